@@ -1,0 +1,46 @@
+# occ_improve: `make demo` and `make test` install what is missing, configure, build and run.
+BUILD_DIR ?= build
+BUILD_TYPE ?= Release
+JOBS ?= $(shell nproc 2>/dev/null || echo 2)
+INSTALL_DIR ?= $(CURDIR)/$(BUILD_DIR)/_install
+CMAKE_FLAGS ?=
+# VTK is not needed by our PCL components; leaving it out halves configure time.
+CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
+            -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) $(CMAKE_FLAGS)
+
+.PHONY: all deps configure build test demo bench consumer-test install clean
+
+all: build
+
+deps:
+	./scripts/install-deps.sh
+
+configure: deps
+	$(CONFIGURE) >/dev/null
+
+build: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS)
+
+test: build
+	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+	$(MAKE) --no-print-directory consumer-test
+
+demo: build
+	./scripts/demo.sh $(BUILD_DIR)
+
+bench: configure
+	cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks
+	./scripts/bench.sh $(BUILD_DIR)
+
+install: build
+	cmake --install $(BUILD_DIR) --prefix $(INSTALL_DIR) >/dev/null
+
+# Builds tests/consumer against the installed package (find_package(occ_improve CONFIG)) and runs it.
+consumer-test: install
+	cmake -S tests/consumer -B $(BUILD_DIR)/consumer -DCMAKE_PREFIX_PATH=$(INSTALL_DIR) \
+	      -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE >/dev/null
+	cmake --build $(BUILD_DIR)/consumer -j $(JOBS)
+	$(BUILD_DIR)/consumer/occ_improve_consumer
+
+clean:
+	rm -rf $(BUILD_DIR)

@@ -1,0 +1,80 @@
+#pragma once
+// Bayesian insertion (eq. 2, SPEC 4-5): each valid point's truncated OPDF is added in log-odds to every
+// column whose angular extent overlaps its +-k sigma box, along the whole ray in front of it.
+//
+// Documented approximations of this fast path (all bounded; tests/reference checks them):
+//  - voxels behind a measurement whose |logit P_s| < kSkipEpsilon (1e-6) are not updated (SPEC 4);
+//  - logit P_s is evaluated in float with polynomial exp/log (relative error < 2e-7);
+//  - exact mode: far in front (u < -20) logit P_s is taken as log(1/2) + u (error < 1e-8);
+//  - clamped mode: voxels where logit P_s <= L_min - L_max are set to L_min without evaluating it
+//    (exact under clamping: any prior value then clamps to L_min).
+#include "occ_improve/grid.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor_model.hpp"
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <vector>
+
+namespace occ_improve {
+
+constexpr double kSkipEpsilon = 1e-6;
+
+/// A view of xyz points in the sensor frame: `count` points, the i-th at xyz[i * stride_floats].
+/// stride_floats = 3 for packed xyz and Eigen::Matrix3Xf, 4 for PCL's PointXYZ, 8 for PointXYZRGB...
+struct PointSpan {
+  const float* xyz = nullptr;
+  std::size_t count = 0;
+  std::size_t stride_floats = 3;
+
+  static PointSpan from(const std::vector<Eigen::Vector3f>& points);
+  static PointSpan from(const Eigen::Matrix3Xf& points);
+};
+
+/// An organized depth image: z-depth in metres per pixel (0 or NaN = no return), row-major.
+struct DepthImage {
+  const float* depth_m = nullptr;
+  std::size_t pixel_count = 0;  ///< must equal intrinsics.width * intrinsics.height
+  PinholeIntrinsics intrinsics;
+};
+
+struct InsertionOptions {
+  int threads = 0;  ///< 0: std::thread::hardware_concurrency(); 1: single-threaded
+};
+
+/// What happened to every point handed in: received = inserted + skipped_invalid + skipped_outside_fov.
+struct InsertionReport {
+  std::size_t points_received = 0;
+  std::size_t points_inserted = 0;
+  std::size_t skipped_invalid = 0;      ///< NaN/Inf coordinate or rho == 0 (no return)
+  std::size_t skipped_outside_fov = 0;  ///< direction outside the grid's angular range
+  std::size_t beyond_depth_range = 0;   ///< inserted; only their free space lies in the grid
+  std::size_t column_updates = 0;       ///< (measurement, column) pairs applied
+  double seconds = 0.0;
+
+  InsertionReport& operator+=(const InsertionReport& other);
+};
+
+/// Inserts points (sensor frame). Skips and counts invalid and out-of-field points; never throws for
+/// individual points. Deterministic: every column receives its measurements in input order.
+InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points,
+                              const InsertionOptions& options = {});
+
+/// Back-projects an organized depth image through its intrinsics and inserts it.
+/// Throws InvalidInput when the buffer is null or its size does not match the intrinsics.
+InsertionReport insert_depth_image(SphericalGrid& grid, const SensorModel& model, const DepthImage& image,
+                                   const InsertionOptions& options = {});
+
+/// Back-projection used by insert_depth_image (pixels with no return give NaN points, kept in place).
+std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image);
+
+/// Inserts several frames of the same viewpoint in order and sums their reports.
+InsertionReport insert_frames(SphericalGrid& grid, const SensorModel& model, const std::vector<PointSpan>& frames,
+                              const InsertionOptions& options = {});
+
+/// logit P_s for a run of depth bins of one column, as the fast path evaluates it (exposed for tests).
+/// out[i] = logit P_s at depth centres[i], for a measurement at rho_bar with angular term B.
+void logit_opdf_profile(const double* centres, std::size_t n, double rho_bar, double angular_term, double sigma_rho,
+                        float* out);
+
+}  // namespace occ_improve

@@ -1,0 +1,52 @@
+#pragma once
+// The sensor occupancy PDF of eq. 1 (SPEC 3) and its noise model (SPEC 2b).
+//   P_s = 1/2 (1 + exp(-u))^-1 + 1/3 exp(-(d^2/s^2 + B)),
+//   d = rho - rho_bar, B = d_theta^2/s_theta^2 + d_phi^2/s_phi^2, u = 2 (d + 2 s)/s + B.
+#include <cmath>
+
+namespace occ_improve {
+
+struct SensorModelParams {
+  double sigma_azimuth_rad = 4.33589667773576e-4;    ///< sqrt(1.88e-7 rad^2), the paper
+  double sigma_elevation_rad = 4.33589667773576e-4;
+  /// Depth noise: sigma_rho(rho) = max(sigma_depth_floor_m, sigma_depth_m + sigma_depth_per_m2 * rho^2).
+  double sigma_depth_m = 0.0472228758124704;  ///< sqrt(2.23e3 mm^2), the paper's constant
+  double sigma_depth_per_m2 = 0.0;            ///< quadratic term [1/m]; Kinect: 1.425e-3 (Khoshelham 2012)
+  double sigma_depth_floor_m = 1e-3;          ///< keeps sigma > 0 for a simulated acquisition at depth 0
+  double support_k = 2.0;                     ///< region of support, in standard deviations
+
+  /// Throws InvalidParameter naming the first bad field.
+  void validate() const;
+};
+
+class SensorModel {
+public:
+  explicit SensorModel(const SensorModelParams& params);
+  const SensorModelParams& params() const { return params_; }
+  double sigma_depth_at(double rho_m) const {
+    double s = params_.sigma_depth_m + params_.sigma_depth_per_m2 * rho_m * rho_m;
+    return s > params_.sigma_depth_floor_m ? s : params_.sigma_depth_floor_m;
+  }
+  double support_azimuth_rad() const { return params_.support_k * params_.sigma_azimuth_rad; }
+  double support_elevation_rad() const { return params_.support_k * params_.sigma_elevation_rad; }
+  /// B of eq. 1 for angular offsets.
+  double angular_term(double d_azimuth, double d_elevation) const {
+    const double a = d_azimuth / params_.sigma_azimuth_rad, e = d_elevation / params_.sigma_elevation_rad;
+    return a * a + e * e;
+  }
+
+private:
+  SensorModelParams params_;
+};
+
+/// logit(P_s) of eq. 1, evaluated stably in log space in double precision: finite for any finite
+/// input, about log(1/2) + u far in front of the measurement, -> 0 behind it.
+double logit_opdf(double d_rho, double angular_term, double sigma_rho);
+
+/// P_s of eq. 1 itself.
+double opdf(double d_rho, double angular_term, double sigma_rho);
+
+inline double logit(double p) { return std::log(p / (1.0 - p)); }
+inline double probability_from_logit(double l) { return 1.0 / (1.0 + std::exp(-l)); }
+
+}  // namespace occ_improve

@@ -1,0 +1,46 @@
+#pragma once
+// The surface of highest occupancy probability (SPEC 6): per column, the depth bin of largest
+// log-odds, with the tie rules:
+//  - never updated: depth 0, P = 0.5, unknown;
+//  - all bins hold the same value: depth rho_max, that P;
+//  - otherwise the nearest run of maximal bins: its centre if the maximum is the clamp L_max,
+//    else its first bin.
+#include "occ_improve/grid.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace occ_improve {
+
+struct SurfaceMap {
+  int width = 0, height = 0;
+  std::vector<float> depth_m;         ///< surface depth per column (0 where unknown)
+  std::vector<float> probability;     ///< P of the surface voxel
+  std::vector<std::int32_t> bin;      ///< surface depth bin (-1 where unknown, depth_bins when all equal)
+  std::vector<std::uint8_t> unknown;  ///< 1 where the column was never updated
+
+  std::size_t size() const { return depth_m.size(); }
+  std::size_t known_count() const;
+};
+
+struct SurfaceVoxel {
+  float depth_m = 0.0f;
+  float probability = 0.5f;
+  std::int32_t bin = -1;
+  bool unknown = true;
+  bool operator==(const SurfaceVoxel& o) const {
+    return depth_m == o.depth_m && probability == o.probability && bin == o.bin && unknown == o.unknown;
+  }
+};
+
+/// The surface voxel of one column (nullptr column = never touched).
+SurfaceVoxel column_surface(const ColumnData* column, const SphericalGrid& grid);
+
+/// Full computation over the grid.
+SurfaceMap compute_surface(const SphericalGrid& grid);
+
+/// Recomputes the given columns; returns those whose surface (depth, P, bin or flag) changed.
+std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::vector<ColumnIndex>& columns,
+                                        SurfaceMap& surface);
+
+}  // namespace occ_improve

@@ -1,0 +1,53 @@
+#include "occ_improve/sensor_model.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace occ_improve {
+
+using detail::require_parameter;
+
+void SensorModelParams::validate() const {
+  require_parameter(std::isfinite(sigma_azimuth_rad) && sigma_azimuth_rad > 0, "sigma_azimuth_rad", sigma_azimuth_rad,
+                    "finite and > 0");
+  require_parameter(std::isfinite(sigma_elevation_rad) && sigma_elevation_rad > 0, "sigma_elevation_rad",
+                    sigma_elevation_rad, "finite and > 0");
+  require_parameter(std::isfinite(sigma_depth_m) && sigma_depth_m >= 0, "sigma_depth_m", sigma_depth_m,
+                    "finite and >= 0");
+  require_parameter(std::isfinite(sigma_depth_per_m2) && sigma_depth_per_m2 >= 0, "sigma_depth_per_m2",
+                    sigma_depth_per_m2, "finite and >= 0");
+  require_parameter(std::isfinite(sigma_depth_floor_m) && sigma_depth_floor_m > 0, "sigma_depth_floor_m",
+                    sigma_depth_floor_m, "finite and > 0");
+  require_parameter(sigma_depth_m > 0 || sigma_depth_per_m2 > 0, "sigma_depth_m", sigma_depth_m,
+                    "> 0 (or sigma_depth_per_m2 > 0)");
+  require_parameter(std::isfinite(support_k) && support_k > 0 && support_k <= 10, "support_k", support_k,
+                    "in (0, 10]");
+}
+
+SensorModel::SensorModel(const SensorModelParams& params) : params_(params) { params.validate(); }
+
+namespace {
+// log(sigmoid(u)) without overflow for any finite u.
+double log_sigmoid(double u) { return u >= 0 ? -std::log1p(std::exp(-u)) : u - std::log1p(std::exp(u)); }
+}  // namespace
+
+double logit_opdf(double d_rho, double angular_term, double sigma_rho) {
+  const double t = d_rho / sigma_rho;
+  const double u = 2.0 * (t + 2.0) + angular_term;
+  const double log_step = std::log(0.5) + log_sigmoid(u);             // log of 1/2 sigmoid(u)
+  const double log_peak = std::log(1.0 / 3.0) - (t * t + angular_term);  // log of 1/3 exp(-(t^2 + B))
+  const double hi = std::max(log_step, log_peak), lo = std::min(log_step, log_peak);
+  const double log_p = hi + std::log1p(std::exp(lo - hi));
+  // P <= 1/2 + 1/3, so log(1 - P) is well conditioned.
+  return log_p - std::log1p(-std::exp(log_p));
+}
+
+double opdf(double d_rho, double angular_term, double sigma_rho) {
+  const double t = d_rho / sigma_rho;
+  const double u = 2.0 * (t + 2.0) + angular_term;
+  return 0.5 / (1.0 + std::exp(-u)) + std::exp(-(t * t + angular_term)) / 3.0;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,53 @@
+#pragma once
+// Reading range frames from files: PCD (organized or not, any XYZ point type) and depth images
+// (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
+// disparity PGM). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
+#include "occ_improve/presets.hpp"
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <optional>
+#include <string>
+
+namespace occ_improve {
+
+enum class DepthEncoding {
+  millimetres,      ///< 16-bit, 1 unit = 1 mm, 0 = no return (Kinect/OpenNI, 7-Scenes, SUN3D/3DMatch)
+  tum_5000,         ///< 16-bit, 1 unit = 0.2 mm (TUM RGB-D, depth_m = value / 5000)
+  sun_rotated_mm,   ///< 16-bit, depth_mm = (v >> 3) | (v << 13) (SUN RGB-D)
+  kinect_disparity, ///< 11-bit raw disparity, 2047 = invalid, depth_m = 351.3 / (1092.5 - raw) (NYU)
+};
+
+/// "mm", "tum", "sun", "nyu" -> encoding; throws InvalidParameter otherwise.
+DepthEncoding parse_depth_encoding(const std::string& name);
+
+/// A 16-bit single-channel image (PNG 16-bit grey, or PGM P5 16-bit).
+struct DepthImage16 {
+  int width = 0, height = 0;
+  std::vector<std::uint16_t> values;
+};
+DepthImage16 read_depth_image16(const std::string& path);
+
+/// A frame as a cloud in the sensor's optical frame; organized (width x height) where the source is.
+struct LoadedFrame {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  std::string path;
+  std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
+};
+
+/// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.
+LoadedFrame load_pcd_frame(const std::string& path);
+
+/// A depth image back-projected through `intrinsics` (its size must match the image's).
+LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics, DepthEncoding encoding);
+
+/// By extension: .pcd -> PCD; .png/.pgm -> depth image (intrinsics required).
+LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
+                       DepthEncoding encoding);
+
+/// Intrinsics from a text file: either "fx fy cx cy [width height]" or a 3x3 matrix (7-Scenes/3DMatch
+/// camera-intrinsics.txt); width/height default to 640 x 480.
+PinholeIntrinsics read_intrinsics_file(const std::string& path);
+
+}  // namespace occ_improve

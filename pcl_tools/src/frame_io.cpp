@@ -1,0 +1,218 @@
+#include "occ_improve/pcl/frame_io.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/integrate.hpp"
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/conversions.h>
+#include <pcl/io/pcd_io.h>
+#include <png.h>
+
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+namespace occ_improve {
+
+namespace {
+
+std::string extension_of(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos) return {};
+  std::string e = path.substr(dot + 1);
+  for (auto& ch : e) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return e;
+}
+
+DepthImage16 read_png16(const std::string& path) {
+  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!file) throw IoError("cannot open depth image '" + path + "'");
+  unsigned char signature[8];
+  if (std::fread(signature, 1, 8, file.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0)
+    throw FormatError("'" + path + "' is not a PNG file");
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!png || !info) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw IoError("libpng could not be initialised");
+  }
+  DepthImage16 image;
+  std::vector<png_bytep> rows;
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    throw FormatError("'" + path + "' is a corrupt or truncated PNG");
+  }
+  png_init_io(png, file.get());
+  png_set_sig_bytes(png, 8);
+  png_read_info(png, info);
+  const int bit_depth = png_get_bit_depth(png, info), colour = png_get_color_type(png, info);
+  if (bit_depth != 16 || (colour != PNG_COLOR_TYPE_GRAY)) {
+    png_destroy_read_struct(&png, &info, nullptr);
+    std::ostringstream m;
+    m << "'" << path << "' is a " << bit_depth << "-bit PNG of colour type " << colour
+      << ": a depth image must be 16-bit single-channel";
+    throw FormatError(m.str());
+  }
+  png_set_swap(png);  // PNG is big-endian; we read host-order uint16
+  image.width = static_cast<int>(png_get_image_width(png, info));
+  image.height = static_cast<int>(png_get_image_height(png, info));
+  image.values.resize(static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height));
+  rows.resize(static_cast<std::size_t>(image.height));
+  for (int v = 0; v < image.height; ++v)
+    rows[static_cast<std::size_t>(v)] =
+        reinterpret_cast<png_bytep>(image.values.data() + static_cast<std::size_t>(v) * image.width);
+  png_read_image(png, rows.data());
+  png_destroy_read_struct(&png, &info, nullptr);
+  return image;
+}
+
+DepthImage16 read_pgm16(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open depth image '" + path + "'");
+  std::string magic;
+  int width = 0, height = 0, max_value = 0;
+  in >> magic >> width >> height >> max_value;
+  if (magic != "P5" || !in || width <= 0 || height <= 0 || max_value < 256 || max_value > 65535)
+    throw FormatError("'" + path + "' is not a 16-bit binary PGM (P5)");
+  in.get();  // the single whitespace after the header
+  DepthImage16 image{width, height, {}};
+  image.values.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  std::vector<unsigned char> raw(image.values.size() * 2);
+  in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size()));
+  if (static_cast<std::size_t>(in.gcount()) != raw.size()) throw FormatError("'" + path + "' is truncated");
+  // The PGM standard says big-endian, but NYU's raw dumps are little-endian: take the order whose
+  // values fit the header's maximum.
+  std::size_t big_ok = 0;
+  for (std::size_t i = 0; i < image.values.size(); ++i)
+    big_ok += (static_cast<int>(raw[2 * i]) << 8 | raw[2 * i + 1]) <= max_value ? 1 : 0;
+  const bool big_endian = big_ok == image.values.size();
+  for (std::size_t i = 0; i < image.values.size(); ++i)
+    image.values[i] = big_endian ? static_cast<std::uint16_t>(raw[2 * i] << 8 | raw[2 * i + 1])
+                                 : static_cast<std::uint16_t>(raw[2 * i + 1] << 8 | raw[2 * i]);
+  return image;
+}
+
+float decode(std::uint16_t v, DepthEncoding e) {
+  switch (e) {
+    case DepthEncoding::millimetres: return v * 1e-3f;
+    case DepthEncoding::tum_5000: return v / 5000.0f;
+    case DepthEncoding::sun_rotated_mm: {
+      const std::uint16_t mm = static_cast<std::uint16_t>((v >> 3) | (v << 13));
+      return mm * 1e-3f;
+    }
+    case DepthEncoding::kinect_disparity:
+      if (v >= 2047 || v >= 1092) return 0.0f;
+      return 351.3f / (1092.5f - static_cast<float>(v));
+  }
+  return 0.0f;
+}
+
+}  // namespace
+
+DepthEncoding parse_depth_encoding(const std::string& name) {
+  if (name == "mm") return DepthEncoding::millimetres;
+  if (name == "tum") return DepthEncoding::tum_5000;
+  if (name == "sun") return DepthEncoding::sun_rotated_mm;
+  if (name == "nyu") return DepthEncoding::kinect_disparity;
+  throw InvalidParameter("depth encoding '" + name + "' is invalid: must be one of mm, tum, sun, nyu");
+}
+
+DepthImage16 read_depth_image16(const std::string& path) {
+  const std::string ext = extension_of(path);
+  if (ext == "png") return read_png16(path);
+  if (ext == "pgm") return read_pgm16(path);
+  throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png or .pgm)");
+}
+
+LoadedFrame load_pcd_frame(const std::string& path) {
+  pcl::PCLPointCloud2 blob;
+  pcl::PCDReader reader;
+  {
+    std::ifstream probe(path, std::ios::binary);
+    if (!probe) throw IoError("cannot open PCD file '" + path + "'");
+    if (probe.peek() == std::ifstream::traits_type::eof()) throw FormatError("PCD file '" + path + "' is empty");
+  }
+  if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
+  bool has_x = false, has_y = false, has_z = false;
+  for (const auto& f : blob.fields) {
+    has_x |= f.name == "x";
+    has_y |= f.name == "y";
+    has_z |= f.name == "z";
+  }
+  if (!has_x || !has_y || !has_z) throw FormatError("PCD file '" + path + "' has no x, y, z fields");
+  LoadedFrame frame;
+  frame.path = path;
+  pcl::fromPCLPointCloud2(blob, frame.cloud);
+  return frame;
+}
+
+LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k, DepthEncoding encoding) {
+  const DepthImage16 raw = read_depth_image16(path);
+  if (raw.width != k.width || raw.height != k.height) {
+    std::ostringstream m;
+    m << "depth image '" << path << "' is " << raw.width << " x " << raw.height << " but the intrinsics say "
+      << k.width << " x " << k.height;
+    throw InvalidInput(m.str());
+  }
+  std::vector<float> depth(raw.values.size());
+  for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = decode(raw.values[i], encoding);
+  const auto points = depth_image_to_points(DepthImage{depth.data(), depth.size(), k});
+  LoadedFrame frame;
+  frame.path = path;
+  frame.intrinsics = k;
+  frame.cloud.width = static_cast<std::uint32_t>(k.width);
+  frame.cloud.height = static_cast<std::uint32_t>(k.height);
+  frame.cloud.is_dense = false;
+  frame.cloud.points.resize(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    frame.cloud.points[i] = pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z());
+  return frame;
+}
+
+LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
+                       DepthEncoding encoding) {
+  const std::string ext = extension_of(path);
+  if (ext == "pcd") return load_pcd_frame(path);
+  if (ext == "png" || ext == "pgm") {
+    if (!intrinsics) throw InvalidInput("depth image '" + path + "' needs camera intrinsics");
+    return load_depth_frame(path, *intrinsics, encoding);
+  }
+  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .png or .pgm)");
+}
+
+PinholeIntrinsics read_intrinsics_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError("cannot open intrinsics file '" + path + "'");
+  std::vector<double> v;
+  double x;
+  while (in >> x) v.push_back(x);
+  if (!in.eof()) throw FormatError("intrinsics file '" + path + "' holds something that is not a number");
+  PinholeIntrinsics k;
+  if (v.size() == 9) {  // 3x3 matrix, row-major
+    k.fx = v[0];
+    k.cx = v[2];
+    k.fy = v[4];
+    k.cy = v[5];
+  } else if (v.size() == 4 || v.size() == 6) {
+    k.fx = v[0];
+    k.fy = v[1];
+    k.cx = v[2];
+    k.cy = v[3];
+    if (v.size() == 6) {
+      k.width = static_cast<int>(v[4]);
+      k.height = static_cast<int>(v[5]);
+    }
+  } else {
+    throw FormatError("intrinsics file '" + path + "' must hold a 3x3 matrix or 'fx fy cx cy [width height]'");
+  }
+  try {
+    k.validate();
+  } catch (const InvalidParameter& e) {
+    throw FormatError("intrinsics file '" + path + "': " + e.what());
+  }
+  return k;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,38 @@
+#pragma once
+// The built-in sample: a Kinect-like 640x480 depth frame the project generates itself, so the demo,
+// tests and benchmarks run on a fresh checkout. Ray-cast through Kinect v1 intrinsics:
+//  - a floor 0.8 m below the sensor, a back wall at 4.2 m with a recess at 6.5 m (beyond the
+//    kinect_v1_paper depth range of 5 m);
+//  - a box and a thin pole in front (depth discontinuities);
+//  - the structured-light shadow band beside each occluder (the projector sits 7.5 cm to the right of
+//    the IR camera: surfaces it cannot see give no return);
+//  - a dark poster on the wall that returns nothing (a patch with no returns);
+//  - Kinect disparity quantisation (1/8 pixel) and axial noise 1.425e-3 z^2 (Khoshelham 2012).
+#include "occ_improve/presets.hpp"
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+namespace occ_improve::sample {
+
+struct SceneOptions {
+  std::uint32_t seed = 1;        ///< noise seed; frames of a sequence differ only by it
+  bool noise = true;             ///< axial Gaussian noise
+  bool quantise = true;          ///< disparity quantisation
+  bool projector_shadow = true;  ///< structured-light shadow band
+};
+
+struct SampleFrame {
+  PinholeIntrinsics intrinsics;
+  std::vector<float> depth_m;  ///< z-depth, row-major, 0 = no return
+  /// Points in the sensor frame, one per pixel, NaN where there is no return (organized order).
+  std::vector<Eigen::Vector3f> points() const;
+};
+
+SampleFrame generate_scene(const SceneOptions& options = {});
+
+/// `frames` frames of the same static view with different noise seeds (a static-camera sequence).
+std::vector<SampleFrame> generate_sequence(int frames, std::uint32_t first_seed = 1);
+
+}  // namespace occ_improve::sample

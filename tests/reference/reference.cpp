@@ -1,0 +1,94 @@
+#include "reference/reference.hpp"
+
+#include <cmath>
+
+namespace occ_improve::reference {
+
+long double logit_opdf(long double d, long double b, long double s) {
+  const long double t = d / s;
+  const long double u = 2.0L * (d + 2.0L * s) / s + b;
+  // log P = log(1/2 sigmoid(u) + 1/3 exp(-(t^2 + b)))
+  const long double log_step = std::log(0.5L) - std::log1p(std::exp(-u));
+  const long double log_peak = std::log(1.0L / 3.0L) - (t * t + b);
+  const long double m = std::max(log_step, log_peak);
+  const long double log_p = m + std::log(std::exp(log_step - m) + std::exp(log_peak - m));
+  return log_p - std::log1p(-std::exp(log_p));
+}
+
+DenseGrid::DenseGrid(const SphericalGeometry& geometry, const SensorModel& model, const GridOptions& options)
+    : geometry_(geometry), model_(model), options_(options), bins_(static_cast<std::size_t>(geometry.depth().bins())) {
+  lmin_ = std::log(options.probability_min / (1 - options.probability_min));
+  lmax_ = std::log(options.probability_max / (1 - options.probability_max));
+  values_.assign(geometry.column_count() * bins_, 0.0);
+  touched_.assign(geometry.column_count(), 0);
+}
+
+void DenseGrid::insert(const std::vector<Eigen::Vector3f>& points) {
+  const auto& g = geometry_;
+  const auto& p = model_.params();
+  for (const auto& q : points) {
+    if (!q.allFinite() || q.isZero()) continue;
+    const SphericalPoint s = to_spherical(q.x(), q.y(), q.z());
+    int ia, ie;
+    if (!g.locate(s.azimuth, s.elevation, ia, ie)) continue;
+    const double ka = p.support_k * p.sigma_azimuth_rad, ke = p.support_k * p.sigma_elevation_rad;
+    const double sigma = model_.sigma_depth_at(s.rho);
+    for (int e = 0; e < g.height(); ++e) {
+      // Column extent [lower, lower + width) overlaps [centre - k s, centre + k s].
+      const double elo = g.elevation().lower(e), ehi = elo + g.elevation().width();
+      if (ehi <= s.elevation - ke || elo > s.elevation + ke) continue;
+      for (int a = 0; a < g.width(); ++a) {
+        const double alo = g.azimuth().lower(a), ahi = alo + g.azimuth().width();
+        if (ahi <= s.azimuth - ka || alo > s.azimuth + ka) continue;
+        const double da = (g.azimuth().centre(a) - s.azimuth) / p.sigma_azimuth_rad;
+        const double de = (g.elevation().centre(e) - s.elevation) / p.sigma_elevation_rad;
+        const long double b = da * da + de * de;
+        const std::size_t column = g.column(a, e);
+        touched_[column] = 1;
+        for (std::size_t k = 0; k < bins_; ++k) {
+          double& v = values_[column * bins_ + k];
+          v += static_cast<double>(logit_opdf(g.depth().centre(static_cast<int>(k)) - s.rho, b, sigma));
+          if (options_.mode == UpdateMode::clamped) v = std::min(std::max(v, lmin_), lmax_);
+        }
+      }
+    }
+  }
+}
+
+DenseGrid::Surface DenseGrid::surface(std::size_t column) const {
+  Surface s;
+  if (!touched_[column]) return s;
+  const double* v = &values_[column * bins_];
+  std::size_t first = 0;
+  for (std::size_t k = 1; k < bins_; ++k)
+    if (v[k] > v[first]) first = k;
+  std::size_t last = first;
+  while (last + 1 < bins_ && v[last + 1] == v[first]) ++last;
+  s.unknown = false;
+  s.probability = 1.0 / (1.0 + std::exp(-v[first]));
+  const auto& depth = geometry_.depth();
+  if (first == 0 && last == bins_ - 1) {
+    s.bin = static_cast<int>(bins_);
+    s.depth_m = depth.max();
+  } else if (options_.mode == UpdateMode::clamped && v[first] >= lmax_) {
+    s.bin = static_cast<int>((first + last) / 2);
+    s.depth_m = 0.5 * (depth.centre(static_cast<int>(first)) + depth.centre(static_cast<int>(last)));
+  } else {
+    s.bin = static_cast<int>(first);
+    s.depth_m = depth.centre(static_cast<int>(first));
+  }
+  return s;
+}
+
+SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height) {
+  GeometryParams p = full.params();
+  p.azimuth_min_rad = full.azimuth().lower(azimuth_first);
+  p.azimuth_max_rad = full.azimuth().lower(azimuth_first) + width * full.azimuth().width();
+  p.elevation_min_rad = full.elevation().lower(elevation_first);
+  p.elevation_max_rad = full.elevation().lower(elevation_first) + height * full.elevation().width();
+  p.azimuth_bins = width;
+  p.elevation_bins = height;
+  return SphericalGeometry(p);
+}
+
+}  // namespace occ_improve::reference

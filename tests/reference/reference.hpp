@@ -1,0 +1,49 @@
+#pragma once
+// The slow, obviously-correct reference of eqs. 1, 2 and the surface (SPEC 3-6): a dense grid of
+// log-odds in double, every voxel of every column in the angular window updated with eq. 1 evaluated
+// in long double, no depth truncation, no tables, no threads. The fast path is checked against it.
+#include "occ_improve/geometry.hpp"
+#include "occ_improve/grid.hpp"
+#include "occ_improve/sensor_model.hpp"
+
+#include <Eigen/Core>
+#include <vector>
+
+namespace occ_improve::reference {
+
+/// logit of eq. 1, straight from its definition (log-sum-exp in long double).
+long double logit_opdf(long double d_rho, long double angular_term, long double sigma_rho);
+
+class DenseGrid {
+public:
+  DenseGrid(const SphericalGeometry& geometry, const SensorModel& model, const GridOptions& options);
+  /// Inserts points in order (NaN/zero and out-of-field points are skipped, as SPEC 1 says).
+  void insert(const std::vector<Eigen::Vector3f>& points);
+  double log_odds(std::size_t column, int bin) const { return values_[column * bins_ + static_cast<std::size_t>(bin)]; }
+  bool touched(std::size_t column) const { return touched_[column] != 0; }
+  const SphericalGeometry& geometry() const { return geometry_; }
+  const SensorModel& model() const { return model_; }
+
+  struct Surface {
+    double depth_m = 0, probability = 0.5;
+    int bin = -1;
+    bool unknown = true;
+  };
+  /// SPEC 6 by brute force over the dense column.
+  Surface surface(std::size_t column) const;
+
+private:
+  SphericalGeometry geometry_;
+  SensorModel model_;
+  GridOptions options_;
+  std::size_t bins_;
+  double lmin_, lmax_;
+  std::vector<double> values_;
+  std::vector<unsigned char> touched_;
+};
+
+/// A geometry covering only a window of another one's columns, with identical column extents:
+/// columns [azimuth_first, azimuth_first + width) x [elevation_first, elevation_first + height).
+SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height);
+
+}  // namespace occ_improve::reference
