@@ -20,7 +20,10 @@ inline std::uint32_t float_to_bits(float f) {
 
 inline float fast_exp(float x) {
   x = x < -87.0f ? -87.0f : (x > 88.0f ? 88.0f : x);
-  const float n = __builtin_floorf(x * 1.44269504088896341f + 0.5f);
+  // round(x / ln2) via truncation of a positive number: floorf would be a libm call on baseline x86-64
+  // and would stop the loop from vectorising.
+  const std::int32_t ni = static_cast<std::int32_t>(x * 1.44269504088896341f + 128.5f) - 128;
+  const float n = static_cast<float>(ni);
   // x - n ln2 with ln2 split in two so the reduction is exact to float precision.
   float r = x - n * 0.693359375f;
   r = r - n * -2.12194440e-4f;
@@ -33,7 +36,7 @@ inline float fast_exp(float x) {
   p = p * r + 0.5f;
   p = p * r + 1.0f;
   p = p * r + 1.0f;
-  const std::int32_t e = static_cast<std::int32_t>(n) + 127;
+  const std::int32_t e = ni + 127;
   return p * bits_to_float(static_cast<std::uint32_t>(e) << 23);
 }
 
