@@ -2,7 +2,6 @@
 // A PCL point type that carries the per-ray results as fields, so pcl_viewer and downstream PCL code
 // can colour or filter by them: x y z (the surface point), surface_depth [m], probability (of the
 // surface voxel) and improvement (eq. 4 for the ray).
-#define PCL_NO_PRECOMPILE
 #include <pcl/point_types.h>
 #include <pcl/register_point_struct.h>
 
