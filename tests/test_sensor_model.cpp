@@ -1,0 +1,88 @@
+// Eq. 1 evaluated stably in log space (SPEC 3) and the sensor model's parameters.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/sensor_model.hpp"
+#include "reference/reference.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace occ_improve {
+namespace {
+
+TEST(SensorModel, LogitMatchesNaiveEvaluationWhereThatIsAccurate) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> t(-4, 6), b(0, 20);
+  for (int i = 0; i < 2000; ++i) {
+    const double s = 0.047, d = t(rng) * s, B = b(rng);
+    const double p = opdf(d, B, s);
+    EXPECT_NEAR(logit_opdf(d, B, s), std::log(p / (1 - p)), 1e-9);
+    EXPECT_NEAR(logit_opdf(d, B, s), static_cast<double>(reference::logit_opdf(d, B, s)), 1e-9);
+  }
+}
+
+TEST(SensorModel, ShapeInFrontAtAndBehindTheMeasurement) {
+  const double s = 0.04722;
+  EXPECT_NEAR(opdf(0, 0, s), 0.5 / (1 + std::exp(-4.0)) + 1.0 / 3.0, 1e-12);  // ~0.824 on the ray
+  EXPECT_NEAR(opdf(0, 0, s), 0.824, 1e-3);
+  EXPECT_NEAR(logit_opdf(1.0, 0, s), 0.0, 1e-6);   // behind: unknown
+  EXPECT_LT(logit_opdf(-0.5, 0, s), -15.0);         // in front: free
+  EXPECT_NEAR(opdf(0, 40, s), 0.5, 1e-6);           // far off the ray: unknown
+}
+
+TEST(SensorModel, FarInFrontIsFiniteAndLinear) {
+  // 5 m in front with sigma 4.7 cm: u is about -208; naive evaluation loses everything there.
+  const double s = 0.04722, d = -5.0, B = 0.3;
+  const double l = logit_opdf(d, B, s);
+  ASSERT_TRUE(std::isfinite(l));
+  const double u = 2 * (d + 2 * s) / s + B;
+  EXPECT_NEAR(l, std::log(0.5) + u, 1e-9);
+  EXPECT_LT(l, -200);
+  // Larger offsets stay finite too.
+  EXPECT_TRUE(std::isfinite(logit_opdf(-1e3, 0, 1e-3)));
+}
+
+TEST(SensorModel, RangeDependentSigmaHasAFloor) {
+  SensorModelParams p;
+  p.sigma_depth_m = 0;
+  p.sigma_depth_per_m2 = 1.425e-3;
+  p.sigma_depth_floor_m = 5e-4;
+  const SensorModel m(p);
+  EXPECT_NEAR(m.sigma_depth_at(1.0), 1.425e-3, 1e-12);
+  EXPECT_NEAR(m.sigma_depth_at(5.0), 0.035625, 1e-9);
+  EXPECT_EQ(m.sigma_depth_at(0.0), 5e-4);
+}
+
+TEST(SensorModel, NonsenseParametersThrowNamingTheField) {
+  const auto expect_named = [](SensorModelParams p, const char* name) {
+    try {
+      SensorModel m(p);
+      ADD_FAILURE() << "expected InvalidParameter for " << name;
+    } catch (const InvalidParameter& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+    }
+  };
+  SensorModelParams p;
+  p.sigma_azimuth_rad = 0;
+  expect_named(p, "sigma_azimuth_rad");
+  p = {};
+  p.sigma_elevation_rad = -1;
+  expect_named(p, "sigma_elevation_rad");
+  p = {};
+  p.sigma_depth_m = std::nan("");
+  expect_named(p, "sigma_depth_m");
+  p = {};
+  p.sigma_depth_m = 0;
+  p.sigma_depth_per_m2 = 0;
+  expect_named(p, "sigma_depth_m");
+  p = {};
+  p.support_k = 0;
+  expect_named(p, "support_k");
+  p = {};
+  p.sigma_depth_floor_m = 0;
+  expect_named(p, "sigma_depth_floor_m");
+}
+
+}  // namespace
+}  // namespace occ_improve
