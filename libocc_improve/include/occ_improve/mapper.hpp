@@ -1,0 +1,44 @@
+#pragma once
+// The facade for "insert frames, ask where to look": a grid, its sensor model, the surface and the
+// improvement map kept up to date together. No logic of its own: insert() is insert_points +
+// take_changed_columns + update_surface + update_improvement.
+#include "occ_improve/grid.hpp"
+#include "occ_improve/improvement.hpp"
+#include "occ_improve/integrate.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/surface.hpp"
+
+#include <cstddef>
+
+namespace occ_improve {
+
+struct MapperReport {
+  InsertionReport insertion;
+  double surface_seconds = 0, improvement_seconds = 0;
+  std::size_t surface_columns_changed = 0, rays_recomputed = 0;
+};
+
+class Mapper {
+public:
+  explicit Mapper(const SensorPreset& preset, const GridOptions& options = {});
+  /// Takes over a grid (e.g. a loaded map) and computes its surface and improvement.
+  Mapper(SphericalGrid grid, const SensorModel& model);
+
+  /// Insertion + incremental surface + incremental improvement.
+  MapperReport insert(PointSpan points, const InsertionOptions& options = {});
+
+  const SphericalGeometry& geometry() const { return grid_.geometry(); }
+  const SensorModel& model() const { return model_; }
+  const SphericalGrid& grid() const { return grid_; }
+  const SurfaceMap& surface() const { return surface_; }
+  const ImprovementMap& improvement() const { return improvement_; }
+
+private:
+  SphericalGrid grid_;
+  SensorModel model_;
+  SurfaceMap surface_;
+  ImprovementMap improvement_;
+};
+
+}  // namespace occ_improve

@@ -1,0 +1,75 @@
+#pragma once
+// Where to look next: the best rays, connected regions of high improvement, and when to stop (SPEC 9).
+//
+// Conventions (docs/METHOD.md, "Ranking"):
+//  - regions are 8-connected (diagonal neighbours join), so a thin diagonal no-data band or depth edge
+//    stays one region;
+//  - a region's centroid is the mean of its columns' centre angles (each column counts once, so the
+//    centroid is the middle of the area to re-acquire, not pulled towards its peak).
+#include "occ_improve/geometry.hpp"
+#include "occ_improve/improvement.hpp"
+#include "occ_improve/surface.hpp"
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+
+struct RankedRay {
+  ColumnIndex column;
+  int azimuth_bin, elevation_bin;
+  float improvement;
+  float depth_m;  ///< surface depth (0 where unknown)
+};
+
+/// The k rays of highest improvement, best first (ties: lower column index first).
+/// k <= 0 -> InvalidParameter; maps of different sizes -> InvalidInput. Returns min(k, rays) rays.
+std::vector<RankedRay> top_rays(const ImprovementMap& map, const SurfaceMap& surface, int k);
+
+struct RegionOptions {
+  float min_improvement = 0.05f;      ///< a column belongs to a region when its improvement >= this
+  std::size_t min_area_columns = 4;   ///< smaller regions are dropped (isolated noisy rays)
+  void validate() const;              ///< NaN / infinite threshold -> InvalidParameter
+};
+
+struct Region {
+  double summed_improvement;
+  std::size_t area_columns;
+  float peak_improvement;
+  double centroid_azimuth_rad, centroid_elevation_rad;  ///< mean of the columns' centre angles
+  Eigen::Vector3d centroid_direction;                   ///< unit vector in the sensor frame
+  double mean_depth_m;                                  ///< over known columns, 0 if none
+};
+
+/// 8-connected regions of improvement >= min_improvement with at least min_area_columns columns,
+/// sorted by summed_improvement (descending). Throws InvalidInput for maps of mismatched sizes.
+std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
+                                 const SurfaceMap& surface, const RegionOptions& options = {});
+
+/// When to stop acquiring. Defaults are scaled for a 640 x 480 map with the paper's model, where one
+/// unknown ray is worth ~0.32 and a ray observed once ~0.13 (docs/METHOD.md):
+///  - total: 10 = about 30 unknown rays or 75 once-seen rays left in the whole view;
+///  - best region: 1 = the best region is worth less than ~8 once-seen rays (a 3 x 3 patch).
+/// Only rays >= ray_floor count towards the total, so the ~1e-3 residual of well-observed rays (300 000
+/// of them) does not keep the signal from ever firing.
+struct StopCriteria {
+  double total_improvement_below = 10.0;
+  double best_region_below = 1.0;
+  double ray_floor = 0.01;
+  void validate() const;  ///< NaN / negative -> InvalidParameter
+};
+
+struct StopSignal {
+  bool stop;
+  double total_improvement;        ///< sum of ray improvements >= ray_floor
+  double best_region_improvement;  ///< largest summed improvement of the regions, 0 without any
+  std::string reason;              ///< why (or why not) stop, for logs
+};
+
+/// stop = total < total_improvement_below OR best region < best_region_below.
+StopSignal stop_signal(const ImprovementMap& map, const std::vector<Region>& regions,
+                       const StopCriteria& criteria = {});
+
+}  // namespace occ_improve

@@ -1,0 +1,217 @@
+#include "occ_improve/improvement.hpp"
+
+#include "fast_math.hpp"
+#include "occ_improve/errors.hpp"
+#include "parallel.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+namespace occ_improve {
+namespace {
+
+void require_matching_surface(const SphericalGeometry& g, const SurfaceMap& s) {
+  if (s.width != g.width() || s.height != g.height() || s.depth_m.size() != g.column_count() ||
+      s.probability.size() != g.column_count())
+    throw InvalidInput("surface map is " + std::to_string(s.width) + " x " + std::to_string(s.height) +
+                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                       " columns");
+}
+
+// imp_i of eq. 3 for one surface voxel (probability p) at d_rho from the simulated measurement, whose
+// angular offset contributes step_factor = exp(-4 - B) and peak_factor = exp(-B) / 3:
+//   P_s = 1/2 (1 + a)^-1 + b,  a = exp(-2t) step_factor = exp(-u),  b = exp(-t^2) peak_factor,  t = d_rho/sigma.
+// With D = 1 + a and N = 1/2 + b D, P_s = N / D and eq. 3 needs one division. fast_exp clamps its argument
+// to [-87, 88]: far in front a <= 3e36 and b >= 5e-39 stay finite and P_s stays ~0. A certain prior
+// (p = 0 or 1, den = 0) is left unchanged by Bayes: imp_i = 0. Branch-free so the row loop vectorises.
+inline float surface_term(float p, float d_rho, float inv_sigma, float step_factor, float peak_factor) {
+  const float t = d_rho * inv_sigma;
+  const float a = step_factor * detail::fast_exp(-2.0f * t);
+  const float b = peak_factor * detail::fast_exp(-(t * t));
+  const float d = 1.0f + a;
+  const float n = 0.5f + b * d;
+  const float num = p * n;
+  const float den = num + (1.0f - p) * (d - n);
+  return den > 0.0f ? num / den - p : 0.0f;
+}
+
+// The window rule and the per-offset angular factors, built once per geometry and model.
+// With uniform angular axes the centre offset between columns j and j + (da, de) is (da w_az, de w_el)
+// for every j, so B, exp(-4 - B) and exp(-B)/3 depend on the offset only.
+struct WindowKernel {
+  std::vector<int> az_lo, az_hi, el_lo, el_hi;  // window offsets of each azimuth bin / elevation row
+  int da_min = 0, da_max = 0, de_min = 0, de_max = 0;
+  std::vector<float> step_factor, peak_factor;  // per offset, (de - de_min) * offsets_across + (da - da_min)
+
+  WindowKernel(const SphericalGeometry& g, const SensorModel& model) {
+    axis_offsets(g.azimuth(), model.support_azimuth_rad(), az_lo, az_hi, da_min, da_max);
+    axis_offsets(g.elevation(), model.support_elevation_rad(), el_lo, el_hi, de_min, de_max);
+    const int across = offsets_across();
+    step_factor.resize(static_cast<std::size_t>(across) * (de_max - de_min + 1));
+    peak_factor.resize(step_factor.size());
+    for (int de = de_min; de <= de_max; ++de)
+      for (int da = da_min; da <= da_max; ++da) {
+        const double b = model.angular_term(da * g.azimuth().width(), de * g.elevation().width());
+        step_factor[offset_index(da, de)] = static_cast<float>(std::exp(-4.0 - b));
+        peak_factor[offset_index(da, de)] = static_cast<float>(std::exp(-b) / 3.0);
+      }
+  }
+  int offsets_across() const { return da_max - da_min + 1; }
+  std::size_t offset_index(int da, int de) const {
+    return static_cast<std::size_t>((de - de_min) * offsets_across() + (da - da_min));
+  }
+
+  // Columns of this axis overlapping centre +- support, by the insertion's rule, as offsets.
+  static void axis_offsets(const UniformAxis& axis, double support, std::vector<int>& lo, std::vector<int>& hi,
+                           int& lo_min, int& hi_max) {
+    lo.resize(static_cast<std::size_t>(axis.bins()));
+    hi.resize(lo.size());
+    lo_min = 0;
+    hi_max = 0;
+    for (int i = 0; i < axis.bins(); ++i) {
+      int first, last;
+      axis.overlapping(axis.centre(i) - support, axis.centre(i) + support, first, last);
+      lo[static_cast<std::size_t>(i)] = first - i;
+      hi[static_cast<std::size_t>(i)] = last - i;
+      lo_min = std::min(lo_min, first - i);
+      hi_max = std::max(hi_max, last - i);
+    }
+  }
+
+  // Eqs. 3-4 for one ray; the offsets are visited in the same order as in the row loop below, so both
+  // give bit-identical sums.
+  float ray(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int a, int e) const {
+    const ColumnIndex j = g.column(a, e);
+    const float rho_j = s.depth_m[j];
+    const float inv_sigma = static_cast<float>(1.0 / model.sigma_depth_at(rho_j));
+    float sum = 0.0f;
+    const auto ua = static_cast<std::size_t>(a), ue = static_cast<std::size_t>(e);
+    for (int de = el_lo[ue]; de <= el_hi[ue]; ++de)
+      for (int da = az_lo[ua]; da <= az_hi[ua]; ++da) {
+        const ColumnIndex i = g.column(a + da, e + de);
+        const std::size_t o = offset_index(da, de);
+        sum += surface_term(s.probability[i], s.depth_m[i] - rho_j, inv_sigma, step_factor[o], peak_factor[o]);
+      }
+    return sum;
+  }
+
+  // Every ray of row e at once: offset by offset, j along the row (contiguous, vectorisable).
+  void row(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
+           std::vector<float>& inv_sigma) const {
+    const int w = g.width();
+    const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+    const float* rho_j = s.depth_m.data() + row_start;
+    for (int x = 0; x < w; ++x) {
+      inv_sigma[static_cast<std::size_t>(x)] = static_cast<float>(1.0 / model.sigma_depth_at(rho_j[x]));
+      out[x] = 0.0f;
+    }
+    const int* lo = az_lo.data();
+    const int* hi = az_hi.data();
+    const float* inv = inv_sigma.data();
+    const auto ue = static_cast<std::size_t>(e);
+    for (int de = el_lo[ue]; de <= el_hi[ue]; ++de) {
+      const std::size_t other_start = static_cast<std::size_t>(e + de) * static_cast<std::size_t>(w);
+      for (int da = da_min; da <= da_max; ++da) {
+        const float* p_i = s.probability.data() + other_start;  // p_i[x + da]: column x + da of row e + de
+        const float* rho_i = s.depth_m.data() + other_start;
+        const float step = step_factor[offset_index(da, de)], peak = peak_factor[offset_index(da, de)];
+        const int x_begin = std::max(0, -da), x_end = std::min(w, w - da);
+        for (int x = x_begin; x < x_end; ++x) {
+          const float term = surface_term(p_i[x + da], rho_i[x + da] - rho_j[x], inv[x], step, peak);
+          out[x] += (lo[x] <= da && da <= hi[x]) ? term : 0.0f;
+        }
+      }
+    }
+  }
+};
+
+void require_bins(const SphericalGeometry& g, int a, int e) {
+  if (a < 0 || a >= g.width())
+    throw InvalidParameter("azimuth_bin = " + std::to_string(a) + " is outside [0, " + std::to_string(g.width()) + ")");
+  if (e < 0 || e >= g.height())
+    throw InvalidParameter("elevation_bin = " + std::to_string(e) + " is outside [0, " +
+                           std::to_string(g.height()) + ")");
+}
+
+}  // namespace
+
+double ray_improvement(const SphericalGeometry& geometry, const SensorModel& model, const SurfaceMap& surface,
+                       int azimuth_bin, int elevation_bin) {
+  require_bins(geometry, azimuth_bin, elevation_bin);
+  require_matching_surface(geometry, surface);
+  return WindowKernel(geometry, model).ray(geometry, model, surface, azimuth_bin, elevation_bin);
+}
+
+ImprovementMap compute_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+                                   const SurfaceMap& surface, int threads) {
+  detail::require_parameter(threads >= 0, "threads", threads, ">= 0");
+  require_matching_surface(geometry, surface);
+  const WindowKernel kernel(geometry, model);
+  ImprovementMap map;
+  map.width = geometry.width();
+  map.height = geometry.height();
+  map.value.resize(geometry.column_count());
+  const int h = geometry.height();
+  const int parts = std::min(detail::resolve_thread_count(threads), h);
+  detail::run_parts(parts, [&](int part, int count) {
+    std::vector<float> inv_sigma(static_cast<std::size_t>(geometry.width()));
+    for (int e = h * part / count; e < h * (part + 1) / count; ++e)
+      kernel.row(geometry, model, surface, e,
+                 map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(geometry.width()),
+                 inv_sigma);
+  });
+  return map;
+}
+
+std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+                                            const SurfaceMap& surface,
+                                            const std::vector<ColumnIndex>& changed_surface_columns,
+                                            ImprovementMap& map) {
+  require_matching_surface(geometry, surface);
+  const std::size_t columns = geometry.column_count();
+  if (map.width == 0 && map.height == 0 && map.value.empty()) {
+    map = compute_improvement(geometry, model, surface);
+    std::vector<ColumnIndex> all(columns);
+    for (std::size_t c = 0; c < columns; ++c) all[c] = static_cast<ColumnIndex>(c);
+    return all;
+  }
+  if (map.width != geometry.width() || map.height != geometry.height() || map.value.size() != columns)
+    throw InvalidInput("improvement map is " + std::to_string(map.width) + " x " + std::to_string(map.height) +
+                       " but the grid has " + std::to_string(geometry.width()) + " x " +
+                       std::to_string(geometry.height()) + " columns");
+  const WindowKernel kernel(geometry, model);
+
+  // Rays whose window holds a changed column: j with lo[j] <= c - j <= hi[j] on both axes.
+  std::vector<std::uint8_t> affected(columns, 0);
+  for (const ColumnIndex c : changed_surface_columns) {
+    if (c >= columns)
+      throw InvalidInput("changed column " + std::to_string(c) + " is outside the grid (" + std::to_string(columns) +
+                         " columns)");
+    const int ca = geometry.azimuth_bin_of(c), ce = geometry.elevation_bin_of(c);
+    for (int e = std::max(0, ce - kernel.de_max); e <= std::min(geometry.height() - 1, ce - kernel.de_min); ++e) {
+      const auto ue = static_cast<std::size_t>(e);
+      if (ce - e < kernel.el_lo[ue] || ce - e > kernel.el_hi[ue]) continue;
+      for (int a = std::max(0, ca - kernel.da_max); a <= std::min(geometry.width() - 1, ca - kernel.da_min); ++a) {
+        const auto ua = static_cast<std::size_t>(a);
+        if (ca - a >= kernel.az_lo[ua] && ca - a <= kernel.az_hi[ua]) affected[geometry.column(a, e)] = 1;
+      }
+    }
+  }
+  std::vector<ColumnIndex> rays;
+  for (std::size_t c = 0; c < columns; ++c)
+    if (affected[c]) rays.push_back(static_cast<ColumnIndex>(c));
+
+  // Independent rays: split the list when it is long enough to pay for the threads.
+  const int parts = rays.size() < 20000 ? 1 : detail::resolve_thread_count(0);
+  detail::run_parts(parts, [&](int part, int count) {
+    const std::size_t n = rays.size();
+    for (std::size_t r = n * part / count; r < n * (part + 1) / count; ++r) {
+      const ColumnIndex j = rays[r];
+      map.value[j] = kernel.ray(geometry, model, surface, geometry.azimuth_bin_of(j), geometry.elevation_bin_of(j));
+    }
+  });
+  return rays;
+}
+
+}  // namespace occ_improve

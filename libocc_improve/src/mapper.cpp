@@ -1,0 +1,34 @@
+#include "occ_improve/mapper.hpp"
+
+#include <chrono>
+
+namespace occ_improve {
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+Mapper::Mapper(const SensorPreset& preset, const GridOptions& options)
+    : Mapper(SphericalGrid(SphericalGeometry(preset.geometry), options), SensorModel(preset.model)) {}
+
+Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(grid)), model_(model) {
+  grid_.take_changed_columns();  // the surface below already accounts for everything in the grid
+  surface_ = compute_surface(grid_);
+  improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+}
+
+MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
+  MapperReport report;
+  report.insertion = insert_points(grid_, model_, points, options);
+  auto start = std::chrono::steady_clock::now();
+  const std::vector<ColumnIndex> changed = update_surface(grid_, grid_.take_changed_columns(), surface_);
+  report.surface_seconds = seconds_since(start);
+  report.surface_columns_changed = changed.size();
+  start = std::chrono::steady_clock::now();
+  report.rays_recomputed = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_).size();
+  report.improvement_seconds = seconds_since(start);
+  return report;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,256 @@
+#include "occ_improve/render.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+namespace occ_improve {
+namespace {
+
+std::uint8_t unit_to_byte(double v) {  // [0, 1] -> [0, 255], clipped, rounded
+  v = std::isnan(v) ? 0.0 : std::min(1.0, std::max(0.0, v));
+  return static_cast<std::uint8_t>(std::lround(v * 255.0));
+}
+
+Image grey_image(int width, int height) {
+  Image im;
+  im.width = width;
+  im.height = height;
+  im.channels = 1;
+  im.pixels.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  return im;
+}
+
+void require_consistent(const SurfaceMap& s) {
+  const std::size_t n = static_cast<std::size_t>(s.width) * static_cast<std::size_t>(s.height);
+  if (s.width < 0 || s.height < 0 || s.depth_m.size() != n || s.probability.size() != n)
+    throw InvalidInput("surface map of " + std::to_string(s.width) + " x " + std::to_string(s.height) +
+                       " rays holds " + std::to_string(s.depth_m.size()) + " depths");
+}
+
+struct ColourStop {
+  float value;
+  std::uint8_t r, g, b;
+};
+// The breakpoints of render.hpp / docs/METHOD.md.
+constexpr ColourStop kColourStops[] = {
+    {-0.3f, 0, 0, 128}, {-0.1f, 0, 64, 255}, {0.0f, 0, 200, 0}, {0.1f, 255, 255, 0}, {0.2f, 255, 140, 0}, {0.3f, 255, 0, 0},
+};
+
+// ---- PNG: CRC-32 (ISO 3309, as PNG specifies), Adler-32 (RFC 1950), stored deflate blocks (RFC 1951).
+std::uint32_t crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc = 0) {
+  static const auto table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t i = 0; i < 256; ++i) {
+      std::uint32_t c = i;
+      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
+      t[i] = c;
+    }
+    return t;
+  }();
+  crc = ~crc;
+  for (std::size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xffu] ^ (crc >> 8);
+  return ~crc;
+}
+
+std::uint32_t adler32(const std::vector<std::uint8_t>& data) {
+  std::uint32_t a = 1, b = 0;
+  for (const std::uint8_t byte : data) {
+    a = (a + byte) % 65521u;
+    b = (b + a) % 65521u;
+  }
+  return (b << 16) | a;
+}
+
+void put_be32(std::vector<std::uint8_t>& out, std::uint32_t v) {
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
+}
+
+void put_chunk(std::vector<std::uint8_t>& out, const char type[4], const std::vector<std::uint8_t>& data) {
+  put_be32(out, static_cast<std::uint32_t>(data.size()));
+  const std::size_t start = out.size();
+  out.insert(out.end(), type, type + 4);
+  out.insert(out.end(), data.begin(), data.end());
+  put_be32(out, crc32(out.data() + start, out.size() - start));
+}
+
+// zlib stream of stored (uncompressed) deflate blocks of at most 65535 bytes.
+std::vector<std::uint8_t> zlib_stored(const std::vector<std::uint8_t>& raw) {
+  std::vector<std::uint8_t> z = {0x78, 0x01};  // deflate, 32 KiB window, no dictionary, check bits
+  std::size_t pos = 0;
+  do {
+    const std::size_t len = std::min<std::size_t>(65535, raw.size() - pos);
+    const bool final_block = pos + len == raw.size();
+    z.push_back(final_block ? 1 : 0);  // BFINAL, BTYPE = 00 (stored)
+    z.push_back(static_cast<std::uint8_t>(len & 0xffu));
+    z.push_back(static_cast<std::uint8_t>(len >> 8));
+    z.push_back(static_cast<std::uint8_t>(~len & 0xffu));
+    z.push_back(static_cast<std::uint8_t>((~len >> 8) & 0xffu));
+    z.insert(z.end(), raw.begin() + static_cast<std::ptrdiff_t>(pos), raw.begin() + static_cast<std::ptrdiff_t>(pos + len));
+    pos += len;
+  } while (pos < raw.size());
+  put_be32(z, adler32(raw));
+  return z;
+}
+
+// ---- A 3 x 5 pixel font for the legend's labels.
+const char* glyph(char c) {
+  switch (c) {
+    case '0': return "111101101101111";
+    case '1': return "010110010010111";
+    case '2': return "111001111100111";
+    case '3': return "111001111001111";
+    case '4': return "101101111001001";
+    case '5': return "111100111001111";
+    case '6': return "111100111101111";
+    case '7': return "111001001001001";
+    case '8': return "111101111101111";
+    case '9': return "111101111001111";
+    case '-': return "000000111000000";
+    case '.': return "000000000000010";
+    default: return "000000000000000";
+  }
+}
+
+void fill(Image& im, int x0, int y0, int w, int h, const std::array<std::uint8_t, 3>& rgb) {
+  for (int y = std::max(0, y0); y < std::min(im.height, y0 + h); ++y)
+    for (int x = std::max(0, x0); x < std::min(im.width, x0 + w); ++x)
+      for (int ch = 0; ch < 3; ++ch)
+        im.pixels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(im.width) + static_cast<std::size_t>(x)) * 3 +
+                  static_cast<std::size_t>(ch)] = rgb[static_cast<std::size_t>(ch)];
+}
+
+// Text centred on x, top at y, each font pixel drawn as scale x scale.
+void draw_text(Image& im, const std::string& text, int centre_x, int y, int scale) {
+  const int advance = 4 * scale;
+  int x = centre_x - (static_cast<int>(text.size()) * advance - scale) / 2;
+  for (const char c : text) {
+    const char* g = glyph(c);
+    for (int row = 0; row < 5; ++row)
+      for (int col = 0; col < 3; ++col)
+        if (g[row * 3 + col] == '1') fill(im, x + col * scale, y + row * scale, scale, scale, {0, 0, 0});
+    x += advance;
+  }
+}
+
+}  // namespace
+
+std::array<std::uint8_t, 3> improvement_colour(float value) {
+  if (std::isnan(value)) return {0, 0, 0};
+  const auto& first = kColourStops[0];
+  const auto& last = kColourStops[std::size(kColourStops) - 1];
+  if (value <= first.value) return {first.r, first.g, first.b};
+  if (value >= last.value) return {last.r, last.g, last.b};
+  std::size_t k = 1;
+  while (value > kColourStops[k].value) ++k;
+  const ColourStop& lo = kColourStops[k - 1];
+  const ColourStop& hi = kColourStops[k];
+  const float t = (value - lo.value) / (hi.value - lo.value);
+  const auto mix = [t](std::uint8_t a, std::uint8_t b) {
+    return static_cast<std::uint8_t>(std::lround(a + t * (static_cast<float>(b) - a)));
+  };
+  return {mix(lo.r, hi.r), mix(lo.g, hi.g), mix(lo.b, hi.b)};
+}
+
+Image render_depth(const SurfaceMap& surface, double depth_max_m) {
+  detail::require_parameter(std::isfinite(depth_max_m) && depth_max_m > 0, "depth_max_m", depth_max_m,
+                            "finite and > 0");
+  require_consistent(surface);
+  Image im = grey_image(surface.width, surface.height);
+  for (std::size_t c = 0; c < surface.size(); ++c) im.pixels[c] = unit_to_byte(surface.depth_m[c] / depth_max_m);
+  return im;
+}
+
+Image render_occupancy(const SurfaceMap& surface) {
+  require_consistent(surface);
+  Image im = grey_image(surface.width, surface.height);
+  // 0.5 maps to 128 (mid grey): P * 256 clipped to 255.
+  for (std::size_t c = 0; c < surface.size(); ++c) {
+    const double p = std::isnan(surface.probability[c]) ? 0.0 : surface.probability[c];
+    im.pixels[c] = static_cast<std::uint8_t>(std::min(255.0, std::max(0.0, std::floor(p * 256.0))));
+  }
+  return im;
+}
+
+Image render_improvement(const ImprovementMap& map) {
+  const std::size_t n = static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height);
+  if (map.width < 0 || map.height < 0 || map.value.size() != n)
+    throw InvalidInput("improvement map of " + std::to_string(map.width) + " x " + std::to_string(map.height) +
+                       " rays holds " + std::to_string(map.value.size()) + " values");
+  Image im;
+  im.width = map.width;
+  im.height = map.height;
+  im.channels = 3;
+  im.pixels.resize(n * 3);
+  for (std::size_t c = 0; c < n; ++c) {
+    const auto rgb = improvement_colour(map.value[c]);
+    std::copy(rgb.begin(), rgb.end(), im.pixels.begin() + static_cast<std::ptrdiff_t>(3 * c));
+  }
+  return im;
+}
+
+Image render_improvement_legend() {
+  // Bar from -0.4 to 0.4 at 4 px per 0.01, ticks and labels every 0.1.
+  constexpr int kMargin = 24, kPixelsPerTenth = 40, kTenths = 8, kBarTop = 8, kBarHeight = 24, kScale = 2;
+  Image im;
+  im.width = 2 * kMargin + kTenths * kPixelsPerTenth + 1;
+  im.height = kBarTop + kBarHeight + 6 + 5 * kScale + 8;
+  im.channels = 3;
+  im.pixels.assign(static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * 3, 255);
+  for (int x = 0; x <= kTenths * kPixelsPerTenth; ++x) {
+    const float value = -0.4f + 0.1f * static_cast<float>(x) / kPixelsPerTenth;
+    fill(im, kMargin + x, kBarTop, 1, kBarHeight, improvement_colour(value));
+  }
+  for (int tick = 0; tick <= kTenths; ++tick) {
+    const int x = kMargin + tick * kPixelsPerTenth;
+    fill(im, x, kBarTop + kBarHeight, 1, 4, {0, 0, 0});
+    const int tenths = tick - kTenths / 2;
+    const std::string label = tenths == 0 ? "0" : (tenths < 0 ? "-0." : "0.") + std::to_string(std::abs(tenths));
+    draw_text(im, label, x, kBarTop + kBarHeight + 6, kScale);
+  }
+  return im;
+}
+
+std::vector<std::uint8_t> encode_png(const Image& image) {
+  if (image.width <= 0 || image.height <= 0 || (image.channels != 1 && image.channels != 3) ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) *
+                                 static_cast<std::size_t>(image.channels))
+    throw InvalidInput("image of " + std::to_string(image.width) + " x " + std::to_string(image.height) + " x " +
+                       std::to_string(image.channels) + " holds " + std::to_string(image.pixels.size()) +
+                       " bytes (need width, height > 0 and 1 or 3 channels)");
+  std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  std::vector<std::uint8_t> ihdr;
+  put_be32(ihdr, static_cast<std::uint32_t>(image.width));
+  put_be32(ihdr, static_cast<std::uint32_t>(image.height));
+  ihdr.push_back(8);                                // bit depth
+  ihdr.push_back(image.channels == 1 ? 0 : 2);      // colour type: grey or RGB
+  ihdr.push_back(0);                                // compression: deflate
+  ihdr.push_back(0);                                // filter method 0
+  ihdr.push_back(0);                                // no interlace
+  put_chunk(png, "IHDR", ihdr);
+  const std::size_t row_bytes = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels);
+  std::vector<std::uint8_t> raw;
+  raw.reserve((row_bytes + 1) * static_cast<std::size_t>(image.height));
+  for (int y = 0; y < image.height; ++y) {
+    raw.push_back(0);  // filter type None
+    const auto row = image.pixels.begin() + static_cast<std::ptrdiff_t>(row_bytes * static_cast<std::size_t>(y));
+    raw.insert(raw.end(), row, row + static_cast<std::ptrdiff_t>(row_bytes));
+  }
+  put_chunk(png, "IDAT", zlib_stored(raw));
+  put_chunk(png, "IEND", {});
+  return png;
+}
+
+void write_png(const std::string& path, const Image& image) {
+  const std::vector<std::uint8_t> bytes = encode_png(image);
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (!file) throw IoError("cannot open '" + path + "' for writing");
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
+    throw IoError("cannot write '" + path + "'");
+  if (std::fclose(file.release()) != 0) throw IoError("cannot write '" + path + "' (close failed)");
+}
+
+}  // namespace occ_improve
