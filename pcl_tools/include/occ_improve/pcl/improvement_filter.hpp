@@ -1,0 +1,106 @@
+#pragma once
+// ImprovementFilter: a PCL filter that keeps the points of a frame by the improvement of the ray they
+// fall in. Fed a cloud from the sensor model's sensor (sensor frame), it first inserts the cloud into
+// its Mapper (its own, or one shared through setMapper; setUpdateMap(false) only reads the map), then
+// selects points by one of:
+//  - range:         improvement in [min, max];
+//  - top_count:     the K points of highest improvement;
+//  - top_fraction:  the best `fraction` of the points that have a ray ("selective sensing": keep the
+//                   share of a frame worth keeping, cut the data where it adds least);
+//  - contour:       improvement < threshold (negative improvement marks depth discontinuities).
+// Ties in the top modes go to the lower point index. Per-point improvement = the improvement of the ray
+// (column) the point's direction falls in.
+//
+// Points without a ray (NaN/Inf, rho = 0, direction outside the grid's field of view) are never kept,
+// neither in the normal nor in the negative (setNegative) output, like NaN points in pcl::PassThrough;
+// they are always among the removed indices and are counted (getPointsWithoutRay()).
+// setNegative, setKeepOrganized, setUserFilterValue and getRemovedIndices behave as in every
+// pcl::FilterIndices. Errors (no map, bad parameters, a map the cloud cannot be inserted into) follow
+// PCL's convention: PCL_ERROR and an empty selection.
+//
+// getImprovementCloud(): per input point (aligned with the input cloud, same width/height) its x y z,
+// and the surface depth, surface probability and improvement of its ray (NaN where it has no ray).
+//
+// Explicitly instantiated for PointXYZ, PointXYZI, PointXYZRGB, PointXYZRGBA and PointXYZL.
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/pcl/point_types.hpp"
+
+#include <pcl/filters/filter_indices.h>
+
+#include <cstddef>
+#include <memory>
+#include <vector>
+
+namespace occ_improve {
+
+enum class ImprovementSelection { range, top_count, top_fraction, contour };
+
+template <typename PointT>
+class ImprovementFilter : public pcl::FilterIndices<PointT> {
+public:
+  using Ptr = std::shared_ptr<ImprovementFilter<PointT>>;
+  using ConstPtr = std::shared_ptr<const ImprovementFilter<PointT>>;
+
+  explicit ImprovementFilter(bool extract_removed_indices = false);
+
+  /// A map of its own for the preset (replaces any mapper set before).
+  void setSensorPreset(const SensorPreset& preset, const GridOptions& grid_options = {});
+  /// Shares a mapper with the caller (nullptr unsets it).
+  void setMapper(std::shared_ptr<Mapper> mapper) { mapper_ = std::move(mapper); }
+  std::shared_ptr<Mapper> getMapper() const { return mapper_; }
+  /// true (default): insert the input before selecting; false: select against the map as it is.
+  void setUpdateMap(bool update) { update_map_ = update; }
+  bool getUpdateMap() const { return update_map_; }
+  void setInsertionOptions(const InsertionOptions& options) { insertion_options_ = options; }
+
+  void setImprovementRange(float min_improvement, float max_improvement);
+  void setTopCount(std::size_t count);
+  void setTopFraction(double fraction);
+  void setContourThreshold(float threshold = 0.0f);
+  ImprovementSelection getSelection() const { return selection_; }
+
+  /// Valid after filter(): see the header comment.
+  const pcl::PointCloud<PointImprovement>& getImprovementCloud() const { return improvement_cloud_; }
+  /// The insertion made by the last filter() call (zeros when the map was not updated).
+  const MapperReport& getLastReport() const { return last_report_; }
+  /// Points of the last filter() call's indices that had no ray.
+  std::size_t getPointsWithoutRay() const { return points_without_ray_; }
+
+protected:
+  using pcl::FilterIndices<PointT>::filter_name_;
+  using pcl::FilterIndices<PointT>::getClassName;
+  using pcl::FilterIndices<PointT>::input_;
+  using pcl::FilterIndices<PointT>::indices_;
+  using pcl::FilterIndices<PointT>::negative_;
+  using pcl::FilterIndices<PointT>::extract_removed_indices_;
+  using pcl::FilterIndices<PointT>::removed_indices_;
+
+  void applyFilter(pcl::Indices& indices) override;
+
+private:
+  /// Fills per-point improvement (NaN without a ray) and the improvement cloud; false on error.
+  bool evaluate(std::vector<float>& point_improvement);
+  /// Indices (into input_) selected in normal mode, ascending.
+  pcl::Indices select(const std::vector<float>& point_improvement) const;
+  bool parametersValid() const;
+
+  std::shared_ptr<Mapper> mapper_;
+  bool update_map_ = true;
+  InsertionOptions insertion_options_;
+  ImprovementSelection selection_ = ImprovementSelection::top_fraction;
+  float min_improvement_ = 0.0f, max_improvement_ = 0.0f, contour_threshold_ = 0.0f;
+  std::size_t top_count_ = 0;
+  double top_fraction_ = 0.2;
+  pcl::PointCloud<PointImprovement> improvement_cloud_;
+  MapperReport last_report_;
+  std::size_t points_without_ray_ = 0;
+};
+
+/// Selective sensing in one call: inserts `frame` into `mapper` and returns the indices of the best
+/// `fraction` of its points by improvement (ascending). Throws InvalidParameter for a fraction outside
+/// [0, 1], InvalidInput for a cloud the mapper refuses.
+template <typename PointT>
+pcl::Indices keep_most_improving(const pcl::PointCloud<PointT>& frame, const std::shared_ptr<Mapper>& mapper,
+                                 double fraction);
+
+}  // namespace occ_improve

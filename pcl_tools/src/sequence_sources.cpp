@@ -1,0 +1,294 @@
+#include "occ_improve/pcl/sequence_sources.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <pcl/common/transforms.h>
+#include <pcl/io/openni2_grabber.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace occ_improve {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------------------------------
+// FileSequenceGrabber
+
+FileSequenceGrabber::FileSequenceGrabber(std::size_t frame_count, float fps)
+    : frame_count_(frame_count), fps_(fps), frame_signal_(createSignal<FrameSignal>()) {
+  detail::require_parameter(std::isfinite(fps) && fps >= 0.0f, "fps", fps, ">= 0 (0 = as fast as possible)");
+}
+
+FileSequenceGrabber::~FileSequenceGrabber() noexcept { stop(); }
+
+void FileSequenceGrabber::setErrorCallback(ErrorCallback callback) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  on_error_ = std::move(callback);
+}
+
+void FileSequenceGrabber::start() {
+  stop();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_requested_ = false;
+  }
+  emitted_ = 0;
+  errors_ = 0;
+  running_ = true;
+  thread_ = std::thread([this] { run(); });
+}
+
+void FileSequenceGrabber::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_requested_ = true;
+  }
+  wake_.notify_all();
+  if (thread_.joinable()) thread_.join();
+  running_ = false;
+}
+
+bool FileSequenceGrabber::isRunning() const { return running_; }
+
+void FileSequenceGrabber::waitUntilDone() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  wake_.wait(lock, [this] { return !running_ || stop_requested_; });
+}
+
+void FileSequenceGrabber::run() {
+  using Clock = std::chrono::steady_clock;
+  const auto period = fps_ > 0.0f ? std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / fps_))
+                                  : Clock::duration::zero();
+  auto next_frame_time = Clock::now();
+  for (std::size_t i = 0; i < frame_count_; ++i) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (wake_.wait_until(lock, next_frame_time, [this] { return stop_requested_; })) break;
+    }
+    next_frame_time += period;
+    Cloud::Ptr cloud;
+    try {
+      cloud = loadFrame(i);
+    } catch (const std::exception& e) {
+      ++errors_;
+      ErrorCallback on_error;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        on_error = on_error_;
+      }
+      if (on_error) on_error(std::string(getName()) + ": frame " + std::to_string(i) + " skipped: " + e.what());
+      continue;
+    }
+    if (frame_signal_->num_slots() > 0) (*frame_signal_)(cloud);
+    ++emitted_;
+  }
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    running_ = false;
+  }
+  wake_.notify_all();
+}
+
+// ---------------------------------------------------------------------------------------------------
+// PcdSequenceGrabber
+
+namespace {
+
+std::vector<std::string> files_in(const std::string& directory, const std::vector<std::string>& extensions) {
+  std::error_code ec;
+  fs::directory_iterator it(directory, ec);
+  if (ec) throw IoError("cannot read folder '" + directory + "': " + ec.message());
+  std::vector<std::string> files;
+  for (const auto& entry : it) {
+    if (!entry.is_regular_file()) continue;
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (std::find(extensions.begin(), extensions.end(), ext) != extensions.end()) files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::vector<std::string> require_files(std::vector<std::string> files, const std::string& what) {
+  if (files.empty()) throw InvalidInput("no " + what + " found");
+  return files;
+}
+
+}  // namespace
+
+PcdSequenceGrabber::PcdSequenceGrabber(const std::string& directory, float fps)
+    : PcdSequenceGrabber(require_files(files_in(directory, {".pcd"}), ".pcd file in '" + directory + "'"), fps) {}
+
+PcdSequenceGrabber::PcdSequenceGrabber(std::vector<std::string> files, float fps)
+    : FileSequenceGrabber(files.size(), fps), files_(require_files(std::move(files), "PCD file in the list")) {}
+
+FileSequenceGrabber::Cloud::Ptr PcdSequenceGrabber::loadFrame(std::size_t index) {
+  LoadedFrame frame = load_pcd_frame(files_[index]);
+  return Cloud::Ptr(new Cloud(std::move(frame.cloud)));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Depth sequences
+
+Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError("cannot open pose file '" + path + "'");
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
+  if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
+    throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = m.topLeftCorner<3, 3>();
+  pose.translation() = m.topRightCorner<3, 1>();
+  return pose;
+}
+
+namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::optional<PinholeIntrinsics> seven_scenes_intrinsics(const fs::path& directory) {
+  for (const fs::path& candidate : {directory / "camera-intrinsics.txt", directory.parent_path() / "camera-intrinsics.txt"})
+    if (fs::exists(candidate)) return read_intrinsics_file(candidate.string());
+  return std::nullopt;
+}
+
+/// "timestamp value..." lines, comments (#) skipped.
+std::vector<std::pair<double, std::string>> timestamped_lines(const fs::path& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError("cannot open '" + path.string() + "'");
+  std::vector<std::pair<double, std::string>> lines;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    double t = 0;
+    std::string rest;
+    if (!(fields >> t)) throw FormatError("'" + path.string() + "': line without a timestamp: " + line);
+    std::getline(fields >> std::ws, rest);
+    lines.emplace_back(t, rest);
+  }
+  return lines;
+}
+
+DepthSequence scan_tum(const fs::path& directory) {
+  DepthSequence sequence;
+  sequence.encoding = DepthEncoding::tum_5000;
+  std::map<double, Eigen::Isometry3d> poses;
+  if (fs::exists(directory / "groundtruth.txt")) {
+    for (const auto& [t, rest] : timestamped_lines(directory / "groundtruth.txt")) {
+      std::istringstream fields(rest);
+      double tx, ty, tz, qx, qy, qz, qw;
+      if (!(fields >> tx >> ty >> tz >> qx >> qy >> qz >> qw))
+        throw FormatError("'" + (directory / "groundtruth.txt").string() + "': bad pose line at t = " + std::to_string(t));
+      Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+      pose.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();
+      pose.translation() = Eigen::Vector3d(tx, ty, tz);
+      poses.emplace(t, pose);
+    }
+  }
+  constexpr double kMaxPoseGapSeconds = 0.02;
+  for (const auto& [t, file] : timestamped_lines(directory / "depth.txt")) {
+    DepthSequenceFrame frame;
+    frame.depth_path = (directory / file).string();
+    if (!poses.empty()) {
+      auto after = poses.lower_bound(t);
+      auto best = after;
+      if (after == poses.end() || (after != poses.begin() && t - std::prev(after)->first < after->first - t))
+        best = std::prev(after);
+      if (std::abs(best->first - t) <= kMaxPoseGapSeconds) frame.camera_to_world = best->second;
+    }
+    sequence.frames.push_back(std::move(frame));
+  }
+  return sequence;
+}
+
+}  // namespace
+
+DepthSequence scan_depth_sequence(const std::string& directory_name) {
+  const fs::path directory(directory_name);
+  if (fs::exists(directory / "depth.txt")) {
+    DepthSequence sequence = scan_tum(directory);
+    if (sequence.frames.empty()) throw InvalidInput("'" + (directory / "depth.txt").string() + "' lists no frame");
+    return sequence;
+  }
+  DepthSequence sequence;
+  const std::vector<std::string> images = files_in(directory_name, {".png", ".pgm"});
+  bool seven_scenes = false;
+  for (const std::string& path : images) {
+    if (!ends_with(path, ".depth.png")) continue;
+    seven_scenes = true;
+    DepthSequenceFrame frame;
+    frame.depth_path = path;
+    const std::string pose_path = path.substr(0, path.size() - std::string(".depth.png").size()) + ".pose.txt";
+    if (fs::exists(pose_path)) frame.camera_to_world = read_pose_matrix_file(pose_path);
+    sequence.frames.push_back(std::move(frame));
+  }
+  if (seven_scenes) {
+    sequence.intrinsics = seven_scenes_intrinsics(directory);
+  } else {
+    for (const std::string& path : images) sequence.frames.push_back({path, std::nullopt});
+  }
+  if (sequence.frames.empty()) throw InvalidInput("no depth image (.png/.pgm) found in '" + directory_name + "'");
+  return sequence;
+}
+
+DepthSequenceGrabber::DepthSequenceGrabber(DepthSequence sequence, const PinholeIntrinsics& intrinsics,
+                                           const DepthSequenceOptions& options)
+    : FileSequenceGrabber(sequence.frames.size(), options.fps),
+      sequence_(std::move(sequence)),
+      intrinsics_(intrinsics),
+      encoding_(options.encoding.value_or(sequence_.encoding)) {
+  if (sequence_.frames.empty()) throw InvalidParameter("depth sequence: no frames");
+  intrinsics_.validate();
+  // Poses are used only when every frame has one: a partly posed sequence cannot be put in one frame.
+  use_poses_ = options.use_poses &&
+               std::all_of(sequence_.frames.begin(), sequence_.frames.end(),
+                           [](const DepthSequenceFrame& f) { return f.camera_to_world.has_value(); });
+  if (use_poses_) world_to_first_ = sequence_.frames.front().camera_to_world->inverse();
+}
+
+FileSequenceGrabber::Cloud::Ptr DepthSequenceGrabber::loadFrame(std::size_t index) {
+  const DepthSequenceFrame& frame = sequence_.frames[index];
+  LoadedFrame loaded = load_depth_frame(frame.depth_path, intrinsics_, encoding_);
+  Cloud::Ptr cloud(new Cloud);
+  if (use_poses_) {
+    const Eigen::Isometry3d to_first = world_to_first_ * *frame.camera_to_world;
+    pcl::transformPointCloud(loaded.cloud, *cloud, to_first.matrix().cast<float>());
+  } else {
+    *cloud = std::move(loaded.cloud);
+  }
+  return cloud;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// OpenNI2
+
+std::shared_ptr<pcl::Grabber> open_openni2_grabber(const std::string& device_or_oni) {
+  const bool is_file = ends_with(device_or_oni, ".oni") || ends_with(device_or_oni, ".ONI");
+  if (is_file && !fs::exists(device_or_oni)) throw IoError("OpenNI2 recording '" + device_or_oni + "' does not exist");
+  try {
+    return std::make_shared<pcl::io::OpenNI2Grabber>(device_or_oni);
+  } catch (const pcl::IOException& e) {
+    const std::string what = e.detailedMessage();
+    if (what.find("No devices connected") != std::string::npos)
+      throw IoError("no OpenNI2 device connected (plug in a Kinect/Xtion, or replay a recording with -oni FILE)");
+    throw IoError("cannot open OpenNI2 " + std::string(is_file ? "recording '" : "device '") + device_or_oni +
+                  "': " + what);
+  } catch (const pcl::PCLException& e) {
+    throw IoError("cannot open OpenNI2 " + std::string(is_file ? "recording '" : "device '") + device_or_oni +
+                  "': " + e.detailedMessage());
+  }
+}
+
+}  // namespace occ_improve
