@@ -1,0 +1,70 @@
+#pragma once
+// Inputs shared by the benchmarks: the generated sample frame and the real frames in ../shared/data,
+// found through OCC_IMPROVE_DATA_DIR (environment), else the folder configured at build time.
+#include "occ_improve/integrate.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <Eigen/Core>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#if OCC_IMPROVE_BENCH_WITH_PCL
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+#endif
+
+namespace occ_improve::bench {
+
+/// Full path of a file under the data folder, "" when it is absent.
+inline std::string data_file(const std::string& relative) {
+  const char* env = std::getenv("OCC_IMPROVE_DATA_DIR");
+#ifdef OCC_IMPROVE_DATA_DIR_DEFAULT
+  const std::string dir = env && *env ? env : OCC_IMPROVE_DATA_DIR_DEFAULT;
+#else
+  const std::string dir = env && *env ? env : "";
+#endif
+  if (dir.empty()) return "";
+  const std::string path = dir + "/" + relative;
+  return std::ifstream(path).good() ? path : "";
+}
+
+/// The generated sample frame as points (NaN where there is no return), built once.
+inline const std::vector<Eigen::Vector3f>& sample_points() {
+  static const std::vector<Eigen::Vector3f> points = sample::generate_scene().points();
+  return points;
+}
+
+/// A real Kinect frame as packed xyz points; `error` says why it is empty.
+inline std::vector<Eigen::Vector3f> load_pcd_points(const std::string& relative, std::string& error) {
+  std::vector<Eigen::Vector3f> points;
+#if OCC_IMPROVE_BENCH_WITH_PCL
+  const std::string path = data_file(relative);
+  if (path.empty()) {
+    error = "real data '" + relative + "' not found (set OCC_IMPROVE_DATA_DIR to the shared/data folder)";
+    return points;
+  }
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  if (pcl::io::loadPCDFile(path, cloud) != 0) {
+    error = "cannot read " + path;
+    return points;
+  }
+  points.reserve(cloud.size());
+  for (const auto& p : cloud.points) points.emplace_back(p.x, p.y, p.z);
+#else
+  error = "built without PCL: cannot read '" + relative + "'";
+#endif
+  return points;
+}
+
+/// The real frame of the insertion benchmarks (PCL tutorial capture, 640 x 480 organized), loaded once.
+inline const std::vector<Eigen::Vector3f>& real_points(std::string& error) {
+  static std::string load_error;
+  static const std::vector<Eigen::Vector3f> points =
+      load_pcd_points("kinect/pcl_tutorials/pairwise/capture0001.pcd", load_error);
+  error = load_error;
+  return points;
+}
+
+}  // namespace occ_improve::bench
