@@ -1,0 +1,35 @@
+#pragma once
+// Saving and loading the spherical grid in a versioned binary format (docs/MAP_FORMAT.md): geometry,
+// sensor model, update mode and clamping, the sparse column contents, and a checksum over all of it.
+//
+// save_map writes a temporary file beside the target and renames it over the target only once it is
+// complete, so an interrupted save never leaves a half-written map under the real name.
+// load_map verifies magic, byte order, version, size and checksum before it trusts any field, then
+// checks every value against the geometry; it throws FormatError for a file that is not a valid map
+// (naming what is wrong) and IoError for a file that cannot be opened or read. Round trips are exact:
+// every voxel's log-odds comes back bit for bit.
+#include "occ_improve/grid.hpp"
+#include "occ_improve/sensor_model.hpp"
+
+#include <cstdint>
+#include <string>
+
+namespace occ_improve {
+
+/// The format version this build writes and the only one it reads.
+constexpr std::uint32_t kMapFormatVersion = 1;
+
+/// Writes `grid` and the sensor model it was built with to `path` (atomically: temp file + rename).
+/// Throws IoError when the folder is not writable or the write fails (the target is then untouched).
+void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model);
+
+struct LoadedMap {
+  SphericalGrid grid;
+  SensorModelParams model;
+};
+
+/// Reads a map written by save_map. Throws IoError (cannot open/read) or FormatError (not a map,
+/// truncated, corrupt, other version, other byte order, inconsistent contents).
+LoadedMap load_map(const std::string& path);
+
+}  // namespace occ_improve

@@ -1,0 +1,316 @@
+// Saving and loading maps (map_io.hpp): exact round trips on generated scenes, atomic saves, and every
+// kind of bad file refused with a typed error.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/integrate.hpp"
+#include "occ_improve/map_io.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/sample_scene.hpp"
+#include "occ_improve/surface.hpp"
+
+#include <Eigen/Core>
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A scratch folder per test, removed afterwards.
+class MapIo : public ::testing::Test {
+protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    folder_ = fs::temp_directory_path() / (std::string("occ_map_io_") + info->name() + "_" +
+                                           std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    fs::remove_all(folder_);
+    fs::create_directories(folder_);
+  }
+  void TearDown() override { fs::remove_all(folder_); }
+  std::string file(const std::string& name) const { return (folder_ / name).string(); }
+  std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(folder_)) names.push_back(e.path().filename().string());
+    return names;
+  }
+  fs::path folder_;
+};
+
+std::vector<char> read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void write_bytes(const std::string& path, const std::vector<char>& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+// The checksum exactly as docs/MAP_FORMAT.md defines it (written from the document, not the library).
+std::uint64_t documented_checksum(const std::vector<char>& bytes, std::size_t size) {
+  std::uint64_t h = 14695981039346656037ull;
+  std::size_t i = 0;
+  for (; i + 8 <= size; i += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, bytes.data() + i, 8);
+    h = (h ^ word) * 1099511628211ull;
+  }
+  for (; i < size; ++i) h = (h ^ static_cast<unsigned char>(bytes[i])) * 1099511628211ull;
+  return h;
+}
+
+void reseal(std::vector<char>& bytes) {
+  const std::uint64_t h = documented_checksum(bytes, bytes.size() - 8);
+  std::memcpy(bytes.data() + bytes.size() - 8, &h, 8);
+}
+
+bool same_params(const GeometryParams& a, const GeometryParams& b) {
+  return a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
+         a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&
+         a.elevation_min_rad == b.elevation_min_rad && a.elevation_max_rad == b.elevation_max_rad &&
+         a.depth_binning == b.depth_binning && a.depth_min_m == b.depth_min_m && a.depth_max_m == b.depth_max_m;
+}
+
+bool same_model(const SensorModelParams& a, const SensorModelParams& b) {
+  return a.sigma_azimuth_rad == b.sigma_azimuth_rad && a.sigma_elevation_rad == b.sigma_elevation_rad &&
+         a.sigma_depth_m == b.sigma_depth_m && a.sigma_depth_per_m2 == b.sigma_depth_per_m2 &&
+         a.sigma_depth_floor_m == b.sigma_depth_floor_m && a.support_k == b.support_k;
+}
+
+// Every column bit for bit: the same touched set, runs, windows and float bit patterns.
+void expect_identical(const SphericalGrid& a, const SphericalGrid& b) {
+  ASSERT_TRUE(same_params(a.geometry().params(), b.geometry().params()));
+  EXPECT_EQ(a.options().mode, b.options().mode);
+  EXPECT_EQ(a.options().probability_min, b.options().probability_min);
+  EXPECT_EQ(a.options().probability_max, b.options().probability_max);
+  EXPECT_EQ(a.options().memory_cap_bytes, b.options().memory_cap_bytes);
+  std::size_t differing = 0;
+  for (std::size_t c = 0; c < a.geometry().column_count(); ++c) {
+    const ColumnData* x = a.find(static_cast<ColumnIndex>(c));
+    const ColumnData* y = b.find(static_cast<ColumnIndex>(c));
+    const bool tx = x && x->touched(), ty = y && y->touched();
+    if (tx != ty) {
+      ++differing;
+      continue;
+    }
+    if (!tx) continue;
+    const bool same = x->uniform_end == y->uniform_end && x->window.size() == y->window.size() &&
+                      (x->uniform_end == 0 || std::memcmp(&x->uniform_value, &y->uniform_value, sizeof(float)) == 0) &&
+                      (x->window.empty() ||
+                       std::memcmp(x->window.data(), y->window.data(), x->window.size() * sizeof(float)) == 0);
+    differing += same ? 0 : 1;
+  }
+  EXPECT_EQ(differing, 0u);
+  EXPECT_EQ(a.touched_column_count(), b.touched_column_count());
+  EXPECT_EQ(a.stored_voxel_count(), b.stored_voxel_count());
+}
+
+void expect_same_surface(const SphericalGrid& a, const SphericalGrid& b) {
+  const SurfaceMap sa = compute_surface(a), sb = compute_surface(b);
+  ASSERT_EQ(sa.size(), sb.size());
+  EXPECT_EQ(sa.bin, sb.bin);
+  EXPECT_EQ(sa.unknown, sb.unknown);
+  EXPECT_EQ(0, std::memcmp(sa.depth_m.data(), sb.depth_m.data(), sa.size() * sizeof(float)));
+  EXPECT_EQ(0, std::memcmp(sa.probability.data(), sb.probability.data(), sa.size() * sizeof(float)));
+}
+
+// The sample scene's frames, generated once for the whole test program.
+const std::vector<std::vector<Eigen::Vector3f>>& sample_frames() {
+  static const auto frames = [] {
+    std::vector<std::vector<Eigen::Vector3f>> points;
+    for (const auto& frame : sample::generate_sequence(2)) points.push_back(frame.points());
+    return points;
+  }();
+  return frames;
+}
+
+SphericalGrid sample_grid(const SensorPreset& preset, const GridOptions& options, int frames = 1) {
+  SphericalGrid grid{SphericalGeometry(preset.geometry), options};
+  const SensorModel model(preset.model);
+  for (int f = 0; f < frames; ++f) insert_points(grid, model, PointSpan::from(sample_frames()[static_cast<std::size_t>(f)]));
+  return grid;
+}
+
+TEST_F(MapIo, PaperPresetSampleFrameRoundTripsBitForBit) {
+  const SensorPreset preset = kinect_v1_paper();
+  const SphericalGrid grid = sample_grid(preset, {});
+  ASSERT_GT(grid.touched_column_count(), 100000u);
+  save_map(file("frame.occmap"), grid, preset.model);
+  const LoadedMap loaded = load_map(file("frame.occmap"));
+  EXPECT_TRUE(same_model(loaded.model, preset.model));
+  expect_identical(grid, loaded.grid);
+  expect_same_surface(grid, loaded.grid);
+  EXPECT_EQ(entries(), std::vector<std::string>{"frame.occmap"}) << "no temporary file may be left behind";
+}
+
+TEST_F(MapIo, ExactModeInverseDepthPresetRoundTrips) {
+  SensorPreset preset = kinect_v1();
+  preset.geometry.depth_bins = 256;
+  GridOptions options;
+  options.mode = UpdateMode::exact;
+  const SphericalGrid grid = sample_grid(preset, options, 2);
+  save_map(file("exact.occmap"), grid, preset.model);
+  const LoadedMap loaded = load_map(file("exact.occmap"));
+  EXPECT_EQ(loaded.grid.options().mode, UpdateMode::exact);
+  EXPECT_EQ(loaded.grid.geometry().params().depth_binning, DepthBinning::inverse_depth);
+  EXPECT_TRUE(same_model(loaded.model, preset.model));
+  expect_identical(grid, loaded.grid);
+  expect_same_surface(grid, loaded.grid);
+}
+
+TEST_F(MapIo, OctomapClampingAndEmptyGridRoundTrip) {
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.azimuth_bins = 64;
+  preset.geometry.elevation_bins = 48;
+  const SphericalGrid empty{SphericalGeometry(preset.geometry), GridOptions::octomap_clamping()};
+  save_map(file("empty.occmap"), empty, preset.model);
+  const LoadedMap loaded = load_map(file("empty.occmap"));
+  EXPECT_EQ(loaded.grid.touched_column_count(), 0u);
+  EXPECT_EQ(loaded.grid.options().probability_min, 0.1192);
+  EXPECT_EQ(loaded.grid.options().probability_max, 0.971);
+  expect_identical(empty, loaded.grid);
+}
+
+TEST_F(MapIo, ResavingOverAnExistingMapReplacesIt) {
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.azimuth_bins = 64;
+  preset.geometry.elevation_bins = 48;
+  const SphericalGrid empty{SphericalGeometry(preset.geometry)};
+  save_map(file("map.occmap"), empty, preset.model);
+  const SphericalGrid full = sample_grid(preset, {});
+  ASSERT_GT(full.touched_column_count(), 0u);
+  save_map(file("map.occmap"), full, preset.model);
+  expect_identical(full, load_map(file("map.occmap")).grid);
+  EXPECT_EQ(entries().size(), 1u);
+}
+
+class BadMapFile : public MapIo {
+protected:
+  // A small valid map (80 x 60 columns), saved once for the whole suite.
+  static void SetUpTestSuite() {
+    SensorPreset preset = kinect_v1_paper();
+    preset.geometry.azimuth_bins = 80;
+    preset.geometry.elevation_bins = 60;
+    preset.geometry.depth_bins = 128;
+    const SphericalGrid grid = sample_grid(preset, {});
+    touched_ = grid.touched_column_count();
+    const std::string path = (fs::temp_directory_path() / "occ_map_io_good_suite.occmap").string();
+    save_map(path, grid, preset.model);
+    good_ = read_bytes(path);
+    fs::remove(path);
+  }
+  void SetUp() override {
+    MapIo::SetUp();
+    ASSERT_GT(touched_, 1000u);
+    write_bytes(file("good.occmap"), good_);
+  }
+  // Loads `bytes` and returns the FormatError message ("" when no FormatError was thrown).
+  std::string format_error_of(const std::vector<char>& bytes) {
+    write_bytes(file("bad.occmap"), bytes);
+    try {
+      load_map(file("bad.occmap"));
+    } catch (const FormatError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  static inline std::vector<char> good_;
+  static inline std::size_t touched_ = 0;
+};
+
+// Offsets from docs/MAP_FORMAT.md.
+constexpr std::size_t kMarkerOffset = 8, kVersionOffset = 12, kAzimuthBinsOffset = 16;
+constexpr std::size_t kFirstColumnOffset = 16 + 64 + 48 + 28 + 8;
+
+TEST_F(BadMapFile, IntactFileLoads) { EXPECT_NO_THROW(load_map(file("good.occmap"))); }
+
+TEST_F(BadMapFile, FlippedBitIsRefusedByTheChecksum) {
+  for (std::size_t at : {kAzimuthBinsOffset + 4, good_.size() / 2, good_.size() - 9}) {
+    auto bytes = good_;
+    bytes[at] = static_cast<char>(bytes[at] ^ 0x10);
+    EXPECT_NE(format_error_of(bytes).find("checksum"), std::string::npos) << "byte " << at;
+  }
+}
+
+TEST_F(BadMapFile, TruncatedFileIsRefused) {
+  for (std::size_t size : {std::size_t{0}, std::size_t{5}, std::size_t{20}, good_.size() / 2, good_.size() - 1}) {
+    const std::vector<char> bytes(good_.begin(), good_.begin() + static_cast<std::ptrdiff_t>(size));
+    EXPECT_FALSE(format_error_of(bytes).empty()) << "size " << size;
+  }
+}
+
+TEST_F(BadMapFile, OtherVersionIsRefusedNamingTheVersion) {
+  auto bytes = good_;
+  const std::uint32_t version = kMapFormatVersion + 1;
+  std::memcpy(bytes.data() + kVersionOffset, &version, 4);
+  reseal(bytes);
+  EXPECT_NE(format_error_of(bytes).find("version " + std::to_string(version)), std::string::npos);
+}
+
+TEST_F(BadMapFile, OtherByteOrderIsRefused) {
+  auto bytes = good_;
+  std::swap(bytes[kMarkerOffset], bytes[kMarkerOffset + 3]);
+  std::swap(bytes[kMarkerOffset + 1], bytes[kMarkerOffset + 2]);
+  reseal(bytes);
+  EXPECT_NE(format_error_of(bytes).find("byte order"), std::string::npos);
+}
+
+TEST_F(BadMapFile, FileThatIsNotAMapIsRefused) {
+  const std::string text = "ply\nformat ascii 1.0\nelement vertex 0\nend_header\n";
+  EXPECT_NE(format_error_of(std::vector<char>(text.begin(), text.end())).find("not an occ_improve map"),
+            std::string::npos);
+}
+
+TEST_F(BadMapFile, ConsistentChecksumButInvalidContentsAreRefused) {
+  {  // a geometry the library refuses
+    auto bytes = good_;
+    const std::int32_t zero_bins = 0;
+    std::memcpy(bytes.data() + kAzimuthBinsOffset, &zero_bins, 4);
+    reseal(bytes);
+    EXPECT_NE(format_error_of(bytes).find("invalid geometry"), std::string::npos);
+  }
+  {  // the first column record pointing outside the grid
+    auto bytes = good_;
+    const std::uint32_t outside = 80 * 60;
+    std::memcpy(bytes.data() + kFirstColumnOffset, &outside, 4);
+    reseal(bytes);
+    EXPECT_NE(format_error_of(bytes).find("outside the grid"), std::string::npos);
+  }
+  {  // a window running past the depth bins
+    auto bytes = good_;
+    const std::uint32_t too_long = 129;
+    std::memcpy(bytes.data() + kFirstColumnOffset + 12, &too_long, 4);
+    reseal(bytes);
+    EXPECT_NE(format_error_of(bytes).find("runs past"), std::string::npos);
+  }
+  {  // a log-odds value beyond the clamp
+    auto bytes = good_;
+    const float beyond = 100.0f;
+    std::memcpy(bytes.data() + kFirstColumnOffset + 16, &beyond, 4);
+    reseal(bytes);
+    EXPECT_NE(format_error_of(bytes).find("out of range"), std::string::npos);
+  }
+}
+
+TEST_F(MapIo, MissingFileIsAnIoError) { EXPECT_THROW(load_map(file("absent.occmap")), IoError); }
+
+TEST_F(MapIo, UnwritableTargetIsAnIoErrorAndLeavesNothingBehind) {
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.azimuth_bins = 16;
+  preset.geometry.elevation_bins = 16;
+  const SphericalGrid grid{SphericalGeometry(preset.geometry)};
+  EXPECT_THROW(save_map(file("no_such_folder/map.occmap"), grid, preset.model), IoError);
+  fs::create_directory(file("a_folder"));
+  EXPECT_THROW(save_map(file("a_folder"), grid, preset.model), IoError);
+  EXPECT_EQ(entries(), std::vector<std::string>{"a_folder"}) << "a failed save must not leave a partial file";
+  EXPECT_TRUE(fs::is_empty(file("a_folder")));
+}
+
+}  // namespace
+}  // namespace occ_improve
