@@ -8,7 +8,9 @@
 #include <pcl/io/pcd_io.h>
 #include <png.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
@@ -26,13 +28,22 @@ std::string extension_of(const std::string& path) {
   return e;
 }
 
+// libpng reports errors through a callback that must not return: keep the message, jump back.
+void png_error_to_string(png_structp png, png_const_charp message) {
+  *static_cast<std::string*>(png_get_error_ptr(png)) = message;
+  png_longjmp(png, 1);
+}
+void png_ignore_warning(png_structp, png_const_charp) {}
+
 DepthImage16 read_png16(const std::string& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw IoError("cannot open depth image '" + path + "'");
   unsigned char signature[8];
   if (std::fread(signature, 1, 8, file.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0)
     throw FormatError("'" + path + "' is not a PNG file");
-  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  std::string png_message;
+  png_structp png =
+      png_create_read_struct(PNG_LIBPNG_VER_STRING, &png_message, &png_error_to_string, &png_ignore_warning);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info) {
     png_destroy_read_struct(&png, &info, nullptr);
@@ -42,7 +53,7 @@ DepthImage16 read_png16(const std::string& path) {
   std::vector<png_bytep> rows;
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_read_struct(&png, &info, nullptr);
-    throw FormatError("'" + path + "' is a corrupt or truncated PNG");
+    throw FormatError("'" + path + "' is a corrupt or truncated PNG (" + png_message + ")");
   }
   png_init_io(png, file.get());
   png_set_sig_bytes(png, 8);
@@ -64,6 +75,7 @@ DepthImage16 read_png16(const std::string& path) {
     rows[static_cast<std::size_t>(v)] =
         reinterpret_cast<png_bytep>(image.values.data() + static_cast<std::size_t>(v) * image.width);
   png_read_image(png, rows.data());
+  png_read_end(png, nullptr);
   png_destroy_read_struct(&png, &info, nullptr);
   return image;
 }
@@ -103,7 +115,7 @@ float decode(std::uint16_t v, DepthEncoding e) {
       return mm * 1e-3f;
     }
     case DepthEncoding::kinect_disparity:
-      if (v >= 2047 || v >= 1092) return 0.0f;
+      if (v >= 1092) return 0.0f;  // 2047 = no return; beyond 1092.5 the model has no depth
       return 351.3f / (1092.5f - static_cast<float>(v));
   }
   return 0.0f;
@@ -148,8 +160,26 @@ LoadedFrame load_pcd_frame(const std::string& path) {
   return frame;
 }
 
-LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k, DepthEncoding encoding) {
+DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image) {
+  std::size_t nonzero = 0, eleven_bit = 0, multiple_of_8 = 0, multiple_of_5 = 0;
+  for (const std::uint16_t v : image.values) {
+    eleven_bit += v <= 2047 ? 1 : 0;
+    if (v == 0) continue;
+    ++nonzero;
+    multiple_of_8 += v % 8 == 0 ? 1 : 0;
+    multiple_of_5 += v % 5 == 0 ? 1 : 0;
+  }
+  if (extension_of(path) == "pgm" && eleven_bit == image.values.size()) return DepthEncoding::kinect_disparity;
+  if (nonzero < 100) return DepthEncoding::millimetres;
+  if (multiple_of_8 == nonzero) return DepthEncoding::sun_rotated_mm;
+  if (multiple_of_5 == nonzero) return DepthEncoding::tum_5000;
+  return DepthEncoding::millimetres;
+}
+
+LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k,
+                             std::optional<DepthEncoding> encoding_or_guess) {
   const DepthImage16 raw = read_depth_image16(path);
+  const DepthEncoding encoding = encoding_or_guess ? *encoding_or_guess : guess_depth_encoding(path, raw);
   if (raw.width != k.width || raw.height != k.height) {
     std::ostringstream m;
     m << "depth image '" << path << "' is " << raw.width << " x " << raw.height << " but the intrinsics say "
@@ -172,7 +202,7 @@ LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k
 }
 
 LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
-                       DepthEncoding encoding) {
+                       std::optional<DepthEncoding> encoding) {
   const std::string ext = extension_of(path);
   if (ext == "pcd") return load_pcd_frame(path);
   if (ext == "png" || ext == "pgm") {
@@ -213,6 +243,49 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
     throw FormatError("intrinsics file '" + path + "': " + e.what());
   }
   return k;
+}
+
+namespace {
+
+bool is_depth_frame_name(const std::filesystem::path& p) {
+  const std::string name = p.filename().string();
+  const std::string suffix = ".depth.png";
+  return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder) {
+  for (const auto& candidate : {folder / "camera-intrinsics.txt", folder.parent_path() / "camera-intrinsics.txt"}) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(candidate, ec)) return read_intrinsics_file(candidate.string());
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::vector<FrameSource> expand_input(const std::string& input) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path p(input);
+  if (!fs::exists(p, ec)) throw IoError("input '" + input + "' does not exist");
+  if (!fs::is_directory(p, ec)) {
+    const std::string ext = extension_of(input);
+    const bool depth_image = ext == "png" || ext == "pgm";
+    const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
+    return {FrameSource{input, depth_image ? intrinsics_beside(folder) : std::nullopt}};
+  }
+  std::vector<std::string> frames;
+  for (fs::recursive_directory_iterator it(p, ec), end; it != end && !ec; it.increment(ec)) {
+    if (it.depth() > 1) it.disable_recursion_pending();  // the folder and its seq-*/ subfolders
+    if (it->is_regular_file(ec) && is_depth_frame_name(it->path())) frames.push_back(it->path().string());
+  }
+  if (ec) throw IoError("cannot list folder '" + input + "': " + ec.message());
+  if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png frames");
+  std::sort(frames.begin(), frames.end());
+  const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p);
+  std::vector<FrameSource> sources;
+  for (const auto& f : frames) sources.push_back({f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path())});
+  return sources;
 }
 
 }  // namespace occ_improve

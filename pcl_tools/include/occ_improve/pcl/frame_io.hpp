@@ -9,6 +9,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace occ_improve {
 
@@ -29,6 +30,13 @@ struct DepthImage16 {
 };
 DepthImage16 read_depth_image16(const std::string& path);
 
+/// The encoding a 16-bit depth image most likely uses, for when the user did not say:
+///  - .pgm whose values all fit in 11 bits: kinect_disparity (NYU's raw dumps);
+///  - nonzero values all multiples of 8: sun_rotated_mm (millimetres below 8.192 m rotate to v << 3);
+///  - nonzero values all multiples of 5: tum_5000 (TUM stores the sensor's millimetres times 5);
+///  - otherwise millimetres. An image with fewer than 100 nonzero values is taken as millimetres.
+DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image);
+
 /// A frame as a cloud in the sensor's optical frame; organized (width x height) where the source is.
 struct LoadedFrame {
   pcl::PointCloud<pcl::PointXYZ> cloud;
@@ -39,12 +47,27 @@ struct LoadedFrame {
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.
 LoadedFrame load_pcd_frame(const std::string& path);
 
-/// A depth image back-projected through `intrinsics` (its size must match the image's).
-LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics, DepthEncoding encoding);
+/// A depth image back-projected through `intrinsics` (its size must match the image's, else InvalidInput).
+/// Without an encoding, guess_depth_encoding() chooses it.
+LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics,
+                             std::optional<DepthEncoding> encoding = std::nullopt);
 
 /// By extension: .pcd -> PCD; .png/.pgm -> depth image (intrinsics required).
 LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
-                       DepthEncoding encoding);
+                       std::optional<DepthEncoding> encoding = std::nullopt);
+
+/// One frame named by a command-line input, with the intrinsics found beside it (if any).
+struct FrameSource {
+  std::string path;
+  std::optional<PinholeIntrinsics> intrinsics;  ///< from a camera-intrinsics.txt of the dataset layout
+};
+
+/// A command-line input as frames. A file is itself; a depth image also picks up a
+/// camera-intrinsics.txt beside it or one folder up (the 3DMatch / SUN3D / 7-Scenes layout). A folder
+/// is its *.depth.png frames (seq-*/ subfolders included), sorted by name, with its
+/// camera-intrinsics.txt. Throws IoError when the input does not exist, InvalidInput for a folder with
+/// no depth frames.
+std::vector<FrameSource> expand_input(const std::string& input);
 
 /// Intrinsics from a text file: either "fx fy cx cy [width height]" or a 3x3 matrix (7-Scenes/3DMatch
 /// camera-intrinsics.txt); width/height default to 640 x 480.

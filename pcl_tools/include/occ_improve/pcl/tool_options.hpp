@@ -1,0 +1,61 @@
+#pragma once
+// The command-line flags every occ_improve tool shares (sensor preset and its overrides, update mode,
+// camera intrinsics, depth encoding, input files), parsed once in the style of PCL's tools
+// (pcl::console::parse_argument / find_switch). Every bad flag throws InvalidParameter naming the flag.
+#include "occ_improve/grid.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/presets.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+
+/// What a tool adds to the common flags.
+struct ToolSpec {
+  std::string default_preset = "kinect_v1_paper";
+  int default_top_k = 10;
+  /// The tool's own flags that take a value (e.g. "-o"), so their values are not taken as inputs.
+  std::vector<std::string> value_flags;
+  /// The tool's own switches (e.g. "-sample"). Any other "-name" argument is an unknown flag (error).
+  std::vector<std::string> switches;
+};
+
+/// The overrides given on the command line, applied on top of a preset (unset = keep the preset's).
+struct PresetOverrides {
+  std::optional<double> sigma_depth_m, sigma_depth_per_m2, sigma_angle_rad, support_k;
+  std::optional<int> depth_bins;
+  std::optional<double> depth_max_m;
+  std::optional<double> fov_horizontal_deg, fov_vertical_deg;
+};
+
+struct ToolOptions {
+  std::string preset_name;
+  PresetOverrides overrides;
+  SensorPreset preset;  ///< the named preset (built from `intrinsics` when it is camera-based) + overrides
+  GridOptions grid;
+  std::optional<PinholeIntrinsics> intrinsics;  ///< from -intrinsics or -intrinsics_file
+  std::optional<DepthEncoding> depth_encoding;  ///< unset: chosen per file (see frame_io.hpp)
+  int top_k = 10;
+  std::vector<std::string> inputs;  ///< positional arguments, in command-line order
+
+  /// The preset again for a camera found with the input (e.g. a folder's camera-intrinsics.txt) when no
+  /// intrinsics were given on the command line; overrides are re-applied. Paper presets ignore it.
+  SensorPreset preset_for_camera(const std::optional<PinholeIntrinsics>& camera) const;
+};
+
+/// True when -h or --help is among the arguments.
+bool help_requested(int argc, const char* const* argv);
+
+/// Parses the common flags. Throws InvalidParameter naming the flag on any bad value or unknown flag,
+/// IoError/FormatError for an unreadable -intrinsics_file.
+ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec& spec = {});
+
+/// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
+SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
+
+/// Usage text of the common flags, for a tool's -h.
+std::string usage_common();
+
+}  // namespace occ_improve

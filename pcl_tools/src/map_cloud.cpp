@@ -1,0 +1,66 @@
+// PointImprovement is a custom point type: the PCD writer's templates are instantiated here, from
+// their implementation header, as PCL asks for types it does not precompile.
+#define PCL_NO_PRECOMPILE
+#include "occ_improve/pcl/map_cloud.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <pcl/io/impl/pcd_io.hpp>
+#include <pcl/io/pcd_io.h>
+
+#include <limits>
+#include <sstream>
+
+namespace occ_improve {
+
+pcl::PointCloud<PointImprovement> to_improvement_cloud(const SphericalGeometry& geometry, const SurfaceMap& surface,
+                                                       const ImprovementMap& improvement) {
+  const int width = geometry.width(), height = geometry.height();
+  const std::size_t n = geometry.column_count();
+  if (surface.width != width || surface.height != height || surface.size() != n || surface.unknown.size() != n ||
+      improvement.width != width || improvement.height != height || improvement.value.size() != n) {
+    std::ostringstream m;
+    m << "to_improvement_cloud: the surface (" << surface.width << " x " << surface.height << ") and improvement ("
+      << improvement.width << " x " << improvement.height << ") maps must match the grid's " << width << " x "
+      << height << " rays";
+    throw InvalidInput(m.str());
+  }
+  constexpr float nan = std::numeric_limits<float>::quiet_NaN();
+  pcl::PointCloud<PointImprovement> cloud;
+  cloud.width = static_cast<std::uint32_t>(width);
+  cloud.height = static_cast<std::uint32_t>(height);
+  cloud.is_dense = false;
+  cloud.points.resize(n);
+  for (int e = 0; e < height; ++e) {
+    for (int a = 0; a < width; ++a) {
+      const ColumnIndex c = geometry.column(a, e);
+      PointImprovement& p = cloud.points[c];
+      p.surface_depth = surface.depth_m[c];
+      p.probability = surface.probability[c];
+      p.improvement = improvement.value[c];
+      if (surface.unknown[c]) {
+        p.x = p.y = p.z = nan;
+      } else {
+        const Eigen::Vector3d xyz = geometry.point(a, e, surface.depth_m[c]);
+        p.x = static_cast<float>(xyz.x());
+        p.y = static_cast<float>(xyz.y());
+        p.z = static_cast<float>(xyz.z());
+      }
+      p.data[3] = 1.0f;
+    }
+  }
+  return cloud;
+}
+
+void save_improvement_cloud(const std::string& path, const pcl::PointCloud<PointImprovement>& cloud) {
+  pcl::PCDWriter writer;
+  int status = -1;
+  try {
+    status = writer.writeBinary(path, cloud);
+  } catch (const pcl::PCLException& e) {  // PCL throws when the file cannot be opened or mapped
+    throw IoError("cannot write PCD file '" + path + "': " + e.detailedMessage());
+  }
+  if (status != 0) throw IoError("cannot write PCD file '" + path + "'");
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,174 @@
+#include "occ_improve/pcl/tool_options.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+namespace {
+
+// argv for the parser: "tool" then the given arguments.
+struct Args {
+  std::vector<std::string> storage;
+  std::vector<const char*> argv;
+  Args(std::initializer_list<std::string> args) : storage{"tool"} {
+    storage.insert(storage.end(), args.begin(), args.end());
+    for (const auto& s : storage) argv.push_back(s.c_str());
+  }
+  int argc() const { return static_cast<int>(argv.size()); }
+};
+
+ToolOptions parse(std::initializer_list<std::string> args, const ToolSpec& spec = {}) {
+  Args a(args);
+  return parse_tool_options(a.argc(), a.argv.data(), spec);
+}
+
+// The message of the InvalidParameter the arguments raise ("" when none).
+std::string error_of(std::initializer_list<std::string> args, const ToolSpec& spec = {}) {
+  try {
+    parse(args, spec);
+  } catch (const InvalidParameter& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ToolOptions, DefaultsAreThePaperPresetClampedWithNoInputs) {
+  const ToolOptions t = parse({});
+  EXPECT_EQ(t.preset_name, "kinect_v1_paper");
+  EXPECT_EQ(t.preset.geometry.azimuth_bins, kinect_v1_paper().geometry.azimuth_bins);
+  EXPECT_EQ(t.preset.model.sigma_depth_m, kinect_v1_paper().model.sigma_depth_m);
+  EXPECT_EQ(t.grid.mode, UpdateMode::clamped);
+  EXPECT_EQ(t.grid.probability_min, GridOptions{}.probability_min);
+  EXPECT_FALSE(t.intrinsics);
+  EXPECT_FALSE(t.depth_encoding);
+  EXPECT_TRUE(t.inputs.empty());
+  EXPECT_EQ(t.top_k, ToolSpec{}.default_top_k);
+}
+
+TEST(ToolOptions, InputsAreThePositionalArgumentsInOrderNotFlagValues) {
+  ToolSpec spec;
+  spec.value_flags = {"-o"};
+  spec.switches = {"-sample"};
+  const ToolOptions t = parse({"b.pcd", "-o", "out", "-sample", "a.png", "-k", "3", "c_folder"}, spec);
+  EXPECT_EQ(t.inputs, (std::vector<std::string>{"b.pcd", "a.png", "c_folder"}));
+  EXPECT_EQ(t.top_k, 3);
+}
+
+TEST(ToolOptions, OverridesReachThePreset) {
+  const ToolOptions t = parse({"-sigma_depth", "0.01", "-sigma_depth_quadratic", "0.002", "-sigma_angle", "0.001",
+                               "-support_k", "3", "-depth_bins", "256", "-depth_max", "4", "-fov", "60,40"});
+  EXPECT_DOUBLE_EQ(t.preset.model.sigma_depth_m, 0.01);
+  EXPECT_DOUBLE_EQ(t.preset.model.sigma_depth_per_m2, 0.002);
+  EXPECT_DOUBLE_EQ(t.preset.model.sigma_azimuth_rad, 0.001);
+  EXPECT_DOUBLE_EQ(t.preset.model.sigma_elevation_rad, 0.001);
+  EXPECT_DOUBLE_EQ(t.preset.model.support_k, 3);
+  EXPECT_EQ(t.preset.geometry.depth_bins, 256);
+  EXPECT_DOUBLE_EQ(t.preset.geometry.depth_max_m, 4);
+  EXPECT_NEAR(t.preset.geometry.azimuth_max_rad - t.preset.geometry.azimuth_min_rad, 60 * M_PI / 180, 1e-12);
+  EXPECT_NEAR(t.preset.geometry.elevation_max_rad, 20 * M_PI / 180, 1e-12);
+}
+
+TEST(ToolOptions, ModeClampAndEncoding) {
+  const ToolOptions exact = parse({"-mode", "exact"});
+  EXPECT_EQ(exact.grid.mode, UpdateMode::exact);
+  const ToolOptions octomap = parse({"-clamp", "octomap"});
+  EXPECT_EQ(octomap.grid.mode, UpdateMode::clamped);
+  EXPECT_EQ(octomap.grid.probability_min, GridOptions::octomap_clamping().probability_min);
+  EXPECT_EQ(octomap.grid.probability_max, GridOptions::octomap_clamping().probability_max);
+  EXPECT_EQ(parse({"-depth_encoding", "tum"}).depth_encoding, DepthEncoding::tum_5000);
+  EXPECT_EQ(parse({"-depth_encoding", "nyu"}).depth_encoding, DepthEncoding::kinect_disparity);
+}
+
+TEST(ToolOptions, IntrinsicsBuildTheCameraPreset) {
+  const ToolOptions t = parse({"-preset", "kinect_v1", "-intrinsics", "570,571,320,240,320,240"});
+  ASSERT_TRUE(t.intrinsics);
+  EXPECT_EQ(t.intrinsics->fx, 570);
+  EXPECT_EQ(t.intrinsics->width, 320);
+  EXPECT_EQ(t.preset.geometry.azimuth_bins, 320);
+  EXPECT_EQ(t.preset.geometry.elevation_bins, 240);
+  ASSERT_TRUE(t.preset.camera);
+  EXPECT_EQ(t.preset.camera->fy, 571);
+  // The paper preset keeps its own geometry whatever the camera.
+  const ToolOptions paper = parse({"-intrinsics", "570,571,320,240,320,240"});
+  EXPECT_EQ(paper.preset.geometry.azimuth_bins, 640);
+}
+
+TEST(ToolOptions, PresetForCameraUsesAFoundCameraUnlessOneWasGiven) {
+  PinholeIntrinsics found;
+  found.fx = found.fy = 585;
+  found.width = 320;
+  found.height = 240;
+  found.cx = 160;
+  found.cy = 120;
+  const ToolOptions t = parse({"-preset", "kinect_v1", "-depth_bins", "128"});
+  const SensorPreset p = t.preset_for_camera(found);
+  EXPECT_EQ(p.geometry.azimuth_bins, 320);
+  EXPECT_EQ(p.geometry.depth_bins, 128);  // overrides re-applied
+  const ToolOptions given = parse({"-preset", "kinect_v1", "-intrinsics", "525,525,319.5,239.5"});
+  EXPECT_EQ(given.preset_for_camera(found).geometry.azimuth_bins, 640);
+  EXPECT_EQ(parse({}).preset_for_camera(found).geometry.azimuth_bins, 640);  // paper preset
+}
+
+TEST(ToolOptions, IntrinsicsFile) {
+  const auto path = std::filesystem::temp_directory_path() / "occ_improve_test_tool_options_intrinsics.txt";
+  {
+    std::ofstream(path) << "580 581 321 241\n";
+  }
+  const ToolOptions t = parse({"-intrinsics_file", path.string()});
+  ASSERT_TRUE(t.intrinsics);
+  EXPECT_EQ(t.intrinsics->fy, 581);
+  EXPECT_EQ(t.intrinsics->cy, 241);
+  std::filesystem::remove(path);
+  EXPECT_THROW(parse({"-intrinsics_file", path.string()}), IoError);
+}
+
+TEST(ToolOptions, BadValuesNameTheFlag) {
+  EXPECT_NE(error_of({"-preset", "kinect_v9"}).find("-preset"), std::string::npos);
+  EXPECT_NE(error_of({"-k", "0"}).find("-k"), std::string::npos);
+  EXPECT_NE(error_of({"-k", "-3"}).find("-k"), std::string::npos);
+  EXPECT_NE(error_of({"-k", "three"}).find("-k"), std::string::npos);
+  EXPECT_NE(error_of({"-sigma_depth", "abc"}).find("-sigma_depth"), std::string::npos);
+  EXPECT_NE(error_of({"-sigma_depth", "-1"}).find("-sigma_depth"), std::string::npos);
+  EXPECT_NE(error_of({"-sigma_angle", "0"}).find("-sigma_angle"), std::string::npos);
+  EXPECT_NE(error_of({"-depth_bins", "0"}).find("-depth_bins"), std::string::npos);
+  EXPECT_NE(error_of({"-depth_bins", "2.5"}).find("-depth_bins"), std::string::npos);
+  EXPECT_NE(error_of({"-depth_max", "nan"}).find("-depth_max"), std::string::npos);
+  EXPECT_NE(error_of({"-fov", "57"}).find("-fov"), std::string::npos);
+  EXPECT_NE(error_of({"-fov", "57,400"}).find("-fov"), std::string::npos);
+  EXPECT_NE(error_of({"-mode", "fast"}).find("-mode"), std::string::npos);
+  EXPECT_NE(error_of({"-clamp", "tight"}).find("-clamp"), std::string::npos);
+  EXPECT_NE(error_of({"-depth_encoding", "inches"}).find("-depth_encoding"), std::string::npos);
+  EXPECT_NE(error_of({"-intrinsics", "525,525,319.5"}).find("-intrinsics"), std::string::npos);
+  EXPECT_NE(error_of({"-intrinsics", "-525,525,319.5,239.5"}).find("-intrinsics"), std::string::npos);
+  EXPECT_NE(error_of({"-intrinsics", "525,525,319.5,239.5,640.5,480"}).find("-intrinsics"), std::string::npos);
+  EXPECT_NE(error_of({"-frobnicate"}).find("-frobnicate"), std::string::npos);
+  EXPECT_NE(error_of({"-preset"}).find("-preset"), std::string::npos);  // value missing
+}
+
+TEST(ToolOptions, ToolFlagsAreAcceptedOnlyWhenDeclared) {
+  EXPECT_NE(error_of({"-o", "out"}).find("-o"), std::string::npos);
+  ToolSpec spec;
+  spec.value_flags = {"-o"};
+  EXPECT_EQ(error_of({"-o", "out"}, spec), "");
+}
+
+TEST(ToolOptions, HelpAndUsage) {
+  Args with_help({"-h"}), without({"a.pcd"});
+  EXPECT_TRUE(help_requested(with_help.argc(), with_help.argv.data()));
+  EXPECT_FALSE(help_requested(without.argc(), without.argv.data()));
+  const std::string usage = usage_common();
+  for (const char* flag : {"-preset", "-sigma_depth", "-sigma_angle", "-depth_bins", "-depth_max", "-fov", "-mode",
+                           "-clamp", "-intrinsics", "-intrinsics_file", "-depth_encoding", "-k"})
+    EXPECT_NE(usage.find(flag), std::string::npos) << flag;
+}
+
+}  // namespace
+}  // namespace occ_improve
