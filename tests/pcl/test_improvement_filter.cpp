@@ -1,0 +1,360 @@
+#include "occ_improve/pcl/improvement_filter.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/sample_scene.hpp"
+#include "support/test_data.hpp"
+
+#include <pcl/common/io.h>
+#include <pcl/io/pcd_io.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <limits>
+
+namespace occ_improve {
+namespace {
+
+using Cloud = pcl::PointCloud<pcl::PointXYZ>;
+
+Cloud::Ptr sample_cloud() {
+  const sample::SampleFrame frame = sample::generate_scene();
+  Cloud::Ptr cloud(new Cloud);
+  for (const Eigen::Vector3f& p : frame.points()) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
+  cloud->width = static_cast<std::uint32_t>(frame.intrinsics.width);
+  cloud->height = static_cast<std::uint32_t>(frame.intrinsics.height);
+  cloud->is_dense = false;
+  return cloud;
+}
+
+/// Indices of the points that have a ray (finite improvement in the companion cloud).
+pcl::Indices with_ray(const pcl::PointCloud<PointImprovement>& improvement) {
+  pcl::Indices out;
+  for (std::size_t i = 0; i < improvement.size(); ++i)
+    if (std::isfinite(improvement[i].improvement)) out.push_back(static_cast<pcl::index_t>(i));
+  return out;
+}
+
+double mean_improvement(const pcl::PointCloud<PointImprovement>& improvement, const pcl::Indices& indices) {
+  double sum = 0;
+  std::size_t n = 0;
+  for (const auto i : indices)
+    if (std::isfinite(improvement[i].improvement)) {
+      sum += improvement[i].improvement;
+      ++n;
+    }
+  return n ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+/// The indices of `all` that are not in `a` (both ascending).
+pcl::Indices minus(const pcl::Indices& all, const pcl::Indices& a) {
+  pcl::Indices out;
+  std::set_difference(all.begin(), all.end(), a.begin(), a.end(), std::back_inserter(out));
+  return out;
+}
+
+pcl::Indices all_indices(std::size_t n) {
+  pcl::Indices out(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = static_cast<pcl::index_t>(i);
+  return out;
+}
+
+// The sample scene inserted once into a shared map (the expensive part); each test filters against it.
+class ImprovementFilterTest : public ::testing::Test {
+protected:
+  static void SetUpTestSuite() {
+    cloud_ = sample_cloud();
+    mapper_ = std::make_shared<Mapper>(kinect_v1_paper());
+    mapper_->insert(span_of(*cloud_));
+  }
+  static void TearDownTestSuite() {
+    cloud_.reset();
+    mapper_.reset();
+  }
+  /// A filter that reads the shared map without inserting again.
+  static void configure(ImprovementFilter<pcl::PointXYZ>& filter) {
+    filter.setMapper(mapper_);
+    filter.setUpdateMap(false);
+    filter.setInputCloud(cloud_);
+  }
+
+  static Cloud::Ptr cloud_;
+  static std::shared_ptr<Mapper> mapper_;
+};
+
+Cloud::Ptr ImprovementFilterTest::cloud_;
+std::shared_ptr<Mapper> ImprovementFilterTest::mapper_;
+
+TEST_F(ImprovementFilterTest, ImprovementCloudIsAlignedWithTheInputAndTheMap) {
+  ImprovementFilter<pcl::PointXYZ> filter;
+  configure(filter);
+  pcl::Indices kept;
+  filter.filter(kept);
+  const auto& improvement = filter.getImprovementCloud();
+  ASSERT_EQ(improvement.size(), cloud_->size());
+  EXPECT_EQ(improvement.width, cloud_->width);
+  EXPECT_EQ(improvement.height, cloud_->height);
+  const SphericalGeometry& geometry = mapper_->geometry();
+  std::size_t without_ray = 0;
+  for (std::size_t i = 0; i < cloud_->size(); i += 97) {
+    const auto& p = (*cloud_)[i];
+    int a = 0, e = 0;
+    const SphericalPoint s = to_spherical(p.x, p.y, p.z);
+    if (!std::isfinite(p.x) || !geometry.locate(s.azimuth, s.elevation, a, e)) {
+      EXPECT_TRUE(std::isnan(improvement[i].improvement));
+      continue;
+    }
+    const ColumnIndex c = geometry.column(a, e);
+    EXPECT_EQ(improvement[i].improvement, mapper_->improvement().value[c]);
+    EXPECT_EQ(improvement[i].probability, mapper_->surface().probability[c]);
+    EXPECT_EQ(improvement[i].surface_depth, mapper_->surface().depth_m[c]);
+    EXPECT_EQ(improvement[i].x, p.x);
+  }
+  for (const auto& q : improvement) without_ray += std::isnan(q.improvement) ? 1 : 0;
+  EXPECT_EQ(filter.getPointsWithoutRay(), without_ray);
+  EXPECT_GT(without_ray, 0u);  // the scene has no-return pixels (shadow bands, poster)
+}
+
+TEST_F(ImprovementFilterTest, TopFractionKeepsTheMostImprovingShare) {
+  ImprovementFilter<pcl::PointXYZ> filter(true);
+  configure(filter);
+  filter.setTopFraction(0.2);
+  pcl::Indices kept;
+  filter.filter(kept);
+  const auto& improvement = filter.getImprovementCloud();
+  const pcl::Indices valid = with_ray(improvement);
+  EXPECT_EQ(kept.size(), static_cast<std::size_t>(std::llround(0.2 * static_cast<double>(valid.size()))));
+  EXPECT_TRUE(std::is_sorted(kept.begin(), kept.end()));
+  const pcl::Indices rest = minus(valid, kept);
+  float min_kept = std::numeric_limits<float>::infinity(), max_rest = -std::numeric_limits<float>::infinity();
+  for (const auto i : kept) min_kept = std::min(min_kept, improvement[i].improvement);
+  for (const auto i : rest) max_rest = std::max(max_rest, improvement[i].improvement);
+  EXPECT_GE(min_kept, max_rest);
+  EXPECT_GT(mean_improvement(improvement, kept), mean_improvement(improvement, rest));
+  // Removed indices: exactly the complement of the output.
+  EXPECT_EQ(*filter.getRemovedIndices(), minus(all_indices(cloud_->size()), kept));
+}
+
+TEST_F(ImprovementFilterTest, NegativeIsTheComplementAmongPointsWithARay) {
+  ImprovementFilter<pcl::PointXYZ> positive, negative(true);
+  configure(positive);
+  configure(negative);
+  positive.setTopFraction(0.3);
+  negative.setTopFraction(0.3);
+  negative.setNegative(true);
+  pcl::Indices kept, complement;
+  positive.filter(kept);
+  negative.filter(complement);
+  EXPECT_EQ(complement, minus(with_ray(negative.getImprovementCloud()), kept));
+  // Points without a ray are kept by neither, and are among the negative filter's removed indices.
+  EXPECT_EQ(*negative.getRemovedIndices(), minus(all_indices(cloud_->size()), complement));
+}
+
+TEST_F(ImprovementFilterTest, KeepOrganizedKeepsTheImageWithNaNs) {
+  ImprovementFilter<pcl::PointXYZ> filter;
+  configure(filter);
+  filter.setTopCount(5000);
+  filter.setKeepOrganized(true);
+  Cloud out;
+  filter.filter(out);
+  ASSERT_EQ(out.size(), cloud_->size());
+  EXPECT_EQ(out.width, cloud_->width);
+  EXPECT_EQ(out.height, cloud_->height);
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < out.size(); ++i)
+    if (std::isfinite(out[i].x)) {
+      ++finite;
+      EXPECT_EQ(out[i].x, (*cloud_)[i].x);
+    }
+  EXPECT_EQ(finite, 5000u);
+  EXPECT_EQ(filter.getRemovedIndices()->size(), cloud_->size() - 5000);
+}
+
+TEST_F(ImprovementFilterTest, RangeAndContourSelectByValue) {
+  ImprovementFilter<pcl::PointXYZ> range, contour;
+  configure(range);
+  configure(contour);
+  range.setImprovementRange(0.05f, 0.5f);
+  contour.setContourThreshold(-0.01f);
+  pcl::Indices in_range, on_contour;
+  range.filter(in_range);
+  contour.filter(on_contour);
+  const auto& improvement = range.getImprovementCloud();
+  std::size_t expected_range = 0, expected_contour = 0;
+  for (const auto& q : improvement) {
+    if (!std::isfinite(q.improvement)) continue;
+    expected_range += (q.improvement >= 0.05f && q.improvement <= 0.5f) ? 1 : 0;
+    expected_contour += q.improvement < -0.01f ? 1 : 0;
+  }
+  EXPECT_EQ(in_range.size(), expected_range);
+  EXPECT_EQ(on_contour.size(), expected_contour);
+  EXPECT_GT(on_contour.size(), 0u) << "the scene's depth discontinuities give negative improvement";
+  for (const auto i : in_range) EXPECT_TRUE(improvement[i].improvement >= 0.05f && improvement[i].improvement <= 0.5f);
+  for (const auto i : on_contour) EXPECT_LT(improvement[i].improvement, -0.01f);
+}
+
+TEST_F(ImprovementFilterTest, IndicesRestrictTheSelection) {
+  ImprovementFilter<pcl::PointXYZ> filter;
+  configure(filter);
+  pcl::IndicesPtr half(new pcl::Indices);
+  for (std::size_t i = 0; i < cloud_->size(); i += 2) half->push_back(static_cast<pcl::index_t>(i));
+  filter.setIndices(half);
+  filter.setTopCount(1000);
+  pcl::Indices kept;
+  filter.filter(kept);
+  EXPECT_EQ(kept.size(), 1000u);
+  for (const auto i : kept) EXPECT_EQ(i % 2, 0);
+}
+
+TEST_F(ImprovementFilterTest, PointsWithoutARayAreNeverKept) {
+  Cloud::Ptr cloud(new Cloud(*cloud_));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  (*cloud)[0] = pcl::PointXYZ(nan, nan, nan);
+  (*cloud)[1] = pcl::PointXYZ(0.0f, 0.0f, -2.0f);  // behind the sensor: outside the field of view
+  (*cloud)[2] = pcl::PointXYZ(0.0f, 0.0f, 0.0f);   // rho = 0
+  for (bool negative : {false, true}) {
+    ImprovementFilter<pcl::PointXYZ> filter;
+    filter.setMapper(mapper_);
+    filter.setUpdateMap(false);
+    filter.setInputCloud(cloud);
+    filter.setImprovementRange(-1e9f, 1e9f);  // everything with a ray
+    filter.setNegative(negative);
+    pcl::Indices kept;
+    filter.filter(kept);
+    for (const auto i : kept) EXPECT_GT(i, 2);
+    EXPECT_GE(filter.getPointsWithoutRay(), 3u);
+  }
+}
+
+TEST_F(ImprovementFilterTest, ErrorsGiveAnEmptyOutput) {
+  ImprovementFilter<pcl::PointXYZ> no_map;
+  no_map.setInputCloud(cloud_);
+  Cloud out;
+  no_map.filter(out);
+  EXPECT_TRUE(out.empty());
+
+  ImprovementFilter<pcl::PointXYZ> bad_fraction;
+  configure(bad_fraction);
+  bad_fraction.setTopFraction(1.5);
+  pcl::Indices kept{1, 2, 3};
+  bad_fraction.filter(kept);
+  EXPECT_TRUE(kept.empty());
+
+  ImprovementFilter<pcl::PointXYZ> bad_range;
+  configure(bad_range);
+  bad_range.setImprovementRange(1.0f, 0.0f);
+  bad_range.filter(out);
+  EXPECT_TRUE(out.empty());
+
+  EXPECT_THROW(keep_most_improving(*cloud_, mapper_, -0.1), InvalidParameter);
+}
+
+TEST(ImprovementFilter, UpdatesItsOwnOrASharedMap) {
+  const Cloud::Ptr cloud = sample_cloud();
+  // Own map from a preset: the filter inserts the frame, and a first view is all worth keeping.
+  ImprovementFilter<pcl::PointXYZ> own;
+  own.setSensorPreset(kinect_v1_paper());
+  own.setInputCloud(cloud);
+  own.setTopFraction(1.0);
+  pcl::Indices kept;
+  own.filter(kept);
+  EXPECT_GT(own.getLastReport().insertion.points_inserted, 0u);
+  EXPECT_EQ(own.getLastReport().insertion.points_received, cloud->size());
+  EXPECT_EQ(kept.size(), cloud->size() - own.getPointsWithoutRay());
+
+  // Shared map: the caller sees the insertion.
+  auto shared = std::make_shared<Mapper>(kinect_v1_paper());
+  ImprovementFilter<pcl::PointXYZ> filter;
+  filter.setMapper(shared);
+  filter.setInputCloud(cloud);
+  filter.filter(kept);
+  EXPECT_EQ(shared->surface().known_count(), own.getMapper()->surface().known_count());
+  EXPECT_GT(shared->surface().known_count(), 0u);
+}
+
+// Selective sensing on real Kinect frames: keep 20 % of a frame, the part that improves the map most.
+void check_selective_sensing(const pcl::PointCloud<pcl::PointXYZRGBA>::Ptr& cloud, const SensorPreset& preset) {
+  auto mapper = std::make_shared<Mapper>(preset);
+  const pcl::Indices kept = keep_most_improving(*cloud, mapper, 0.2);
+
+  ImprovementFilter<pcl::PointXYZRGBA> reader(true);
+  reader.setMapper(mapper);
+  reader.setUpdateMap(false);
+  reader.setInputCloud(cloud);
+  reader.setTopFraction(0.2);
+  pcl::Indices again;
+  reader.filter(again);
+  EXPECT_EQ(again, kept);  // the helper is the filter
+
+  const auto& improvement = reader.getImprovementCloud();
+  const pcl::Indices valid = with_ray(improvement);
+  ASSERT_GT(valid.size(), 1000u);
+  EXPECT_NEAR(static_cast<double>(kept.size()), 0.2 * static_cast<double>(valid.size()), 1.0);
+  const pcl::Indices removed = minus(valid, kept);
+  EXPECT_GT(mean_improvement(improvement, kept), mean_improvement(improvement, removed));
+  EXPECT_EQ(*reader.getRemovedIndices(), minus(all_indices(cloud->size()), kept));
+
+  ImprovementFilter<pcl::PointXYZRGBA> negative;
+  negative.setMapper(mapper);
+  negative.setUpdateMap(false);
+  negative.setInputCloud(cloud);
+  negative.setTopFraction(0.2);
+  negative.setNegative(true);
+  pcl::Indices complement;
+  negative.filter(complement);
+  EXPECT_EQ(complement, removed);
+
+  ImprovementFilter<pcl::PointXYZRGBA> organized;
+  organized.setMapper(mapper);
+  organized.setUpdateMap(false);
+  organized.setInputCloud(cloud);
+  organized.setTopFraction(0.2);
+  organized.setKeepOrganized(true);
+  pcl::PointCloud<pcl::PointXYZRGBA> out;
+  organized.filter(out);
+  EXPECT_EQ(out.width, cloud->width);
+  EXPECT_EQ(out.height, cloud->height);
+  std::size_t finite = 0;
+  for (const auto& p : out) finite += std::isfinite(p.x) ? 1 : 0;
+  EXPECT_EQ(finite, kept.size());
+}
+
+TEST(ImprovementFilterRealData, SelectiveSensingOnFivePeople) {
+  OCC_REQUIRE_DATA(path, "kinect/pcl_test/five_people.pcd");
+  pcl::PointCloud<pcl::PointXYZRGBA>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZRGBA>);
+  ASSERT_EQ(pcl::io::loadPCDFile(path, *cloud), 0);
+  check_selective_sensing(cloud, kinect_v1());
+}
+
+TEST(ImprovementFilterRealData, SelectiveSensingOnA7ScenesFrameAfterAnother) {
+  OCC_REQUIRE_DATA(first, "sequences/7scenes_redkitchen/frames/frame-000150.depth.png");
+  OCC_REQUIRE_DATA(second, "sequences/7scenes_redkitchen/frames/frame-000151.depth.png");
+  OCC_REQUIRE_DATA(intrinsics_path, "sequences/7scenes_redkitchen/camera-intrinsics.txt");
+  const PinholeIntrinsics intrinsics = read_intrinsics_file(intrinsics_path);
+  const SensorPreset preset = kinect_v1(intrinsics);
+  // The map already holds frame 150; selective sensing then picks what frame 151 adds.
+  auto mapper = std::make_shared<Mapper>(preset);
+  const LoadedFrame frame150 = load_depth_frame(first, intrinsics, DepthEncoding::millimetres);
+  mapper->insert(span_of(frame150.cloud));
+  const LoadedFrame frame151 = load_depth_frame(second, intrinsics, DepthEncoding::millimetres);
+  pcl::PointCloud<pcl::PointXYZRGBA>::Ptr cloud(new pcl::PointCloud<pcl::PointXYZRGBA>);
+  pcl::copyPointCloud(frame151.cloud, *cloud);
+
+  ImprovementFilter<pcl::PointXYZRGBA> filter(true);
+  filter.setMapper(mapper);
+  filter.setInputCloud(cloud);
+  filter.setTopFraction(0.2);
+  pcl::Indices kept;
+  filter.filter(kept);
+  const auto& improvement = filter.getImprovementCloud();
+  const pcl::Indices removed = minus(with_ray(improvement), kept);
+  ASSERT_FALSE(kept.empty());
+  EXPECT_GT(mean_improvement(improvement, kept), mean_improvement(improvement, removed));
+}
+
+}  // namespace
+}  // namespace occ_improve
