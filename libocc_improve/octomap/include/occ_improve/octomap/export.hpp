@@ -1,0 +1,74 @@
+#pragma once
+// Export of the spherical grid to OctoMap (the only part of occ_improve that includes OctoMap).
+//
+// Conversion: every OcTree leaf whose centre lies inside the sensor's field of view and depth range is
+// given the log-odds of the spherical voxel that contains that centre (the voxel-centre lookup, exact at
+// any OcTree resolution: no holes where leaves are finer than the spherical bins, no smearing where they
+// are coarser). Spherical voxels never touched, or whose |log-odds| is inside the unknown band, leave the
+// leaf unknown (absent from the tree); everything else is written, so free and occupied space both carry
+// their log-odds.
+//
+// Merge rule: several maps (different poses, or a map added to a tree that already holds data) merge by
+// ADDING log-odds and then clamping to the tree's clamping thresholds (OcTree::updateNode). Maps taken
+// from different poses are independent measurements of the same space, and adding log-odds is exactly
+// the Bayesian fusion of independent evidence (eq. 2, OctoMap's own rule for every ray it inserts);
+// clamping keeps the result able to change its mind, as in the grid. (Taking the max would make one
+// confident but wrong view override every other one.) Adding the same map twice counts it twice.
+#include "occ_improve/grid.hpp"
+
+#include <Eigen/Geometry>
+#include <octomap/OcTree.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+namespace occ_improve {
+
+struct OctomapExportOptions {
+  /// P at or above which OctoMap calls a voxel occupied (OcTree::setOccupancyThres). 0.5: a voxel is
+  /// occupied when the evidence leans that way at all, as the grid's own P does.
+  double occupancy_threshold = 0.5;
+  /// Voxels with |P - 0.5| below this are left unknown: the OPDF decays to exactly 1/2 behind a
+  /// measurement, and a voxel with P = 0.5 + 1e-4 carries no information worth turning into "occupied".
+  double unknown_band_probability = 0.01;
+  /// Refuse an export whose estimated OcTree would need more memory than this (ResourceLimit).
+  std::size_t memory_cap_bytes = std::size_t{2} << 30;
+
+  void validate() const;  ///< InvalidParameter naming the field
+};
+
+struct OctomapExportReport {
+  std::size_t leaves_examined = 0;  ///< OcTree leaf keys in the frustum's bounding box
+  std::size_t occupied_written = 0;
+  std::size_t free_written = 0;
+  std::size_t left_unknown = 0;  ///< leaves inside the field of view whose voxel is unknown
+  double seconds = 0;
+};
+
+/// An empty OcTree at `resolution_m` with the grid's clamping thresholds (exact-mode grids: probabilities
+/// 0 and 1, i.e. log-odds -inf/+inf, no clamping, as eq. 2) and the occupancy threshold.
+/// Throws InvalidParameter for resolution_m <= 0 or non-finite.
+std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double resolution_m,
+                                             const OctomapExportOptions& options = {});
+
+/// Adds `grid`, observed from `world_from_sensor`, to `tree` by the merge rule above, at the tree's
+/// resolution; inner nodes are updated before returning. Throws InvalidParameter for a pose that is
+/// not a finite rigid transform or a frustum outside the tree's addressable range, ResourceLimit when the
+/// estimated memory exceeds options.memory_cap_bytes. The tree is unchanged when it throws.
+OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& grid,
+                                  const Eigen::Isometry3d& world_from_sensor,
+                                  const OctomapExportOptions& options = {});
+
+/// make_octree + add_to_octree.
+std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+                                           double resolution_m, const OctomapExportOptions& options = {},
+                                           OctomapExportReport* report = nullptr);
+
+/// Writes `tree` with OctoMap's own writers, chosen by extension: ".bt" (maximum likelihood,
+/// writeBinaryConst) or ".ot" (full log-odds, write). The tree is not modified (no pruning, no
+/// thresholding). The file is written beside `path` and renamed into place: a failed write leaves no
+/// half-written file. Throws InvalidParameter for another extension, IoError when it cannot write.
+void write_octree(const octomap::OcTree& tree, const std::string& path);
+
+}  // namespace occ_improve

@@ -1,0 +1,211 @@
+#include "occ_improve/octomap/export.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/sensor_model.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+namespace occ_improve {
+namespace {
+
+using detail::require_parameter;
+
+// Memory of one OcTree leaf: the node (float + children pointer, 16 bytes) plus its share of the parent's
+// 8-pointer child array (8 bytes), plus ~1/7 for the inner levels above. Used only for the cap estimate.
+constexpr double kBytesPerLeaf = 28.0;
+
+void require_rigid(const Eigen::Isometry3d& pose) {
+  const Eigen::Matrix4d& m = pose.matrix();
+  if (!m.allFinite()) throw InvalidParameter("pose (world <- sensor) has non-finite entries");
+  if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+    throw InvalidParameter("pose (world <- sensor) is not an affine transform: last row must be 0 0 0 1");
+  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
+  const double orthogonality = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (orthogonality > 1e-6 || std::abs(r.determinant() - 1.0) > 1e-6) {
+    std::ostringstream msg;
+    msg << "pose (world <- sensor) is not a rigid transform: |R^T R - I| = " << orthogonality
+        << ", det R = " << r.determinant() << " (scaling, shear or reflection)";
+    throw InvalidParameter(msg.str());
+  }
+}
+
+// Volume of the grid's frustum: solid angle (azimuth span x (sin el_max - sin el_min)) x (r^3 / 3).
+double frustum_volume_m3(const SphericalGeometry& g) {
+  const GeometryParams& p = g.params();
+  const double solid_angle =
+      (p.azimuth_max_rad - p.azimuth_min_rad) * (std::sin(p.elevation_max_rad) - std::sin(p.elevation_min_rad));
+  return solid_angle * (std::pow(p.depth_max_m, 3) - std::pow(p.depth_min_m, 3)) / 3.0;
+}
+
+// World-frame bounding box of the frustum: its boundary sampled on a 17 x 17 angular lattice at the
+// near and far depths (and the sensor origin), padded by the far cap's bulge between samples.
+void frustum_bounds(const SphericalGeometry& g, const Eigen::Isometry3d& pose, Eigen::Vector3d& lo,
+                    Eigen::Vector3d& hi) {
+  constexpr int kSamples = 17;
+  const GeometryParams& p = g.params();
+  lo = hi = pose.translation();
+  double widest_step = 0;
+  for (int i = 0; i < kSamples; ++i)
+    for (int j = 0; j < kSamples; ++j) {
+      SphericalPoint s;
+      const double step_az = (p.azimuth_max_rad - p.azimuth_min_rad) / (kSamples - 1);
+      const double step_el = (p.elevation_max_rad - p.elevation_min_rad) / (kSamples - 1);
+      widest_step = std::max({widest_step, step_az, step_el});
+      s.azimuth = p.azimuth_min_rad + i * step_az;
+      s.elevation = p.elevation_min_rad + j * step_el;
+      for (double rho : {p.depth_min_m, p.depth_max_m}) {
+        s.rho = rho;
+        const Eigen::Vector3d w = pose * from_spherical(s);
+        lo = lo.cwiseMin(w);
+        hi = hi.cwiseMax(w);
+      }
+    }
+  const double bulge = p.depth_max_m * (1.0 - std::cos(widest_step)) + 1e-6;
+  lo.array() -= bulge;
+  hi.array() += bulge;
+}
+
+std::string temporary_name(const std::string& path) {
+  static std::atomic<unsigned> counter{0};
+  std::random_device random;
+  std::ostringstream name;
+  name << path << ".partial-" << std::hex << random() << '-' << counter++;
+  return name.str();
+}
+
+}  // namespace
+
+void OctomapExportOptions::validate() const {
+  require_parameter(occupancy_threshold > 0 && occupancy_threshold < 1, "occupancy_threshold", occupancy_threshold,
+                    "in (0, 1)");
+  require_parameter(unknown_band_probability >= 0 && unknown_band_probability < 0.5, "unknown_band_probability",
+                    unknown_band_probability, "in [0, 0.5)");
+  require_parameter(memory_cap_bytes > 0, "memory_cap_bytes", static_cast<double>(memory_cap_bytes), "> 0");
+}
+
+std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double resolution_m,
+                                             const OctomapExportOptions& options) {
+  options.validate();
+  require_parameter(std::isfinite(resolution_m) && resolution_m > 0, "resolution_m", resolution_m, "> 0");
+  auto tree = std::make_unique<octomap::OcTree>(resolution_m);
+  if (grid.clamped()) {
+    tree->setClampingThresMin(grid.options().probability_min);
+    tree->setClampingThresMax(grid.options().probability_max);
+  } else {
+    // OctoMap stores thresholds as float log-odds; probabilities 0 and 1 become -inf and +inf, i.e. no
+    // clamping, as eq. 2 in exact mode (exact-mode free space reaches log-odds of -1000 and below).
+    tree->setClampingThresMin(0.0);
+    tree->setClampingThresMax(1.0);
+  }
+  tree->setOccupancyThres(options.occupancy_threshold);
+  return tree;
+}
+
+OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& grid,
+                                  const Eigen::Isometry3d& world_from_sensor, const OctomapExportOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  options.validate();
+  require_rigid(world_from_sensor);
+  const SphericalGeometry& geometry = grid.geometry();
+  const double resolution = tree.getResolution();
+
+  const double leaves = frustum_volume_m3(geometry) / (resolution * resolution * resolution);
+  if (leaves * kBytesPerLeaf > static_cast<double>(options.memory_cap_bytes)) {
+    std::ostringstream msg;
+    msg << "OcTree export at resolution " << resolution << " m: about " << leaves << " leaves ("
+        << leaves * kBytesPerLeaf / (1 << 20) << " MiB) in the " << frustum_volume_m3(geometry)
+        << " m^3 field of view exceed memory_cap_bytes = "
+        << static_cast<double>(options.memory_cap_bytes) / (1 << 20) << " MiB; choose a coarser resolution";
+    throw ResourceLimit(msg.str());
+  }
+  Eigen::Vector3d lo, hi;
+  frustum_bounds(geometry, world_from_sensor, lo, hi);
+  octomap::OcTreeKey key_lo, key_hi;
+  if (!tree.coordToKeyChecked(lo.x(), lo.y(), lo.z(), key_lo) ||
+      !tree.coordToKeyChecked(hi.x(), hi.y(), hi.z(), key_hi)) {
+    std::ostringstream msg;
+    msg << "the field of view seen from this pose spans [" << lo.transpose() << "] .. [" << hi.transpose()
+        << "] m, outside the OcTree's addressable range at resolution " << resolution << " m";
+    throw InvalidParameter(msg.str());
+  }
+
+  const double log_odds_band = logit(0.5 + options.unknown_band_probability);
+  const GeometryParams& params = geometry.params();
+  const double near2 = params.depth_min_m * params.depth_min_m, far2 = params.depth_max_m * params.depth_max_m;
+  // Sensor-frame position of a leaf centre: p = R^T (c - t), stepped along world z inside the loop.
+  const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
+  const Eigen::Vector3d origin = world_from_sensor.translation();
+  const Eigen::Vector3d step_z = sensor_from_world.col(2) * resolution;
+  GridAccessor accessor(grid);
+  OctomapExportReport report;
+  octomap::OcTreeKey key;
+  for (unsigned kx = key_lo[0]; kx <= key_hi[0]; ++kx) {
+    key[0] = static_cast<octomap::key_type>(kx);
+    for (unsigned ky = key_lo[1]; ky <= key_hi[1]; ++ky) {
+      key[1] = static_cast<octomap::key_type>(ky);
+      const Eigen::Vector3d first(tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key_lo[2]));
+      Eigen::Vector3d p = sensor_from_world * (first - origin);
+      for (unsigned kz = key_lo[2]; kz <= key_hi[2]; ++kz, p += step_z) {
+        ++report.leaves_examined;
+        const double rho2 = p.squaredNorm();
+        if (rho2 >= far2 || rho2 < near2 || rho2 == 0.0) continue;
+        const SphericalPoint s = to_spherical(p.x(), p.y(), p.z());
+        int azimuth_bin, elevation_bin;
+        if (!geometry.locate(s.azimuth, s.elevation, azimuth_bin, elevation_bin)) continue;
+        const int bin = geometry.depth().bin(s.rho);
+        if (bin < 0 || bin >= geometry.depth().bins()) continue;
+        const float value = accessor.log_odds(geometry.column(azimuth_bin, elevation_bin), bin);
+        if (std::abs(value) < log_odds_band) {
+          ++report.left_unknown;
+          continue;
+        }
+        key[2] = static_cast<octomap::key_type>(kz);
+        const octomap::OcTreeNode* node = tree.updateNode(key, value, true);
+        (tree.isNodeOccupied(node) ? report.occupied_written : report.free_written) += 1;
+      }
+    }
+  }
+  tree.updateInnerOccupancy();
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+                                           double resolution_m, const OctomapExportOptions& options,
+                                           OctomapExportReport* report) {
+  auto tree = make_octree(grid, resolution_m, options);
+  const OctomapExportReport r = add_to_octree(*tree, grid, world_from_sensor, options);
+  if (report) *report = r;
+  return tree;
+}
+
+void write_octree(const octomap::OcTree& tree, const std::string& path) {
+  const std::string extension = std::filesystem::path(path).extension().string();
+  if (extension != ".bt" && extension != ".ot")
+    throw InvalidParameter("OctoMap output '" + path + "' must end in .bt (maximum likelihood) or .ot (full)");
+  const std::string temporary = temporary_name(path);
+  bool written = false;
+  {
+    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
+    if (!out) throw IoError("cannot create '" + temporary + "' to write OctoMap file '" + path + "'");
+    written = extension == ".bt" ? tree.writeBinaryConst(out) : tree.write(out);
+    out.close();
+    written = written && static_cast<bool>(out);
+  }
+  std::error_code error;
+  if (written) std::filesystem::rename(temporary, path, error);
+  if (!written || error) {
+    std::error_code ignored;
+    std::filesystem::remove(temporary, ignored);
+    throw IoError("cannot write OctoMap file '" + path + "'" + (error ? ": " + error.message() : std::string()));
+  }
+}
+
+}  // namespace occ_improve
