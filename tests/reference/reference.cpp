@@ -1,5 +1,7 @@
 #include "reference/reference.hpp"
 
+#include "occ_improve/surface.hpp"
+
 #include <cmath>
 
 namespace occ_improve::reference {
@@ -59,25 +61,69 @@ DenseGrid::Surface DenseGrid::surface(std::size_t column) const {
   Surface s;
   if (!touched_[column]) return s;
   const double* v = &values_[column * bins_];
+  double best = v[0];
+  for (std::size_t k = 1; k < bins_; ++k) best = std::max(best, v[k]);
+  const double floor_value = best - kSurfaceTieTolerance;  // SPEC 6 ties, as surface.hpp defines them
   std::size_t first = 0;
-  for (std::size_t k = 1; k < bins_; ++k)
-    if (v[k] > v[first]) first = k;
+  while (v[first] < floor_value) ++first;
   std::size_t last = first;
-  while (last + 1 < bins_ && v[last + 1] == v[first]) ++last;
+  while (last + 1 < bins_ && v[last + 1] >= floor_value) ++last;
   s.unknown = false;
-  s.probability = 1.0 / (1.0 + std::exp(-v[first]));
   const auto& depth = geometry_.depth();
   if (first == 0 && last == bins_ - 1) {
     s.bin = static_cast<int>(bins_);
     s.depth_m = depth.max();
-  } else if (options_.mode == UpdateMode::clamped && v[first] >= lmax_) {
+    s.probability = 1.0 / (1.0 + std::exp(-best));
+    return s;
+  }
+  if (options_.mode == UpdateMode::clamped && best >= lmax_) {
     s.bin = static_cast<int>((first + last) / 2);
     s.depth_m = 0.5 * (depth.centre(static_cast<int>(first)) + depth.centre(static_cast<int>(last)));
   } else {
     s.bin = static_cast<int>(first);
     s.depth_m = depth.centre(static_cast<int>(first));
   }
+  s.probability = 1.0 / (1.0 + std::exp(-v[s.bin]));
   return s;
+}
+
+std::vector<double> improvement_map(const SphericalGeometry& g, const SensorModel& model,
+                                    const std::vector<DenseGrid::Surface>& surfaces) {
+  const auto& p = model.params();
+  const double ka = p.support_k * p.sigma_azimuth_rad, ke = p.support_k * p.sigma_elevation_rad;
+  std::vector<double> result(g.column_count(), 0.0);
+  for (int ej = 0; ej < g.height(); ++ej)
+    for (int aj = 0; aj < g.width(); ++aj) {
+      const std::size_t j = g.column(aj, ej);
+      const double rho_j = surfaces[j].unknown ? 0.0 : surfaces[j].depth_m;
+      const double theta = g.azimuth().centre(aj), phi = g.elevation().centre(ej);
+      const double sigma = model.sigma_depth_at(rho_j);
+      double sum = 0;
+      for (int e = 0; e < g.height(); ++e) {
+        const double elo = g.elevation().lower(e), ehi = elo + g.elevation().width();
+        if (ehi <= phi - ke || elo > phi + ke) continue;
+        for (int a = 0; a < g.width(); ++a) {
+          const double alo = g.azimuth().lower(a), ahi = alo + g.azimuth().width();
+          if (ahi <= theta - ka || alo > theta + ka) continue;
+          const DenseGrid::Surface& v = surfaces[g.column(a, e)];
+          const double rho_i = v.unknown ? 0.0 : v.depth_m, p_i = v.unknown ? 0.5 : v.probability;
+          const double da = (g.azimuth().centre(a) - theta) / p.sigma_azimuth_rad;
+          const double de = (g.elevation().centre(e) - phi) / p.sigma_elevation_rad;
+          const long double logit_s = logit_opdf(rho_i - rho_j, da * da + de * de, sigma);
+          const double p_s = static_cast<double>(1.0L / (1.0L + std::exp(-logit_s)));
+          const double den = p_i * p_s + (1 - p_i) * (1 - p_s);
+          sum += (den > 0 ? p_i * p_s / den : p_i) - p_i;  // a certain prior stays unchanged
+        }
+      }
+      result[j] = sum;
+    }
+  return result;
+}
+
+std::vector<double> improvement_map(const DenseGrid& grid) {
+  std::vector<DenseGrid::Surface> surfaces(grid.geometry().column_count());
+  for (std::size_t c = 0; c < surfaces.size(); ++c) surfaces[c] = grid.surface(c);
+  return improvement_map(grid.geometry(), grid.model(), surfaces);
 }
 
 SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height) {

@@ -42,6 +42,14 @@ private:
   std::vector<unsigned char> touched_;
 };
 
+/// Eqs. 3-4 (SPEC 7) by brute force in double for every column, over the given surfaces (one per column):
+/// the window is found by testing every column's extent against the +-k sigma box of the simulated
+/// measurement; unknown surfaces take part with depth 0 and P = 1/2; P_s comes from logit_opdf above.
+std::vector<double> improvement_map(const SphericalGeometry& geometry, const SensorModel& model,
+                                    const std::vector<DenseGrid::Surface>& surfaces);
+/// The same over the dense grid's own surface.
+std::vector<double> improvement_map(const DenseGrid& grid);
+
 /// A geometry covering only a window of another one's columns, with identical column extents:
 /// columns [azimuth_first, azimuth_first + width) x [elevation_first, elevation_first + height).
 SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height);

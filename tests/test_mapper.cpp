@@ -1,0 +1,78 @@
+// The Mapper facade: insertion + incremental surface + incremental improvement equal full recomputation.
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+
+namespace occ_improve {
+namespace {
+
+void expect_equal_to_full_recomputation(const Mapper& m) {
+  const SurfaceMap surface = compute_surface(m.grid());
+  ASSERT_EQ(surface.depth_m, m.surface().depth_m);
+  ASSERT_EQ(surface.probability, m.surface().probability);
+  const ImprovementMap full = compute_improvement(m.geometry(), m.model(), m.surface());
+  ASSERT_EQ(full.value.size(), m.improvement().value.size());
+  double max_d = 0;
+  for (std::size_t c = 0; c < full.value.size(); ++c)
+    max_d = std::max(max_d, static_cast<double>(std::abs(full.value[c] - m.improvement().value[c])));
+  EXPECT_LE(max_d, 1e-6);
+}
+
+TEST(Mapper, RandomBatchesGiveTheFullRecomputation) {
+  Mapper mapper(kinect_v1_paper());
+  EXPECT_EQ(mapper.improvement().value.size(), mapper.geometry().column_count());
+  // Two noisy frames of the sample, shuffled and cut into many batches of random size.
+  std::vector<Eigen::Vector3f> points;
+  for (std::uint32_t seed : {1u, 2u}) {
+    sample::SceneOptions o;
+    o.seed = seed;
+    const auto frame = sample::generate_scene(o).points();
+    points.insert(points.end(), frame.begin(), frame.end());
+  }
+  std::mt19937 rng(7);
+  std::shuffle(points.begin(), points.end(), rng);
+  std::size_t pos = 0, batches = 0, total_recomputed = 0;
+  while (pos < points.size()) {
+    // Small batches first (few changed columns), then large ones.
+    const std::size_t cap = batches < 20 ? 50 : 60000;
+    const std::size_t n = std::min(points.size() - pos, 1 + rng() % cap);
+    const std::vector<Eigen::Vector3f> batch(points.begin() + static_cast<std::ptrdiff_t>(pos),
+                                             points.begin() + static_cast<std::ptrdiff_t>(pos + n));
+    const MapperReport r = mapper.insert(PointSpan::from(batch));
+    EXPECT_EQ(r.insertion.points_received, n);
+    EXPECT_GE(r.rays_recomputed, r.surface_columns_changed);
+    total_recomputed += r.rays_recomputed;
+    if (batches < 20) {
+      EXPECT_LT(r.rays_recomputed, mapper.geometry().column_count() / 10);
+    }
+    pos += n;
+    ++batches;
+    if (batches % 10 == 0) expect_equal_to_full_recomputation(mapper);
+  }
+  EXPECT_GT(batches, 25u);
+  EXPECT_GT(total_recomputed, 0u);
+  expect_equal_to_full_recomputation(mapper);
+}
+
+TEST(Mapper, FromGridComputesSurfaceAndImprovement) {
+  const SensorPreset p = kinect_v1_paper();
+  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  const SensorModel model(p.model);
+  insert_points(grid, model, PointSpan::from(sample::generate_scene().points()));
+  const SurfaceMap surface = compute_surface(grid);
+  Mapper mapper(std::move(grid), model);
+  EXPECT_EQ(mapper.surface().depth_m, surface.depth_m);
+  EXPECT_EQ(mapper.improvement().value, compute_improvement(mapper.geometry(), model, surface).value);
+  // Nothing pending: inserting nothing recomputes nothing.
+  const MapperReport r = mapper.insert(PointSpan{});
+  EXPECT_EQ(r.surface_columns_changed, 0u);
+  EXPECT_EQ(r.rays_recomputed, 0u);
+}
+
+}  // namespace
+}  // namespace occ_improve

@@ -1,0 +1,133 @@
+// Ranking: top rays, 8-connected regions, the stop signal.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/ranking.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace occ_improve {
+namespace {
+
+struct Maps {
+  SphericalGeometry geometry;
+  SurfaceMap surface;
+  ImprovementMap improvement;
+};
+
+// A small grid with hand-made improvement values, surfaces known at 2 m except where noted.
+Maps small_maps(int w, int h) {
+  GeometryParams gp;
+  gp.azimuth_bins = w;
+  gp.elevation_bins = h;
+  Maps m{SphericalGeometry(gp), {}, {}};
+  m.surface.width = m.improvement.width = w;
+  m.surface.height = m.improvement.height = h;
+  const std::size_t n = static_cast<std::size_t>(w) * h;
+  m.surface.depth_m.assign(n, 2.0f);
+  m.surface.probability.assign(n, 0.8f);
+  m.surface.bin.assign(n, 10);
+  m.surface.unknown.assign(n, 0);
+  m.improvement.value.assign(n, 0.0f);
+  return m;
+}
+
+TEST(Ranking, TopRaysAreTheLargestBestFirst) {
+  Maps m = small_maps(10, 8);
+  m.improvement.value[m.geometry.column(3, 4)] = 0.3f;
+  m.improvement.value[m.geometry.column(7, 1)] = 0.5f;
+  m.improvement.value[m.geometry.column(0, 0)] = -0.2f;
+  m.surface.depth_m[m.geometry.column(7, 1)] = 3.5f;
+  const auto rays = top_rays(m.improvement, m.surface, 2);
+  ASSERT_EQ(rays.size(), 2u);
+  EXPECT_EQ(rays[0].azimuth_bin, 7);
+  EXPECT_EQ(rays[0].elevation_bin, 1);
+  EXPECT_EQ(rays[0].column, m.geometry.column(7, 1));
+  EXPECT_FLOAT_EQ(rays[0].improvement, 0.5f);
+  EXPECT_FLOAT_EQ(rays[0].depth_m, 3.5f);
+  EXPECT_EQ(rays[1].column, m.geometry.column(3, 4));
+  EXPECT_EQ(top_rays(m.improvement, m.surface, 1000).size(), 80u);
+  EXPECT_THROW(top_rays(m.improvement, m.surface, 0), InvalidParameter);
+  Maps other = small_maps(9, 8);
+  EXPECT_THROW(top_rays(m.improvement, other.surface, 3), InvalidInput);
+}
+
+TEST(Ranking, RegionsAreEightConnectedAndSorted) {
+  Maps m = small_maps(20, 12);
+  auto set = [&](int a, int e, float v) { m.improvement.value[m.geometry.column(a, e)] = v; };
+  // A diagonal line of 5 (8-connected: one region), sum 1.0.
+  for (int k = 0; k < 5; ++k) set(2 + k, 2 + k, 0.2f);
+  // A 3 x 3 block of 0.3 with one unknown column: sum 2.7, peak 0.3.
+  for (int e = 5; e <= 7; ++e)
+    for (int a = 12; a <= 14; ++a) set(a, e, 0.3f);
+  m.surface.unknown[m.geometry.column(13, 6)] = 1;
+  m.surface.depth_m[m.geometry.column(13, 6)] = 0.0f;
+  m.surface.depth_m[m.geometry.column(12, 5)] = 3.0f;
+  // Too small (3 columns) and below threshold.
+  set(18, 0, 0.9f), set(19, 0, 0.9f), set(19, 1, 0.9f);
+  set(0, 11, 0.04f), set(1, 11, 0.04f), set(2, 11, 0.04f), set(3, 11, 0.04f);
+  const auto regions = find_regions(m.geometry, m.improvement, m.surface);
+  ASSERT_EQ(regions.size(), 2u);
+  EXPECT_NEAR(regions[0].summed_improvement, 2.7, 1e-5);
+  EXPECT_EQ(regions[0].area_columns, 9u);
+  EXPECT_FLOAT_EQ(regions[0].peak_improvement, 0.3f);
+  EXPECT_NEAR(regions[0].mean_depth_m, (7 * 2.0 + 3.0) / 8, 1e-6);
+  EXPECT_NEAR(regions[0].centroid_azimuth_rad, m.geometry.azimuth().centre(13), 1e-12);
+  EXPECT_NEAR(regions[0].centroid_elevation_rad, m.geometry.elevation().centre(6), 1e-12);
+  EXPECT_TRUE(regions[0].centroid_direction.isApprox(m.geometry.direction(13, 6), 1e-9));
+  EXPECT_NEAR(regions[0].centroid_direction.norm(), 1.0, 1e-12);
+  EXPECT_NEAR(regions[1].summed_improvement, 1.0, 1e-5);
+  EXPECT_EQ(regions[1].area_columns, 5u);
+  // Lower area threshold: the small region appears too.
+  RegionOptions o;
+  o.min_area_columns = 1;
+  EXPECT_EQ(find_regions(m.geometry, m.improvement, m.surface, o).size(), 3u);
+  o.min_improvement = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(find_regions(m.geometry, m.improvement, m.surface, o), InvalidParameter);
+}
+
+TEST(Ranking, StopSignalFollowsTheThresholds) {
+  Maps m = small_maps(20, 12);
+  for (int a = 0; a < 10; ++a) m.improvement.value[m.geometry.column(a, 3)] = 0.3f;
+  m.improvement.value[0] = 0.005f;  // below ray_floor: not counted
+  const auto regions = find_regions(m.geometry, m.improvement, m.surface);
+  StopCriteria c;
+  c.total_improvement_below = 2.0;
+  c.best_region_below = 1.0;
+  StopSignal s = stop_signal(m.improvement, regions, c);
+  EXPECT_NEAR(s.total_improvement, 3.0, 1e-5);
+  EXPECT_NEAR(s.best_region_improvement, 3.0, 1e-5);
+  EXPECT_FALSE(s.stop) << s.reason;
+  c.total_improvement_below = 4.0;
+  s = stop_signal(m.improvement, regions, c);
+  EXPECT_TRUE(s.stop);
+  EXPECT_NE(s.reason.find("total"), std::string::npos);
+  c.total_improvement_below = 2.0;
+  c.best_region_below = 5.0;
+  s = stop_signal(m.improvement, regions, c);
+  EXPECT_TRUE(s.stop);
+  EXPECT_NE(s.reason.find("best region"), std::string::npos);
+  c.best_region_below = std::nan("");
+  EXPECT_THROW(stop_signal(m.improvement, regions, c), InvalidParameter);
+}
+
+TEST(Ranking, SampleSceneDoesNotStopAndPointsAtTheNoDataRegions) {
+  const Mapper mapper = [] {
+    Mapper m(kinect_v1_paper());
+    m.insert(PointSpan::from(sample::generate_scene().points()));
+    return m;
+  }();
+  const auto regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface());
+  ASSERT_FALSE(regions.empty());
+  // The best region's columns are mostly unknown (no-data holes are worth the most): its peak is ~0.32.
+  EXPECT_GT(regions.front().peak_improvement, 0.28f);
+  const StopSignal s = stop_signal(mapper.improvement(), regions);
+  EXPECT_FALSE(s.stop) << s.reason;
+}
+
+}  // namespace
+}  // namespace occ_improve
