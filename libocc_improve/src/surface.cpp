@@ -19,33 +19,35 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
   const int uniform_end = std::min<int>(c->uniform_end, bins);
   const int window_end = std::min<int>(c->window_end(), bins);
 
-  // Largest value and the first bin holding it, over the uniform run, the window and the untouched tail.
+  // Largest value over the uniform run, the window and the untouched tail (log-odds 0).
   float best = -std::numeric_limits<float>::infinity();
-  int first = -1;
-  if (uniform_end > 0) {
-    best = c->uniform_value;
+  if (uniform_end > 0) best = c->uniform_value;
+  for (int b = uniform_end; b < window_end; ++b) best = std::max(best, c->window[static_cast<std::size_t>(b - c->uniform_end)]);
+  if (window_end < bins) best = std::max(best, 0.0f);
+
+  // The nearest run of bins within the tie tolerance of it, walked segment by segment so the uniform run
+  // and the tail cost O(1).
+  const float floor_value = best - kSurfaceTieTolerance;
+  const auto window_at = [&](int b) { return c->window[static_cast<std::size_t>(b - c->uniform_end)]; };
+  int first = window_end;  // the tail, unless the uniform run or a window bin comes first
+  if (uniform_end > 0 && c->uniform_value >= floor_value) {
     first = 0;
+  } else {
+    for (int b = uniform_end; b < window_end; ++b)
+      if (window_at(b) >= floor_value) {
+        first = b;
+        break;
+      }
   }
-  for (int b = uniform_end; b < window_end; ++b) {
-    const float v = c->window[static_cast<std::size_t>(b - c->uniform_end)];
-    if (v > best) {
-      best = v;
-      first = b;
-    }
-  }
-  if (window_end < bins && 0.0f > best) {
-    best = 0.0f;
-    first = window_end;
-  }
+  int last = std::max(first, uniform_end - 1);  // a run starting in the uniform run spans all of it
+  while (last + 1 < window_end && window_at(last + 1) >= floor_value) ++last;
+  if (last + 1 >= window_end && window_end < bins && 0.0f >= floor_value) last = bins - 1;
 
   s.unknown = false;
-  s.probability = static_cast<float>(probability_from_logit(best));
-  // Run of maximal bins starting at `first`.
-  int last = first;
-  while (last + 1 < bins && c->value(last + 1) == best) ++last;
   if (first == 0 && last == bins - 1) {  // every bin holds the same value
     s.bin = bins;
     s.depth_m = static_cast<float>(depth.max());
+    s.probability = static_cast<float>(probability_from_logit(best));
     return s;
   }
   if (grid.clamped() && best >= grid.log_odds_max()) {  // saturated peak: centre of the run
@@ -55,6 +57,7 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
     s.bin = first;
     s.depth_m = static_cast<float>(depth.centre(first));
   }
+  s.probability = static_cast<float>(probability_from_logit(c->value(s.bin)));
   return s;
 }
 

@@ -5,12 +5,17 @@
 //  - all bins hold the same value: depth rho_max, that P;
 //  - otherwise the nearest run of maximal bins: its centre if the maximum is the clamp L_max,
 //    else its first bin.
+// "Maximal" means within kSurfaceTieTolerance of the maximum (in log-odds): SPEC 4 lets updates below
+// 1e-6 be skipped and values are held in float, so bins closer than that to the maximum are ties, not
+// a better surface (typical case: the unknown tail behind carved free space, L = 0 +- 1e-7).
 #include "occ_improve/grid.hpp"
 
 #include <cstdint>
 #include <vector>
 
 namespace occ_improve {
+
+constexpr float kSurfaceTieTolerance = 1e-5f;  ///< log-odds; Delta P < 2.5e-6
 
 struct SurfaceMap {
   int width = 0, height = 0;
