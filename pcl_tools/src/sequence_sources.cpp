@@ -5,6 +5,8 @@
 #include <pcl/common/transforms.h>
 #include <pcl/io/openni2_grabber.h>
 
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -145,8 +147,14 @@ Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
       if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
   if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
     throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
+  // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
+  // inverse() transposes it, so project it onto the nearest rotation (SVD) to keep T^-1 T = I.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
+  if (rotation.determinant() < 0 || (rotation - m.topLeftCorner<3, 3>()).norm() > 1e-3)
+    throw FormatError("pose file '" + path + "' does not hold a rotation (not orthonormal)");
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = m.topLeftCorner<3, 3>();
+  pose.linear() = rotation;
   pose.translation() = m.topRightCorner<3, 1>();
   return pose;
 }

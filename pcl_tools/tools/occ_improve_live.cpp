@@ -1,0 +1,245 @@
+// occ_improve_live: fuse a stream of range frames (OpenNI2 device, .oni recording, PCD folder or
+// depth-image sequence) into the spherical occupancy grid as they arrive, and keep the depth,
+// occupancy and improvement maps written to a folder.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/grabber_pipeline.hpp"
+#include "occ_improve/pcl/sequence_sources.hpp"
+#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/render.hpp"
+
+#include <pcl/console/parse.h>
+#include <pcl/console/print.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <mutex>
+#include <thread>
+
+namespace {
+
+using namespace occ_improve;
+using Pipeline = GrabberPipeline<pcl::PointXYZ>;
+
+volatile std::sig_atomic_t g_interrupted = 0;
+extern "C" void on_sigint(int) { g_interrupted = 1; }
+
+void print_usage(const char* program) {
+  std::cout << "Usage: " << program << " <source> [options]\n"
+            << "Fuses a stream of range frames into the spherical occupancy grid and writes the maps.\n\n"
+            << "Source (exactly one):\n"
+            << "  -device [URI]             live OpenNI2 device (first one found, or its URI)\n"
+            << "  -oni FILE                 OpenNI2 recording\n"
+            << "  -pcd_dir DIR              the .pcd files of a folder, in name order\n"
+            << "  -depth_dir DIR            depth-image sequence: 7-Scenes (frame-*.depth.png, .pose.txt,\n"
+            << "                            camera-intrinsics.txt), TUM RGB-D (depth.txt, groundtruth.txt) or\n"
+            << "                            a folder of 16-bit PNG/PGM; needs intrinsics unless the folder has them\n"
+            << "  FILE.pcd ...              positional PCD files, in order\n"
+            << "With poses, every frame is moved into the FIRST frame's sensor frame (the grid has one\n"
+            << "viewpoint).\n\n"
+            << "Pipeline:\n"
+            << "  -o DIR                    output folder for depth.png, occupancy.png, improvement.png (default .)\n"
+            << "  -save_every N             also write the maps every N processed frames (default 0: at the end)\n"
+            << "  -fps F                    file sources: frames per second (default 0: as fast as possible)\n"
+            << "  -threads N                insertion threads (default 0: all cores)\n"
+            << "  -drop                     file sources: newest frame wins like a live sensor (default: every\n"
+            << "                            frame is processed)\n"
+            << "  -no_poses                 ignore the sequence's poses\n"
+            << "  -stop_on_signal           stop once the improvement stop signal fires\n"
+            << "  -max_frames N             file sources: only the first N frames; live: stop after N processed\n"
+            << "Ctrl-C stops cleanly and still writes the maps.\n\n"
+            << usage_common();
+}
+
+/// The argument vector without "-device [URI]", which tool_options does not know; returns the URI
+/// (empty for the first device) when -device was given.
+std::optional<std::string> take_device_flag(std::vector<const char*>& args) {
+  for (std::size_t i = 1; i < args.size(); ++i) {
+    if (std::string(args[i]) != "-device") continue;
+    std::string uri;
+    std::size_t erase = 1;
+    if (i + 1 < args.size() && args[i + 1][0] != '-') {
+      uri = args[i + 1];
+      erase = 2;
+    }
+    args.erase(args.begin() + static_cast<std::ptrdiff_t>(i), args.begin() + static_cast<std::ptrdiff_t>(i + erase));
+    return uri;
+  }
+  return std::nullopt;
+}
+
+void write_maps(const Mapper& mapper, const std::string& dir, double depth_max_m) {
+  write_png(dir + "/depth.png", render_depth(mapper.surface(), depth_max_m));
+  write_png(dir + "/occupancy.png", render_occupancy(mapper.surface()));
+  write_png(dir + "/improvement.png", render_improvement(mapper.improvement()));
+}
+
+template <typename T>
+T parse_number(int argc, const char* const* argv, const char* flag, T fallback, T minimum) {
+  T value = fallback;
+  if (pcl::console::parse_argument(argc, argv, flag, value) >= 0 && value < minimum)
+    throw InvalidParameter(std::string(flag) + " " + std::to_string(value) + " is invalid: must be >= " +
+                           std::to_string(minimum));
+  return value;
+}
+
+int run(int argc, const char* const* argv_in) {
+  std::vector<const char*> args(argv_in, argv_in + argc);
+  const std::optional<std::string> device = take_device_flag(args);
+  const int n = static_cast<int>(args.size());
+  const char* const* argv = args.data();
+
+  ToolSpec spec;
+  spec.default_preset = "kinect_v1";
+  spec.value_flags = {"-oni", "-pcd_dir", "-depth_dir", "-o", "-save_every", "-fps", "-threads", "-max_frames"};
+  spec.switches = {"-drop", "-no_poses", "-stop_on_signal"};
+  const ToolOptions options = parse_tool_options(n, argv, spec);
+
+  std::string oni, pcd_dir, depth_dir, out_dir = ".";
+  pcl::console::parse_argument(n, argv, "-oni", oni);
+  pcl::console::parse_argument(n, argv, "-pcd_dir", pcd_dir);
+  pcl::console::parse_argument(n, argv, "-depth_dir", depth_dir);
+  pcl::console::parse_argument(n, argv, "-o", out_dir);
+  const int save_every = parse_number(n, argv, "-save_every", 0, 0);
+  const float fps = parse_number(n, argv, "-fps", 0.0f, 0.0f);
+  const int threads = parse_number(n, argv, "-threads", 0, 0);
+  const int max_frames = parse_number(n, argv, "-max_frames", 0, 0);
+  const bool drop = pcl::console::find_switch(n, argv, "-drop");
+  const bool stop_on_signal = pcl::console::find_switch(n, argv, "-stop_on_signal");
+
+  const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() + !options.inputs.empty();
+  if (sources != 1)
+    throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir or PCD files); see -h");
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw IoError("cannot create output folder '" + out_dir + "': " + ec.message());
+
+  // The source, and the sensor preset that fits it.
+  std::shared_ptr<pcl::Grabber> grabber;
+  FileSequenceGrabber* file_source = nullptr;
+  SensorPreset preset = options.preset;
+  std::string source_text;
+  if (device || !oni.empty()) {
+    grabber = open_openni2_grabber(device ? *device : oni);
+    source_text = device ? "OpenNI2 device " + (device->empty() ? std::string("(first)") : *device) : "recording " + oni;
+  } else if (!depth_dir.empty()) {
+    DepthSequence sequence = scan_depth_sequence(depth_dir);
+    if (max_frames > 0 && sequence.frames.size() > static_cast<std::size_t>(max_frames))
+      sequence.frames.resize(static_cast<std::size_t>(max_frames));  // file sources stop exactly there
+    const std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : sequence.intrinsics;
+    if (!camera) throw InvalidParameter("-depth_dir " + depth_dir + ": no camera-intrinsics.txt there; give -intrinsics or -intrinsics_file");
+    if (!options.intrinsics) preset = options.preset_for_camera(camera);
+    DepthSequenceOptions sequence_options;
+    sequence_options.fps = fps;
+    sequence_options.use_poses = !pcl::console::find_switch(n, argv, "-no_poses");
+    sequence_options.encoding = options.depth_encoding;
+    auto source = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
+    source_text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
+                  (source->posesApplied() ? "poses applied: map in the first frame's view" : "no poses") + ")";
+    file_source = source.get();
+    grabber = source;
+  } else {
+    std::vector<std::string> files = pcd_dir.empty() ? options.inputs : PcdSequenceGrabber(pcd_dir).files();
+    if (max_frames > 0 && files.size() > static_cast<std::size_t>(max_frames))
+      files.resize(static_cast<std::size_t>(max_frames));
+    auto source = std::make_shared<PcdSequenceGrabber>(files, fps);
+    source_text = (pcd_dir.empty() ? std::string("PCD files") : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
+    file_source = source.get();
+    grabber = source;
+  }
+
+  PipelineOptions pipeline_options;
+  pipeline_options.insertion.threads = threads;
+  pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
+  pipeline_options.backpressure = file_source != nullptr && !drop;
+  Pipeline pipeline(preset, options.grid, pipeline_options);
+  const double depth_max_m = preset.geometry.depth_max_m;
+
+  std::mutex report_mutex;
+  FrameResult last;
+  bool have_result = false;
+  std::atomic<bool> stop_signalled{false};
+  std::atomic<int> maps_written{0};
+  std::uint64_t frames_seen = 0;  // only touched by the worker
+  pipeline.setResultCallback([&](const FrameResult& r) {
+    {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      last = r;
+      have_result = true;
+    }
+    if (r.stop.stop) stop_signalled = true;
+    if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
+      write_maps(pipeline.mapper(), out_dir, depth_max_m);
+      ++maps_written;
+    }
+  });
+  pipeline.setEventCallback([](const PipelineEvent& e) { pcl::console::print_warn("\n%s\n", e.message.c_str()); });
+  if (file_source)
+    file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
+  pipeline.attach(*grabber);
+
+  pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source_text.c_str(),
+                           preset.name.c_str(), preset.geometry.azimuth_bins, preset.geometry.elevation_bins,
+                           preset.geometry.depth_bins, depth_max_m);
+  std::signal(SIGINT, on_sigint);
+  pipeline.start();
+  const char* stop_reason = "source finished";
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const PipelineStatistics s = pipeline.statistics();
+    std::fprintf(stderr, "\rframes %llu  processed %llu  dropped %llu  rejected %llu  %.1f fps   ",
+                 static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
+                 static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
+                 s.processed_per_second());
+    if (g_interrupted) { stop_reason = "interrupted (Ctrl-C)"; break; }
+    if (stop_on_signal && stop_signalled) { stop_reason = "stop signal"; break; }
+    if (max_frames > 0 && s.processed >= static_cast<std::uint64_t>(max_frames)) { stop_reason = "-max_frames reached"; break; }
+    if (file_source && !file_source->isRunning() && s.in_flight == 0) break;
+  }
+  pipeline.stop();
+  std::fprintf(stderr, "\n");
+  write_maps(pipeline.mapper(), out_dir, depth_max_m);
+  write_png(out_dir + "/improvement_legend.png", render_improvement_legend());
+
+  const PipelineStatistics s = pipeline.statistics();
+  pcl::console::print_info("Stopped: %s\n", stop_reason);
+  pcl::console::print_info(
+      "Frames: %llu received, %llu processed, %llu dropped, %llu rejected, %llu source errors in %.2f s "
+      "(%.1f frames/s)\n",
+      static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
+      static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
+      static_cast<unsigned long long>(s.grabber_errors), s.wall_seconds, s.processed_per_second());
+  pcl::console::print_info("Per frame [ms]: convert %.1f, insert %.1f, surface %.1f, improvement %.1f, regions %.1f\n",
+                           s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms), s.mean_ms(s.surface_ms),
+                           s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
+  if (have_result) {
+    pcl::console::print_info("Stop signal: %s (%s)\n", last.stop.stop ? "yes" : "no", last.stop.reason.c_str());
+    for (std::size_t i = 0; i < last.top_regions.size(); ++i) {
+      const Region& r = last.top_regions[i];
+      pcl::console::print_info("  region %zu: improvement %.2f over %zu rays, azimuth %.1f deg, elevation %.1f deg, depth %.2f m\n",
+                               i + 1, r.summed_improvement, r.area_columns, r.centroid_azimuth_rad * 180.0 / M_PI,
+                               r.centroid_elevation_rad * 180.0 / M_PI, r.mean_depth_m);
+    }
+  }
+  pcl::console::print_info("Wrote %s/{depth,occupancy,improvement,improvement_legend}.png (%d intermediate writes)\n",
+                           out_dir.c_str(), maps_written.load());
+  return s.processed > 0 ? 0 : 1;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (help_requested(argc, argv)) {
+    print_usage(argv[0]);
+    return 0;
+  }
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
