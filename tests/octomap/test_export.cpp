@@ -49,6 +49,13 @@ Eigen::Isometry3d some_pose() {
   return pose;
 }
 
+// A finest-level leaf centre inside a (possibly pruned) leaf: its lowest corner leaf. Pruning merges 8
+// children only when all exist with one value, so every finest leaf inside was written with that value.
+Eigen::Vector3d finest_centre(const octomap::OcTree::leaf_iterator& it, double resolution) {
+  const double inset = 0.5 * (it.getSize() - resolution);
+  return Eigen::Vector3d(it.getX() - inset, it.getY() - inset, it.getZ() - inset);
+}
+
 class OctomapExport : public ::testing::Test {
 protected:
   void SetUp() override {
@@ -110,7 +117,7 @@ TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBou
     float lowest = 0;
     for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
       if (++checked % 7 != 0) continue;  // every 7th leaf keeps the test short
-      const auto expected = test::spherical_log_odds(grid, pose, Eigen::Vector3d(it.getX(), it.getY(), it.getZ()), options);
+      const auto expected = test::spherical_log_odds(grid, pose, finest_centre(it, kResolution), options);
       ASSERT_TRUE(expected.has_value()) << "a leaf was written for an unknown voxel";
       equal += std::abs(*expected - it->getLogOdds()) <= 1e-6f ? 1 : 0;
       lowest = std::min(lowest, it->getLogOdds());
@@ -136,10 +143,8 @@ TEST_F(OctomapExport, TwoPosesMergeByAddingLogOddsThenClamping) {
   const float lo = grid.log_odds_min(), hi = grid.log_odds_max();
 
   std::size_t both = 0, checked = 0, matching = 0;
-  std::size_t leaf = 0;
   for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
-    if (++leaf % 5 != 0) continue;
-    const Eigen::Vector3d w(it.getX(), it.getY(), it.getZ());
+    const Eigen::Vector3d w = finest_centre(it, kResolution);
     const auto la = test::spherical_log_odds(grid, a, w, options), lb = test::spherical_log_odds(grid, b, w, options);
     ASSERT_TRUE(la || lb) << "a leaf neither view knows";
     const float expected = std::clamp(std::clamp(la.value_or(0.0f), lo, hi) + lb.value_or(0.0f), lo, hi);

@@ -172,7 +172,10 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
       }
     }
   }
+  // Lazy insertion leaves inner nodes stale and every leaf expanded: refresh the inner nodes, then merge
+  // children of equal value (uniform free space at the clamp) as OctoMap's own insertion does.
   tree.updateInnerOccupancy();
+  tree.prune();
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
 }

@@ -53,7 +53,8 @@ std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double r
                                              const OctomapExportOptions& options = {});
 
 /// Adds `grid`, observed from `world_from_sensor`, to `tree` by the merge rule above, at the tree's
-/// resolution; inner nodes are updated before returning. Throws InvalidParameter for a pose that is
+/// resolution; inner nodes are updated and equal children pruned before returning (as insertPointCloud
+/// leaves its tree). Throws InvalidParameter for a pose that is
 /// not a finite rigid transform or a frustum outside the tree's addressable range, ResourceLimit when the
 /// estimated memory exceeds options.memory_cap_bytes. The tree is unchanged when it throws.
 OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& grid,
