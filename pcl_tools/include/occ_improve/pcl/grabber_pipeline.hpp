@@ -14,7 +14,8 @@
 // Once stopped: received = processed + dropped + rejected.
 //
 // The Mapper is read and written by the worker only while the pipeline runs: read it from the result
-// callback (which runs on the worker) or after stop().
+// callback (which runs on the worker) or after stop(). Callbacks must not call stop() (it joins the
+// worker they run on); set a flag and stop from another thread instead.
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/ranking.hpp"
 
