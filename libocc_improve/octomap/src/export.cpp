@@ -36,17 +36,29 @@ void require_rigid(const Eigen::Isometry3d& pose) {
   }
 }
 
-// Volume of the grid's frustum: solid angle (azimuth span x (sin el_max - sin el_min)) x (r^3 / 3).
-double frustum_volume_m3(const SphericalGeometry& g) {
+// The far end of everything the grid knows: beyond the last touched bin of every column all voxels are
+// unknown, so the export need not visit them (a table-top frame in an 8 m grid ends near 2 m).
+double known_far_m(const SphericalGrid& grid) {
+  const SphericalGeometry& g = grid.geometry();
+  int last_bin = -1;
+  for (std::size_t c = 0; c < g.column_count(); ++c) {
+    const ColumnData* column = grid.find(static_cast<ColumnIndex>(c));
+    if (column) last_bin = std::max(last_bin, column->window_end() - 1);
+  }
+  return last_bin < 0 ? g.depth().min() : g.depth().upper(last_bin);
+}
+
+// Volume of the frustum out to far_m: solid angle (azimuth span x (sin el_max - sin el_min)) x (r^3 / 3).
+double frustum_volume_m3(const SphericalGeometry& g, double far_m) {
   const GeometryParams& p = g.params();
   const double solid_angle =
       (p.azimuth_max_rad - p.azimuth_min_rad) * (std::sin(p.elevation_max_rad) - std::sin(p.elevation_min_rad));
-  return solid_angle * (std::pow(p.depth_max_m, 3) - std::pow(p.depth_min_m, 3)) / 3.0;
+  return solid_angle * std::max(0.0, std::pow(far_m, 3) - std::pow(p.depth_min_m, 3)) / 3.0;
 }
 
-// World-frame bounding box of the frustum: its boundary sampled on a 17 x 17 angular lattice at the
-// near and far depths (and the sensor origin), padded by the far cap's bulge between samples.
-void frustum_bounds(const SphericalGeometry& g, const Eigen::Isometry3d& pose, Eigen::Vector3d& lo,
+// World-frame bounding box of the frustum out to far_m: its boundary sampled on a 17 x 17 angular
+// lattice at the near and far depths (and the sensor origin), padded by the far cap's bulge between samples.
+void frustum_bounds(const SphericalGeometry& g, double far_m, const Eigen::Isometry3d& pose, Eigen::Vector3d& lo,
                     Eigen::Vector3d& hi) {
   constexpr int kSamples = 17;
   const GeometryParams& p = g.params();
@@ -60,14 +72,14 @@ void frustum_bounds(const SphericalGeometry& g, const Eigen::Isometry3d& pose, E
       widest_step = std::max({widest_step, step_az, step_el});
       s.azimuth = p.azimuth_min_rad + i * step_az;
       s.elevation = p.elevation_min_rad + j * step_el;
-      for (double rho : {p.depth_min_m, p.depth_max_m}) {
+      for (double rho : {p.depth_min_m, far_m}) {
         s.rho = rho;
         const Eigen::Vector3d w = pose * from_spherical(s);
         lo = lo.cwiseMin(w);
         hi = hi.cwiseMax(w);
       }
     }
-  const double bulge = p.depth_max_m * (1.0 - std::cos(widest_step)) + 1e-6;
+  const double bulge = far_m * (1.0 - std::cos(widest_step)) + 1e-6;
   lo.array() -= bulge;
   hi.array() += bulge;
 }
@@ -116,17 +128,19 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
   const SphericalGeometry& geometry = grid.geometry();
   const double resolution = tree.getResolution();
 
-  const double leaves = frustum_volume_m3(geometry) / (resolution * resolution * resolution);
+  const double far_m = known_far_m(grid);
+  const double volume_m3 = frustum_volume_m3(geometry, far_m);
+  const double leaves = volume_m3 / (resolution * resolution * resolution);
   if (leaves * kBytesPerLeaf > static_cast<double>(options.memory_cap_bytes)) {
     std::ostringstream msg;
     msg << "OcTree export at resolution " << resolution << " m: about " << leaves << " leaves ("
-        << leaves * kBytesPerLeaf / (1 << 20) << " MiB) in the " << frustum_volume_m3(geometry)
-        << " m^3 field of view exceed memory_cap_bytes = "
+        << leaves * kBytesPerLeaf / (1 << 20) << " MiB) in the " << volume_m3
+        << " m^3 of known field of view exceed memory_cap_bytes = "
         << static_cast<double>(options.memory_cap_bytes) / (1 << 20) << " MiB; choose a coarser resolution";
     throw ResourceLimit(msg.str());
   }
   Eigen::Vector3d lo, hi;
-  frustum_bounds(geometry, world_from_sensor, lo, hi);
+  frustum_bounds(geometry, far_m, world_from_sensor, lo, hi);
   octomap::OcTreeKey key_lo, key_hi;
   if (!tree.coordToKeyChecked(lo.x(), lo.y(), lo.z(), key_lo) ||
       !tree.coordToKeyChecked(hi.x(), hi.y(), hi.z(), key_hi)) {
@@ -138,7 +152,7 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
 
   const double log_odds_band = logit(0.5 + options.unknown_band_probability);
   const GeometryParams& params = geometry.params();
-  const double near2 = params.depth_min_m * params.depth_min_m, far2 = params.depth_max_m * params.depth_max_m;
+  const double near2 = params.depth_min_m * params.depth_min_m, far2 = far_m * far_m;
   // Sensor-frame position of a leaf centre: p = R^T (c - t), stepped along world z inside the loop.
   const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
   const Eigen::Vector3d origin = world_from_sensor.translation();
@@ -189,10 +203,15 @@ std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eige
   return tree;
 }
 
-void write_octree(const octomap::OcTree& tree, const std::string& path) {
+void require_octomap_output_path(const std::string& path) {
   const std::string extension = std::filesystem::path(path).extension().string();
   if (extension != ".bt" && extension != ".ot")
     throw InvalidParameter("OctoMap output '" + path + "' must end in .bt (maximum likelihood) or .ot (full)");
+}
+
+void write_octree(const octomap::OcTree& tree, const std::string& path) {
+  require_octomap_output_path(path);
+  const std::string extension = std::filesystem::path(path).extension().string();
   const std::string temporary = temporary_name(path);
   bool written = false;
   {
