@@ -1,11 +1,14 @@
 // Saving and loading maps (map_io.hpp): exact round trips on generated scenes, atomic saves, and every
 // kind of bad file refused with a typed error.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/improvement.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/map_io.hpp"
+#include "occ_improve/mapper.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/surface.hpp"
+#include "support/map_compare.hpp"
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
@@ -70,54 +73,12 @@ void reseal(std::vector<char>& bytes) {
   std::memcpy(bytes.data() + bytes.size() - 8, &h, 8);
 }
 
-bool same_params(const GeometryParams& a, const GeometryParams& b) {
-  return a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
-         a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&
-         a.elevation_min_rad == b.elevation_min_rad && a.elevation_max_rad == b.elevation_max_rad &&
-         a.depth_binning == b.depth_binning && a.depth_min_m == b.depth_min_m && a.depth_max_m == b.depth_max_m;
-}
-
-bool same_model(const SensorModelParams& a, const SensorModelParams& b) {
-  return a.sigma_azimuth_rad == b.sigma_azimuth_rad && a.sigma_elevation_rad == b.sigma_elevation_rad &&
-         a.sigma_depth_m == b.sigma_depth_m && a.sigma_depth_per_m2 == b.sigma_depth_per_m2 &&
-         a.sigma_depth_floor_m == b.sigma_depth_floor_m && a.support_k == b.support_k;
-}
-
-// Every column bit for bit: the same touched set, runs, windows and float bit patterns.
-void expect_identical(const SphericalGrid& a, const SphericalGrid& b) {
-  ASSERT_TRUE(same_params(a.geometry().params(), b.geometry().params()));
-  EXPECT_EQ(a.options().mode, b.options().mode);
-  EXPECT_EQ(a.options().probability_min, b.options().probability_min);
-  EXPECT_EQ(a.options().probability_max, b.options().probability_max);
-  EXPECT_EQ(a.options().memory_cap_bytes, b.options().memory_cap_bytes);
-  std::size_t differing = 0;
-  for (std::size_t c = 0; c < a.geometry().column_count(); ++c) {
-    const ColumnData* x = a.find(static_cast<ColumnIndex>(c));
-    const ColumnData* y = b.find(static_cast<ColumnIndex>(c));
-    const bool tx = x && x->touched(), ty = y && y->touched();
-    if (tx != ty) {
-      ++differing;
-      continue;
-    }
-    if (!tx) continue;
-    const bool same = x->uniform_end == y->uniform_end && x->window.size() == y->window.size() &&
-                      (x->uniform_end == 0 || std::memcmp(&x->uniform_value, &y->uniform_value, sizeof(float)) == 0) &&
-                      (x->window.empty() ||
-                       std::memcmp(x->window.data(), y->window.data(), x->window.size() * sizeof(float)) == 0);
-    differing += same ? 0 : 1;
-  }
-  EXPECT_EQ(differing, 0u);
-  EXPECT_EQ(a.touched_column_count(), b.touched_column_count());
-  EXPECT_EQ(a.stored_voxel_count(), b.stored_voxel_count());
-}
-
-void expect_same_surface(const SphericalGrid& a, const SphericalGrid& b) {
+// Surface and improvement maps of two grids, bit for bit (the maps a loaded map must reproduce).
+void expect_same_maps(const SphericalGrid& a, const SphericalGrid& b, const SensorModelParams& model) {
   const SurfaceMap sa = compute_surface(a), sb = compute_surface(b);
-  ASSERT_EQ(sa.size(), sb.size());
-  EXPECT_EQ(sa.bin, sb.bin);
-  EXPECT_EQ(sa.unknown, sb.unknown);
-  EXPECT_EQ(0, std::memcmp(sa.depth_m.data(), sb.depth_m.data(), sa.size() * sizeof(float)));
-  EXPECT_EQ(0, std::memcmp(sa.probability.data(), sb.probability.data(), sa.size() * sizeof(float)));
+  test::expect_same_surface(sa, sb);
+  const SensorModel m(model);
+  test::expect_same_improvement(compute_improvement(a.geometry(), m, sa), compute_improvement(b.geometry(), m, sb));
 }
 
 // The sample scene's frames, generated once for the whole test program.
@@ -143,10 +104,27 @@ TEST_F(MapIo, PaperPresetSampleFrameRoundTripsBitForBit) {
   ASSERT_GT(grid.touched_column_count(), 100000u);
   save_map(file("frame.occmap"), grid, preset.model);
   const LoadedMap loaded = load_map(file("frame.occmap"));
-  EXPECT_TRUE(same_model(loaded.model, preset.model));
-  expect_identical(grid, loaded.grid);
-  expect_same_surface(grid, loaded.grid);
+  EXPECT_TRUE(test::same_model(loaded.model, preset.model));
+  test::expect_identical(grid, loaded.grid);
+  expect_same_maps(grid, loaded.grid, preset.model);
   EXPECT_EQ(entries(), std::vector<std::string>{"frame.occmap"}) << "no temporary file may be left behind";
+}
+
+TEST_F(MapIo, MappingContinuedFromASavedMapEqualsUninterruptedMapping) {
+  const SensorPreset preset = kinect_v1_paper();
+  Mapper uninterrupted(preset);
+  uninterrupted.insert(PointSpan::from(sample_frames()[0]));
+  save_map(file("first.occmap"), uninterrupted.grid(), uninterrupted.model().params());
+  LoadedMap loaded = load_map(file("first.occmap"));
+  Mapper resumed(std::move(loaded.grid), SensorModel(loaded.model));
+  test::expect_same_surface(uninterrupted.surface(), resumed.surface());
+  test::expect_same_improvement(uninterrupted.improvement(), resumed.improvement());
+
+  uninterrupted.insert(PointSpan::from(sample_frames()[1]));
+  resumed.insert(PointSpan::from(sample_frames()[1]));
+  test::expect_identical(uninterrupted.grid(), resumed.grid());
+  test::expect_same_surface(uninterrupted.surface(), resumed.surface());
+  test::expect_same_improvement(uninterrupted.improvement(), resumed.improvement());
 }
 
 TEST_F(MapIo, ExactModeInverseDepthPresetRoundTrips) {
@@ -159,9 +137,9 @@ TEST_F(MapIo, ExactModeInverseDepthPresetRoundTrips) {
   const LoadedMap loaded = load_map(file("exact.occmap"));
   EXPECT_EQ(loaded.grid.options().mode, UpdateMode::exact);
   EXPECT_EQ(loaded.grid.geometry().params().depth_binning, DepthBinning::inverse_depth);
-  EXPECT_TRUE(same_model(loaded.model, preset.model));
-  expect_identical(grid, loaded.grid);
-  expect_same_surface(grid, loaded.grid);
+  EXPECT_TRUE(test::same_model(loaded.model, preset.model));
+  test::expect_identical(grid, loaded.grid);
+  expect_same_maps(grid, loaded.grid, preset.model);
 }
 
 TEST_F(MapIo, OctomapClampingAndEmptyGridRoundTrip) {
@@ -174,7 +152,7 @@ TEST_F(MapIo, OctomapClampingAndEmptyGridRoundTrip) {
   EXPECT_EQ(loaded.grid.touched_column_count(), 0u);
   EXPECT_EQ(loaded.grid.options().probability_min, 0.1192);
   EXPECT_EQ(loaded.grid.options().probability_max, 0.971);
-  expect_identical(empty, loaded.grid);
+  test::expect_identical(empty, loaded.grid);
 }
 
 TEST_F(MapIo, ResavingOverAnExistingMapReplacesIt) {
@@ -186,7 +164,7 @@ TEST_F(MapIo, ResavingOverAnExistingMapReplacesIt) {
   const SphericalGrid full = sample_grid(preset, {});
   ASSERT_GT(full.touched_column_count(), 0u);
   save_map(file("map.occmap"), full, preset.model);
-  expect_identical(full, load_map(file("map.occmap")).grid);
+  test::expect_identical(full, load_map(file("map.occmap")).grid);
   EXPECT_EQ(entries().size(), 1u);
 }
 
