@@ -28,7 +28,7 @@ Image render_depth(const SurfaceMap& surface, double depth_max_m);
 Image render_occupancy(const SurfaceMap& surface);
 /// RGB through improvement_colour.
 Image render_improvement(const ImprovementMap& map);
-/// RGB legend: the colour bar from -0.3 to 0.4 with value ticks labelled by a built-in digit font.
+/// RGB legend: the colour bar from -0.4 to 0.4, ticks every 0.1 labelled with a built-in 3 x 5 digit font.
 Image render_improvement_legend();
 
 /// The colour map above (NaN -> black).
