@@ -33,7 +33,8 @@ inline float surface_term(float p, float d_rho, float inv_sigma, float step_fact
   const float n = 0.5f + b * d;
   const float num = p * n;
   const float den = num + (1.0f - p) * (d - n);
-  return den > 0.0f ? num / den - p : 0.0f;
+  const float imp = num / (den > 0.0f ? den : 1.0f) - p;  // selects, not branches: the loop vectorises
+  return den > 0.0f ? imp : 0.0f;
 }
 
 // The window rule and the per-offset angular factors, built once per geometry and model.
@@ -119,7 +120,8 @@ struct WindowKernel {
         const int x_begin = std::max(0, -da), x_end = std::min(w, w - da);
         for (int x = x_begin; x < x_end; ++x) {
           const float term = surface_term(p_i[x + da], rho_i[x + da] - rho_j[x], inv[x], step, peak);
-          out[x] += (lo[x] <= da && da <= hi[x]) ? term : 0.0f;
+          const bool in_window = (lo[x] <= da) & (da <= hi[x]);  // '&': no short-circuit branch
+          out[x] += in_window ? term : 0.0f;
         }
       }
     }
