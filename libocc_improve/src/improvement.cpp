@@ -8,6 +8,12 @@
 #include <cmath>
 #include <string>
 
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define OCC_IMPROVE_ROW_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define OCC_IMPROVE_ROW_CLONES
+#endif
+
 namespace occ_improve {
 namespace {
 
@@ -97,8 +103,9 @@ struct WindowKernel {
     return sum;
   }
 
-  // Every ray of row e at once: offset by offset, j along the row (contiguous, vectorisable).
-  void row(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
+  // Every ray of row e at once: offset by offset, j along the row (contiguous, vectorisable). On x86-64
+  // GCC also builds an AVX2 clone picked at load time (no FMA: results stay bit-identical to ray()).
+  OCC_IMPROVE_ROW_CLONES void row(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
            std::vector<float>& inv_sigma) const {
     const int w = g.width();
     const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
@@ -204,13 +211,25 @@ std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, c
   for (std::size_t c = 0; c < columns; ++c)
     if (affected[c]) rays.push_back(static_cast<ColumnIndex>(c));
 
-  // Independent rays: split the list when it is long enough to pay for the threads.
-  const int parts = rays.size() < 20000 ? 1 : detail::resolve_thread_count(0);
+  // Rows with many affected rays go through the vectorised row loop (whole row into scratch, affected
+  // values copied), the others ray by ray; both give bit-identical values. Rows are independent.
+  const int w = geometry.width(), h = geometry.height();
+  const int parts = rays.size() < 20000 ? 1 : std::min(detail::resolve_thread_count(0), h);
   detail::run_parts(parts, [&](int part, int count) {
-    const std::size_t n = rays.size();
-    for (std::size_t r = n * part / count; r < n * (part + 1) / count; ++r) {
-      const ColumnIndex j = rays[r];
-      map.value[j] = kernel.ray(geometry, model, surface, geometry.azimuth_bin_of(j), geometry.elevation_bin_of(j));
+    std::vector<float> scratch(static_cast<std::size_t>(w)), inv_sigma(static_cast<std::size_t>(w));
+    for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
+      const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+      const auto row_affected = static_cast<int>(
+          std::count(affected.begin() + static_cast<std::ptrdiff_t>(row_start),
+                     affected.begin() + static_cast<std::ptrdiff_t>(row_start + static_cast<std::size_t>(w)), 1));
+      if (row_affected == 0) continue;
+      if (row_affected * 8 >= w) kernel.row(geometry, model, surface, e, scratch.data(), inv_sigma);
+      for (int a = 0; a < w; ++a) {
+        const std::size_t j = row_start + static_cast<std::size_t>(a);
+        if (!affected[j]) continue;
+        map.value[j] = row_affected * 8 >= w ? scratch[static_cast<std::size_t>(a)]
+                                             : kernel.ray(geometry, model, surface, a, e);
+      }
     }
   });
   return rays;
