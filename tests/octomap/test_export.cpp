@@ -77,6 +77,7 @@ void expect_agreement(const test::Agreement& a) {
   EXPECT_GT(a.per_class[static_cast<int>(Occupancy::free)], 500u);
   EXPECT_GT(a.per_class[static_cast<int>(Occupancy::occupied)], 0u);
   EXPECT_GT(a.per_class[static_cast<int>(Occupancy::unknown)], 100u);
+  ::testing::Test::RecordProperty("agreement", std::to_string(a.agreed) + "/" + std::to_string(a.compared));
   EXPECT_GE(a.fraction(), 0.99) << a.agreed << " / " << a.compared << " (" << a.near_boundary << " near boundaries)";
 }
 

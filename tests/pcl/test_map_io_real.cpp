@@ -62,6 +62,7 @@ void expect_octree_agreement(const SphericalGrid& grid, bool thin_surface) {
   if (!thin_surface) {
     EXPECT_GT(a.per_class[static_cast<int>(test::Occupancy::occupied)], 0u);
   }
+  ::testing::Test::RecordProperty("agreement", std::to_string(a.agreed) + "/" + std::to_string(a.compared));
   EXPECT_GE(a.fraction(), 0.99) << a.agreed << " / " << a.compared << " (" << a.near_boundary << " near boundaries)";
 }
 
