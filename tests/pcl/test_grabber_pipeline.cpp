@@ -6,6 +6,7 @@
 #include "occ_improve/sample_scene.hpp"
 #include "support/test_data.hpp"
 
+#include <pcl/common/io.h>
 #include <pcl/common/transforms.h>
 #include <pcl/io/pcd_grabber.h>
 #include <pcl/io/pcd_io.h>
@@ -403,6 +404,35 @@ TEST(SequenceSources, ErrorsNameTheProblem) {
   EXPECT_THROW(PcdSequenceGrabber(std::vector<std::string>{"a.pcd"}, -1.0f), InvalidParameter);
   std::ofstream(empty.path / "bad.pose.txt") << "1 0 0\n";
   EXPECT_THROW(read_pose_matrix_file((empty.path / "bad.pose.txt").string()), FormatError);
+}
+
+}  // namespace
+}  // namespace occ_improve
+
+namespace occ_improve {
+namespace {
+
+template <typename PointT>
+class GrabberPipelineTyped : public ::testing::Test {};
+using PointTypes = ::testing::Types<pcl::PointXYZ, pcl::PointXYZI, pcl::PointXYZRGB, pcl::PointXYZRGBA, pcl::PointXYZL>;
+TYPED_TEST_SUITE(GrabberPipelineTyped, PointTypes);
+
+TYPED_TEST(GrabberPipelineTyped, EveryInstantiatedTypeIsMapped) {
+  typename pcl::PointCloud<TypeParam>::Ptr cloud(new pcl::PointCloud<TypeParam>);
+  pcl::copyPointCloud(*tiny_frame(), *cloud);
+  PipelineOptions options;
+  options.backpressure = true;
+  GrabberPipeline<TypeParam> pipeline(tiny_preset(), {}, options);
+  pipeline.start();
+  pipeline.pushFrame(cloud);
+  pipeline.pushFrame(cloud);
+  pipeline.stop();
+  EXPECT_EQ(pipeline.statistics().processed, 2u);
+  // The same map as the PointXYZ frame gives: the stride of each type is handled.
+  Mapper direct(tiny_preset());
+  direct.insert(span_of(*tiny_frame()));
+  direct.insert(span_of(*tiny_frame()));
+  EXPECT_EQ(pipeline.mapper().improvement().value, direct.improvement().value);
 }
 
 }  // namespace

@@ -358,3 +358,50 @@ TEST(ImprovementFilterRealData, SelectiveSensingOnA7ScenesFrameAfterAnother) {
 
 }  // namespace
 }  // namespace occ_improve
+
+namespace occ_improve {
+namespace {
+
+// Every instantiated point type filters the same way (a small camera keeps this fast).
+template <typename PointT>
+class ImprovementFilterTyped : public ::testing::Test {};
+using PointTypes = ::testing::Types<pcl::PointXYZ, pcl::PointXYZI, pcl::PointXYZRGB, pcl::PointXYZRGBA, pcl::PointXYZL>;
+TYPED_TEST_SUITE(ImprovementFilterTyped, PointTypes);
+
+TYPED_TEST(ImprovementFilterTyped, TopFractionOnAStep) {
+  PinholeIntrinsics k;
+  k.fx = k.fy = 50.0;
+  k.cx = 31.5;
+  k.cy = 23.5;
+  k.width = 64;
+  k.height = 48;
+  PinholePresetOptions options;
+  options.depth_bins = 128;
+  // A step: left half at 1.5 m, right half at 3 m (a depth discontinuity down the middle).
+  typename pcl::PointCloud<TypeParam>::Ptr cloud(new pcl::PointCloud<TypeParam>);
+  for (int v = 0; v < k.height; ++v)
+    for (int u = 0; u < k.width; ++u) {
+      const double z = u < k.width / 2 ? 1.5 : 3.0;
+      TypeParam p;
+      p.x = static_cast<float>((u - k.cx) / k.fx * z);
+      p.y = static_cast<float>((v - k.cy) / k.fy * z);
+      p.z = static_cast<float>(z);
+      cloud->push_back(p);
+    }
+  cloud->width = static_cast<std::uint32_t>(k.width);
+  cloud->height = static_cast<std::uint32_t>(k.height);
+  ImprovementFilter<TypeParam> filter(true);
+  filter.setSensorPreset(preset_from_pinhole(k, options));
+  filter.setInputCloud(cloud);
+  filter.setTopFraction(0.25);
+  pcl::PointCloud<TypeParam> kept;
+  filter.filter(kept);
+  const std::size_t with_ray_count = cloud->size() - filter.getPointsWithoutRay();
+  EXPECT_GT(with_ray_count, cloud->size() / 2);
+  EXPECT_EQ(kept.size(), static_cast<std::size_t>(std::llround(0.25 * static_cast<double>(with_ray_count))));
+  EXPECT_EQ(filter.getRemovedIndices()->size(), cloud->size() - kept.size());
+  EXPECT_EQ(filter.getImprovementCloud().size(), cloud->size());
+}
+
+}  // namespace
+}  // namespace occ_improve
