@@ -1,6 +1,7 @@
 // Export of one 640 x 480 Kinect frame's grid (preset kinect_v1_paper, clamped) to an OctoMap OcTree at
 // 2 cm, side by side with OctoMap 1.9's own insertPointCloud of the same cloud at 2 cm (max range 5 m,
-// sensor at the origin). One iteration each: insertPointCloud alone takes seconds.
+// sensor at the origin), on the generated sample frame and on a real capture
+// (kinect/pcl_tutorials/pairwise/capture0001.pcd). One iteration each: insertPointCloud takes seconds.
 //
 // Counters: leaves_written (free + occupied leaves the export wrote), leaves (tree leaves afterwards),
 // tree_MB (OcTree::memoryUsage).
@@ -25,14 +26,24 @@ namespace {
 constexpr double kResolution = 0.02;
 constexpr double kMaxRange = 5.0;
 
-const SphericalGrid& one_frame_grid() {
-  static const auto grid = [] {
-    const SensorPreset preset = kinect_v1_paper();
-    auto g = std::make_unique<SphericalGrid>(SphericalGeometry(preset.geometry));
-    insert_points(*g, SensorModel(preset.model), PointSpan::from(bench::sample_points()));
-    return g;
-  }();
-  return *grid;
+enum class Input { sample, real };
+
+const std::vector<Eigen::Vector3f>* input_points(Input input, benchmark::State& state) {
+  if (input == Input::sample) return &bench::sample_points();
+  std::string error;
+  const auto& points = bench::real_points(error);
+  if (points.empty()) {
+    state.SkipWithError(error.c_str());
+    return nullptr;
+  }
+  return &points;
+}
+
+std::unique_ptr<SphericalGrid> one_frame_grid(const std::vector<Eigen::Vector3f>& points) {
+  const SensorPreset preset = kinect_v1_paper();
+  auto grid = std::make_unique<SphericalGrid>(SphericalGeometry(preset.geometry));
+  insert_points(*grid, SensorModel(preset.model), PointSpan::from(points));
+  return grid;
 }
 
 void set_tree_counters(benchmark::State& state, const octomap::OcTree& tree) {
@@ -40,18 +51,22 @@ void set_tree_counters(benchmark::State& state, const octomap::OcTree& tree) {
   state.counters["tree_MB"] = static_cast<double>(tree.memoryUsage()) / 1e6;
 }
 
-void BM_ExportGridToOcTree_2cm(benchmark::State& state) {
-  const SphericalGrid& grid = one_frame_grid();
+void BM_ExportGridToOcTree_2cm(benchmark::State& state, Input input) {
+  const auto* points = input_points(input, state);
+  if (!points) return;
+  const auto grid = one_frame_grid(*points);
   std::unique_ptr<octomap::OcTree> tree;
   OctomapExportReport report;
-  for (auto _ : state) tree = to_octree(grid, Eigen::Isometry3d::Identity(), kResolution, {}, &report);
+  for (auto _ : state) tree = to_octree(*grid, Eigen::Isometry3d::Identity(), kResolution, {}, &report);
   state.counters["leaves_written"] = static_cast<double>(report.free_written + report.occupied_written);
   set_tree_counters(state, *tree);
 }
 
-void BM_OctomapInsertPointCloud_2cm(benchmark::State& state) {
+void BM_OctomapInsertPointCloud_2cm(benchmark::State& state, Input input) {
+  const auto* points = input_points(input, state);
+  if (!points) return;
   octomap::Pointcloud cloud;
-  for (const auto& p : bench::sample_points())
+  for (const auto& p : *points)
     if (p.allFinite()) cloud.push_back(p.x(), p.y(), p.z());
   std::unique_ptr<octomap::OcTree> tree;
   for (auto _ : state) {
@@ -62,8 +77,12 @@ void BM_OctomapInsertPointCloud_2cm(benchmark::State& state) {
   set_tree_counters(state, *tree);
 }
 
-BENCHMARK(BM_ExportGridToOcTree_2cm)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK(BM_OctomapInsertPointCloud_2cm)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_ExportGridToOcTree_2cm, sample, Input::sample)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_OctomapInsertPointCloud_2cm, sample, Input::sample)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_ExportGridToOcTree_2cm, real, Input::real)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_OctomapInsertPointCloud_2cm, real, Input::real)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 }  // namespace
 }  // namespace occ_improve
