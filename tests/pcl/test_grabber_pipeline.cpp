@@ -15,6 +15,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <future>
@@ -243,6 +244,28 @@ TEST(GrabberPipeline, DestructionWhileRunningJoinsEverything) {
   for (int i = 0; i < 3; ++i) pipeline->pushFrame(tiny_frame());
   pipeline.reset();  // stops the grabber and the worker
   EXPECT_FALSE(grabber->isRunning());
+}
+
+TEST(GrabberPipeline, StopMidStreamKeepsTheCountsConsistent) {
+  TempDir dir("occ_improve_pipeline_tiny");
+  for (int f = 0; f < 40; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%03d.pcd", f);
+    ASSERT_EQ(pcl::io::savePCDFileBinary((dir.path / name).string(), *tiny_frame(1.0 + 0.05 * f)), 0);
+  }
+  PcdSequenceGrabber grabber(dir.path.string());  // as fast as it reads: the worker falls behind
+  GrabberPipeline<pcl::PointXYZ> pipeline(tiny_preset());
+  pipeline.attach(grabber);
+  pipeline.start();
+  while (grabber.framesEmitted() < 10 && grabber.isRunning()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  pipeline.stop();  // mid-stream
+  EXPECT_FALSE(grabber.isRunning());
+  const PipelineStatistics s = pipeline.statistics();
+  EXPECT_GE(s.received, 10u);
+  EXPECT_GE(s.processed, 1u);
+  EXPECT_EQ(s.rejected, 0u);
+  expect_consistent(s);
+  EXPECT_EQ(s.received, grabber.framesEmitted());
 }
 
 // The built-in sample sequence written as PCD files and replayed through the PCD folder source; one
