@@ -276,7 +276,10 @@ TEST_F(BadMapFile, ConsistentChecksumButInvalidContentsAreRefused) {
   }
 }
 
-TEST_F(MapIo, MissingFileIsAnIoError) { EXPECT_THROW(load_map(file("absent.occmap")), IoError); }
+TEST_F(MapIo, MissingFileOrFolderIsAnIoError) {
+  EXPECT_THROW(load_map(file("absent.occmap")), IoError);
+  EXPECT_THROW(load_map(folder_.string()), IoError);
+}
 
 TEST_F(MapIo, UnwritableTargetIsAnIoErrorAndLeavesNothingBehind) {
   SensorPreset preset = kinect_v1_paper();
