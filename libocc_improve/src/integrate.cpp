@@ -16,6 +16,15 @@ namespace {
 using detail::fast_exp;
 using detail::fast_log;
 
+// The per-voxel loops below are compiled twice, for x86-64-v3 (AVX2 + FMA: Haswell and later) and for
+// baseline x86-64, and the loader picks the clone the CPU supports: vector code without -march=native.
+// They vectorise only with -fno-trapping-math (set on this file in CMake); check with -fopt-info-vec.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define OCC_IMPROVE_VECTOR_KERNEL __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define OCC_IMPROVE_VECTOR_KERNEL
+#endif
+
 // Beyond this depth offset (in sigmas, as a function of B) |logit P_s| < kSkipEpsilon:
 //   the step term deviates from 1/2 by < eps/4 once u > log(4/eps), the peak term is < eps/4 once
 //   t^2 + B > log(8/(3 eps)).
@@ -28,93 +37,197 @@ double skip_offset_sigmas(double angular_term) {
 // peak term is below e^-120 of the step term (t <= -12).
 constexpr double kLinearU = -20.0;
 
+// Clamped-mode shortcuts (exact under clamping; see integrate.hpp):
+//  - logit P_s <= 0 wherever t <= kNonPositiveT, for every B >= 0: P_s <= 1/2 there because
+//    (2/3)(e^-B + e^(2t+4)) <= (2/3)(1 + e^1) = 2.48 < e^(t^2) = 9.49 at t = -1.5 and the gap widens below.
+//    Bins of the leading L_min run stay at L_min.
+//  - for t <= -3 - B/2 (u <= -2): P_s <= 1/2 e^u (1 + 6.1e-4) (the peak term is (2/3) e^-((t+1)^2 + 3 + 2B)
+//    <= 6.1e-4 of the step term) and -log(1 - P_s) <= 0.071, so logit P_s <= log(1/2) + u + 0.072. A bin
+//    holding L with L + log(1/2) + u <= L_min - kBoundMargin therefore ends at L_min: not evaluated.
+constexpr double kNonPositiveT = -1.5;
+constexpr double kBoundMargin = 0.2;
+
+// e_b = e^-(2 t_b + 4) and g_b = e^-(t_b^2) / 3 for bins [0, n): the B-free factors of e^-u and of the peak
+// term, shared by every column of one measurement (a column multiplies both by e^-B).
+OCC_IMPROVE_VECTOR_KERNEL
+void opdf_bin_terms(const double* centres, int n, double rho_bar, double inv_sigma, float* e, float* g) {
+  for (int i = 0; i < n; ++i) {
+    const float t = static_cast<float>((centres[i] - rho_bar) * inv_sigma);
+    e[i] = fast_exp(-(2.0f * t + 4.0f));
+    g[i] = fast_exp(-(t * t)) * (1.0f / 3.0f);
+  }
+}
+
+// logit P_s from the bin terms, with a = e^-B: x = e^-u, P = 1/(2(1+x)) + g and the odds P/(1-P)
+// rearranged so that numerator and denominator both stay accurate near P = 1/2.
+inline float logit_from_terms(float e, float g, float a) {
+  const float x = e * a, gx = g * a * (1.0f + x);
+  return fast_log((0.5f + gx) / (0.5f + x - gx));
+}
+
+OCC_IMPROVE_VECTOR_KERNEL
+void logit_profile_from_terms(const float* e, const float* g, int n, float a, float* out) {
+  for (int i = 0; i < n; ++i) out[i] = logit_from_terms(e[i], g[i], a);
+}
+
+OCC_IMPROVE_VECTOR_KERNEL
+void add_logit_clamped(float* w, const float* e, const float* g, int n, float a, float lmin, float lmax) {
+  for (int i = 0; i < n; ++i) {
+    const float v = w[i] + logit_from_terms(e[i], g[i], a);
+    w[i] = v < lmin ? lmin : (v > lmax ? lmax : v);
+  }
+}
+
+OCC_IMPROVE_VECTOR_KERNEL
+void add_logit(float* w, const float* e, const float* g, int n, float a) {
+  for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
+}
+
 struct Measurement {
   double rho, azimuth, elevation;
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
 };
 
-struct ThreadScratch {
-  std::vector<float> profile;
-  std::size_t column_updates = 0;
+// One measurement's bin terms, computed on demand over the bins its columns need ([lo, hi), by bin).
+class MeasurementTerms {
+public:
+  explicit MeasurementTerms(const DepthAxis& depth)
+      : centres_(depth.centres().data()),
+        e_(static_cast<std::size_t>(depth.bins())),
+        g_(static_cast<std::size_t>(depth.bins())) {}
+
+  void reset(double rho_bar, double sigma) {
+    rho_bar_ = rho_bar;
+    inv_sigma_ = 1.0 / sigma;
+    lo_ = hi_ = 0;
+  }
+  void ensure(int first, int last) {
+    if (first >= last) return;
+    if (lo_ == hi_) {
+      compute(first, last);
+      lo_ = first;
+      hi_ = last;
+      return;
+    }
+    if (first < lo_) {
+      compute(first, lo_);
+      lo_ = first;
+    }
+    if (last > hi_) {
+      compute(hi_, last);
+      hi_ = last;
+    }
+  }
+  const float* e() const { return e_.data(); }
+  const float* g() const { return g_.data(); }
+
+private:
+  void compute(int first, int last) {
+    opdf_bin_terms(centres_ + first, last - first, rho_bar_, inv_sigma_, e_.data() + first, g_.data() + first);
+  }
+  const double* centres_;
+  std::vector<float> e_, g_;
+  double rho_bar_ = 0, inv_sigma_ = 1;
+  int lo_ = 0, hi_ = 0;
 };
+
+// Window bins reserved beyond the current need when a window grows: later measurements of the same
+// column usually reach a bin or two further, and each growth would otherwise reallocate.
+constexpr std::size_t kWindowSlack = 4;
 
 // Adds one measurement's truncated OPDF to one column.
 class ColumnKernel {
 public:
-  ColumnKernel(const SphericalGrid& grid) : grid_(grid), depth_(grid.geometry().depth()) {
+  explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()) {
     clamped_ = grid.clamped();
     lmin_ = grid.log_odds_min();
     lmax_ = grid.log_odds_max();
-    saturation_ = static_cast<double>(lmin_) - static_cast<double>(lmax_);
   }
 
-  void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, ThreadScratch& scratch) const {
-    const int bins = depth_.bins();
+  void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms) const {
     const int end = depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
-    if (clamped_) {
-      // Voxels where logit P_s <= L_min - L_max end at L_min whatever they held: they are not evaluated.
-      // The bound keeps a margin of 1.5 sigma: there the step term is < e^(L_min - L_max - 3) and the
-      // peak term negligible, so logit P_s < L_min - L_max.
-      const double t_saturate = (saturation_ - std::log(0.5) - 4.0 - angular_term) / 2.0 - 1.5;
-      const int saturated = std::min(depth_.first_centre_above(rho_bar + sigma * t_saturate), bins);
-      const int first = saturated, count = std::max(end - first, 0);
-      scratch.profile.resize(static_cast<std::size_t>(count));
-      logit_opdf_profile(depth_.centres().data() + first, static_cast<std::size_t>(count), rho_bar, angular_term,
-                         sigma, scratch.profile.data());
-      apply_clamped(column, saturated, first, end, scratch.profile.data());
-    } else {
-      const double t_linear = (kLinearU - 4.0 - angular_term) / 2.0;
-      const int linear_end = std::min(depth_.first_centre_above(rho_bar + sigma * t_linear), end);
-      const int count = std::max(end - linear_end, 0);
-      scratch.profile.resize(static_cast<std::size_t>(count));
-      logit_opdf_profile(depth_.centres().data() + linear_end, static_cast<std::size_t>(count), rho_bar,
-                         angular_term, sigma, scratch.profile.data());
-      apply_exact(column, linear_end, end, scratch.profile.data(), rho_bar, angular_term, sigma);
-    }
-    ++scratch.column_updates;
+    const float a = fast_exp(static_cast<float>(-angular_term));
+    if (clamped_)
+      apply_clamped(column, end, rho_bar, angular_term, sigma, a, terms);
+    else
+      apply_exact(column, end, rho_bar, angular_term, sigma, a, terms);
   }
 
 private:
-  void apply_clamped(ColumnData& c, int saturated, int first, int end, const float* profile) const {
-    if (saturated > c.uniform_end) {
-      const auto drop = std::min<std::size_t>(static_cast<std::size_t>(saturated - c.uniform_end), c.window.size());
-      c.window.erase(c.window.begin(), c.window.begin() + static_cast<std::ptrdiff_t>(drop));
-      c.uniform_end = saturated;
+  static void grow_window(ColumnData& c, int end) {
+    const auto needed = static_cast<std::size_t>(end - c.uniform_end);
+    if (needed <= c.window.size()) return;
+    if (c.window.capacity() < needed) c.window.reserve(needed + kWindowSlack);
+    c.window.resize(needed, 0.0f);
+  }
+
+  void apply_clamped(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
+                     MeasurementTerms& terms) const {
+    if (c.uniform_end > 0 && c.uniform_value != lmin_) {  // not a run this kernel made (e.g. a loaded map)
+      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
+      c.uniform_end = 0;
+    }
+    // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
+    const int run_keep = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
+    if (c.uniform_end > run_keep && run_keep < end) {
+      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - run_keep), lmin_);
+      c.uniform_end = run_keep;
+    }
+    // 2. Leading window bins that the bound sends to L_min join the run.
+    const double* centres = depth_.centres().data();
+    const double inv_sigma = 1.0 / sigma;
+    const double t_bound = -3.0 - 0.5 * angular_term;
+    const double limit = lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term);  // on L + 2t
+    const int window_end = c.window_end();
+    int first = c.uniform_end;
+    while (first < window_end && first < end) {
+      const double t = (centres[first] - rho_bar) * inv_sigma;
+      if (t > t_bound || c.window[static_cast<std::size_t>(first - c.uniform_end)] + 2.0 * t > limit) break;
+      ++first;
+    }
+    if (first > c.uniform_end) {
+      c.window.erase(c.window.begin(), c.window.begin() + (first - c.uniform_end));
+      c.uniform_end = first;
       c.uniform_value = lmin_;
     }
-    // Inside the uniform run (all L_min) only voxels with logit P_s > 0 change; materialise from the first.
-    const int run_overlap_end = std::min(c.uniform_end, end);
-    for (int b = first; b < run_overlap_end; ++b) {
-      if (profile[b - first] > 0.0f) {
-        c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - b), lmin_);
-        c.uniform_end = b;
-        break;
+    // 3. Past the window the bins are untouched (L = 0): the same bound with L = 0 is a depth threshold.
+    if (first == window_end) {
+      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * std::min(t_bound, 0.5 * limit)), end);
+      if (fresh > first) {
+        first = fresh;
+        c.uniform_end = fresh;
+        c.uniform_value = lmin_;
       }
     }
-    if (c.window_end() < end) c.window.resize(static_cast<std::size_t>(end - c.uniform_end), 0.0f);
+    // 4. The remaining bins up to the support's end, evaluated.
+    if (first >= end) return;
+    grow_window(c, end);
+    terms.ensure(first, end);
     float* w = c.window.data() - c.uniform_end;  // w[b] is bin b
-    for (int b = std::max(first, static_cast<int>(c.uniform_end)); b < end; ++b) {
-      const float v = w[b] + profile[b - first];
-      w[b] = v < lmin_ ? lmin_ : (v > lmax_ ? lmax_ : v);
-    }
+    add_logit_clamped(w + first, terms.e() + first, terms.g() + first, end - first, a, lmin_, lmax_);
     SphericalGrid::compact(c);
   }
 
-  void apply_exact(ColumnData& c, int linear_end, int end, const float* profile, double rho_bar, double angular_term,
-                   double sigma) const {
-    if (c.window_end() < end) c.window.resize(static_cast<std::size_t>(end), 0.0f);
+  void apply_exact(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
+                   MeasurementTerms& terms) const {
+    const double t_linear = (kLinearU - 4.0 - angular_term) / 2.0;
+    const int linear_end = std::min(depth_.first_centre_above(rho_bar + sigma * t_linear), end);
+    if (c.uniform_end > 0) {  // exact mode keeps every bin in the window
+      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
+      c.uniform_end = 0;
+    }
+    grow_window(c, end);
     float* w = c.window.data();
     const double* centres = depth_.centres().data();
     const double offset = std::log(0.5) + 4.0 + angular_term, slope = 2.0 / sigma;
     for (int b = 0; b < linear_end; ++b) w[b] += static_cast<float>(offset + slope * (centres[b] - rho_bar));
-    for (int b = linear_end; b < end; ++b) w[b] += profile[b - linear_end];
+    terms.ensure(linear_end, end);
+    add_logit(w + linear_end, terms.e() + linear_end, terms.g() + linear_end, end - linear_end, a);
   }
 
-  const SphericalGrid& grid_;
   const DepthAxis& depth_;
   bool clamped_;
   float lmin_, lmax_;
-  double saturation_;
 };
 
 bool to_measurement(const float* p, const SphericalGeometry& g, const SensorModel& model, Measurement& m,
@@ -145,16 +258,9 @@ bool to_measurement(const float* p, const SphericalGeometry& g, const SensorMode
 
 void logit_opdf_profile(const double* centres, std::size_t n, double rho_bar, double angular_term, double sigma_rho,
                         float* out) {
-  const double inv_sigma = 1.0 / sigma_rho;
-  const float b = static_cast<float>(angular_term);
-  for (std::size_t i = 0; i < n; ++i) {
-    const float t = static_cast<float>((centres[i] - rho_bar) * inv_sigma);
-    const float x = fast_exp(-(2.0f * t + 4.0f + b));       // e^-u
-    const float g = fast_exp(-(t * t + b)) * (1.0f / 3.0f);  // peak term
-    // P = 1/(2(1+x)) + g; odds P/(1-P) rearranged so that both sides stay accurate near P = 1/2.
-    const float gx = g * (1.0f + x);
-    out[i] = fast_log((0.5f + gx) / (0.5f + x - gx));
-  }
+  std::vector<float> e(n), g(n);
+  opdf_bin_terms(centres, static_cast<int>(n), rho_bar, 1.0 / sigma_rho, e.data(), g.data());
+  logit_profile_from_terms(e.data(), g.data(), static_cast<int>(n), fast_exp(static_cast<float>(-angular_term)), out);
 }
 
 PointSpan PointSpan::from(const std::vector<Eigen::Vector3f>& points) {
@@ -220,20 +326,23 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   detail::run_parts(parts, [&](int part, int n) {
     const int row_begin = tile_rows * part / n * SphericalGrid::kTileSize;
     const int row_end = std::min(tile_rows * (part + 1) / n * SphericalGrid::kTileSize, g.height());
-    ThreadScratch scratch;
+    MeasurementTerms terms(g.depth());
+    std::size_t column_updates = 0;
     for (const Measurement& m : measurements) {
       const int e0 = std::max(m.elevation_first, row_begin), e1 = std::min(m.elevation_last, row_end - 1);
       if (e0 > e1) continue;
       const double sigma = model.sigma_depth_at(m.rho);
+      terms.reset(m.rho, sigma);
       for (int e = e0; e <= e1; ++e)
         for (int a = m.azimuth_first; a <= m.azimuth_last; ++a) {
           const double b = model.angular_term(az.centre(a) - m.azimuth, el.centre(e) - m.elevation);
           const ColumnIndex c = g.column(a, e);
-          kernel.apply(grid.touch(c), m.rho, b, sigma, scratch);
+          kernel.apply(grid.touch(c), m.rho, b, sigma, terms);
           grid.mark_changed(c);
+          ++column_updates;
         }
     }
-    updates[static_cast<std::size_t>(part)] = scratch.column_updates;
+    updates[static_cast<std::size_t>(part)] = column_updates;
   });
   for (std::size_t u : updates) report.column_updates += u;
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

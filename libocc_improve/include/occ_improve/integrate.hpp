@@ -4,10 +4,14 @@
 //
 // Documented approximations of this fast path (all bounded; tests/reference checks them):
 //  - voxels behind a measurement whose |logit P_s| < kSkipEpsilon (1e-6) are not updated (SPEC 4);
-//  - logit P_s is evaluated in float with polynomial exp/log (relative error < 2e-7);
+//  - logit P_s is evaluated in float with polynomial exp/log (fast_math.hpp; |error| < 2e-6 against the
+//    double logit_opdf, tests/test_fast_math.cpp);
 //  - exact mode: far in front (u < -20) logit P_s is taken as log(1/2) + u (error < 1e-8);
-//  - clamped mode: voxels where logit P_s <= L_min - L_max are set to L_min without evaluating it
-//    (exact under clamping: any prior value then clamps to L_min).
+//  - clamped mode skips voxels whose result is known without evaluating logit P_s (exact under clamping):
+//    a) logit P_s <= 0 wherever t = (rho - rho_bar)/sigma <= -1.5, for every B >= 0, so the leading run
+//       of L_min voxels is left alone there;
+//    b) for t <= -3 - B/2, logit P_s <= log(1/2) + u + 0.072, so a voxel holding L with
+//       L + log(1/2) + u <= L_min - 0.2 ends at L_min (untouched voxels: L = 0).
 #include "occ_improve/grid.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/sensor_model.hpp"
