@@ -282,20 +282,41 @@ FileSequenceGrabber::Cloud::Ptr DepthSequenceGrabber::loadFrame(std::size_t inde
 // ---------------------------------------------------------------------------------------------------
 // OpenNI2
 
+namespace {
+
+/// The innermost description of a PCL exception ("<function> in <file> @ <line> : <description>", nested
+/// for re-thrown errors), without source locations and on one line, for "error: ..." output.
+std::string one_line(const pcl::PCLException& e) {
+  std::string text;
+  for (const char c : std::string(e.detailedMessage())) {
+    const bool space = c == '\n' || c == '\t' || c == '\r' || c == ' ';
+    if (!space)
+      text += c;
+    else if (!text.empty() && text.back() != ' ')
+      text += ' ';
+  }
+  const std::size_t last_location = text.rfind(" : ");
+  if (last_location != std::string::npos) text = text.substr(last_location + 3);
+  while (!text.empty() && text.back() == ' ') text.pop_back();
+  return text;
+}
+
+}  // namespace
+
 std::shared_ptr<pcl::Grabber> open_openni2_grabber(const std::string& device_or_oni) {
   const bool is_file = ends_with(device_or_oni, ".oni") || ends_with(device_or_oni, ".ONI");
   if (is_file && !fs::exists(device_or_oni)) throw IoError("OpenNI2 recording '" + device_or_oni + "' does not exist");
   try {
     return std::make_shared<pcl::io::OpenNI2Grabber>(device_or_oni);
   } catch (const pcl::IOException& e) {
-    const std::string what = e.detailedMessage();
+    const std::string what = one_line(e);
     if (what.find("No devices connected") != std::string::npos)
       throw IoError("no OpenNI2 device connected (plug in a Kinect/Xtion, or replay a recording with -oni FILE)");
     throw IoError("cannot open OpenNI2 " + std::string(is_file ? "recording '" : "device '") + device_or_oni +
                   "': " + what);
   } catch (const pcl::PCLException& e) {
     throw IoError("cannot open OpenNI2 " + std::string(is_file ? "recording '" : "device '") + device_or_oni +
-                  "': " + e.detailedMessage());
+                  "': " + one_line(e));
   }
 }
 

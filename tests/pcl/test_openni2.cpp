@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 namespace occ_improve {
@@ -29,6 +30,20 @@ TEST(OpenNI2, MissingRecordingNamesTheFile) {
   } catch (const IoError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/recording.oni"), std::string::npos) << e.what();
   }
+}
+
+TEST(OpenNI2, CorruptRecordingIsAOneLineIoError) {
+  const std::string path = (std::filesystem::temp_directory_path() / "occ_improve_corrupt_test.oni").string();
+  std::ofstream(path) << "not an OpenNI recording\n";
+  try {
+    open_openni2_grabber(path);
+    FAIL() << "expected IoError";
+  } catch (const IoError& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+  std::filesystem::remove(path);
 }
 
 TEST(OpenNI2, UnknownDeviceUriIsAnIoError) {
