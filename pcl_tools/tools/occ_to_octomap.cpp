@@ -27,7 +27,7 @@ using namespace occ_improve;
 namespace {
 
 void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " -load MAP.occmap [options] -o OUT.bt|OUT.ot\n"
+  std::cout << "Usage: " << program << " -load MAP.occmap [-pose P] [-load MAP2 -pose P2 ...] [options] -o OUT.bt|OUT.ot\n"
             << "       " << program << " [options] INPUT... -o OUT.bt|OUT.ot\n"
             << "       " << program << " -sample [options] -o OUT.bt|OUT.ot\n\n"
             << "Writes the spherical occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of\n"
@@ -36,7 +36,9 @@ void print_usage(const char* program) {
             << ".ot = full log-odds (both with OctoMap's own writers).\n\n"
             << "Tool options:\n"
             << "  -o OUT.bt|OUT.ot          output file (required)\n"
-            << "  -load MAP.occmap          a map saved by occ_improve (save_map); the map carries its own preset\n"
+            << "  -load MAP.occmap          a map saved by occ_improve (save_map); the map carries its own preset.\n"
+            << "                            Repeat -load (each with its own -pose, in order) to merge maps taken\n"
+            << "                            from several poses: log-odds are added, then clamped\n"
             << "  -sample                   use the built-in generated Kinect-like frame instead of input files\n"
             << "  -save MAP.occmap          also save the grid built from the input frames\n"
             << "  -resolution R             OcTree leaf size in metres (default 0.02)\n"
@@ -69,6 +71,14 @@ Eigen::Isometry3d parse_pose(const std::string& text) {
   pose.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
   pose.linear() = q.toRotationMatrix();
   return pose;
+}
+
+/// Every value of a repeatable flag, in command-line order.
+std::vector<std::string> all_values(int argc, char** argv, const std::string& flag) {
+  std::vector<std::string> values;
+  for (int i = 1; i + 1 < argc; ++i)
+    if (flag == argv[i]) values.emplace_back(argv[++i]);
+  return values;
 }
 
 double parse_resolution(int argc, char** argv) {
@@ -131,57 +141,76 @@ int run(int argc, char** argv) {
   spec.value_flags = {"-o", "-load", "-save", "-resolution", "-pose"};
   spec.switches = {"-sample"};
   const ToolOptions options = parse_tool_options(argc, argv, spec);
-  std::string output, load_path, save_path, pose_text;
+  std::string output, save_path;
   pcl::console::parse_argument(argc, argv, "-o", output);
-  pcl::console::parse_argument(argc, argv, "-load", load_path);
   pcl::console::parse_argument(argc, argv, "-save", save_path);
+  const std::vector<std::string> load_paths = all_values(argc, argv, "-load");
+  const std::vector<std::string> pose_texts = all_values(argc, argv, "-pose");
   const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
   if (output.empty()) throw InvalidParameter("-o OUT.bt|OUT.ot is required (see -h)");
   require_octomap_output_path(output);
   const double resolution = parse_resolution(argc, argv);
-  const Eigen::Isometry3d pose = pcl::console::parse_argument(argc, argv, "-pose", pose_text) >= 0
-                                     ? parse_pose(pose_text)
-                                     : Eigen::Isometry3d::Identity();
-  const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
+  const int sources = (load_paths.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
-  if (!load_path.empty() && !save_path.empty()) throw InvalidParameter("-save only applies to a grid built from frames");
+  if (!load_paths.empty() && !save_path.empty()) throw InvalidParameter("-save only applies to a grid built from frames");
+  const std::size_t maps = std::max<std::size_t>(load_paths.size(), 1);
+  if (!pose_texts.empty() && pose_texts.size() != maps)
+    throw InvalidParameter("give one -pose per map (" + std::to_string(maps) + " map(s), " +
+                           std::to_string(pose_texts.size()) + " poses)");
+  if (maps > 1 && pose_texts.empty())
+    throw InvalidParameter("merging " + std::to_string(maps) + " maps needs one -pose per -load");
+  std::vector<Eigen::Isometry3d> poses;
+  for (const std::string& text : pose_texts) poses.push_back(parse_pose(text));
+  if (poses.empty()) poses.push_back(Eigen::Isometry3d::Identity());
 
+  // Every source is read before the first export, so a bad map fails before any work.
   auto start = std::chrono::steady_clock::now();
-  Source source;
-  if (!load_path.empty()) {
-    LoadedMap loaded = load_map(load_path);
+  std::vector<Source> grids;
+  for (const std::string& path : load_paths) {
+    LoadedMap loaded = load_map(path);
+    Source source;
     source.grid.emplace(std::move(loaded.grid));
     source.model = loaded.model;
-    source.description = "map " + load_path;
-  } else {
-    source = build_from_frames(options, use_sample);
+    source.description = "map " + path;
+    grids.push_back(std::move(source));
   }
+  if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample));
   const double read_seconds = seconds_since(start);
-  const SphericalGrid& grid = *source.grid;
 
   double save_seconds = 0;
   if (!save_path.empty()) {
     start = std::chrono::steady_clock::now();
-    save_map(save_path, grid, source.model);
+    save_map(save_path, *grids.front().grid, grids.front().model);
     save_seconds = seconds_since(start);
   }
 
+  // The first map sets the tree's clamping; the others merge into it.
+  const auto tree = make_octree(*grids.front().grid, resolution);
   OctomapExportReport report;
-  const auto tree = to_octree(grid, pose, resolution, {}, &report);
+  for (std::size_t i = 0; i < grids.size(); ++i) {
+    const OctomapExportReport r = add_to_octree(*tree, *grids[i].grid, poses[i]);
+    report.occupied_written += r.occupied_written;
+    report.free_written += r.free_written;
+    report.left_unknown += r.left_unknown;
+    report.seconds += r.seconds;
+  }
   start = std::chrono::steady_clock::now();
   write_octree(*tree, output);
   const double write_seconds = seconds_since(start);
 
-  const GeometryParams& g = grid.geometry().params();
-  std::printf("read %s: %d x %d x %d bins, %zu touched columns, %s mode\n", source.description.c_str(),
-              g.azimuth_bins, g.elevation_bins, g.depth_bins, grid.touched_column_count(),
-              grid.clamped() ? "clamped" : "exact");
-  if (source.insertion.points_received)
-    std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view\n",
-                source.insertion.points_received, source.insertion.points_inserted, source.insertion.skipped_invalid,
-                source.insertion.skipped_outside_fov);
+  for (const Source& source : grids) {
+    const SphericalGrid& grid = *source.grid;
+    const GeometryParams& g = grid.geometry().params();
+    std::printf("read %s: %d x %d x %d bins, %zu touched columns, %s mode\n", source.description.c_str(),
+                g.azimuth_bins, g.elevation_bins, g.depth_bins, grid.touched_column_count(),
+                grid.clamped() ? "clamped" : "exact");
+    if (source.insertion.points_received)
+      std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view\n",
+                  source.insertion.points_received, source.insertion.points_inserted,
+                  source.insertion.skipped_invalid, source.insertion.skipped_outside_fov);
+  }
   if (!save_path.empty()) std::printf("saved map %s\n", save_path.c_str());
-  std::printf("OcTree at %.4g m: %zu occupied and %zu free leaves written, %zu left unknown; %zu leaves, %.1f MB\n",
+  std::printf("OcTree at %.4g m: %zu occupied and %zu free leaf updates, %zu left unknown; %zu leaves, %.1f MB\n",
               resolution, report.occupied_written, report.free_written, report.left_unknown,
               tree->getNumLeafNodes(), static_cast<double>(tree->memoryUsage()) / 1e6);
   std::printf("wrote %s (%.1f MB)\n", output.c_str(), static_cast<double>(std::filesystem::file_size(output)) / 1e6);
