@@ -194,16 +194,18 @@ TEST(Improvement, PaperPictureOnTheSampleScene) {
   insert_points(grid, model, PointSpan::from(sample::generate_scene().points()));
   const SurfaceMap s = compute_surface(grid);
   const ImprovementMap imp = compute_improvement(g, model, s);
-  std::vector<double> unknown, once, beyond, far_side_of_edge;
+  std::vector<double> unknown, once, beyond, far_side_of_edge, beside_hole;
   for (int e = 1; e + 1 < g.height(); ++e)
     for (int a = 1; a + 1 < g.width(); ++a) {
       const ColumnIndex j = g.column(a, e);
       bool all_unknown = true, all_known = true, all_beyond = true;
+      int unknown_neighbours = 0;
       float lo = 1e9f, hi = -1e9f;
       for (int de = -1; de <= 1; ++de)
         for (int da = -1; da <= 1; ++da) {
           const ColumnIndex i = g.column(a + da, e + de);
           all_unknown = all_unknown && s.unknown[i];
+          unknown_neighbours += s.unknown[i];
           all_known = all_known && !s.unknown[i];
           all_beyond = all_beyond && s.bin[i] == g.depth().bins();
           lo = std::min(lo, s.depth_m[i]);
@@ -215,6 +217,7 @@ TEST(Improvement, PaperPictureOnTheSampleScene) {
       if (in_range && hi - lo < 0.05f && s.probability[j] > 0.78f && s.probability[j] < 0.86f)
         once.push_back(imp.value[j]);
       if (in_range && s.depth_m[j] - lo > 0.5f) far_side_of_edge.push_back(imp.value[j]);
+      if (!s.unknown[j] && s.bin[j] < g.depth().bins() && unknown_neighbours >= 3) beside_hole.push_back(imp.value[j]);
     }
   ASSERT_GT(unknown.size(), 100u);
   ASSERT_GT(once.size(), 100u);
@@ -225,6 +228,9 @@ TEST(Improvement, PaperPictureOnTheSampleScene) {
   EXPECT_NEAR(median(beyond), 0.0, 0.01);
   // A measurement of the far side would carve the near side's surface free: negative.
   EXPECT_LT(median(far_side_of_edge), -0.1);
+  // Beside a no-data hole: each unknown neighbour (depth 0, in front) is carved from 1/2 to ~0.
+  ASSERT_GT(beside_hole.size(), 100u);
+  EXPECT_LT(median(beside_hole), -0.5);
 }
 
 // A plane at 2 m measured exactly once along every column's centre ray: every ray is worth ~0.135.
