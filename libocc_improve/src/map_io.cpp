@@ -1,14 +1,13 @@
 #include "occ_improve/map_io.hpp"
 
+#include "occ_improve/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
 
-#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <random>
 #include <sstream>
 #include <type_traits>
 #include <vector>
@@ -104,15 +103,6 @@ std::vector<char> read_file(const std::string& path) {
   std::vector<char> bytes(static_cast<std::size_t>(size));
   if (size > 0 && !in.read(bytes.data(), size)) throw IoError("cannot read map '" + path + "'");
   return bytes;
-}
-
-// A fresh name beside `path` (same folder, hence same file system, so the rename is atomic).
-std::string temporary_name(const std::string& path) {
-  static std::atomic<unsigned> counter{0};
-  std::random_device random;
-  std::ostringstream name;
-  name << path << ".partial-" << std::hex << random() << '-' << counter++;
-  return name.str();
 }
 
 void write_geometry(Writer& w, const GeometryParams& g) {
@@ -259,25 +249,9 @@ void save_map(const std::string& path, const SphericalGrid& grid, const SensorMo
   std::vector<char>& bytes = w.bytes();
   w.put<std::uint64_t>(checksum(bytes.data(), bytes.size()));
 
-  const std::string temporary = temporary_name(path);
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot create '" + temporary + "' to save map '" + path + "'");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.close();
-    if (!out) {
-      std::error_code ignored;
-      std::filesystem::remove(temporary, ignored);
-      throw IoError("cannot write map '" + path + "' (disk full?)");
-    }
-  }
-  std::error_code error;
-  std::filesystem::rename(temporary, path, error);
-  if (error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw IoError("cannot move the saved map into place as '" + path + "': " + error.message());
-  }
+  write_file_atomically(path, "map", [&](std::ostream& out) {
+    return static_cast<bool>(out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())));
+  });
 }
 
 LoadedMap load_map(const std::string& path) {

@@ -1,15 +1,13 @@
 #include "occ_improve/octomap/export.hpp"
 
+#include "occ_improve/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/sensor_model.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <random>
 #include <sstream>
 
 namespace occ_improve {
@@ -82,14 +80,6 @@ void frustum_bounds(const SphericalGeometry& g, double far_m, const Eigen::Isome
   const double bulge = far_m * (1.0 - std::cos(widest_step)) + 1e-6;
   lo.array() -= bulge;
   hi.array() += bulge;
-}
-
-std::string temporary_name(const std::string& path) {
-  static std::atomic<unsigned> counter{0};
-  std::random_device random;
-  std::ostringstream name;
-  name << path << ".partial-" << std::hex << random() << '-' << counter++;
-  return name.str();
 }
 
 }  // namespace
@@ -211,23 +201,10 @@ void require_octomap_output_path(const std::string& path) {
 
 void write_octree(const octomap::OcTree& tree, const std::string& path) {
   require_octomap_output_path(path);
-  const std::string extension = std::filesystem::path(path).extension().string();
-  const std::string temporary = temporary_name(path);
-  bool written = false;
-  {
-    std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot create '" + temporary + "' to write OctoMap file '" + path + "'");
-    written = extension == ".bt" ? tree.writeBinaryConst(out) : tree.write(out);
-    out.close();
-    written = written && static_cast<bool>(out);
-  }
-  std::error_code error;
-  if (written) std::filesystem::rename(temporary, path, error);
-  if (!written || error) {
-    std::error_code ignored;
-    std::filesystem::remove(temporary, ignored);
-    throw IoError("cannot write OctoMap file '" + path + "'" + (error ? ": " + error.message() : std::string()));
-  }
+  const bool full = std::filesystem::path(path).extension() == ".ot";
+  write_file_atomically(path, "OctoMap file", [&](std::ostream& out) {
+    return full ? tree.write(out) : tree.writeBinaryConst(out);
+  });
 }
 
 }  // namespace occ_improve
