@@ -70,11 +70,32 @@ void logit_profile_from_terms(const float* e, const float* g, int n, float a, fl
   for (int i = 0; i < n; ++i) out[i] = logit_from_terms(e[i], g[i], a);
 }
 
+// Clamped mode works on odds O = e^L during a frame: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
+// with clamping after each update, without a log per voxel and measurement (one per voxel and frame).
 OCC_IMPROVE_VECTOR_KERNEL
-void add_logit_clamped(float* w, const float* e, const float* g, int n, float a, float lmin, float lmax) {
+void multiply_odds_clamped(float* o, const float* e, const float* g, int n, float a, float omin, float omax) {
   for (int i = 0; i < n; ++i) {
-    const float v = w[i] + logit_from_terms(e[i], g[i], a);
-    w[i] = v < lmin ? lmin : (v > lmax ? lmax : v);
+    const float x = e[i] * a, gx = g[i] * a * (1.0f + x);
+    const float v = o[i] * ((0.5f + gx) / (0.5f + x - gx));
+    o[i] = v < omin ? omin : (v > omax ? omax : v);
+  }
+}
+
+// The clamps map to each other exactly both ways (whatever rounding the vector clone does), so that
+// uniform runs are recognised.
+OCC_IMPROVE_VECTOR_KERNEL
+void log_odds_to_odds(float* w, int n, float omin, float omax, float lmin, float lmax) {
+  for (int i = 0; i < n; ++i) {
+    const float l = w[i], o = fast_exp(l);
+    w[i] = l <= lmin ? omin : (l >= lmax ? omax : o);
+  }
+}
+
+OCC_IMPROVE_VECTOR_KERNEL
+void odds_to_log_odds(float* w, int n, float omin, float omax, float lmin, float lmax) {
+  for (int i = 0; i < n; ++i) {
+    const float o = w[i], l = fast_log(o);
+    w[i] = o <= omin ? lmin : (o >= omax ? lmax : l);
   }
 }
 
@@ -135,14 +156,20 @@ private:
 // column usually reach a bin or two further, and each growth would otherwise reallocate.
 constexpr std::size_t kWindowSlack = 4;
 
-// Adds one measurement's truncated OPDF to one column.
+// Adds one measurement's truncated OPDF to one column. In clamped mode a column's window holds odds from
+// its first update in a frame (begin_odds) until finish_odds at the end of the frame; its uniform run keeps
+// L_min throughout.
 class ColumnKernel {
 public:
   explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()) {
     clamped_ = grid.clamped();
     lmin_ = grid.log_odds_min();
     lmax_ = grid.log_odds_max();
+    omin_ = fast_exp(lmin_);
+    omax_ = fast_exp(lmax_);
   }
+
+  bool clamped() const { return clamped_; }
 
   void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms) const {
     const int end = depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
@@ -153,59 +180,66 @@ public:
       apply_exact(column, end, rho_bar, angular_term, sigma, a, terms);
   }
 
-private:
-  static void grow_window(ColumnData& c, int end) {
-    const auto needed = static_cast<std::size_t>(end - c.uniform_end);
-    if (needed <= c.window.size()) return;
-    if (c.window.capacity() < needed) c.window.reserve(needed + kWindowSlack);
-    c.window.resize(needed, 0.0f);
-  }
-
-  void apply_clamped(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
-                     MeasurementTerms& terms) const {
+  void begin_odds(ColumnData& c) const {
     if (c.uniform_end > 0 && c.uniform_value != lmin_) {  // not a run this kernel made (e.g. a loaded map)
       c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
       c.uniform_end = 0;
     }
+    log_odds_to_odds(c.window.data(), static_cast<int>(c.window.size()), omin_, omax_, lmin_, lmax_);
+  }
+
+  void finish_odds(ColumnData& c) const {
+    odds_to_log_odds(c.window.data(), static_cast<int>(c.window.size()), omin_, omax_, lmin_, lmax_);
+    SphericalGrid::compact(c);
+  }
+
+private:
+  static void grow_window(ColumnData& c, int end, float fill) {
+    const auto needed = static_cast<std::size_t>(end - c.uniform_end);
+    if (needed <= c.window.size()) return;
+    if (c.window.capacity() < needed) c.window.reserve(needed + kWindowSlack);
+    c.window.resize(needed, fill);
+  }
+
+  // Leading window voxels at the lower clamp join the uniform run.
+  void merge_leading_min(ColumnData& c) const {
+    std::size_t n = 0;
+    while (n < c.window.size() && c.window[n] <= omin_) ++n;
+    if (n == 0) return;
+    c.window.erase(c.window.begin(), c.window.begin() + static_cast<std::ptrdiff_t>(n));
+    c.uniform_end += static_cast<std::int32_t>(n);
+    c.uniform_value = lmin_;
+  }
+
+  void apply_clamped(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
+                     MeasurementTerms& terms) const {
     // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
     const int run_keep = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
     if (c.uniform_end > run_keep && run_keep < end) {
-      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - run_keep), lmin_);
+      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - run_keep), omin_);
       c.uniform_end = run_keep;
     }
-    // 2. Leading window bins that the bound sends to L_min join the run.
-    const double* centres = depth_.centres().data();
-    const double inv_sigma = 1.0 / sigma;
-    const double t_bound = -3.0 - 0.5 * angular_term;
-    const double limit = lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term);  // on L + 2t
-    const int window_end = c.window_end();
+    // 2. An empty window means untouched voxels (L = 0) from the run's end: there the bound on logit P_s
+    //    for t <= -3 - B/2 is a depth threshold below which they end at L_min without evaluation. (Window
+    //    voxels are simply evaluated: a vector update is cheaper than testing them one by one.)
     int first = c.uniform_end;
-    while (first < window_end && first < end) {
-      const double t = (centres[first] - rho_bar) * inv_sigma;
-      if (t > t_bound || c.window[static_cast<std::size_t>(first - c.uniform_end)] + 2.0 * t > limit) break;
-      ++first;
-    }
-    if (first > c.uniform_end) {
-      c.window.erase(c.window.begin(), c.window.begin() + (first - c.uniform_end));
-      c.uniform_end = first;
-      c.uniform_value = lmin_;
-    }
-    // 3. Past the window the bins are untouched (L = 0): the same bound with L = 0 is a depth threshold.
-    if (first == window_end) {
-      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * std::min(t_bound, 0.5 * limit)), end);
+    if (c.window.empty()) {
+      const double t_bound = -3.0 - 0.5 * angular_term;
+      const double t_fresh = 0.5 * (lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
+      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
       if (fresh > first) {
         first = fresh;
         c.uniform_end = fresh;
         c.uniform_value = lmin_;
       }
     }
-    // 4. The remaining bins up to the support's end, evaluated.
+    // 3. The remaining bins up to the support's end, evaluated.
     if (first >= end) return;
-    grow_window(c, end);
+    grow_window(c, end, 1.0f);
     terms.ensure(first, end);
-    float* w = c.window.data() - c.uniform_end;  // w[b] is bin b
-    add_logit_clamped(w + first, terms.e() + first, terms.g() + first, end - first, a, lmin_, lmax_);
-    SphericalGrid::compact(c);
+    float* o = c.window.data() - c.uniform_end;  // o[b] is bin b
+    multiply_odds_clamped(o + first, terms.e() + first, terms.g() + first, end - first, a, omin_, omax_);
+    merge_leading_min(c);
   }
 
   void apply_exact(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
@@ -216,7 +250,7 @@ private:
       c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
       c.uniform_end = 0;
     }
-    grow_window(c, end);
+    grow_window(c, end, 0.0f);
     float* w = c.window.data();
     const double* centres = depth_.centres().data();
     const double offset = std::log(0.5) + 4.0 + angular_term, slope = 2.0 / sigma;
@@ -227,7 +261,7 @@ private:
 
   const DepthAxis& depth_;
   bool clamped_;
-  float lmin_, lmax_;
+  float lmin_, lmax_, omin_, omax_;
 };
 
 bool to_measurement(const float* p, const SphericalGeometry& g, const SensorModel& model, Measurement& m,
@@ -321,12 +355,15 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   const int tile_rows = (g.height() + SphericalGrid::kTileSize - 1) / SphericalGrid::kTileSize;
   const int parts = std::max(1, std::min(threads, tile_rows));
   const ColumnKernel kernel(grid);
+  // One flag per column (threads write disjoint columns): window already converted to odds this frame.
+  std::vector<std::uint8_t> in_odds(kernel.clamped() ? g.column_count() : 0, 0);
   const UniformAxis &az = g.azimuth(), &el = g.elevation();
   std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
   detail::run_parts(parts, [&](int part, int n) {
     const int row_begin = tile_rows * part / n * SphericalGrid::kTileSize;
     const int row_end = std::min(tile_rows * (part + 1) / n * SphericalGrid::kTileSize, g.height());
     MeasurementTerms terms(g.depth());
+    std::vector<ColumnData*> odds_columns;  // clamped mode: columns whose window holds odds this frame
     std::size_t column_updates = 0;
     for (const Measurement& m : measurements) {
       const int e0 = std::max(m.elevation_first, row_begin), e1 = std::min(m.elevation_last, row_end - 1);
@@ -337,11 +374,18 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
         for (int a = m.azimuth_first; a <= m.azimuth_last; ++a) {
           const double b = model.angular_term(az.centre(a) - m.azimuth, el.centre(e) - m.elevation);
           const ColumnIndex c = g.column(a, e);
-          kernel.apply(grid.touch(c), m.rho, b, sigma, terms);
+          ColumnData& column = grid.touch(c);
+          if (kernel.clamped() && !in_odds[c]) {
+            in_odds[c] = 1;
+            kernel.begin_odds(column);
+            odds_columns.push_back(&column);
+          }
+          kernel.apply(column, m.rho, b, sigma, terms);
           grid.mark_changed(c);
           ++column_updates;
         }
     }
+    for (ColumnData* column : odds_columns) kernel.finish_odds(*column);
     updates[static_cast<std::size_t>(part)] = column_updates;
   });
   for (std::size_t u : updates) report.column_updates += u;
