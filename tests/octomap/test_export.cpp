@@ -37,9 +37,12 @@ const SphericalGrid& sample_grid(UpdateMode mode) {
     insert_points(*grid, SensorModel(preset.model), PointSpan::from(points));
     return grid;
   };
-  static const auto clamped = build(UpdateMode::clamped);
+  if (mode == UpdateMode::clamped) {
+    static const auto clamped = build(UpdateMode::clamped);
+    return *clamped;
+  }
   static const auto exact = build(UpdateMode::exact);
-  return mode == UpdateMode::clamped ? *clamped : *exact;
+  return *exact;
 }
 
 Eigen::Isometry3d some_pose() {
