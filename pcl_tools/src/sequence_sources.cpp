@@ -243,9 +243,15 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
     sequence.frames.push_back(std::move(frame));
   }
   if (seven_scenes) {
+    sequence.encoding = DepthEncoding::millimetres;
     sequence.intrinsics = seven_scenes_intrinsics(directory);
   } else {
-    for (const std::string& path : images) sequence.frames.push_back({path, std::nullopt});
+    auto named_depth = [](const std::string& path) {
+      return fs::path(path).filename().string().find("depth") != std::string::npos;
+    };
+    const bool some_named_depth = std::any_of(images.begin(), images.end(), named_depth);
+    for (const std::string& path : images)
+      if (!some_named_depth || named_depth(path)) sequence.frames.push_back({path, std::nullopt});
   }
   if (sequence.frames.empty()) throw InvalidInput("no depth image (.png/.pgm) found in '" + directory_name + "'");
   return sequence;
@@ -256,7 +262,7 @@ DepthSequenceGrabber::DepthSequenceGrabber(DepthSequence sequence, const Pinhole
     : FileSequenceGrabber(sequence.frames.size(), options.fps),
       sequence_(std::move(sequence)),
       intrinsics_(intrinsics),
-      encoding_(options.encoding.value_or(sequence_.encoding)) {
+      encoding_(options.encoding ? options.encoding : sequence_.encoding) {
   if (sequence_.frames.empty()) throw InvalidParameter("depth sequence: no frames");
   intrinsics_.validate();
   // Poses are used only when every frame has one: a partly posed sequence cannot be put in one frame.

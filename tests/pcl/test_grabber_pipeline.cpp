@@ -406,7 +406,7 @@ TEST(SequenceSources, TumLayoutAssociatesPosesByTimestamp) {
                                               << "1305031102.1950 4 5 6 0 0 0.7071068 0.7071068\n";
   const DepthSequence sequence = scan_depth_sequence(dir.path.string());
   ASSERT_EQ(sequence.frames.size(), 3u);
-  EXPECT_EQ(sequence.encoding, DepthEncoding::tum_5000);
+  EXPECT_TRUE(sequence.encoding == DepthEncoding::tum_5000);
   EXPECT_EQ(sequence.frames[0].depth_path, (dir.path / "depth/1305031102.160407.png").string());
   ASSERT_TRUE(sequence.frames[0].camera_to_world.has_value());
   EXPECT_NEAR(sequence.frames[0].camera_to_world->translation().x(), 1.0, 1e-12);
@@ -417,6 +417,17 @@ TEST(SequenceSources, TumLayoutAssociatesPosesByTimestamp) {
   // Partly posed: poses are not used rather than mixing frames.
   DepthSequenceGrabber grabber(sequence, tiny_camera());
   EXPECT_FALSE(grabber.posesApplied());
+}
+
+TEST(SequenceSources, PlainFolderTakesTheDepthImagesOnly) {
+  TempDir dir("occ_improve_plain");
+  for (const char* name : {"1.png", "1_depth.png", "2.png", "2_depth.png", "notes.txt"}) std::ofstream(dir.path / name) << "x";
+  const DepthSequence sequence = scan_depth_sequence(dir.path.string());
+  ASSERT_EQ(sequence.frames.size(), 2u);
+  EXPECT_EQ(fs::path(sequence.frames[0].depth_path).filename(), "1_depth.png");
+  EXPECT_EQ(fs::path(sequence.frames[1].depth_path).filename(), "2_depth.png");
+  EXPECT_FALSE(sequence.encoding.has_value());  // guessed per file
+  EXPECT_FALSE(sequence.intrinsics.has_value());
 }
 
 TEST(SequenceSources, ErrorsNameTheProblem) {

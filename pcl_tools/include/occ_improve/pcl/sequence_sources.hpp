@@ -111,7 +111,7 @@ struct DepthSequenceFrame {
 struct DepthSequence {
   std::vector<DepthSequenceFrame> frames;
   std::optional<PinholeIntrinsics> intrinsics;  ///< from the layout's own file, when it has one
-  DepthEncoding encoding = DepthEncoding::millimetres;
+  std::optional<DepthEncoding> encoding;  ///< the layout's encoding; unset: guessed per file (frame_io)
 };
 
 /// Recognises the layout of `directory`:
@@ -119,7 +119,8 @@ struct DepthSequence {
 ///    when present; intrinsics from `camera-intrinsics.txt` in the folder or its parent;
 ///  - TUM RGB-D: `depth.txt` ("timestamp depth/file.png" lines, 1/5000 m), poses from `groundtruth.txt`
 ///    ("t tx ty tz qx qy qz qw", nearest timestamp within 20 ms) when present;
-///  - otherwise every .png/.pgm in name order, no poses (encoding millimetres).
+///  - otherwise every .png/.pgm in name order (only those with "depth" in their name when some have
+///    it, so colour images beside them are left out), no poses, encoding guessed per file.
 /// Throws IoError when unreadable, InvalidInput when no depth image is found, FormatError on a bad pose.
 DepthSequence scan_depth_sequence(const std::string& directory);
 
@@ -148,7 +149,7 @@ protected:
 private:
   DepthSequence sequence_;
   PinholeIntrinsics intrinsics_;
-  DepthEncoding encoding_;
+  std::optional<DepthEncoding> encoding_;
   bool use_poses_ = false;
   Eigen::Isometry3d world_to_first_ = Eigen::Isometry3d::Identity();
 };
