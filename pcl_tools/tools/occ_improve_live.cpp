@@ -19,6 +19,8 @@
 #include <mutex>
 #include <thread>
 
+#include <unistd.h>
+
 namespace {
 
 using namespace occ_improve;
@@ -187,20 +189,24 @@ int run(int argc, const char* const* argv_in) {
   std::signal(SIGINT, on_sigint);
   pipeline.start();
   const char* stop_reason = "source finished";
-  for (;;) {
+  // On a terminal the progress line rewrites itself; in a log, one line every 5 s.
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  const int ticks_per_line = terminal ? 1 : 25;
+  for (int tick = 1;; ++tick) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const PipelineStatistics s = pipeline.statistics();
-    std::fprintf(stderr, "\rframes %llu  processed %llu  dropped %llu  rejected %llu  %.1f fps   ",
-                 static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
-                 static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
-                 s.processed_per_second());
+    if (tick % ticks_per_line == 0)
+      std::fprintf(stderr, "%sframes %llu  processed %llu  dropped %llu  rejected %llu  %.1f fps   %s",
+                   terminal ? "\r" : "", static_cast<unsigned long long>(s.received),
+                   static_cast<unsigned long long>(s.processed), static_cast<unsigned long long>(s.dropped),
+                   static_cast<unsigned long long>(s.rejected), s.processed_per_second(), terminal ? "" : "\n");
     if (g_interrupted) { stop_reason = "interrupted (Ctrl-C)"; break; }
     if (stop_on_signal && stop_signalled) { stop_reason = "stop signal"; break; }
     if (max_frames > 0 && s.processed >= static_cast<std::uint64_t>(max_frames)) { stop_reason = "-max_frames reached"; break; }
     if (file_source && !file_source->isRunning() && s.in_flight == 0) break;
   }
   pipeline.stop();
-  std::fprintf(stderr, "\n");
+  if (terminal) std::fprintf(stderr, "\n");
   write_maps(pipeline.mapper(), out_dir, depth_max_m);
   write_png(out_dir + "/improvement_legend.png", render_improvement_legend());
 
