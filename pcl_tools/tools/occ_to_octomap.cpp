@@ -159,6 +159,12 @@ int run(int argc, char** argv) {
                            std::to_string(pose_texts.size()) + " poses)");
   if (maps > 1 && pose_texts.empty())
     throw InvalidParameter("merging " + std::to_string(maps) + " maps needs one -pose per -load");
+  const PresetOverrides& o = options.overrides;
+  const bool preset_flags = pcl::console::find_argument(argc, argv, "-preset") >= 0 || o.sigma_depth_m ||
+                            o.sigma_depth_per_m2 || o.sigma_angle_rad || o.support_k || o.depth_bins ||
+                            o.depth_max_m || o.fov_horizontal_deg || o.fov_vertical_deg;
+  if (!load_paths.empty() && preset_flags)
+    std::cerr << "warning: preset flags are ignored with -load: a saved map carries its own geometry and model\n";
   std::vector<Eigen::Isometry3d> poses;
   for (const std::string& text : pose_texts) poses.push_back(parse_pose(text));
   if (poses.empty()) poses.push_back(Eigen::Isometry3d::Identity());
