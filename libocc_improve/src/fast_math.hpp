@@ -6,6 +6,9 @@
 //   vector instruction of the kernel.
 #include <cstdint>
 #include <cstring>
+#if defined(__x86_64__) || defined(__SSE__)
+#include <xmmintrin.h>
+#endif
 
 namespace occ_improve::detail {
 
@@ -66,5 +69,23 @@ inline float fast_log(float x) {
   y += e * -2.12194440e-4f;  // ln 2 split in two, as in fast_exp
   return (r + y) + e * 0.693359375f;
 }
+
+/// While alive, the calling thread flushes denormal results and operands to zero (SSE FTZ + DAZ), and
+/// restores its previous mode on destruction. The kernel's peak term e^-(t^2 + B) underflows far from a
+/// measurement; a denormal there weighs < 1e-37 against terms >= 1e-7, but costs a microcode assist of
+/// ~100 cycles per operation.
+class FlushDenormals {
+public:
+#if defined(__x86_64__) || defined(__SSE__)
+  FlushDenormals() : saved_(_mm_getcsr()) { _mm_setcsr(saved_ | 0x8040u); }
+  ~FlushDenormals() { _mm_setcsr(saved_); }
+
+private:
+  unsigned saved_;
+#endif
+public:
+  FlushDenormals(const FlushDenormals&) = delete;
+  FlushDenormals& operator=(const FlushDenormals&) = delete;
+};
 
 }  // namespace occ_improve::detail

@@ -49,14 +49,20 @@ constexpr double kBoundMargin = 0.2;
 
 // e_b = e^-(2 t_b + 4) and g_b = e^-(t_b^2) / 3 for bins [0, n): the B-free factors of e^-u and of the peak
 // term, shared by every column of one measurement (a column multiplies both by e^-B).
+// With angular_term = B0 != 0 the factor e^-B0 is folded in (for columns with B > kMaxFactoredB).
 OCC_IMPROVE_VECTOR_KERNEL
-void opdf_bin_terms(const double* centres, int n, double rho_bar, double inv_sigma, float* e, float* g) {
+void opdf_bin_terms(const double* centres, int n, double rho_bar, double inv_sigma, float angular_term, float* e,
+                    float* g) {
   for (int i = 0; i < n; ++i) {
     const float t = static_cast<float>((centres[i] - rho_bar) * inv_sigma);
-    e[i] = fast_exp(-(2.0f * t + 4.0f));
-    g[i] = fast_exp(-(t * t)) * (1.0f / 3.0f);
+    e[i] = fast_exp(-(2.0f * t + 4.0f + angular_term));
+    g[i] = fast_exp(-(t * t + angular_term)) * (1.0f / 3.0f);
   }
 }
+
+// Columns with B above this take terms of their own: e^-B (fast_exp saturates at e^-87) times e_b would
+// lose e^-u where e_b is large.
+constexpr double kMaxFactoredB = 60.0;
 
 // logit P_s from the bin terms, with a = e^-B: x = e^-u, P = 1/(2(1+x)) + g and the odds P/(1-P)
 // rearranged so that numerator and denominator both stay accurate near P = 1/2.
@@ -117,9 +123,10 @@ public:
         e_(static_cast<std::size_t>(depth.bins())),
         g_(static_cast<std::size_t>(depth.bins())) {}
 
-  void reset(double rho_bar, double sigma) {
+  void reset(double rho_bar, double sigma, double folded_angular_term = 0.0) {
     rho_bar_ = rho_bar;
     inv_sigma_ = 1.0 / sigma;
+    folded_angular_term_ = static_cast<float>(folded_angular_term);
     lo_ = hi_ = 0;
   }
   void ensure(int first, int last) {
@@ -144,11 +151,13 @@ public:
 
 private:
   void compute(int first, int last) {
-    opdf_bin_terms(centres_ + first, last - first, rho_bar_, inv_sigma_, e_.data() + first, g_.data() + first);
+    opdf_bin_terms(centres_ + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
+                   g_.data() + first);
   }
   const double* centres_;
   std::vector<float> e_, g_;
   double rho_bar_ = 0, inv_sigma_ = 1;
+  float folded_angular_term_ = 0;
   int lo_ = 0, hi_ = 0;
 };
 
@@ -171,9 +180,10 @@ public:
 
   bool clamped() const { return clamped_; }
 
-  void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms) const {
+  /// `terms` are the measurement's, with a = e^-B the column's factor (or B folded in and a = 1).
+  void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
+             float a) const {
     const int end = depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
-    const float a = fast_exp(static_cast<float>(-angular_term));
     if (clamped_)
       apply_clamped(column, end, rho_bar, angular_term, sigma, a, terms);
     else
@@ -191,6 +201,9 @@ public:
   void finish_odds(ColumnData& c) const {
     odds_to_log_odds(c.window.data(), static_cast<int>(c.window.size()), omin_, omax_, lmin_, lmax_);
     SphericalGrid::compact(c);
+    // A window first grows over the whole support of one measurement, then its front collapses into the
+    // run as more measurements agree: without this, a third of the store would be spare capacity.
+    if (c.window.capacity() > c.window.size() + 2 * kWindowSlack) c.window.shrink_to_fit();
   }
 
 private:
@@ -293,8 +306,11 @@ bool to_measurement(const float* p, const SphericalGeometry& g, const SensorMode
 void logit_opdf_profile(const double* centres, std::size_t n, double rho_bar, double angular_term, double sigma_rho,
                         float* out) {
   std::vector<float> e(n), g(n);
-  opdf_bin_terms(centres, static_cast<int>(n), rho_bar, 1.0 / sigma_rho, e.data(), g.data());
-  logit_profile_from_terms(e.data(), g.data(), static_cast<int>(n), fast_exp(static_cast<float>(-angular_term)), out);
+  const bool factored = angular_term <= kMaxFactoredB;
+  opdf_bin_terms(centres, static_cast<int>(n), rho_bar, 1.0 / sigma_rho, factored ? 0.0f : static_cast<float>(angular_term),
+                 e.data(), g.data());
+  logit_profile_from_terms(e.data(), g.data(), static_cast<int>(n),
+                           factored ? fast_exp(static_cast<float>(-angular_term)) : 1.0f, out);
 }
 
 PointSpan PointSpan::from(const std::vector<Eigen::Vector3f>& points) {
@@ -362,7 +378,8 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   detail::run_parts(parts, [&](int part, int n) {
     const int row_begin = tile_rows * part / n * SphericalGrid::kTileSize;
     const int row_end = std::min(tile_rows * (part + 1) / n * SphericalGrid::kTileSize, g.height());
-    MeasurementTerms terms(g.depth());
+    const detail::FlushDenormals flush_denormals;
+    MeasurementTerms terms(g.depth()), column_terms(g.depth());
     std::vector<ColumnData*> odds_columns;  // clamped mode: columns whose window holds odds this frame
     std::size_t column_updates = 0;
     for (const Measurement& m : measurements) {
@@ -380,7 +397,12 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
             kernel.begin_odds(column);
             odds_columns.push_back(&column);
           }
-          kernel.apply(column, m.rho, b, sigma, terms);
+          if (b <= kMaxFactoredB) {
+            kernel.apply(column, m.rho, b, sigma, terms, fast_exp(static_cast<float>(-b)));
+          } else {
+            column_terms.reset(m.rho, sigma, b);
+            kernel.apply(column, m.rho, b, sigma, column_terms, 1.0f);
+          }
           grid.mark_changed(c);
           ++column_updates;
         }
