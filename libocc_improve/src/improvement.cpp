@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <type_traits>
 
 #if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
 #define OCC_IMPROVE_ROW_CLONES __attribute__((target_clones("avx2", "default")))
@@ -26,15 +28,26 @@ void require_matching_surface(const SphericalGeometry& g, const SurfaceMap& s) {
 }
 
 // imp_i of eq. 3 for one surface voxel (probability p) at d_rho from the simulated measurement, whose
-// angular offset contributes step_factor = exp(-4 - B) and peak_factor = exp(-B) / 3:
-//   P_s = 1/2 (1 + a)^-1 + b,  a = exp(-2t) step_factor = exp(-u),  b = exp(-t^2) peak_factor,  t = d_rho/sigma.
-// With D = 1 + a and N = 1/2 + b D, P_s = N / D and eq. 3 needs one division. fast_exp clamps its argument
-// to [-87, 88]: far in front a <= 3e36 and b >= 5e-39 stay finite and P_s stays ~0. A certain prior
-// (p = 0 or 1, den = 0) is left unchanged by Bayes: imp_i = 0. Branch-free so the row loop vectorises.
-inline float surface_term(float p, float d_rho, float inv_sigma, float step_factor, float peak_factor) {
+// angular offset has the angular term b_angular = B:
+//   P_s = 1/2 (1 + a)^-1 + b,  a = exp(-(2t + 4 + B)) = exp(-u),  b = exp(-(t^2 + B) - log 3),  t = d_rho/sigma.
+// B and log 3 sit inside the exponents, not in factors outside them: fast_exp clamps its argument to
+// [-87, 88], so a and b never leave the normal float range (no underflow of a factor that would lose the
+// free-space carving of a far offset, no subnormal operands that cost a microcode assist per lane).
+// Far in front a <= 2e38, P_s stays ~1e-38. With D = 1 + a and N = 1/2 + b D, P_s = N / D and eq. 3 needs
+// one division. A certain prior (p = 0 or 1, den = 0) is left unchanged by Bayes: imp_i = 0.
+// Branch-free so the row loop vectorises.
+//
+// kWithPeak = false drops b, for window offsets with B >= kPeakNegligibleB: there b / P_s and b / (1 - P_s)
+// are both below (2/3)(e^-B + e^-(3 + 2B)) < 8e-8 for every d_rho, and a relative error eps in P_s and
+// in 1 - P_s moves the posterior of eq. 3 by at most eps / 2, so imp_i changes by < 4e-8.
+constexpr float kPeakNegligibleB = 16.0f;
+
+template <bool kWithPeak>
+inline float surface_term(float p, float d_rho, float inv_sigma, float b_angular) {
+  constexpr float kLog3 = 1.09861228866811f;
   const float t = d_rho * inv_sigma;
-  const float a = step_factor * detail::fast_exp(-2.0f * t);
-  const float b = peak_factor * detail::fast_exp(-(t * t));
+  const float a = detail::fast_exp(-(2.0f * t + 4.0f + b_angular));
+  const float b = kWithPeak ? detail::fast_exp(-(t * t + b_angular) - kLog3) : 0.0f;
   const float d = 1.0f + a;
   const float n = 0.5f + b * d;
   const float num = p * n;
@@ -45,24 +58,39 @@ inline float surface_term(float p, float d_rho, float inv_sigma, float step_fact
 
 // The window rule and the per-offset angular factors, built once per geometry and model.
 // With uniform angular axes the centre offset between columns j and j + (da, de) is (da w_az, de w_el)
-// for every j, so B, exp(-4 - B) and exp(-B)/3 depend on the offset only.
+// for every j, so B depends on the offset only.
 struct WindowKernel {
   std::vector<int> az_lo, az_hi, el_lo, el_hi;  // window offsets of each azimuth bin / elevation row
   int da_min = 0, da_max = 0, de_min = 0, de_max = 0;
-  std::vector<float> step_factor, peak_factor;  // per offset, (de - de_min) * offsets_across + (da - da_min)
+  std::vector<float> angular_term;  // B per offset, at (de - de_min) * offsets_across + (da - da_min)
+  std::vector<std::uint8_t> needs_peak;  // B < kPeakNegligibleB, per offset
+  // Per azimuth offset da: the azimuth bins whose window holds da, as [run_first, run_end) when they are
+  // contiguous (always, for the uniform axes and clipping of today; the masked loop covers the rest).
+  std::vector<int> run_first, run_end;
+  std::vector<std::uint8_t> run_contiguous;
 
   WindowKernel(const SphericalGeometry& g, const SensorModel& model) {
     axis_offsets(g.azimuth(), model.support_azimuth_rad(), az_lo, az_hi, da_min, da_max);
     axis_offsets(g.elevation(), model.support_elevation_rad(), el_lo, el_hi, de_min, de_max);
     const int across = offsets_across();
-    step_factor.resize(static_cast<std::size_t>(across) * (de_max - de_min + 1));
-    peak_factor.resize(step_factor.size());
+    angular_term.resize(static_cast<std::size_t>(across) * static_cast<std::size_t>(de_max - de_min + 1));
     for (int de = de_min; de <= de_max; ++de)
-      for (int da = da_min; da <= da_max; ++da) {
-        const double b = model.angular_term(da * g.azimuth().width(), de * g.elevation().width());
-        step_factor[offset_index(da, de)] = static_cast<float>(std::exp(-4.0 - b));
-        peak_factor[offset_index(da, de)] = static_cast<float>(std::exp(-b) / 3.0);
-      }
+      for (int da = da_min; da <= da_max; ++da)
+        angular_term[offset_index(da, de)] =
+            static_cast<float>(model.angular_term(da * g.azimuth().width(), de * g.elevation().width()));
+    needs_peak.resize(angular_term.size());
+    for (std::size_t o = 0; o < angular_term.size(); ++o) needs_peak[o] = angular_term[o] < kPeakNegligibleB;
+    for (int da = da_min; da <= da_max; ++da) {
+      int first = 0, last = -1, count = 0;
+      for (int x = 0; x < g.width(); ++x)
+        if (az_lo[static_cast<std::size_t>(x)] <= da && da <= az_hi[static_cast<std::size_t>(x)]) {
+          if (count++ == 0) first = x;
+          last = x;
+        }
+      run_first.push_back(first);
+      run_end.push_back(last + 1);
+      run_contiguous.push_back(count == last + 1 - first);
+    }
   }
   int offsets_across() const { return da_max - da_min + 1; }
   std::size_t offset_index(int da, int de) const {
@@ -98,7 +126,9 @@ struct WindowKernel {
       for (int da = az_lo[ua]; da <= az_hi[ua]; ++da) {
         const ColumnIndex i = g.column(a + da, e + de);
         const std::size_t o = offset_index(da, de);
-        sum += surface_term(s.probability[i], s.depth_m[i] - rho_j, inv_sigma, step_factor[o], peak_factor[o]);
+        const float p_i = s.probability[i], d_rho = s.depth_m[i] - rho_j;
+        sum += needs_peak[o] ? surface_term<true>(p_i, d_rho, inv_sigma, angular_term[o])
+                             : surface_term<false>(p_i, d_rho, inv_sigma, angular_term[o]);
       }
     return sum;
   }
@@ -123,12 +153,33 @@ struct WindowKernel {
       for (int da = da_min; da <= da_max; ++da) {
         const float* p_i = s.probability.data() + other_start;  // p_i[x + da]: column x + da of row e + de
         const float* rho_i = s.depth_m.data() + other_start;
-        const float step = step_factor[offset_index(da, de)], peak = peak_factor[offset_index(da, de)];
-        const int x_begin = std::max(0, -da), x_end = std::min(w, w - da);
-        for (int x = x_begin; x < x_end; ++x) {
-          const float term = surface_term(p_i[x + da], rho_i[x + da] - rho_j[x], inv[x], step, peak);
-          const bool in_window = (lo[x] <= da) & (da <= hi[x]);  // '&': no short-circuit branch
-          out[x] += in_window ? term : 0.0f;
+        const float b_angular = angular_term[offset_index(da, de)];
+        // Same additions in the same order either way: the masked loop adds 0 outside the window.
+        const auto accumulate = [&](auto with_peak, auto masked, int x_begin, int x_end) {
+          for (int x = x_begin; x < x_end; ++x) {
+            const float term =
+                surface_term<decltype(with_peak)::value>(p_i[x + da], rho_i[x + da] - rho_j[x], inv[x], b_angular);
+            if constexpr (decltype(masked)::value) {
+              const bool in_window = (lo[x] <= da) & (da <= hi[x]);  // '&': no short-circuit branch
+              out[x] += in_window ? term : 0.0f;
+            } else {
+              out[x] += term;
+            }
+          }
+        };
+        const bool peak = needs_peak[offset_index(da, de)];
+        const auto r = static_cast<std::size_t>(da - da_min);
+        if (run_contiguous[r]) {
+          if (peak)
+            accumulate(std::true_type{}, std::false_type{}, run_first[r], run_end[r]);
+          else
+            accumulate(std::false_type{}, std::false_type{}, run_first[r], run_end[r]);
+        } else {
+          const int x_begin = std::max(0, -da), x_end = std::min(w, w - da);
+          if (peak)
+            accumulate(std::true_type{}, std::true_type{}, x_begin, x_end);
+          else
+            accumulate(std::false_type{}, std::true_type{}, x_begin, x_end);
         }
       }
     }
