@@ -119,7 +119,9 @@ struct Measurement {
 class MeasurementTerms {
 public:
   explicit MeasurementTerms(const DepthAxis& depth)
-      : centres_(depth.centres().data()),
+      : depth_(depth),
+        centres_(depth.centres().data()),
+        bins_(depth.bins()),
         e_(static_cast<std::size_t>(depth.bins())),
         g_(static_cast<std::size_t>(depth.bins())) {}
 
@@ -127,6 +129,7 @@ public:
     rho_bar_ = rho_bar;
     inv_sigma_ = 1.0 / sigma;
     folded_angular_term_ = static_cast<float>(folded_angular_term);
+    run_keep_ = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
     lo_ = hi_ = 0;
   }
   void ensure(int first, int last) {
@@ -137,15 +140,21 @@ public:
       hi_ = last;
       return;
     }
+    // Neighbouring columns ask for a bin or two more: extend by a few at once (short vector loops are
+    // mostly scalar prologue and epilogue).
     if (first < lo_) {
-      compute(first, lo_);
-      lo_ = first;
+      const int from = std::max(first - kTermsMargin, 0);
+      compute(from, lo_);
+      lo_ = from;
     }
     if (last > hi_) {
-      compute(hi_, last);
-      hi_ = last;
+      const int to = std::min(last + kTermsMargin, bins_);
+      compute(hi_, to);
+      hi_ = to;
     }
   }
+  /// Bins below it have t <= kNonPositiveT (where logit P_s <= 0 for every B).
+  int run_keep() const { return run_keep_; }
   const float* e() const { return e_.data(); }
   const float* g() const { return g_.data(); }
 
@@ -154,12 +163,19 @@ private:
     opdf_bin_terms(centres_ + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
                    g_.data() + first);
   }
+  static constexpr int kTermsMargin = 4;
+  const DepthAxis& depth_;
   const double* centres_;
+  int bins_;
   std::vector<float> e_, g_;
   double rho_bar_ = 0, inv_sigma_ = 1;
   float folded_angular_term_ = 0;
-  int lo_ = 0, hi_ = 0;
+  int run_keep_ = 0, lo_ = 0, hi_ = 0;
 };
+
+// Clamped mode: a column's window returns from odds to log-odds this many measurements after its first
+// update of the call (3 image rows of an organized 640-wide frame).
+constexpr std::size_t kOddsLag = 2048;
 
 // Window bins reserved beyond the current need when a window grows: later measurements of the same
 // column usually reach a bin or two further, and each growth would otherwise reallocate.
@@ -227,7 +243,7 @@ private:
   void apply_clamped(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
                      MeasurementTerms& terms) const {
     // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
-    const int run_keep = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
+    const int run_keep = terms.run_keep();
     if (c.uniform_end > run_keep && run_keep < end) {
       c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - run_keep), omin_);
       c.uniform_end = run_keep;
@@ -301,6 +317,29 @@ bool to_measurement(const float* p, const SphericalGeometry& g, const SensorMode
   return true;
 }
 
+// Splits the tile rows into `parts` bands of about equal work (column updates), so that neither thread
+// waits for the other where the scene is uneven (floor below, far wall or no returns above). Returns
+// parts + 1 tile-row boundaries. Any split gives the same result: each column has one owner.
+std::vector<int> balanced_bands(const std::vector<Measurement>& measurements, int tile_rows, int parts) {
+  std::vector<double> work(static_cast<std::size_t>(tile_rows), 0.0);
+  for (const Measurement& m : measurements) {
+    const double columns = m.azimuth_last - m.azimuth_first + 1;
+    for (int e = m.elevation_first; e <= m.elevation_last; ++e)
+      work[static_cast<std::size_t>(e / SphericalGrid::kTileSize)] += columns;
+  }
+  double total = 0;
+  for (double w : work) total += w;
+  std::vector<int> begin(static_cast<std::size_t>(parts) + 1, tile_rows);
+  begin[0] = 0;
+  double sum = 0;
+  int part = 1;
+  for (int r = 0; r < tile_rows && part < parts; ++r) {
+    sum += work[static_cast<std::size_t>(r)];
+    if (sum >= total * part / parts) begin[static_cast<std::size_t>(part++)] = r + 1;
+  }
+  return begin;
+}
+
 }  // namespace
 
 void logit_opdf_profile(const double* centres, std::size_t n, double rho_bar, double angular_term, double sigma_rho,
@@ -370,35 +409,71 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   //    a column, and every column sees its measurements in input order: results do not depend on threads.
   const int tile_rows = (g.height() + SphericalGrid::kTileSize - 1) / SphericalGrid::kTileSize;
   const int parts = std::max(1, std::min(threads, tile_rows));
+  const std::vector<int> band_begin = balanced_bands(measurements, tile_rows, parts);
   const ColumnKernel kernel(grid);
   // One flag per column (threads write disjoint columns): window already converted to odds this frame.
   std::vector<std::uint8_t> in_odds(kernel.clamped() ? g.column_count() : 0, 0);
   const UniformAxis &az = g.azimuth(), &el = g.elevation();
+  const double inv_sigma_azimuth = 1.0 / model.params().sigma_azimuth_rad;
+  const double inv_sigma_elevation = 1.0 / model.params().sigma_elevation_rad;
   std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
-  detail::run_parts(parts, [&](int part, int n) {
-    const int row_begin = tile_rows * part / n * SphericalGrid::kTileSize;
-    const int row_end = std::min(tile_rows * (part + 1) / n * SphericalGrid::kTileSize, g.height());
+  detail::run_parts(parts, [&](int part, int) {
+    const int row_begin = band_begin[static_cast<std::size_t>(part)] * SphericalGrid::kTileSize;
+    const int row_end = std::min(band_begin[static_cast<std::size_t>(part) + 1] * SphericalGrid::kTileSize, g.height());
     const detail::FlushDenormals flush_denormals;
     MeasurementTerms terms(g.depth()), column_terms(g.depth());
-    std::vector<ColumnData*> odds_columns;  // clamped mode: columns whose window holds odds this frame
+    std::vector<double> azimuth_b(static_cast<std::size_t>(g.width()));
+    std::vector<float> azimuth_f(static_cast<std::size_t>(g.width()));
+    // Clamped mode: columns whose window holds odds, by the measurement that converted them. A column is
+    // converted back once kOddsLag measurements have passed since (organized input has finished with it
+    // by then), while its window is still in cache; a later touch converts it again.
+    struct OddsColumn {
+      ColumnIndex index;
+      std::size_t since;
+    };
+    std::vector<OddsColumn> odds_columns;
+    std::size_t odds_head = 0;
+    auto finish_until = [&](std::size_t since_limit) {
+      while (odds_head < odds_columns.size() && odds_columns[odds_head].since < since_limit) {
+        const ColumnIndex c = odds_columns[odds_head++].index;
+        kernel.finish_odds(grid.touch(c));
+        in_odds[c] = 0;
+      }
+      if (odds_head > 4096 && odds_head * 2 > odds_columns.size()) {
+        odds_columns.erase(odds_columns.begin(), odds_columns.begin() + static_cast<std::ptrdiff_t>(odds_head));
+        odds_head = 0;
+      }
+    };
     std::size_t column_updates = 0;
-    for (const Measurement& m : measurements) {
+    for (std::size_t mi = 0; mi < measurements.size(); ++mi) {
+      if (mi > kOddsLag) finish_until(mi - kOddsLag);  // the same schedule for any thread count
+      const Measurement& m = measurements[mi];
       const int e0 = std::max(m.elevation_first, row_begin), e1 = std::min(m.elevation_last, row_end - 1);
       if (e0 > e1) continue;
       const double sigma = model.sigma_depth_at(m.rho);
       terms.reset(m.rho, sigma);
-      for (int e = e0; e <= e1; ++e)
+      // B = B_azimuth + B_elevation and e^-B = e^-B_azimuth e^-B_elevation, per row and per column once.
+      for (int a = m.azimuth_first; a <= m.azimuth_last; ++a) {
+        const double d = (az.centre(a) - m.azimuth) * inv_sigma_azimuth;
+        azimuth_b[static_cast<std::size_t>(a - m.azimuth_first)] = d * d;
+        azimuth_f[static_cast<std::size_t>(a - m.azimuth_first)] = fast_exp(static_cast<float>(-d * d));
+      }
+      for (int e = e0; e <= e1; ++e) {
+        const double d = (el.centre(e) - m.elevation) * inv_sigma_elevation;
+        const double elevation_b = d * d;
+        const float elevation_f = fast_exp(static_cast<float>(-elevation_b));
         for (int a = m.azimuth_first; a <= m.azimuth_last; ++a) {
-          const double b = model.angular_term(az.centre(a) - m.azimuth, el.centre(e) - m.elevation);
+          const double b = azimuth_b[static_cast<std::size_t>(a - m.azimuth_first)] + elevation_b;
+          const float factor = azimuth_f[static_cast<std::size_t>(a - m.azimuth_first)] * elevation_f;
           const ColumnIndex c = g.column(a, e);
           ColumnData& column = grid.touch(c);
           if (kernel.clamped() && !in_odds[c]) {
             in_odds[c] = 1;
             kernel.begin_odds(column);
-            odds_columns.push_back(&column);
+            odds_columns.push_back({c, mi});
           }
           if (b <= kMaxFactoredB) {
-            kernel.apply(column, m.rho, b, sigma, terms, fast_exp(static_cast<float>(-b)));
+            kernel.apply(column, m.rho, b, sigma, terms, factor);
           } else {
             column_terms.reset(m.rho, sigma, b);
             kernel.apply(column, m.rho, b, sigma, column_terms, 1.0f);
@@ -406,8 +481,9 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
           grid.mark_changed(c);
           ++column_updates;
         }
+      }
     }
-    for (ColumnData* column : odds_columns) kernel.finish_odds(*column);
+    finish_until(measurements.size());
     updates[static_cast<std::size_t>(part)] = column_updates;
   });
   for (std::size_t u : updates) report.column_updates += u;
