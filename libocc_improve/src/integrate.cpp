@@ -25,11 +25,13 @@ using detail::fast_log;
 #define OCC_IMPROVE_VECTOR_KERNEL
 #endif
 
-// Beyond this depth offset (in sigmas, as a function of B) |logit P_s| < kSkipEpsilon:
-//   the step term deviates from 1/2 by < eps/4 once u > log(4/eps), the peak term is < eps/4 once
-//   t^2 + B > log(8/(3 eps)).
+// Beyond this depth offset (in sigmas, as a function of B) |logit P_s| < kSkipEpsilon. There P_s = 1/2 + d
+// with d = g - e^-u / (2 (1 + e^-u)), g the peak term, so |d| <= max(g, e^-u / 2), and
+// |logit(1/2 + d)| = 2 atanh(2 |d|) < 4.001 |d| for |d| < 1e-3. Both terms below eps / 4.001 is enough:
+//   the step term once u >= log(4.001 / (2 eps)), the peak term once t^2 + B >= log(4.001 / (3 eps)).
 double skip_offset_sigmas(double angular_term) {
-  static const double step_limit = std::log(4.0 / kSkipEpsilon), peak_limit = std::log(8.0 / (3.0 * kSkipEpsilon));
+  static const double step_limit = std::log(4.001 / (2.0 * kSkipEpsilon));
+  static const double peak_limit = std::log(4.001 / (3.0 * kSkipEpsilon));
   return std::max((step_limit - 4.0 - angular_term) / 2.0, std::sqrt(std::max(0.0, peak_limit - angular_term)));
 }
 
@@ -179,7 +181,7 @@ constexpr std::size_t kOddsLag = 2048;
 
 // Window bins reserved beyond the current need when a window grows: later measurements of the same
 // column usually reach a bin or two further, and each growth would otherwise reallocate.
-constexpr std::size_t kWindowSlack = 4;
+constexpr std::size_t kWindowSlack = 2;
 
 // Adds one measurement's truncated OPDF to one column. In clamped mode a column's window holds odds from
 // its first update in a frame (begin_odds) until finish_odds at the end of the frame; its uniform run keeps
