@@ -129,5 +129,53 @@ TEST(Ranking, SampleSceneDoesNotStopAndPointsAtTheNoDataRegions) {
   EXPECT_FALSE(s.stop) << s.reason;
 }
 
+TEST(Ranking, StopMonitorFiresWhenProgressStallsOnly) {
+  ImprovementMap map;
+  map.width = 10;
+  map.height = 10;
+  map.value.assign(100, 0.3f);  // total 30: above the absolute threshold, so only stalling can stop
+  StopMonitor monitor({}, ProgressCriteria{0.01, 3});  // 10% drops are progress, 0% is not
+  Region big{};
+  big.summed_improvement = 30.0;  // keeps the best-region threshold quiet
+  big.centroid_direction = Eigen::Vector3d::UnitZ();
+  const std::vector<Region> regions = {big};
+  // Shrinking by 10% per frame is progress.
+  for (int frame = 0; frame < 6; ++frame) {
+    EXPECT_FALSE(monitor.update(map, regions).stop) << frame;
+    for (float& v : map.value) v *= 0.9f;
+  }
+  EXPECT_FALSE(monitor.update(map, regions).stop);  // still sees the last 10% drop
+  // Now stuck: the third frame in a row without a 1% gain stops.
+  EXPECT_FALSE(monitor.update(map, regions).stop);
+  EXPECT_FALSE(monitor.update(map, regions).stop);
+  const StopSignal s = monitor.update(map, regions);
+  EXPECT_TRUE(s.stop);
+  EXPECT_NE(s.reason.find("stalled"), std::string::npos) << s.reason;
+  EXPECT_THROW(StopMonitor({}, ProgressCriteria{-0.1, 3}), InvalidParameter);
+  EXPECT_THROW(StopMonitor({}, ProgressCriteria{0.01, 0}), InvalidParameter);
+}
+
+TEST(Ranking, StaticSequenceStopsWhenGainsDiminish) {
+  // The sample's poster and projector shadows never return data, so their rays keep ~0.32 forever and the
+  // absolute thresholds never fire; repeated frames of the same view must still end in a stop once each
+  // frame adds little.
+  Mapper mapper(kinect_v1_paper());
+  StopMonitor monitor;
+  bool stopped = false, absolute_stop = false;
+  int frame = 0;
+  for (; frame < 30 && !stopped; ++frame) {
+    sample::SceneOptions options;
+    options.seed = static_cast<std::uint32_t>(frame + 1);
+    const auto points = sample::generate_scene(options).points();
+    mapper.insert(PointSpan::from(points));
+    const auto regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface());
+    absolute_stop |= stop_signal(mapper.improvement(), regions).stop;
+    stopped = monitor.update(mapper.improvement(), regions).stop;
+  }
+  EXPECT_FALSE(absolute_stop);
+  EXPECT_TRUE(stopped) << "no stop after " << frame << " frames";
+  EXPECT_GE(frame, 4);  // not before progress was measured over `patience` frames
+}
+
 }  // namespace
 }  // namespace occ_improve

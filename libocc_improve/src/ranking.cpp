@@ -130,4 +130,33 @@ StopSignal stop_signal(const ImprovementMap& map, const std::vector<Region>& reg
   return s;
 }
 
+void ProgressCriteria::validate() const {
+  detail::require_parameter(std::isfinite(min_relative_gain) && min_relative_gain >= 0 && min_relative_gain < 1,
+                            "min_relative_gain", min_relative_gain, "in [0, 1)");
+  detail::require_parameter(patience >= 1, "patience", patience, ">= 1");
+}
+
+StopMonitor::StopMonitor(const StopCriteria& criteria, const ProgressCriteria& progress)
+    : criteria_(criteria), progress_(progress) {
+  criteria.validate();
+  progress.validate();
+}
+
+StopSignal StopMonitor::update(const ImprovementMap& map, const std::vector<Region>& regions) {
+  StopSignal s = stop_signal(map, regions, criteria_);
+  if (previous_total_ >= 0) {
+    const double gain = previous_total_ - s.total_improvement;
+    stalled_frames_ = gain < progress_.min_relative_gain * previous_total_ ? stalled_frames_ + 1 : 0;
+  }
+  previous_total_ = s.total_improvement;
+  if (!s.stop && stalled_frames_ >= progress_.patience) {
+    std::ostringstream why;
+    why << "progress stalled: total expected improvement " << s.total_improvement << " fell by less than "
+        << 100 * progress_.min_relative_gain << "% per frame for " << stalled_frames_ << " frames";
+    s.stop = true;
+    s.reason = why.str();
+  }
+  return s;
+}
+
 }  // namespace occ_improve
