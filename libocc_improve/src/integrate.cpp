@@ -43,8 +43,8 @@ constexpr double kLinearU = -20.0;
 //    (2/3)(e^-B + e^(2t+4)) <= (2/3)(1 + e^1) = 2.48 < e^(t^2) = 9.49 at t = -1.5 and the gap widens below.
 //    Bins of the leading L_min run stay at L_min.
 //  - for t <= -3 - B/2 (u <= -2): P_s <= 1/2 e^u (1 + 6.1e-4) (the peak term is (2/3) e^-((t+1)^2 + 3 + 2B)
-//    <= 6.1e-4 of the step term) and -log(1 - P_s) <= 0.071, so logit P_s <= log(1/2) + u + 0.072. A bin
-//    holding L with L + log(1/2) + u <= L_min - kBoundMargin therefore ends at L_min: not evaluated.
+//    <= 6.1e-4 of the step term) and -log(1 - P_s) <= 0.071, so logit P_s <= log(1/2) + u + 0.072. An
+//    untouched bin (L = 0) with log(1/2) + u <= L_min - kBoundMargin therefore ends at L_min: not evaluated.
 constexpr double kNonPositiveT = -1.5;
 constexpr double kBoundMargin = 0.2;
 
@@ -183,8 +183,8 @@ constexpr std::size_t kOddsLag = 2048;
 constexpr std::size_t kWindowSlack = 2;
 
 // Adds one measurement's truncated OPDF to one column. In clamped mode a column's window holds odds from
-// its first update in a frame (begin_odds) until finish_odds at the end of the frame; its uniform run keeps
-// L_min throughout.
+// its first update in an insertion call (begin_odds) until finish_odds (kOddsLag measurements later, or at
+// the end of the call); its uniform run keeps L_min throughout.
 class ColumnKernel {
 public:
   explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()) {
