@@ -21,6 +21,7 @@ double ms_since(double start_seconds) { return (now_seconds() - start_seconds) *
 void PipelineOptions::validate() const {
   regions.validate();
   stop.validate();
+  progress.validate();
   detail::require_parameter(insertion.threads >= 0, "insertion.threads", insertion.threads, ">= 0");
   detail::require_parameter((expected_width == 0) == (expected_height == 0), "expected_width",
                             expected_width, "0 exactly when expected_height is 0");
@@ -29,7 +30,7 @@ void PipelineOptions::validate() const {
 namespace detail {
 
 PipelineEngine::PipelineEngine(std::shared_ptr<Mapper> mapper, const PipelineOptions& options)
-    : mapper_(std::move(mapper)), options_(options) {
+    : mapper_(std::move(mapper)), options_(options), stop_monitor_(options.stop, options.progress) {
   if (!mapper_) throw InvalidParameter("GrabberPipeline: mapper is null");
   options_.validate();
 }
@@ -177,7 +178,7 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
   const double t_regions = now_seconds();
   std::vector<Region> regions = find_regions(mapper_->geometry(), mapper_->improvement(), mapper_->surface(),
                                              options_.regions);
-  result.stop = stop_signal(mapper_->improvement(), regions, options_.stop);
+  result.stop = stop_monitor_.update(mapper_->improvement(), regions);
   regions.resize(std::min(regions.size(), options_.top_regions));
   result.top_regions = std::move(regions);
   const double regions_ms = ms_since(t_regions);

@@ -40,6 +40,7 @@ struct PipelineOptions {
   RegionOptions regions;          ///< what counts as a region of interest
   std::size_t top_regions = 5;    ///< regions kept in each FrameResult (best first)
   StopCriteria stop;              ///< when to signal "enough"
+  ProgressCriteria progress;      ///< ... or when frames stop paying (StopMonitor)
   bool backpressure = false;      ///< true: the grabber waits for the worker instead of dropping frames
   bool require_organized = false; ///< reject unorganized frames
   /// Expected organized size (0 = any); set from the preset's camera by the preset constructor.
@@ -118,6 +119,7 @@ private:
 
   std::shared_ptr<Mapper> mapper_;
   PipelineOptions options_;
+  StopMonitor stop_monitor_;  ///< worker thread only
   mutable std::mutex mutex_;
   std::condition_variable work_ready_, slot_free_;
   std::optional<ErasedFrame> slot_;
