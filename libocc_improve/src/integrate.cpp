@@ -111,6 +111,36 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
 
+// DepthAxis::first_centre_above without the call, the division and the libm floor on the hot path: uniform
+// bins guess the index in closed form, then the same fix-up against the stored centres makes the result
+// identical (the first bin whose centre is > rho). Inverse-depth bins use the generic lookup.
+class CentreLocator {
+public:
+  explicit CentreLocator(const DepthAxis& depth)
+      : depth_(depth),
+        centres_(depth.centres().data()),
+        bins_(depth.bins()),
+        uniform_(depth.binning() == DepthBinning::uniform),
+        min_(depth.min()),
+        bins_per_metre_(depth.bins() / (depth.max() - depth.min())) {}
+
+  int first_centre_above(double rho) const {
+    if (!uniform_) return depth_.first_centre_above(rho);
+    const double ci = (rho - min_) * bins_per_metre_;  // centre(b) > rho  <=>  b + 0.5 > ci
+    int b = !(ci >= -0.5) ? 0 : (ci >= bins_ ? bins_ : static_cast<int>(ci + 0.5));  // floor: ci + 0.5 >= 0
+    while (b > 0 && centres_[b - 1] > rho) --b;
+    while (b < bins_ && centres_[b] <= rho) ++b;
+    return b;
+  }
+
+private:
+  const DepthAxis& depth_;
+  const double* centres_;
+  int bins_;
+  bool uniform_;
+  double min_, bins_per_metre_;
+};
+
 struct Measurement {
   double rho, azimuth, elevation;
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
@@ -120,7 +150,7 @@ struct Measurement {
 class MeasurementTerms {
 public:
   explicit MeasurementTerms(const DepthAxis& depth)
-      : depth_(depth),
+      : locator_(depth),
         centres_(depth.centres().data()),
         bins_(depth.bins()),
         e_(static_cast<std::size_t>(depth.bins())),
@@ -130,7 +160,7 @@ public:
     rho_bar_ = rho_bar;
     inv_sigma_ = 1.0 / sigma;
     folded_angular_term_ = static_cast<float>(folded_angular_term);
-    run_keep_ = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
+    run_keep_ = locator_.first_centre_above(rho_bar + sigma * kNonPositiveT);
     lo_ = hi_ = 0;
   }
   void ensure(int first, int last) {
@@ -165,7 +195,7 @@ private:
                    g_.data() + first);
   }
   static constexpr int kTermsMargin = 4;
-  const DepthAxis& depth_;
+  CentreLocator locator_;
   const double* centres_;
   int bins_;
   std::vector<float> e_, g_;
@@ -187,7 +217,7 @@ constexpr std::size_t kWindowSlack = 2;
 // the end of the call); its uniform run keeps L_min throughout.
 class ColumnKernel {
 public:
-  explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()) {
+  explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()), locator_(depth_) {
     clamped_ = grid.clamped();
     lmin_ = grid.log_odds_min();
     lmax_ = grid.log_odds_max();
@@ -200,7 +230,7 @@ public:
   /// `terms` are the measurement's, with a = e^-B the column's factor (or B folded in and a = 1).
   void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
              float a) const {
-    const int end = depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
+    const int end = locator_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
     if (clamped_)
       apply_clamped(column, end, rho_bar, angular_term, sigma, a, terms);
     else
@@ -218,16 +248,28 @@ public:
   void finish_odds(ColumnData& c) const {
     odds_to_log_odds(c.window.data(), static_cast<int>(c.window.size()), omin_, omax_, lmin_, lmax_);
     SphericalGrid::compact(c);
-    // A window first grows over the whole support of one measurement, then its front collapses into the
-    // run as more measurements agree: without this, a third of the store would be spare capacity.
+  }
+
+  // A window first grows over the whole support of one measurement, then its front collapses into the
+  // run as more measurements agree: without this, a third of the store would be spare capacity. Once
+  // per column and call (a column finished early may be converted again and regrow within the call).
+  static void release_spare(ColumnData& c) {
     if (c.window.capacity() > c.window.size() + 2 * kWindowSlack) c.window.shrink_to_fit();
   }
 
 private:
-  static void grow_window(ColumnData& c, int end, float fill) {
+  // Capacity for `size` window bins. Clamped mode releases spare capacity at the end of the call
+  // (release_spare), so within a call it grows geometrically: a window grows at both ends over many
+  // measurements, and an exact fit would reallocate (and copy) at most of them.
+  void reserve_window(ColumnData& c, std::size_t size) const {
+    if (c.window.capacity() >= size) return;
+    c.window.reserve(size + (clamped_ ? size / 2 : 0) + kWindowSlack);
+  }
+
+  void grow_window(ColumnData& c, int end, float fill) const {
     const auto needed = static_cast<std::size_t>(end - c.uniform_end);
     if (needed <= c.window.size()) return;
-    if (c.window.capacity() < needed) c.window.reserve(needed + kWindowSlack);
+    reserve_window(c, needed);
     c.window.resize(needed, fill);
   }
 
@@ -246,6 +288,7 @@ private:
     // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
     const int run_keep = terms.run_keep();
     if (c.uniform_end > run_keep && run_keep < end) {
+      reserve_window(c, static_cast<std::size_t>(std::max(c.window_end(), end) - run_keep));
       c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - run_keep), omin_);
       c.uniform_end = run_keep;
     }
@@ -256,7 +299,7 @@ private:
     if (c.window.empty()) {
       const double t_bound = -3.0 - 0.5 * angular_term;
       const double t_fresh = 0.5 * (lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
-      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
+      const int fresh = std::min(locator_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
       if (fresh > first) {
         first = fresh;
         c.uniform_end = fresh;
@@ -275,7 +318,7 @@ private:
   void apply_exact(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
                    MeasurementTerms& terms) const {
     const double t_linear = (kLinearU - 4.0 - angular_term) / 2.0;
-    const int linear_end = std::min(depth_.first_centre_above(rho_bar + sigma * t_linear), end);
+    const int linear_end = std::min(locator_.first_centre_above(rho_bar + sigma * t_linear), end);
     if (c.uniform_end > 0) {  // exact mode keeps every bin in the window
       c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
       c.uniform_end = 0;
@@ -290,6 +333,7 @@ private:
   }
 
   const DepthAxis& depth_;
+  CentreLocator locator_;
   bool clamped_;
   float lmin_, lmax_, omin_, omax_;
 };
@@ -412,8 +456,10 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   const int parts = std::max(1, std::min(threads, tile_rows));
   const std::vector<int> band_begin = balanced_bands(measurements, tile_rows, parts);
   const ColumnKernel kernel(grid);
-  // One flag per column (threads write disjoint columns): window already converted to odds this frame.
-  std::vector<std::uint8_t> in_odds(kernel.clamped() ? g.column_count() : 0, 0);
+  // One state per column (threads write disjoint columns): untouched this call, window in odds, or
+  // converted back to log-odds (spare capacity released at the end of the call).
+  enum : std::uint8_t { kUntouched = 0, kInOdds = 1, kFinished = 2 };
+  std::vector<std::uint8_t> odds_state(kernel.clamped() ? g.column_count() : 0, 0);
   const UniformAxis &az = g.azimuth(), &el = g.elevation();
   const double inv_sigma_azimuth = 1.0 / model.params().sigma_azimuth_rad;
   const double inv_sigma_elevation = 1.0 / model.params().sigma_elevation_rad;
@@ -434,11 +480,12 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
     };
     std::vector<OddsColumn> odds_columns;
     std::size_t odds_head = 0;
+    std::vector<ColumnIndex> converted_columns;  // each once
     auto finish_until = [&](std::size_t since_limit) {
       while (odds_head < odds_columns.size() && odds_columns[odds_head].since < since_limit) {
         const ColumnIndex c = odds_columns[odds_head++].index;
         kernel.finish_odds(grid.touch(c));
-        in_odds[c] = 0;
+        odds_state[c] = kFinished;
       }
       if (odds_head > 4096 && odds_head * 2 > odds_columns.size()) {
         odds_columns.erase(odds_columns.begin(), odds_columns.begin() + static_cast<std::ptrdiff_t>(odds_head));
@@ -468,8 +515,9 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
           const float factor = azimuth_f[static_cast<std::size_t>(a - m.azimuth_first)] * elevation_f;
           const ColumnIndex c = g.column(a, e);
           ColumnData& column = grid.touch(c);
-          if (kernel.clamped() && !in_odds[c]) {
-            in_odds[c] = 1;
+          if (kernel.clamped() && odds_state[c] != kInOdds) {
+            if (odds_state[c] == kUntouched) converted_columns.push_back(c);
+            odds_state[c] = kInOdds;
             kernel.begin_odds(column);
             odds_columns.push_back({c, mi});
           }
@@ -485,6 +533,7 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
       }
     }
     finish_until(measurements.size());
+    for (const ColumnIndex c : converted_columns) ColumnKernel::release_spare(grid.touch(c));
     updates[static_cast<std::size_t>(part)] = column_updates;
   });
   for (std::size_t u : updates) report.column_updates += u;
