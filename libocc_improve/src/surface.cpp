@@ -1,6 +1,7 @@
 #include "occ_improve/surface.hpp"
 
 #include "occ_improve/sensor_model.hpp"
+#include "parallel.hpp"
 
 #include <algorithm>
 #include <limits>
@@ -11,6 +12,23 @@ std::size_t SurfaceMap::known_count() const {
   return static_cast<std::size_t>(std::count(unknown.begin(), unknown.end(), std::uint8_t{0}));
 }
 
+namespace {
+// Maximum of n floats with eight independent accumulators: a single running max is a serial dependency
+// chain (one maxss per value); eight lanes let the compiler use packed max instructions.
+float window_max(const float* v, std::size_t n) {
+  constexpr std::size_t kLanes = 8;
+  float lane[kLanes];
+  for (float& l : lane) l = -std::numeric_limits<float>::infinity();
+  std::size_t i = 0;
+  for (; i + kLanes <= n; i += kLanes)
+    for (std::size_t k = 0; k < kLanes; ++k) lane[k] = v[i + k] > lane[k] ? v[i + k] : lane[k];
+  for (; i < n; ++i) lane[0] = v[i] > lane[0] ? v[i] : lane[0];
+  float best = lane[0];
+  for (std::size_t k = 1; k < kLanes; ++k) best = std::max(best, lane[k]);
+  return best;
+}
+}  // namespace
+
 SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
   SurfaceVoxel s;
   if (c == nullptr || !c->touched()) return s;
@@ -20,9 +38,8 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
   const int window_end = std::min<int>(c->window_end(), bins);
 
   // Largest value over the uniform run, the window and the untouched tail (log-odds 0).
-  float best = -std::numeric_limits<float>::infinity();
-  if (uniform_end > 0) best = c->uniform_value;
-  for (int b = uniform_end; b < window_end; ++b) best = std::max(best, c->window[static_cast<std::size_t>(b - c->uniform_end)]);
+  float best = window_max(c->window.data(), static_cast<std::size_t>(window_end - uniform_end));
+  if (uniform_end > 0) best = std::max(best, c->uniform_value);
   if (window_end < bins) best = std::max(best, 0.0f);
 
   // The nearest run of bins within the tie tolerance of it, walked segment by segment so the uniform run
@@ -73,7 +90,7 @@ SurfaceVoxel load(const SurfaceMap& m, std::size_t i) {
 }
 }  // namespace
 
-SurfaceMap compute_surface(const SphericalGrid& grid) {
+SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
   const SphericalGeometry& g = grid.geometry();
   SurfaceMap m;
   m.width = g.width();
@@ -83,25 +100,38 @@ SurfaceMap compute_surface(const SphericalGrid& grid) {
   m.probability.assign(n, 0.5f);
   m.bin.assign(n, -1);
   m.unknown.assign(n, 1);
-  GridAccessor access(grid);
-  for (std::size_t i = 0; i < n; ++i) {
-    const ColumnData* c = access.find(static_cast<ColumnIndex>(i));
-    if (c && c->touched()) store(m, i, column_surface(c, grid));
-  }
+  detail::run_parts(detail::resolve_thread_count(threads), [&](int part, int parts) {
+    GridAccessor access(grid);
+    const std::size_t begin = n * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
+    const std::size_t end = n * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
+    for (std::size_t i = begin; i < end; ++i) {
+      const ColumnData* c = access.find(static_cast<ColumnIndex>(i));
+      if (c && c->touched()) store(m, i, column_surface(c, grid));
+    }
+  });
   return m;
 }
 
 std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::vector<ColumnIndex>& columns,
-                                        SurfaceMap& surface) {
-  std::vector<ColumnIndex> changed;
-  for (ColumnIndex c : columns) {
-    const SurfaceVoxel v = column_surface(grid.find(c), grid);
-    if (!(v == load(surface, c))) {
-      store(surface, c, v);
-      changed.push_back(c);
+                                        SurfaceMap& surface, int threads) {
+  const int parts = std::max(1, std::min(detail::resolve_thread_count(threads),
+                                         static_cast<int>(columns.size() / 4096) + 1));
+  std::vector<std::vector<ColumnIndex>> changed(static_cast<std::size_t>(parts));
+  detail::run_parts(parts, [&](int part, int n) {
+    const std::size_t begin = columns.size() * static_cast<std::size_t>(part) / static_cast<std::size_t>(n);
+    const std::size_t end = columns.size() * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(n);
+    for (std::size_t i = begin; i < end; ++i) {
+      const ColumnIndex c = columns[i];
+      const SurfaceVoxel v = column_surface(grid.find(c), grid);
+      if (!(v == load(surface, c))) {
+        store(surface, c, v);  // distinct columns: no two parts write the same entry
+        changed[static_cast<std::size_t>(part)].push_back(c);
+      }
     }
-  }
-  return changed;
+  });
+  std::vector<ColumnIndex> out = std::move(changed[0]);
+  for (std::size_t p = 1; p < changed.size(); ++p) out.insert(out.end(), changed[p].begin(), changed[p].end());
+  return out;
 }
 
 }  // namespace occ_improve

@@ -41,11 +41,12 @@ struct SurfaceVoxel {
 /// The surface voxel of one column (nullptr column = never touched).
 SurfaceVoxel column_surface(const ColumnData* column, const SphericalGrid& grid);
 
-/// Full computation over the grid.
-SurfaceMap compute_surface(const SphericalGrid& grid);
+/// Full computation over the grid (threads: 0 = hardware concurrency).
+SurfaceMap compute_surface(const SphericalGrid& grid, int threads = 0);
 
-/// Recomputes the given columns; returns those whose surface (depth, P, bin or flag) changed.
+/// Recomputes the given columns; returns those whose surface (depth, P, bin or flag) changed, in the
+/// order given. Columns are split in contiguous chunks over `threads` (0 = hardware concurrency).
 std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::vector<ColumnIndex>& columns,
-                                        SurfaceMap& surface);
+                                        SurfaceMap& surface, int threads = 0);
 
 }  // namespace occ_improve
