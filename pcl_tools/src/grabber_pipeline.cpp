@@ -208,8 +208,6 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
 
 // ---------------------------------------------------------------------------------------------------
 
-namespace {
-
 PipelineOptions with_camera(PipelineOptions options, const SensorPreset& preset) {
   if (preset.camera) {
     options.expected_width = static_cast<std::uint32_t>(preset.camera->width);
@@ -217,8 +215,6 @@ PipelineOptions with_camera(PipelineOptions options, const SensorPreset& preset)
   }
   return options;
 }
-
-}  // namespace
 
 template <typename PointT>
 GrabberPipeline<PointT>::GrabberPipeline(const SensorPreset& preset, const GridOptions& grid_options,

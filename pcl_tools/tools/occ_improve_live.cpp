@@ -2,6 +2,7 @@
 // depth-image sequence) into the spherical occupancy grid as they arrive, and keep the depth,
 // occupancy and improvement maps written to a folder.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/map_io.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
@@ -45,6 +46,9 @@ void print_usage(const char* program) {
             << "Pipeline:\n"
             << "  -o DIR                    output folder for depth.png, occupancy.png, improvement.png (default .)\n"
             << "  -save_every N             also write the maps every N processed frames (default 0: at the end)\n"
+            << "  -load MAP.occmap          continue a saved grid from the same viewpoint (it carries its own\n"
+            << "                            preset; preset flags are ignored; poses are relative to this run's first frame)\n"
+            << "  -save MAP.occmap          save the grid at the end (and with the maps every -save_every frames)\n"
             << "  -fps F                    file sources: frames per second (default 0: as fast as possible)\n"
             << "  -threads N                insertion threads (default 0: all cores)\n"
             << "  -drop                     file sources: newest frame wins like a live sensor (default: every\n"
@@ -96,11 +100,14 @@ int run(int argc, const char* const* argv_in) {
 
   ToolSpec spec;
   spec.default_preset = "kinect_v1";
-  spec.value_flags = {"-oni", "-pcd_dir", "-depth_dir", "-o", "-save_every", "-fps", "-threads", "-max_frames"};
+  spec.value_flags = {"-oni",     "-pcd_dir",    "-depth_dir", "-o",   "-save_every",
+                      "-fps",     "-threads",    "-max_frames", "-load", "-save"};
   spec.switches = {"-drop", "-no_poses", "-stop_on_signal"};
   const ToolOptions options = parse_tool_options(n, argv, spec);
 
-  std::string oni, pcd_dir, depth_dir, out_dir = ".";
+  std::string oni, pcd_dir, depth_dir, out_dir = ".", load_path, save_path;
+  pcl::console::parse_argument(n, argv, "-load", load_path);
+  pcl::console::parse_argument(n, argv, "-save", save_path);
   pcl::console::parse_argument(n, argv, "-oni", oni);
   pcl::console::parse_argument(n, argv, "-pcd_dir", pcd_dir);
   pcl::console::parse_argument(n, argv, "-depth_dir", depth_dir);
@@ -157,8 +164,22 @@ int run(int argc, const char* const* argv_in) {
   pipeline_options.insertion.threads = threads;
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
   pipeline_options.backpressure = file_source != nullptr && !drop;
-  Pipeline pipeline(preset, options.grid, pipeline_options);
+  // A saved map fixes the geometry and the model; the source's frames must fit it.
+  std::shared_ptr<Mapper> mapper;
+  if (!load_path.empty()) {
+    LoadedMap loaded = load_map(load_path);
+    mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
+    preset.name = "loaded from " + load_path;
+    preset.geometry = mapper->geometry().params();
+    preset.model = mapper->model().params();
+  } else {
+    mapper = std::make_shared<Mapper>(preset, options.grid);
+  }
+  Pipeline pipeline(mapper, with_camera(pipeline_options, preset));
   const double depth_max_m = preset.geometry.depth_max_m;
+  const auto save_grid = [&] {
+    if (!save_path.empty()) save_map(save_path, pipeline.mapper().grid(), pipeline.mapper().model().params());
+  };
 
   std::mutex report_mutex;
   FrameResult last;
@@ -175,6 +196,7 @@ int run(int argc, const char* const* argv_in) {
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
       write_maps(pipeline.mapper(), out_dir, depth_max_m);
+      save_grid();
       ++maps_written;
     }
   });
@@ -209,6 +231,8 @@ int run(int argc, const char* const* argv_in) {
   if (terminal) std::fprintf(stderr, "\n");
   write_maps(pipeline.mapper(), out_dir, depth_max_m);
   write_png(out_dir + "/improvement_legend.png", render_improvement_legend());
+  save_grid();
+  if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
 
   const PipelineStatistics s = pipeline.statistics();
   pcl::console::print_info("Stopped: %s\n", stop_reason);

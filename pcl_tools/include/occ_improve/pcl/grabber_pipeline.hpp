@@ -48,6 +48,11 @@ struct PipelineOptions {
   void validate() const;          ///< throws InvalidParameter
 };
 
+/// The options with expected_width/height set from the preset's camera (unchanged without a camera), so
+/// frames of another size are rejected instead of mapped through the wrong rays.
+PipelineOptions with_camera(PipelineOptions options, const SensorPreset& preset);
+
+
 /// What the worker did with one frame.
 struct FrameResult {
   std::uint64_t frame_index = 0;  ///< 0-based index among frames received
