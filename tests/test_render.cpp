@@ -160,8 +160,9 @@ TEST(Render, ImprovementColoursFollowTheBreakpoints) {
   using C = std::array<std::uint8_t, 3>;
   EXPECT_EQ(improvement_colour(0.0f), (C{0, 200, 0}));      // green
   EXPECT_EQ(improvement_colour(0.1f), (C{255, 255, 0}));    // yellow
-  EXPECT_EQ(improvement_colour(0.2f), (C{255, 140, 0}));    // orange
-  EXPECT_EQ(improvement_colour(0.32f), (C{255, 0, 0}));     // red (no-data rays)
+  EXPECT_EQ(improvement_colour(0.26f), (C{255, 160, 0}));   // orange
+  EXPECT_EQ(improvement_colour(0.31f), (C{255, 100, 0}));   // dark orange (rays seen once, off centre)
+  EXPECT_EQ(improvement_colour(0.324f), (C{255, 0, 0}));    // red (no-data rays)
   EXPECT_EQ(improvement_colour(-1.0f), (C{0, 0, 128}));     // dark blue
   const C slight = improvement_colour(-0.05f), strong = improvement_colour(-0.2f);
   EXPECT_GT(slight[2], slight[0]);                           // negative: blue shades
@@ -169,9 +170,9 @@ TEST(Render, ImprovementColoursFollowTheBreakpoints) {
   EXPECT_LT(strong[1], slight[1]);                           // deeper blue for larger magnitude
   const C once = improvement_colour(0.13f);                  // between yellow and orange
   EXPECT_EQ(once[0], 255);
-  EXPECT_GT(once[1], 140);
+  EXPECT_GT(once[1], 160);
   EXPECT_LT(once[1], 255);
-  ImprovementMap m{2, 1, {0.0f, 0.32f}};
+  ImprovementMap m{2, 1, {0.0f, 0.324f}};
   const Image im = render_improvement(m);
   EXPECT_EQ(im.channels, 3);
   EXPECT_EQ(im.pixels, (std::vector<std::uint8_t>{0, 200, 0, 255, 0, 0}));

@@ -37,7 +37,8 @@ struct ColourStop {
 };
 // The breakpoints of render.hpp / docs/METHOD.md.
 constexpr ColourStop kColourStops[] = {
-    {-0.3f, 0, 0, 128}, {-0.1f, 0, 64, 255}, {0.0f, 0, 200, 0}, {0.1f, 255, 255, 0}, {0.2f, 255, 140, 0}, {0.3f, 255, 0, 0},
+    {-0.3f, 0, 0, 128},    {-0.1f, 0, 64, 255},    {0.0f, 0, 200, 0},    {0.1f, 255, 255, 0},
+    {0.26f, 255, 160, 0},  {0.31f, 255, 100, 0},   {0.322f, 255, 0, 0},
 };
 
 // ---- PNG: CRC-32 (ISO 3309, as PNG specifies), Adler-32 (RFC 1950), stored deflate blocks (RFC 1951).

@@ -121,6 +121,31 @@ float decode(std::uint16_t v, DepthEncoding e) {
   return 0.0f;
 }
 
+// PCL 1.13's reader dereferences missing header fields and crashes on a file that is not a PCD at all,
+// so the header is checked here first: text lines up to DATA, with FIELDS, SIZE, TYPE, WIDTH and POINTS.
+void require_pcd_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open PCD file '" + path + "'");
+  if (in.peek() == std::ifstream::traits_type::eof()) throw FormatError("PCD file '" + path + "' is empty");
+  const std::vector<std::string> required = {"FIELDS", "SIZE", "TYPE", "WIDTH", "POINTS"};
+  std::vector<bool> seen(required.size(), false);
+  std::string line;
+  for (int lines = 0; lines < 64 && std::getline(in, line); ++lines) {
+    if (line.empty() || line[0] == '#') continue;
+    for (unsigned char ch : line)
+      if (ch < 9 || (ch > 13 && ch < 32) || ch > 126)
+        throw FormatError("'" + path + "' is not a PCD file (binary data before the DATA line)");
+    const std::string key = line.substr(0, line.find(' '));
+    if (key == "DATA") {
+      for (std::size_t i = 0; i < required.size(); ++i)
+        if (!seen[i]) throw FormatError("'" + path + "' is not a PCD file (no " + required[i] + " line)");
+      return;
+    }
+    for (std::size_t i = 0; i < required.size(); ++i) seen[i] = seen[i] || key == required[i];
+  }
+  throw FormatError("'" + path + "' is not a PCD file (no PCD header ending in a DATA line)");
+}
+
 }  // namespace
 
 DepthEncoding parse_depth_encoding(const std::string& name) {
@@ -129,6 +154,16 @@ DepthEncoding parse_depth_encoding(const std::string& name) {
   if (name == "sun") return DepthEncoding::sun_rotated_mm;
   if (name == "nyu") return DepthEncoding::kinect_disparity;
   throw InvalidParameter("depth encoding '" + name + "' is invalid: must be one of mm, tum, sun, nyu");
+}
+
+const char* depth_encoding_name(DepthEncoding encoding) {
+  switch (encoding) {
+    case DepthEncoding::millimetres: return "mm";
+    case DepthEncoding::tum_5000: return "tum";
+    case DepthEncoding::sun_rotated_mm: return "sun";
+    case DepthEncoding::kinect_disparity: return "nyu";
+  }
+  return "?";
 }
 
 DepthImage16 read_depth_image16(const std::string& path) {
@@ -141,11 +176,7 @@ DepthImage16 read_depth_image16(const std::string& path) {
 LoadedFrame load_pcd_frame(const std::string& path) {
   pcl::PCLPointCloud2 blob;
   pcl::PCDReader reader;
-  {
-    std::ifstream probe(path, std::ios::binary);
-    if (!probe) throw IoError("cannot open PCD file '" + path + "'");
-    if (probe.peek() == std::ifstream::traits_type::eof()) throw FormatError("PCD file '" + path + "' is empty");
-  }
+  require_pcd_header(path);
   if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
   bool has_x = false, has_y = false, has_z = false;
   for (const auto& f : blob.fields) {
@@ -192,6 +223,7 @@ LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k
   LoadedFrame frame;
   frame.path = path;
   frame.intrinsics = k;
+  frame.encoding = encoding;
   frame.cloud.width = static_cast<std::uint32_t>(k.width);
   frame.cloud.height = static_cast<std::uint32_t>(k.height);
   frame.cloud.is_dense = false;

@@ -22,6 +22,8 @@ enum class DepthEncoding {
 
 /// "mm", "tum", "sun", "nyu" -> encoding; throws InvalidParameter otherwise.
 DepthEncoding parse_depth_encoding(const std::string& name);
+/// The inverse: "mm", "tum", "sun", "nyu".
+const char* depth_encoding_name(DepthEncoding encoding);
 
 /// A 16-bit single-channel image (PNG 16-bit grey, or PGM P5 16-bit).
 struct DepthImage16 {
@@ -42,6 +44,7 @@ struct LoadedFrame {
   pcl::PointCloud<pcl::PointXYZ> cloud;
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
+  std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
 };
 
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.

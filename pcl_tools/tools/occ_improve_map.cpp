@@ -1,0 +1,302 @@
+// occ_improve_map: fuse one or more range frames taken from one viewpoint into the spherical occupancy
+// grid and write where one more measurement would teach the most: depth, occupancy and improvement
+// images, the per-ray results as an organized PCD, and the ranked regions worth re-acquiring.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/map_io.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/pcl/map_cloud.hpp"
+#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/ranking.hpp"
+#include "occ_improve/render.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <pcl/console/parse.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+using namespace occ_improve;
+
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+
+void print_usage(const char* program) {
+  std::cout << "Usage: " << program << " [options] INPUT... -o OUTDIR\n"
+            << "       " << program << " -sample -o OUTDIR\n\n"
+            << "Fuses the input frames (one viewpoint, in order) into a spherical occupancy grid and writes the\n"
+            << "improvement map (where one more measurement would change the map most) to OUTDIR:\n"
+            << "  depth.png occupancy.png improvement.png legend.png  the maps as images (rows = elevation)\n"
+            << "  surface.pcd   organized PointImprovement cloud (x y z surface_depth probability improvement)\n"
+            << "  regions.csv   the K best connected regions, ranked by summed improvement\n"
+            << "  rays.csv      the K best single rays\n\n"
+            << "Tool options:\n"
+            << "  -o OUTDIR                 output folder (default occ_improve_out); replaced as a whole at the end\n"
+            << "  -sample                   use the built-in generated Kinect-like frame instead of input files\n"
+            << "  -load MAP.occmap          start from a saved grid (same viewpoint); it carries its own preset,\n"
+            << "                            so preset flags are ignored; input frames are fused on top of it\n"
+            << "  -save MAP.occmap          save the resulting grid (written atomically)\n"
+            << "  -threads N                worker threads (default 0: all cores)\n"
+            << "  -min_improvement V        a region's rays have improvement >= V (default 0.05)\n\n"
+            << usage_common();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+struct Frame {
+  std::string name;
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+};
+
+// A folder that is removed unless committed: outputs are written there and renamed into place at the
+// end, so a failure never leaves files that look complete.
+class StagingFolder {
+public:
+  explicit StagingFolder(const fs::path& target) : target_(target) {
+    const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    std::error_code ec;
+    if (!fs::is_directory(parent, ec))
+      throw IoError("cannot write output folder '" + target.string() + "': '" + parent.string() +
+                    "' is not a folder");
+    staging_ = parent / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
+    if (!fs::create_directory(staging_, ec) || ec)
+      throw IoError("cannot write output folder '" + target.string() + "': cannot create '" + staging_.string() +
+                    "'" + (ec ? ": " + ec.message() : ""));
+  }
+  StagingFolder(const StagingFolder&) = delete;
+  StagingFolder& operator=(const StagingFolder&) = delete;
+  ~StagingFolder() {
+    std::error_code ec;
+    if (!committed_) fs::remove_all(staging_, ec);
+  }
+  std::string file(const std::string& name) const { return (staging_ / name).string(); }
+
+  /// Replaces the target by the staged folder (an existing target is moved aside first, then removed).
+  void commit() {
+    std::error_code ec;
+    fs::path old;
+    if (fs::exists(target_, ec)) {
+      if (!fs::is_directory(target_, ec)) throw IoError("output '" + target_.string() + "' exists and is not a folder");
+      old = staging_;
+      old += ".old";
+      fs::rename(target_, old, ec);
+      if (ec) throw IoError("cannot replace output folder '" + target_.string() + "': " + ec.message());
+    }
+    fs::rename(staging_, target_, ec);
+    if (ec) {
+      if (!old.empty()) fs::rename(old, target_, ec);
+      throw IoError("cannot move the outputs into '" + target_.string() + "'");
+    }
+    committed_ = true;
+    if (!old.empty()) fs::remove_all(old, ec);
+  }
+
+private:
+  fs::path target_, staging_;
+  bool committed_ = false;
+};
+
+void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
+  std::ofstream out(path);
+  if (!out) throw IoError("cannot write '" + path + "'");
+  out << "rank,summed_improvement,area_columns,peak_improvement,centroid_azimuth_deg,centroid_elevation_deg,"
+         "direction_x,direction_y,direction_z,mean_depth_m\n";
+  char line[512];
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const Region& r = regions[i];
+    std::snprintf(line, sizeof line, "%zu,%.6f,%zu,%.6f,%.4f,%.4f,%.6f,%.6f,%.6f,%.4f\n", i + 1,
+                  r.summed_improvement, r.area_columns, static_cast<double>(r.peak_improvement),
+                  r.centroid_azimuth_rad * kRadToDeg, r.centroid_elevation_rad * kRadToDeg, r.centroid_direction.x(),
+                  r.centroid_direction.y(), r.centroid_direction.z(), r.mean_depth_m);
+    out << line;
+  }
+  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, const std::vector<RankedRay>& rays) {
+  std::ofstream out(path);
+  if (!out) throw IoError("cannot write '" + path + "'");
+  out << "rank,improvement,azimuth_bin,elevation_bin,azimuth_deg,elevation_deg,depth_m\n";
+  char line[256];
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RankedRay& r = rays[i];
+    std::snprintf(line, sizeof line, "%zu,%.6f,%d,%d,%.4f,%.4f,%.4f\n", i + 1, static_cast<double>(r.improvement),
+                  r.azimuth_bin, r.elevation_bin, geometry.azimuth().centre(r.azimuth_bin) * kRadToDeg,
+                  geometry.elevation().centre(r.elevation_bin) * kRadToDeg, static_cast<double>(r.depth_m));
+    out << line;
+  }
+  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+int run(int argc, char** argv) {
+  if (help_requested(argc, argv)) {
+    print_usage(argv[0]);
+    return 0;
+  }
+  ToolSpec spec;
+  spec.value_flags = {"-o", "-threads", "-min_improvement", "-load", "-save"};
+  spec.switches = {"-sample"};
+  const ToolOptions options = parse_tool_options(argc, argv, spec);
+  const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
+  std::string out_dir = "occ_improve_out";
+  pcl::console::parse_argument(argc, argv, "-o", out_dir);
+  if (out_dir.empty()) throw InvalidParameter("-o needs a folder name");
+  std::string load_path, save_path;
+  pcl::console::parse_argument(argc, argv, "-load", load_path);
+  pcl::console::parse_argument(argc, argv, "-save", save_path);
+  InsertionOptions insertion;
+  if (std::string text; pcl::console::parse_argument(argc, argv, "-threads", text) >= 0) {
+    char* end = nullptr;
+    const long threads = std::strtol(text.c_str(), &end, 10);
+    if (text.empty() || *end != '\0' || threads < 0 || threads > 1024)
+      throw InvalidParameter("-threads " + text + " is invalid: must be an integer in [0, 1024]");
+    insertion.threads = static_cast<int>(threads);
+  }
+  RegionOptions region_options;
+  if (std::string text; pcl::console::parse_argument(argc, argv, "-min_improvement", text) >= 0) {
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (text.empty() || *end != '\0' || !std::isfinite(v))
+      throw InvalidParameter("-min_improvement " + text + " is invalid: must be a finite number");
+    region_options.min_improvement = static_cast<float>(v);
+  }
+  if (use_sample && !options.inputs.empty()) throw InvalidParameter("give either input files or -sample, not both");
+  if (!use_sample && options.inputs.empty() && load_path.empty())
+    throw InvalidParameter("no input: give PCD / depth image files or a dataset folder, -sample or -load (see -h)");
+
+  // Fail on an unwritable output folder before any work.
+  StagingFolder staging{fs::path(out_dir)};
+
+  // Read.
+  auto start = std::chrono::steady_clock::now();
+  std::vector<Frame> frames;
+  std::optional<PinholeIntrinsics> found_camera;
+  if (use_sample) {
+    const sample::SampleFrame scene = sample::generate_scene();
+    Frame f{"built-in sample", {}};
+    const std::vector<Eigen::Vector3f> points = scene.points();
+    f.cloud.width = static_cast<std::uint32_t>(scene.intrinsics.width);
+    f.cloud.height = static_cast<std::uint32_t>(scene.intrinsics.height);
+    f.cloud.is_dense = false;
+    f.cloud.points.reserve(points.size());
+    for (const auto& p : points) f.cloud.points.emplace_back(p.x(), p.y(), p.z());
+    found_camera = scene.intrinsics;
+    frames.push_back(std::move(f));
+  } else {
+    for (const std::string& input : options.inputs) {
+      for (const FrameSource& source : expand_input(input)) {
+        const auto camera = options.intrinsics ? options.intrinsics : source.intrinsics;
+        LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
+        if (!found_camera && loaded.intrinsics) found_camera = loaded.intrinsics;
+        std::string name = source.path;
+        if (loaded.encoding) name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
+        frames.push_back({name, std::move(loaded.cloud)});
+      }
+    }
+  }
+  const double read_seconds = seconds_since(start);
+
+  SensorPreset preset = options.preset_for_camera(found_camera);
+  Mapper mapper = [&] {
+    if (load_path.empty()) return Mapper(preset, options.grid);
+    LoadedMap loaded = load_map(load_path);
+    preset.name = "loaded from " + load_path;
+    preset.geometry = loaded.grid.geometry().params();
+    preset.model = loaded.model;
+    return Mapper(std::move(loaded.grid), SensorModel(loaded.model));
+  }();
+
+  // Insert (insertion + incremental surface + improvement, timed separately by the mapper).
+  MapperReport total;
+  for (const Frame& frame : frames) {
+    const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
+    if (r.insertion.points_received == r.insertion.skipped_invalid)
+      throw InvalidInput("'" + frame.name + "' holds no valid points (" + std::to_string(r.insertion.points_received) +
+                         " points, all NaN or at the origin)");
+    total.insertion += r.insertion;
+    total.surface_seconds += r.surface_seconds;
+    total.improvement_seconds += r.improvement_seconds;
+  }
+  if (!frames.empty() && total.insertion.points_inserted == 0)
+    throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
+
+  // Rank.
+  start = std::chrono::steady_clock::now();
+  const std::vector<Region> all_regions =
+      find_regions(mapper.geometry(), mapper.improvement(), mapper.surface(), region_options);
+  const std::vector<RankedRay> rays = top_rays(mapper.improvement(), mapper.surface(), options.top_k);
+  const StopSignal stop = stop_signal(mapper.improvement(), all_regions);
+  const std::vector<Region> regions(
+      all_regions.begin(), all_regions.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(
+                                                     all_regions.size(), static_cast<std::size_t>(options.top_k))));
+  const double ranking_seconds = seconds_since(start);
+
+  // Write into the staging folder, then move it into place.
+  start = std::chrono::steady_clock::now();
+  write_png(staging.file("depth.png"), render_depth(mapper.surface(), mapper.geometry().depth().max()));
+  write_png(staging.file("occupancy.png"), render_occupancy(mapper.surface()));
+  write_png(staging.file("improvement.png"), render_improvement(mapper.improvement()));
+  write_png(staging.file("legend.png"), render_improvement_legend());
+  save_improvement_cloud(staging.file("surface.pcd"),
+                         to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
+  write_regions_csv(staging.file("regions.csv"), regions);
+  write_rays_csv(staging.file("rays.csv"), mapper.geometry(), rays);
+  staging.commit();
+  if (!save_path.empty()) save_map(save_path, mapper.grid(), mapper.model().params());
+  const double write_seconds = seconds_since(start);
+
+  // Summary.
+  const InsertionReport& in = total.insertion;
+  const GeometryParams& g = preset.geometry;
+  std::printf("preset %s: %d x %d x %d bins, depth %.2f-%.2f m, %s mode\n", preset.name.c_str(), g.azimuth_bins,
+              g.elevation_bins, g.depth_bins, g.depth_min_m, g.depth_max_m,
+              options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
+  for (const Frame& f : frames) std::printf("read %s: %zu points\n", f.name.c_str(), f.cloud.size());
+  std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
+              "%zu used beyond the depth range (free space only)\n",
+              in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
+              in.beyond_depth_range);
+  std::printf("time [s]: read %.3f, insert %.3f, surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
+              read_seconds, in.seconds, total.surface_seconds, total.improvement_seconds, ranking_seconds,
+              write_seconds);
+  std::printf("top %zu of %zu regions (improvement >= %.3g, >= %zu rays):\n", regions.size(), all_regions.size(),
+              static_cast<double>(region_options.min_improvement), region_options.min_area_columns);
+  std::printf("  rank  summed  area   peak  azimuth  elevation  depth\n");
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const Region& r = regions[i];
+    std::printf("  %4zu %7.2f %5zu %6.3f %7.2fd %9.2fd %5.2fm\n", i + 1, r.summed_improvement, r.area_columns,
+                static_cast<double>(r.peak_improvement), r.centroid_azimuth_rad * kRadToDeg,
+                r.centroid_elevation_rad * kRadToDeg, r.mean_depth_m);
+  }
+  if (!rays.empty())
+    std::printf("best ray: azimuth bin %d, elevation bin %d, improvement %.3f, surface depth %.2f m\n",
+                rays.front().azimuth_bin, rays.front().elevation_bin, static_cast<double>(rays.front().improvement),
+                static_cast<double>(rays.front().depth_m));
+  std::printf("stop: %s (%s)\n", stop.stop ? "yes" : "no", stop.reason.c_str());
+  std::printf("wrote %s/: depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv\n",
+              out_dir.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
