@@ -8,7 +8,7 @@ CMAKE_FLAGS ?=
 CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
             -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) $(CMAKE_FLAGS)
 
-.PHONY: all deps configure build test demo bench consumer-test install clean
+.PHONY: all deps configure build test demo bench segment-eval consumer-test install clean
 
 all: build
 
@@ -31,6 +31,11 @@ demo: build
 bench: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks
 	./scripts/bench.sh $(BUILD_DIR)
+
+# Our segmentation and PCL's on the labelled mOSD clouds (docs/SEGMENTATION.md).
+DATA_DIR ?= $(CURDIR)/../shared/data
+segment-eval: build
+	$(BUILD_DIR)/pcl_tools/occ_segment_eval $(DATA_DIR)/segmentation/mosd_learn/*.pcd
 
 install: build
 	cmake --install $(BUILD_DIR) --prefix $(INSTALL_DIR) >/dev/null

@@ -1,0 +1,74 @@
+#include "occ_improve/pcl/cloud_segmentation.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/conversion.hpp"
+
+#include <chrono>
+#include <cmath>
+
+namespace occ_improve {
+
+namespace {
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+}  // namespace
+
+template <typename PointT>
+std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const SphericalGeometry& geometry,
+                                             const Segmentation& segmentation, std::size_t& outside) {
+  if (segmentation.width != geometry.width() || segmentation.height != geometry.height())
+    throw InvalidInput("labels_for_points: the segmentation does not match the grid geometry");
+  std::vector<std::uint32_t> labels(cloud.size(), 0);
+  outside = 0;
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    const PointT& p = cloud[i];
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
+    const SphericalPoint s = to_spherical(p.x, p.y, p.z);
+    if (!(s.rho > 0)) continue;
+    int a = 0, e = 0;
+    if (!geometry.locate(s.azimuth, s.elevation, a, e)) {
+      ++outside;
+      continue;
+    }
+    labels[i] = segmentation.label[geometry.column(a, e)];
+  }
+  return labels;
+}
+
+template <typename PointT>
+CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const SensorPreset& preset,
+                                const SegmentationParams& params, const GridOptions& grid_options) {
+  if (!cloud.isOrganized() || cloud.height <= 1)
+    throw InvalidInput("the cloud is not organized (height 1): segmentation from the improvement map needs a "
+                       "range image, i.e. an organized cloud");
+  params.validate();
+  using Clock = std::chrono::steady_clock;
+  CloudSegmentation result;
+  auto start = Clock::now();
+  Mapper mapper(preset, grid_options);
+  result.mapping = mapper.insert(span_of(cloud));
+  result.mapping_seconds = seconds_since(start);
+
+  start = Clock::now();
+  result.segmentation = segment_improvement(mapper.geometry(), mapper.surface(), mapper.improvement(), params);
+  result.segmentation_seconds = seconds_since(start);
+
+  start = Clock::now();
+  result.point_labels = labels_for_points(cloud, mapper.geometry(), result.segmentation, result.points_outside_grid);
+  result.labelling_seconds = seconds_since(start);
+  return result;
+}
+
+#define OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(T)                                                                  \
+  template CloudSegmentation segment_cloud(const pcl::PointCloud<T>&, const SensorPreset&,                        \
+                                           const SegmentationParams&, const GridOptions&);                        \
+  template std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<T>&, const SphericalGeometry&,     \
+                                                        const Segmentation&, std::size_t&);
+OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZ)
+OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZRGB)
+OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZRGBA)
+OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZRGBL)
+#undef OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD
+
+}  // namespace occ_improve

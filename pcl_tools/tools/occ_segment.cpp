@@ -1,0 +1,128 @@
+// occ_segment: segments an organized range frame along its negative-improvement contours (the paper's
+// closing remark) and writes a labelled cloud, label and contour images and a per-segment table.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/cloud_segmentation.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/pcl/segmentation_eval.hpp"
+#include "occ_improve/pcl/tool_options.hpp"
+
+#include <pcl/console/parse.h>
+#include <pcl/io/pcd_io.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+
+namespace {
+
+using namespace occ_improve;
+
+void print_usage(const char* program) {
+  std::cout << "Usage: " << program << " INPUT -o OUTDIR [options]\n"
+            << "Segments one organized frame (organized PCD or depth image) along negative-improvement contours.\n"
+            << "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png, contours.png,\n"
+            << "segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n\n"
+            << "Segmentation options:\n"
+            << "  -o OUTDIR                 output folder (created if needed)\n"
+            << "  -contour V                contour rays have improvement < V (default per preset: -0.02)\n"
+            << "  -min_segment N            smaller regions are attached to a neighbour (default 200 rays)\n"
+            << "  -plane                    take out the dominant plane first (table, floor), as PCL does\n"
+            << "Without -intrinsics, a PCD's intrinsics are estimated from its organized points.\n\n"
+            << usage_common();
+}
+
+int run(int argc, char** argv) {
+  ToolSpec spec;
+  spec.default_preset = "kinect_v1";
+  spec.value_flags = {"-o", "-contour", "-min_segment"};
+  spec.switches = {"-plane"};
+  const ToolOptions options = parse_tool_options(argc, argv, spec);
+  std::string out_dir;
+  pcl::console::parse_argument(argc, argv, "-o", out_dir);
+  if (out_dir.empty()) throw InvalidParameter("-o OUTDIR is required");
+  if (options.inputs.size() != 1) throw InvalidParameter("give exactly one input frame (see -h)");
+
+  const LoadedFrame frame = load_frame(options.inputs.front(), options.intrinsics, options.depth_encoding);
+  if (frame.cloud.height <= 1)
+    throw InvalidInput("'" + frame.path + "' is not organized (height 1): the segmentation needs a range image");
+  const std::size_t valid = static_cast<std::size_t>(std::count_if(
+      frame.cloud.begin(), frame.cloud.end(), [](const pcl::PointXYZ& p) { return std::isfinite(p.z) && p.z > 0; }));
+  if (valid == 0) {
+    std::printf("'%s' holds no valid point: no segments\n", frame.path.c_str());
+    return 0;
+  }
+  const auto camera = options.intrinsics ? options.intrinsics
+                                         : (frame.intrinsics ? frame.intrinsics : estimate_intrinsics(frame.cloud));
+  const SensorPreset preset = options.preset_for_camera(camera);
+  SegmentationParams params = segmentation_defaults(preset);
+  pcl::console::parse_argument(argc, argv, "-contour", params.contour_improvement_below);
+  int min_segment = static_cast<int>(params.min_segment_columns);
+  pcl::console::parse_argument(argc, argv, "-min_segment", min_segment);
+  if (min_segment < 1) throw InvalidParameter("-min_segment " + std::to_string(min_segment) + " must be >= 1");
+  params.min_segment_columns = static_cast<std::size_t>(min_segment);
+  params.remove_dominant_plane = pcl::console::find_switch(argc, argv, "-plane");
+
+  const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
+
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) throw IoError("cannot create output folder '" + out_dir + "': " + ec.message());
+  pcl::PointCloud<pcl::PointXYZRGBL> labelled;
+  labelled.width = frame.cloud.width;
+  labelled.height = frame.cloud.height;
+  labelled.is_dense = false;
+  labelled.resize(frame.cloud.size());
+  std::vector<std::size_t> points_per_label(result.segmentation.segments.size() + 1, 0);
+  for (std::size_t i = 0; i < frame.cloud.size(); ++i) {
+    auto& q = labelled[i];
+    q.x = frame.cloud[i].x;
+    q.y = frame.cloud[i].y;
+    q.z = frame.cloud[i].z;
+    q.label = result.point_labels[i];
+    ++points_per_label[std::min(q.label, static_cast<std::uint32_t>(points_per_label.size() - 1))];
+    // The label image's colour for this label, so the cloud and labels.png agree.
+    const auto rgb = segment_colour(q.label);
+    q.r = rgb[0];
+    q.g = rgb[1];
+    q.b = rgb[2];
+  }
+  const std::string cloud_path = out_dir + "/labels.pcd";
+  if (pcl::io::savePCDFileBinary(cloud_path, labelled) < 0) throw IoError("cannot write '" + cloud_path + "'");
+  write_png(out_dir + "/labels.png", render_segmentation(result.segmentation));
+  write_png(out_dir + "/contours.png", render_contours(result.segmentation));
+  std::ofstream csv(out_dir + "/segments.csv");
+  if (!csv) throw IoError("cannot write '" + out_dir + "/segments.csv'");
+  csv << "label,rays,points,centroid_x_m,centroid_y_m,centroid_z_m,mean_depth_m,plane\n";
+  for (const Segment& s : result.segmentation.segments)
+    csv << s.label << ',' << s.columns << ',' << points_per_label[s.label] << ',' << s.centroid_m.x() << ','
+        << s.centroid_m.y() << ',' << s.centroid_m.z() << ',' << s.mean_depth_m << ',' << (s.plane ? 1 : 0) << '\n';
+  if (!csv) throw IoError("cannot write '" + out_dir + "/segments.csv'");
+
+  const Segmentation& seg = result.segmentation;
+  std::printf("preset %s, contour < %.3f, min segment %zu rays, dominant plane %s\n", preset.name.c_str(),
+              params.contour_improvement_below, params.min_segment_columns,
+              params.remove_dominant_plane ? "removed" : "kept");
+  std::printf("rays: %zu valid, %zu contour, %zu attached, %zu plane; %zu segments; %zu valid points outside the grid\n",
+              seg.valid_columns, seg.contour_columns, seg.attached_columns, seg.plane_columns, seg.segments.size(),
+              result.points_outside_grid);
+  std::printf("time [ms]: map %.1f, segmentation %.1f, labelling %.1f, total %.1f\n", 1e3 * result.mapping_seconds,
+              1e3 * result.segmentation_seconds, 1e3 * result.labelling_seconds, 1e3 * result.total_seconds());
+  std::printf("wrote %s/: labels.pcd labels.png contours.png segments.csv\n", out_dir.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (help_requested(argc, argv)) {
+    print_usage(argv[0]);
+    return 0;
+  }
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+}
