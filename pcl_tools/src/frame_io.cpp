@@ -94,12 +94,20 @@ DepthImage16 read_pgm16(const std::string& path) {
   std::vector<unsigned char> raw(image.values.size() * 2);
   in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size()));
   if (static_cast<std::size_t>(in.gcount()) != raw.size()) throw FormatError("'" + path + "' is truncated");
-  // The PGM standard says big-endian, but NYU's raw dumps are little-endian: take the order whose
-  // values fit the header's maximum.
-  std::size_t big_ok = 0;
-  for (std::size_t i = 0; i < image.values.size(); ++i)
-    big_ok += (static_cast<int>(raw[2 * i]) << 8 | raw[2 * i + 1]) <= max_value ? 1 : 0;
-  const bool big_endian = big_ok == image.values.size();
+  // The PGM standard says big-endian, but NYU's raw dumps are little-endian (with maximum 65535, so
+  // every value "fits"). Take the order whose values fit the header's maximum, and of two that fit, the
+  // one with the smaller largest value: depth data leaves its high byte mostly small.
+  std::size_t big_ok = 0, little_ok = 0;
+  int big_max = 0, little_max = 0;
+  for (std::size_t i = 0; i < image.values.size(); ++i) {
+    const int big = raw[2 * i] << 8 | raw[2 * i + 1], little = raw[2 * i + 1] << 8 | raw[2 * i];
+    big_ok += big <= max_value ? 1 : 0;
+    little_ok += little <= max_value ? 1 : 0;
+    big_max = std::max(big_max, big);
+    little_max = std::max(little_max, little);
+  }
+  const std::size_t n = image.values.size();
+  const bool big_endian = big_ok == n && (little_ok != n || big_max <= little_max);
   for (std::size_t i = 0; i < image.values.size(); ++i)
     image.values[i] = big_endian ? static_cast<std::uint16_t>(raw[2 * i] << 8 | raw[2 * i + 1])
                                  : static_cast<std::uint16_t>(raw[2 * i + 1] << 8 | raw[2 * i]);
@@ -192,18 +200,37 @@ LoadedFrame load_pcd_frame(const std::string& path) {
 }
 
 DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image) {
-  std::size_t nonzero = 0, eleven_bit = 0, multiple_of_8 = 0, multiple_of_5 = 0;
+  std::size_t eleven_bit = 0, multiple_of_8 = 0, multiple_of_5 = 0;
+  std::vector<std::uint16_t> nonzero;
+  nonzero.reserve(image.values.size());
   for (const std::uint16_t v : image.values) {
     eleven_bit += v <= 2047 ? 1 : 0;
     if (v == 0) continue;
-    ++nonzero;
+    nonzero.push_back(v);
     multiple_of_8 += v % 8 == 0 ? 1 : 0;
     multiple_of_5 += v % 5 == 0 ? 1 : 0;
   }
   if (extension_of(path) == "pgm" && eleven_bit == image.values.size()) return DepthEncoding::kinect_disparity;
-  if (nonzero < 100) return DepthEncoding::millimetres;
-  if (multiple_of_8 == nonzero) return DepthEncoding::sun_rotated_mm;
-  if (multiple_of_5 == nonzero) return DepthEncoding::tum_5000;
+  if (nonzero.size() < 100) return DepthEncoding::millimetres;
+  const double n = static_cast<double>(nonzero.size());
+  // SUN RGB-D: only depths beyond 8.192 m set the low 3 bits, a few percent of a frame at most.
+  if (multiple_of_8 >= 0.9 * n) return DepthEncoding::sun_rotated_mm;
+  // TUM: the sensor's millimetres times 5 (a few interpolated pixels break the pattern).
+  if (multiple_of_5 >= 0.99 * n) return DepthEncoding::tum_5000;
+  // Other TUM frames are not multiples of 5. Their depth quantisation tells: a Kinect's adjacent
+  // distinct depths lie 2.85e-3 z^2 m apart (z in m), i.e. 2.85e-6 v^2 units in millimetres but 5 times
+  // fewer units in TUM's scale. Compare the typical step between distinct values above the median with
+  // the millimetre prediction; a sensor without that quantisation (steps of ~1 unit) stays millimetres.
+  std::sort(nonzero.begin(), nonzero.end());
+  const double median = nonzero[nonzero.size() / 2];
+  std::vector<double> steps;
+  for (std::size_t i = nonzero.size() / 2; i + 1 < nonzero.size() && steps.size() < 16; ++i)
+    if (nonzero[i + 1] != nonzero[i]) steps.push_back(nonzero[i + 1] - nonzero[i]);
+  if (steps.size() >= 8) {
+    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+    const double ratio = steps[steps.size() / 2] / (2.85e-6 * median * median);
+    if (ratio > 0.1 && ratio < 0.45) return DepthEncoding::tum_5000;
+  }
   return DepthEncoding::millimetres;
 }
 

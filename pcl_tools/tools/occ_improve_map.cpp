@@ -197,11 +197,17 @@ int run(int argc, char** argv) {
   } else {
     for (const std::string& input : options.inputs) {
       for (const FrameSource& source : expand_input(input)) {
-        const auto camera = options.intrinsics ? options.intrinsics : source.intrinsics;
+        // A depth image without intrinsics anywhere gets the Kinect v1's (OpenNI's defaults, TUM's too).
+        const bool assumed = !options.intrinsics && !source.intrinsics;
+        const auto camera = options.intrinsics ? options.intrinsics
+                                               : source.intrinsics ? source.intrinsics : kinect_v1_intrinsics();
         LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
         if (!found_camera && loaded.intrinsics) found_camera = loaded.intrinsics;
         std::string name = source.path;
-        if (loaded.encoding) name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
+        if (loaded.encoding) {
+          name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding);
+          name += assumed ? ", Kinect v1 intrinsics assumed: give -intrinsics if they differ)" : ")";
+        }
         frames.push_back({name, std::move(loaded.cloud)});
       }
     }

@@ -34,9 +34,10 @@ DepthImage16 read_depth_image16(const std::string& path);
 
 /// The encoding a 16-bit depth image most likely uses, for when the user did not say:
 ///  - .pgm whose values all fit in 11 bits: kinect_disparity (NYU's raw dumps);
-///  - nonzero values all multiples of 8: sun_rotated_mm (millimetres below 8.192 m rotate to v << 3);
-///  - nonzero values all multiples of 5: tum_5000 (TUM stores the sensor's millimetres times 5);
-///  - otherwise millimetres. An image with fewer than 100 nonzero values is taken as millimetres.
+///  - >= 90% of nonzero values multiples of 8: sun_rotated_mm (millimetres below 8.192 m rotate to v << 3);
+///  - >= 99% multiples of 5: tum_5000 (TUM stores the sensor's millimetres times 5);
+///  - steps between distinct values near the median ~1/5 of a Kinect's millimetre quantisation: tum_5000;
+///  - otherwise millimetres (also for an image with fewer than 100 nonzero values).
 DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image);
 
 /// A frame as a cloud in the sensor's optical frame; organized (width x height) where the source is.
