@@ -1,5 +1,7 @@
 #include "occ_improve/pcl/tool_options.hpp"
 
+#include <cstdio>
+
 #include "occ_improve/errors.hpp"
 
 #include <pcl/console/parse.h>
@@ -261,6 +263,19 @@ Inputs (positional, fused in order, all from the same viewpoint):
                             nyu (raw Kinect disparity); default: guessed per file from its values
   -h                        this help
 )";
+}
+
+int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv)) {
+  if (help_requested(argc, argv)) {
+    print_usage(argv[0]);
+    return 0;
+  }
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
 }
 
 }  // namespace occ_improve

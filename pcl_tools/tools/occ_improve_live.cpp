@@ -262,14 +262,5 @@ int run(int argc, const char* const* argv_in) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (help_requested(argc, argv)) {
-    print_usage(argv[0]);
-    return 0;
-  }
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
+  return occ_improve::run_tool(argc, argv, print_usage, [](int n, char** v) { return run(n, v); });
 }

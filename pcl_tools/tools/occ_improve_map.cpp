@@ -141,10 +141,6 @@ void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, 
 }
 
 int run(int argc, char** argv) {
-  if (help_requested(argc, argv)) {
-    print_usage(argv[0]);
-    return 0;
-  }
   ToolSpec spec;
   spec.value_flags = {"-o", "-threads", "-min_improvement", "-load", "-save"};
   spec.switches = {"-sample"};
@@ -298,11 +294,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }

@@ -114,15 +114,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  if (help_requested(argc, argv)) {
-    print_usage(argv[0]);
-    return 0;
-  }
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }

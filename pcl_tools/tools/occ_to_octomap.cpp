@@ -133,10 +133,6 @@ Source build_from_frames(const ToolOptions& options, bool use_sample) {
 }
 
 int run(int argc, char** argv) {
-  if (help_requested(argc, argv)) {
-    print_usage(argv[0]);
-    return 0;
-  }
   ToolSpec spec;
   spec.value_flags = {"-o", "-load", "-save", "-resolution", "-pose"};
   spec.switches = {"-sample"};
@@ -227,11 +223,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }

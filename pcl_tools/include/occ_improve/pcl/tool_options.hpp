@@ -48,6 +48,10 @@ struct ToolOptions {
 /// True when -h or --help is among the arguments.
 bool help_requested(int argc, const char* const* argv);
 
+/// The shared main() of the command-line tools: prints usage on -h/--help (exit 0), otherwise runs
+/// `run` and turns any exception into a one-line "error: ..." on stderr and exit code 1.
+int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv));
+
 /// Parses the common flags. Throws InvalidParameter naming the flag on any bad value or unknown flag,
 /// IoError/FormatError for an unreadable -intrinsics_file.
 ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec& spec = {});
