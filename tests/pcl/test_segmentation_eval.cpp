@@ -23,7 +23,7 @@ TEST(SegmentationEval, OursScoresAtLeastPclOnMosd) {
   ours.remove_dominant_plane = true;
   double ours_f = 0, pcl_f = 0;
   for (const char* name : kClouds) {
-    const std::string path = data_file(std::string("segmentation/mosd_learn/") + name + ".pcd");
+    const std::string path = test::data_file(std::string("segmentation/mosd_learn/") + name + ".pcd");
     ASSERT_FALSE(path.empty()) << name;
     const auto cloud = load_labelled_cloud(path);
     std::vector<std::uint32_t> truth(cloud.size());
