@@ -1,6 +1,13 @@
-// A downstream program: uses the installed headers and libraries of every target.
+// A downstream program: uses the installed headers and libraries of every target it was given.
 #include <occ_improve/integrate.hpp>
 #include <occ_improve/surface.hpp>
+#ifdef HAVE_OCC_OCTOMAP
+#include <occ_improve/octomap/export.hpp>
+#endif
+#ifdef HAVE_OCC_PCL
+#include <occ_improve/pcl/conversion.hpp>
+#include <occ_improve/pcl/frame_io.hpp>
+#endif
 
 #include <cstdio>
 #include <vector>
@@ -9,13 +16,34 @@ int main() {
   using namespace occ_improve;
   const SensorPreset preset = kinect_v1_paper();
   SphericalGrid grid{SphericalGeometry(preset.geometry)};
-  std::vector<Eigen::Vector3f> points = {{0.0f, 0.0f, 2.0f}};
+  std::vector<Eigen::Vector3f> points;  // a 1 m x 1 m wall 2 m ahead
+  for (float x = -0.5f; x <= 0.5f; x += 0.005f)
+    for (float y = -0.5f; y <= 0.5f; y += 0.005f) points.emplace_back(x, y, 2.0f);
   const InsertionReport r = insert_points(grid, SensorModel(preset.model), PointSpan::from(points));
   const SurfaceMap s = compute_surface(grid);
-  if (r.points_inserted != 1 || s.known_count() == 0) {
-    std::fprintf(stderr, "consumer: unexpected result\n");
+  if (r.points_inserted != points.size() || s.known_count() == 0) {
+    std::fprintf(stderr, "consumer: unexpected result from occ_improve::core\n");
     return 1;
   }
   std::printf("consumer: occ_improve::core OK (%zu known columns)\n", s.known_count());
+#ifdef HAVE_OCC_OCTOMAP
+  const auto tree = to_octree(grid, Eigen::Isometry3d::Identity(), 0.05);
+  if (!tree || tree->size() == 0) {
+    std::fprintf(stderr, "consumer: empty OcTree from occ_improve::octomap\n");
+    return 1;
+  }
+  std::printf("consumer: occ_improve::octomap OK (%zu nodes)\n", tree->size());
+#endif
+#ifdef HAVE_OCC_PCL
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  cloud.push_back(pcl::PointXYZ(0.0f, 0.0f, 2.0f));
+  SphericalGrid from_pcl{SphericalGeometry(preset.geometry)};
+  if (insert_points(from_pcl, SensorModel(preset.model), span_of(cloud)).points_inserted != 1 ||
+      parse_depth_encoding("tum") != DepthEncoding::tum_5000) {
+    std::fprintf(stderr, "consumer: unexpected result from occ_improve::pcl\n");
+    return 1;
+  }
+  std::printf("consumer: occ_improve::pcl OK\n");
+#endif
   return 0;
 }
