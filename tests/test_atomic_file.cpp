@@ -1,5 +1,6 @@
 // write_file_atomically (atomic_file.hpp): complete files appear under the real name, failed writes
 // leave the previous file and no temporary behind.
+#include "support/temp_folder.hpp"
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
 
@@ -15,24 +16,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class AtomicFile : public ::testing::Test {
+class AtomicFile : public test::TempFolderTest {
 protected:
-  void SetUp() override {
-    folder_ = fs::temp_directory_path() /
-              (std::string("occ_atomic_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
-  std::string file(const std::string& name) const { return (folder_ / name).string(); }
-  std::size_t entry_count() const {
-    return static_cast<std::size_t>(std::distance(fs::directory_iterator(folder_), fs::directory_iterator()));
-  }
   static std::string contents(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   }
-  fs::path folder_;
 };
 
 TEST_F(AtomicFile, WritesAndReplaces) {

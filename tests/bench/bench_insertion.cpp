@@ -21,18 +21,8 @@
 namespace occ_improve {
 namespace {
 
-enum class Input { sample, real };
-
-const std::vector<Eigen::Vector3f>* input_points(Input input, benchmark::State& state) {
-  if (input == Input::sample) return &bench::sample_points();
-  std::string error;
-  const auto& points = bench::real_points(error);
-  if (points.empty()) {
-    state.SkipWithError(error.c_str());
-    return nullptr;
-  }
-  return &points;
-}
+using bench::Input;
+using bench::input_points;
 
 void set_store_counters(benchmark::State& state, const SphericalGrid& grid, const InsertionReport& r) {
   state.counters["points"] = static_cast<double>(r.points_received);

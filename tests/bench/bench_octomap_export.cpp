@@ -26,18 +26,8 @@ namespace {
 constexpr double kResolution = 0.02;
 constexpr double kMaxRange = 5.0;
 
-enum class Input { sample, real };
-
-const std::vector<Eigen::Vector3f>* input_points(Input input, benchmark::State& state) {
-  if (input == Input::sample) return &bench::sample_points();
-  std::string error;
-  const auto& points = bench::real_points(error);
-  if (points.empty()) {
-    state.SkipWithError(error.c_str());
-    return nullptr;
-  }
-  return &points;
-}
+using bench::Input;
+using bench::input_points;
 
 std::unique_ptr<SphericalGrid> one_frame_grid(const std::vector<Eigen::Vector3f>& points) {
   const SensorPreset preset = kinect_v1_paper();

@@ -5,6 +5,7 @@
 #include "occ_improve/sample_scene.hpp"
 
 #include <Eigen/Core>
+#include <benchmark/benchmark.h>
 #include <cstdlib>
 #include <fstream>
 #include <string>
@@ -65,6 +66,21 @@ inline const std::vector<Eigen::Vector3f>& real_points(std::string& error) {
       load_pcd_points("kinect/pcl_tutorials/pairwise/capture0001.pcd", load_error);
   error = load_error;
   return points;
+}
+
+/// The frame a benchmark runs on: the generated sample, or the real capture (skips with the reason when
+/// the data folder is absent).
+enum class Input { sample, real };
+
+inline const std::vector<Eigen::Vector3f>* input_points(Input input, benchmark::State& state) {
+  if (input == Input::sample) return &sample_points();
+  std::string error;
+  const auto& points = real_points(error);
+  if (points.empty()) {
+    state.SkipWithError(error.c_str());
+    return nullptr;
+  }
+  return &points;
 }
 
 }  // namespace occ_improve::bench

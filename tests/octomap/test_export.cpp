@@ -1,6 +1,7 @@
 // Export of the spherical grid to OctoMap (octomap/export.hpp): files read back with OctoMap agree with
 // the grid, maps from two poses merge by the documented rule, writing leaves the caller's tree alone, and
 // bad input is refused with typed errors and no half-written file.
+#include "support/temp_folder.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/octomap/export.hpp"
@@ -59,21 +60,7 @@ Eigen::Vector3d finest_centre(const octomap::OcTree::leaf_iterator& it, double r
   return Eigen::Vector3d(it.getX() - inset, it.getY() - inset, it.getZ() - inset);
 }
 
-class OctomapExport : public ::testing::Test {
-protected:
-  void SetUp() override {
-    folder_ = fs::temp_directory_path() /
-              (std::string("occ_export_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(folder_);
-    fs::create_directories(folder_);
-  }
-  void TearDown() override { fs::remove_all(folder_); }
-  std::string file(const std::string& name) const { return (folder_ / name).string(); }
-  std::size_t entry_count() const {
-    return static_cast<std::size_t>(std::distance(fs::directory_iterator(folder_), fs::directory_iterator()));
-  }
-  fs::path folder_;
-};
+using OctomapExport = test::TempFolderTest;
 
 void expect_agreement(const test::Agreement& a) {
   EXPECT_GT(a.compared, 2000u);
