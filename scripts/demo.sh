@@ -3,6 +3,7 @@
 set -euo pipefail
 build=${1:-build}
 out=out/demo
+mkdir -p "$(dirname "$out")"
 "$build/pcl_tools/occ_improve_map" -sample -o "$out"
 echo
 echo "Outputs in $out/:"

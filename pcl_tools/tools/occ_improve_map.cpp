@@ -69,7 +69,7 @@ public:
     std::error_code ec;
     if (!fs::is_directory(parent, ec))
       throw IoError("cannot write output folder '" + target.string() + "': '" + parent.string() +
-                    "' is not a folder");
+                    (fs::exists(parent, ec) ? "' is not a folder" : "' does not exist"));
     staging_ = parent / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
     if (!fs::create_directory(staging_, ec) || ec)
       throw IoError("cannot write output folder '" + target.string() + "': cannot create '" + staging_.string() +
