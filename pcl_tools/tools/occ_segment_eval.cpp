@@ -91,13 +91,14 @@ int main(int argc, char** argv) {
 
     std::printf("ours: %s dominant-plane removal; PCL: dominant plane left out\n",
                 ours.remove_dominant_plane ? "with" : "without");
-    std::printf("%-14s %-5s %6s %8s %5s %6s %7s %7s %9s\n", "cloud", "meth", "F", "F>=.75", "over", "under",
-                "bnd P", "bnd R", "ms/frame");
     Totals ours_total, pcl_total;
     for (int index : files) {
       const std::string path = argv[index];
       const std::string name = path.substr(path.find_last_of('/') + 1);
       const auto cloud = load_labelled_cloud(path);
+      if (ours_total.clouds == 0)  // the header only once a cloud has loaded, so an error stands alone
+        std::printf("%-14s %-5s %6s %8s %5s %6s %7s %7s %9s\n", "cloud", "meth", "F", "F>=.75", "over", "under",
+                    "bnd P", "bnd R", "ms/frame");
       std::vector<std::uint32_t> truth(cloud.size());
       for (std::size_t i = 0; i < cloud.size(); ++i) truth[i] = cloud[i].label;
       const int width = static_cast<int>(cloud.width), height = static_cast<int>(cloud.height);
