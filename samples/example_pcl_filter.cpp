@@ -25,12 +25,8 @@ Cloud::Ptr sample_frame(std::uint32_t seed) {
   occ_improve::sample::SceneOptions options;
   options.seed = seed;
   const auto frame = occ_improve::sample::generate_scene(options);
-  Cloud::Ptr cloud(new Cloud);
-  for (const Eigen::Vector3f& p : frame.points()) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  cloud->width = static_cast<std::uint32_t>(frame.intrinsics.width);
-  cloud->height = static_cast<std::uint32_t>(frame.intrinsics.height);
-  cloud->is_dense = false;
-  return cloud;
+  return Cloud::Ptr(
+      new Cloud(occ_improve::organized_cloud(frame.points(), frame.intrinsics.width, frame.intrinsics.height)));
 }
 
 double mean_improvement(const pcl::PointCloud<occ_improve::PointImprovement>& fields, const pcl::Indices& indices) {

@@ -1,6 +1,7 @@
 #include "occ_improve/pcl/frame_io.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate.hpp"
 
 #include <pcl/PCLPointCloud2.h>
@@ -251,12 +252,7 @@ LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k
   frame.path = path;
   frame.intrinsics = k;
   frame.encoding = encoding;
-  frame.cloud.width = static_cast<std::uint32_t>(k.width);
-  frame.cloud.height = static_cast<std::uint32_t>(k.height);
-  frame.cloud.is_dense = false;
-  frame.cloud.points.resize(points.size());
-  for (std::size_t i = 0; i < points.size(); ++i)
-    frame.cloud.points[i] = pcl::PointXYZ(points[i].x(), points[i].y(), points[i].z());
+  frame.cloud = organized_cloud(points, k.width, k.height);
   return frame;
 }
 

@@ -181,13 +181,7 @@ int run(int argc, char** argv) {
   std::optional<PinholeIntrinsics> found_camera;
   if (use_sample) {
     const sample::SampleFrame scene = sample::generate_scene();
-    Frame f{"built-in sample", {}};
-    const std::vector<Eigen::Vector3f> points = scene.points();
-    f.cloud.width = static_cast<std::uint32_t>(scene.intrinsics.width);
-    f.cloud.height = static_cast<std::uint32_t>(scene.intrinsics.height);
-    f.cloud.is_dense = false;
-    f.cloud.points.reserve(points.size());
-    for (const auto& p : points) f.cloud.points.emplace_back(p.x(), p.y(), p.z());
+    Frame f{"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)};
     found_camera = scene.intrinsics;
     frames.push_back(std::move(f));
   } else {

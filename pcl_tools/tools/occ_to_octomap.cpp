@@ -104,11 +104,7 @@ Source build_from_frames(const ToolOptions& options, bool use_sample) {
   Source source;
   if (use_sample) {
     const sample::SampleFrame scene = sample::generate_scene();
-    pcl::PointCloud<pcl::PointXYZ> cloud;
-    for (const auto& p : scene.points()) cloud.points.emplace_back(p.x(), p.y(), p.z());
-    cloud.width = static_cast<std::uint32_t>(cloud.size());
-    cloud.height = 1;
-    clouds.push_back(std::move(cloud));
+    clouds.push_back(organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height));
     camera = scene.intrinsics;
     source.description = "built-in sample frame";
   } else {

@@ -5,6 +5,7 @@
 //                show how far the pipeline is from keeping up;
 //  - SevenScenes: the real 7-Scenes sequence (kinect_v1 preset from its intrinsics), when the data is there.
 // Run: cmake --build <build> --target bench_pipeline && <build>/tests/bench_pipeline
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/sample_scene.hpp"
@@ -27,12 +28,8 @@ const std::vector<Cloud::ConstPtr>& sample_sequence() {
   static const std::vector<Cloud::ConstPtr> clouds = [] {
     std::vector<Cloud::ConstPtr> out;
     for (const sample::SampleFrame& frame : sample::generate_sequence(kFrames)) {
-      Cloud::Ptr cloud(new Cloud);
-      for (const Eigen::Vector3f& p : frame.points()) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-      cloud->width = static_cast<std::uint32_t>(frame.intrinsics.width);
-      cloud->height = static_cast<std::uint32_t>(frame.intrinsics.height);
-      cloud->is_dense = false;
-      out.push_back(cloud);
+      out.push_back(Cloud::ConstPtr(
+          new Cloud(organized_cloud(frame.points(), frame.intrinsics.width, frame.intrinsics.height))));
     }
     return out;
   }();

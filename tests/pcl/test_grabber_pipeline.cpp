@@ -275,11 +275,7 @@ TEST(GrabberPipelineReplay, GeneratedSequenceFromPcdFiles) {
   const std::vector<sample::SampleFrame> frames = sample::generate_sequence(2);
   std::vector<Cloud> clouds;
   for (std::size_t f = 0; f < frames.size(); ++f) {
-    Cloud cloud;
-    for (const Eigen::Vector3f& p : frames[f].points()) cloud.push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-    cloud.width = static_cast<std::uint32_t>(frames[f].intrinsics.width);
-    cloud.height = static_cast<std::uint32_t>(frames[f].intrinsics.height);
-    cloud.is_dense = false;
+    Cloud cloud = organized_cloud(frames[f].points(), frames[f].intrinsics.width, frames[f].intrinsics.height);
     ASSERT_EQ(pcl::io::savePCDFileBinary((dir.path / ("frame_" + std::to_string(f) + ".pcd")).string(), cloud), 0);
     clouds.push_back(std::move(cloud));
   }

@@ -23,12 +23,7 @@ using Cloud = pcl::PointCloud<pcl::PointXYZ>;
 
 Cloud::Ptr sample_cloud() {
   const sample::SampleFrame frame = sample::generate_scene();
-  Cloud::Ptr cloud(new Cloud);
-  for (const Eigen::Vector3f& p : frame.points()) cloud->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
-  cloud->width = static_cast<std::uint32_t>(frame.intrinsics.width);
-  cloud->height = static_cast<std::uint32_t>(frame.intrinsics.height);
-  cloud->is_dense = false;
-  return cloud;
+  return Cloud::Ptr(new Cloud(organized_cloud(frame.points(), frame.intrinsics.width, frame.intrinsics.height)));
 }
 
 /// Indices of the points that have a ray (finite improvement in the companion cloud).

@@ -2,7 +2,11 @@
 // PCL clouds -> core point spans, without copying.
 #include "occ_improve/integrate.hpp"
 
+#include <Eigen/Core>
 #include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <vector>
 
 namespace occ_improve {
 
@@ -12,5 +16,9 @@ PointSpan span_of(const pcl::PointCloud<PointT>& cloud) {
   static_assert(sizeof(PointT) % sizeof(float) == 0, "point type size must be a whole number of floats");
   return {cloud.empty() ? nullptr : &cloud.points.front().x, cloud.size(), sizeof(PointT) / sizeof(float)};
 }
+
+/// An organized width x height cloud from per-pixel points in row-major order, NaN where there is no
+/// return (sample::SampleFrame::points(), depth_image_to_points()). Throws InvalidInput on a size mismatch.
+pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f>& points, int width, int height);
 
 }  // namespace occ_improve
