@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <sstream>
 
 namespace occ_improve {
@@ -111,22 +112,25 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
 
-// DepthAxis::first_centre_above without the call, the division and the libm floor on the hot path: uniform
-// bins guess the index in closed form, then the same fix-up against the stored centres makes the result
-// identical (the first bin whose centre is > rho). Inverse-depth bins use the generic lookup.
+// DepthAxis::first_centre_above without the call, the division and the libm floor on the hot path: the
+// continuous bin index is guessed in closed form (uniform: linear in rho; inverse-depth: linear in 1/rho),
+// then the same fix-up against the stored centres makes the result identical (the first bin whose centre
+// is > rho).
 class CentreLocator {
 public:
   explicit CentreLocator(const DepthAxis& depth)
-      : depth_(depth),
-        centres_(depth.centres().data()),
+      : centres_(depth.centres().data()),
         bins_(depth.bins()),
         uniform_(depth.binning() == DepthBinning::uniform),
         min_(depth.min()),
-        bins_per_metre_(depth.bins() / (depth.max() - depth.min())) {}
+        inverse_min_(1.0 / depth.min()),
+        bins_per_unit_(uniform_ ? depth.bins() / (depth.max() - depth.min())
+                                : depth.bins() / (1.0 / depth.min() - 1.0 / depth.max())) {}
 
   int first_centre_above(double rho) const {
-    if (!uniform_) return depth_.first_centre_above(rho);
-    const double ci = (rho - min_) * bins_per_metre_;  // centre(b) > rho  <=>  b + 0.5 > ci
+    // centre(b) > rho  <=>  b + 0.5 > ci
+    const double ci = uniform_ ? (rho - min_) * bins_per_unit_
+                               : (rho > 0 ? (inverse_min_ - 1.0 / rho) * bins_per_unit_ : -1.0);
     int b = !(ci >= -0.5) ? 0 : (ci >= bins_ ? bins_ : static_cast<int>(ci + 0.5));  // floor: ci + 0.5 >= 0
     while (b > 0 && centres_[b - 1] > rho) --b;
     while (b < bins_ && centres_[b] <= rho) ++b;
@@ -134,11 +138,10 @@ public:
   }
 
 private:
-  const DepthAxis& depth_;
   const double* centres_;
   int bins_;
   bool uniform_;
-  double min_, bins_per_metre_;
+  double min_, inverse_min_, bins_per_unit_;
 };
 
 struct Measurement {
@@ -146,15 +149,20 @@ struct Measurement {
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
 };
 
-// One measurement's bin terms, computed on demand over the bins its columns need ([lo, hi), by bin).
+// One measurement's bin terms, computed on demand over the bins its columns need. They are computed in
+// whole blocks of kTermsBlock bins (the vector width), so the vector loop never ends in a scalar
+// remainder: the arrays and a copy of the centres are padded past the last bin for that.
 class MeasurementTerms {
 public:
   explicit MeasurementTerms(const DepthAxis& depth)
-      : locator_(depth),
-        centres_(depth.centres().data()),
-        bins_(depth.bins()),
-        e_(static_cast<std::size_t>(depth.bins())),
-        g_(static_cast<std::size_t>(depth.bins())) {}
+      : locator_(depth), padded_bins_((depth.bins() + kTermsBlock - 1) / kTermsBlock * kTermsBlock) {
+    const auto n = static_cast<std::size_t>(padded_bins_);
+    centres_.assign(depth.centres().begin(), depth.centres().end());
+    const double last = centres_.back(), spacing = depth.bins() > 1 ? last - centres_[centres_.size() - 2] : 1.0;
+    for (std::size_t i = centres_.size(); i < n; ++i) centres_.push_back(last + spacing * static_cast<double>(i + 1 - centres_.size()));
+    e_.resize(n);
+    g_.resize(n);
+  }
 
   void reset(double rho_bar, double sigma, double folded_angular_term = 0.0) {
     rho_bar_ = rho_bar;
@@ -165,23 +173,21 @@ public:
   }
   void ensure(int first, int last) {
     if (first >= last) return;
+    first = first / kTermsBlock * kTermsBlock;
+    last = std::min((last + kTermsBlock - 1) / kTermsBlock * kTermsBlock, padded_bins_);
     if (lo_ == hi_) {
       compute(first, last);
       lo_ = first;
       hi_ = last;
       return;
     }
-    // Neighbouring columns ask for a bin or two more: extend by a few at once (short vector loops are
-    // mostly scalar prologue and epilogue).
     if (first < lo_) {
-      const int from = std::max(first - kTermsMargin, 0);
-      compute(from, lo_);
-      lo_ = from;
+      compute(first, lo_);
+      lo_ = first;
     }
     if (last > hi_) {
-      const int to = std::min(last + kTermsMargin, bins_);
-      compute(hi_, to);
-      hi_ = to;
+      compute(hi_, last);
+      hi_ = last;
     }
   }
   /// Bins below it have t <= kNonPositiveT (where logit P_s <= 0 for every B).
@@ -190,31 +196,33 @@ public:
   const float* g() const { return g_.data(); }
 
 private:
+  static constexpr int kTermsBlock = 8;
   void compute(int first, int last) {
-    opdf_bin_terms(centres_ + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
+    opdf_bin_terms(centres_.data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
                    g_.data() + first);
   }
-  static constexpr int kTermsMargin = 4;
   CentreLocator locator_;
-  const double* centres_;
-  int bins_;
+  int padded_bins_;
+  std::vector<double> centres_;
   std::vector<float> e_, g_;
   double rho_bar_ = 0, inv_sigma_ = 1;
   float folded_angular_term_ = 0;
   int run_keep_ = 0, lo_ = 0, hi_ = 0;
 };
 
-// Clamped mode: a column's window returns from odds to log-odds this many measurements after its first
-// update of the call (3 image rows of an organized 640-wide frame).
-constexpr std::size_t kOddsLag = 2048;
+// One column's voxels while a call updates it: the whole depth axis in a scratch row, in odds e^L in
+// clamped mode (one exp and one log per voxel and call instead of a log per voxel and measurement), in
+// log-odds in exact mode. Only [run_end, tail) is materialised: bins below run_end hold the leading L_min
+// run (clamped mode), bins from tail on are untouched (L = 0). A column is loaded once per call, receives
+// all its measurements of the call in input order, and is stored back once, so its window is neither
+// reallocated nor shifted per measurement.
+struct ColumnScratch {
+  float* v = nullptr;  ///< v[b] is bin b
+  int run_end = 0, tail = 0;
+  bool loaded = false;
+};
 
-// Window bins reserved beyond the current need when a window grows: later measurements of the same
-// column usually reach a bin or two further, and each growth would otherwise reallocate.
-constexpr std::size_t kWindowSlack = 2;
-
-// Adds one measurement's truncated OPDF to one column. In clamped mode a column's window holds odds from
-// its first update in an insertion call (begin_odds) until finish_odds (kOddsLag measurements later, or at
-// the end of the call); its uniform run keeps L_min throughout.
+// Adds one measurement's truncated OPDF to one column.
 class ColumnKernel {
 public:
   explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()), locator_(depth_) {
@@ -225,106 +233,88 @@ public:
     omax_ = fast_exp(lmax_);
   }
 
-  bool clamped() const { return clamped_; }
+  void load(const ColumnData& c, ColumnScratch& s) const {
+    const int window_end = c.window_end();
+    // A leading run this kernel did not make (exact mode, or a map loaded from elsewhere) is evaluated
+    // voxel by voxel like the window.
+    const bool own_run = clamped_ && c.uniform_value == lmin_;
+    std::fill(s.v, s.v + (own_run ? 0 : c.uniform_end), c.uniform_value);
+    std::copy(c.window.begin(), c.window.end(), s.v + c.uniform_end);
+    s.run_end = own_run ? c.uniform_end : 0;
+    s.tail = window_end;
+    if (clamped_) log_odds_to_odds(s.v + s.run_end, s.tail - s.run_end, omin_, omax_, lmin_, lmax_);
+    s.loaded = true;
+  }
+
+  void store(ColumnScratch& s, ColumnData& c) const {
+    if (clamped_) odds_to_log_odds(s.v + s.run_end, s.tail - s.run_end, omin_, omax_, lmin_, lmax_);
+    c.uniform_end = s.run_end;
+    c.uniform_value = s.run_end > 0 ? lmin_ : 0.0f;
+    // Exact capacity unless the old one is close: after the first call a window keeps about its size.
+    const auto size = static_cast<std::size_t>(s.tail - s.run_end);
+    if (c.window.capacity() < size || c.window.capacity() > size + kWindowSlack)
+      std::vector<float>(s.v + s.run_end, s.v + s.tail).swap(c.window);
+    else
+      c.window.assign(s.v + s.run_end, s.v + s.tail);
+    SphericalGrid::compact(c);
+    s.loaded = false;
+  }
 
   /// `terms` are the measurement's, with a = e^-B the column's factor (or B folded in and a = 1).
-  void apply(ColumnData& column, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
+  void apply(ColumnScratch& s, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
              float a) const {
     const int end = locator_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
     if (clamped_)
-      apply_clamped(column, end, rho_bar, angular_term, sigma, a, terms);
+      apply_clamped(s, end, rho_bar, angular_term, sigma, a, terms);
     else
-      apply_exact(column, end, rho_bar, angular_term, sigma, a, terms);
-  }
-
-  void begin_odds(ColumnData& c) const {
-    if (c.uniform_end > 0 && c.uniform_value != lmin_) {  // not a run this kernel made (e.g. a loaded map)
-      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
-      c.uniform_end = 0;
-    }
-    log_odds_to_odds(c.window.data(), static_cast<int>(c.window.size()), omin_, omax_, lmin_, lmax_);
-  }
-
-  void finish_odds(ColumnData& c) const {
-    odds_to_log_odds(c.window.data(), static_cast<int>(c.window.size()), omin_, omax_, lmin_, lmax_);
-    SphericalGrid::compact(c);
-  }
-
-  // A window first grows over the whole support of one measurement, then its front collapses into the
-  // run as more measurements agree: without this, a third of the store would be spare capacity. Once
-  // per column and call (a column finished early may be converted again and regrow within the call).
-  static void release_spare(ColumnData& c) {
-    if (c.window.capacity() > c.window.size() + 2 * kWindowSlack) c.window.shrink_to_fit();
+      apply_exact(s, end, rho_bar, angular_term, sigma, a, terms);
   }
 
 private:
-  // Capacity for `size` window bins. Clamped mode releases spare capacity at the end of the call
-  // (release_spare), so within a call it grows geometrically: a window grows at both ends over many
-  // measurements, and an exact fit would reallocate (and copy) at most of them.
-  void reserve_window(ColumnData& c, std::size_t size) const {
-    if (c.window.capacity() >= size) return;
-    c.window.reserve(size + (clamped_ ? size / 2 : 0) + kWindowSlack);
+  // A window may keep this many spare bins of capacity from an earlier call before it is reallocated.
+  static constexpr std::size_t kWindowSlack = 4;
+
+  static void extend_tail(ColumnScratch& s, int end, float fill) {
+    if (end <= s.tail) return;
+    std::fill(s.v + s.tail, s.v + end, fill);
+    s.tail = end;
   }
 
-  void grow_window(ColumnData& c, int end, float fill) const {
-    const auto needed = static_cast<std::size_t>(end - c.uniform_end);
-    if (needed <= c.window.size()) return;
-    reserve_window(c, needed);
-    c.window.resize(needed, fill);
-  }
-
-  // Leading window voxels at the lower clamp join the uniform run.
-  void merge_leading_min(ColumnData& c) const {
-    std::size_t n = 0;
-    while (n < c.window.size() && c.window[n] <= omin_) ++n;
-    if (n == 0) return;
-    c.window.erase(c.window.begin(), c.window.begin() + static_cast<std::ptrdiff_t>(n));
-    c.uniform_end += static_cast<std::int32_t>(n);
-    c.uniform_value = lmin_;
-  }
-
-  void apply_clamped(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
+  void apply_clamped(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
                      MeasurementTerms& terms) const {
+    float* o = s.v;
     // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
     const int run_keep = terms.run_keep();
-    if (c.uniform_end > run_keep && run_keep < end) {
-      reserve_window(c, static_cast<std::size_t>(std::max(c.window_end(), end) - run_keep));
-      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end - run_keep), omin_);
-      c.uniform_end = run_keep;
+    if (s.run_end > run_keep && run_keep < end) {
+      std::fill(o + run_keep, o + s.run_end, omin_);
+      s.run_end = run_keep;
     }
-    // 2. An empty window means untouched voxels (L = 0) from the run's end: there the bound on logit P_s
-    //    for t <= -3 - B/2 is a depth threshold below which they end at L_min without evaluation. (Window
-    //    voxels are simply evaluated: a vector update is cheaper than testing them one by one.)
-    int first = c.uniform_end;
-    if (c.window.empty()) {
+    // 2. Nothing materialised means untouched voxels (L = 0) from the run's end: there the bound on
+    //    logit P_s for t <= -3 - B/2 is a depth threshold below which they end at L_min without
+    //    evaluation. (Materialised voxels are simply evaluated: a vector update is cheaper than testing
+    //    them one by one.)
+    int first = s.run_end;
+    if (s.run_end == s.tail) {
       const double t_bound = -3.0 - 0.5 * angular_term;
       const double t_fresh = 0.5 * (lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
       const int fresh = std::min(locator_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
-      if (fresh > first) {
-        first = fresh;
-        c.uniform_end = fresh;
-        c.uniform_value = lmin_;
-      }
+      if (fresh > first) first = s.run_end = s.tail = fresh;
     }
-    // 3. The remaining bins up to the support's end, evaluated.
+    // 3. The remaining bins up to the support's end, evaluated; leading voxels at the lower clamp join
+    //    the run.
     if (first >= end) return;
-    grow_window(c, end, 1.0f);
+    extend_tail(s, end, 1.0f);
     terms.ensure(first, end);
-    float* o = c.window.data() - c.uniform_end;  // o[b] is bin b
     multiply_odds_clamped(o + first, terms.e() + first, terms.g() + first, end - first, a, omin_, omax_);
-    merge_leading_min(c);
+    while (s.run_end < s.tail && o[s.run_end] <= omin_) ++s.run_end;
   }
 
-  void apply_exact(ColumnData& c, int end, double rho_bar, double angular_term, double sigma, float a,
+  void apply_exact(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
                    MeasurementTerms& terms) const {
     const double t_linear = (kLinearU - 4.0 - angular_term) / 2.0;
     const int linear_end = std::min(locator_.first_centre_above(rho_bar + sigma * t_linear), end);
-    if (c.uniform_end > 0) {  // exact mode keeps every bin in the window
-      c.window.insert(c.window.begin(), static_cast<std::size_t>(c.uniform_end), c.uniform_value);
-      c.uniform_end = 0;
-    }
-    grow_window(c, end, 0.0f);
-    float* w = c.window.data();
+    extend_tail(s, end, 0.0f);
+    float* w = s.v;
     const double* centres = depth_.centres().data();
     const double offset = std::log(0.5) + 4.0 + angular_term, slope = 2.0 / sigma;
     for (int b = 0; b < linear_end; ++b) w[b] += static_cast<float>(offset + slope * (centres[b] - rho_bar));
@@ -450,90 +440,92 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
     measurements.insert(measurements.end(), chunks[p].begin(), chunks[p].end());
   }
 
-  // 2. Measurements -> columns. Each thread owns a band of tile rows, so no two threads share a tile or
-  //    a column, and every column sees its measurements in input order: results do not depend on threads.
-  const int tile_rows = (g.height() + SphericalGrid::kTileSize - 1) / SphericalGrid::kTileSize;
+  // 2. Measurements -> columns, tile by tile. Each thread owns a band of tile rows, so no two threads
+  //    share a tile or a column, and every column sees its measurements in input order: results do not
+  //    depend on threads. Within a tile, a measurement's depth terms are computed once for all its
+  //    columns there, and the tile's columns stay in cache while its measurements are applied.
+  constexpr int kTile = SphericalGrid::kTileSize;
+  const int tile_rows = (g.height() + kTile - 1) / kTile, tile_columns = (g.width() + kTile - 1) / kTile;
   const int parts = std::max(1, std::min(threads, tile_rows));
   const std::vector<int> band_begin = balanced_bands(measurements, tile_rows, parts);
   const ColumnKernel kernel(grid);
-  // One state per column (threads write disjoint columns): untouched this call, window in odds, or
-  // converted back to log-odds (spare capacity released at the end of the call).
-  enum : std::uint8_t { kUntouched = 0, kInOdds = 1, kFinished = 2 };
-  std::vector<std::uint8_t> odds_state(kernel.clamped() ? g.column_count() : 0, 0);
   const UniformAxis &az = g.azimuth(), &el = g.elevation();
   const double inv_sigma_azimuth = 1.0 / model.params().sigma_azimuth_rad;
   const double inv_sigma_elevation = 1.0 / model.params().sigma_elevation_rad;
+  const auto depth_bins = static_cast<std::size_t>(g.depth().bins());
   std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
   detail::run_parts(parts, [&](int part, int) {
-    const int row_begin = band_begin[static_cast<std::size_t>(part)] * SphericalGrid::kTileSize;
-    const int row_end = std::min(band_begin[static_cast<std::size_t>(part) + 1] * SphericalGrid::kTileSize, g.height());
+    const int first_tile_row = band_begin[static_cast<std::size_t>(part)];
+    const int end_tile_row = band_begin[static_cast<std::size_t>(part) + 1];
     const detail::FlushDenormals flush_denormals;
+    // 2a. The measurements of each tile of the band, in input order (a counting sort).
+    const auto band_tiles = static_cast<std::size_t>(end_tile_row - first_tile_row) * static_cast<std::size_t>(tile_columns);
+    auto for_each_tile = [&](const Measurement& m, auto&& visit) {
+      const int row_first = std::max(m.elevation_first / kTile, first_tile_row);
+      const int row_last = std::min(m.elevation_last / kTile, end_tile_row - 1);
+      for (int r = row_first; r <= row_last; ++r)
+        for (int t = m.azimuth_first / kTile; t <= m.azimuth_last / kTile; ++t)
+          visit(static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns) + static_cast<std::size_t>(t));
+    };
+    std::vector<std::uint32_t> tile_begin(band_tiles + 1, 0);
+    for (const Measurement& m : measurements) for_each_tile(m, [&](std::size_t t) { ++tile_begin[t + 1]; });
+    for (std::size_t t = 0; t < band_tiles; ++t) tile_begin[t + 1] += tile_begin[t];
+    std::vector<std::uint32_t> tile_items(tile_begin.back()), next(tile_begin.begin(), tile_begin.end() - 1);
+    for (std::size_t mi = 0; mi < measurements.size(); ++mi)
+      for_each_tile(measurements[mi], [&](std::size_t t) { tile_items[next[t]++] = static_cast<std::uint32_t>(mi); });
+
+    // 2b. Tile by tile: load a column on its first measurement, store it after the tile's last.
+    const std::unique_ptr<float[]> scratch_rows(new float[kTile * kTile * depth_bins]);
+    ColumnScratch scratch[kTile * kTile];
+    for (int i = 0; i < kTile * kTile; ++i) scratch[i].v = scratch_rows.get() + static_cast<std::size_t>(i) * depth_bins;
     MeasurementTerms terms(g.depth()), column_terms(g.depth());
-    std::vector<double> azimuth_b(static_cast<std::size_t>(g.width()));
-    std::vector<float> azimuth_f(static_cast<std::size_t>(g.width()));
-    // Clamped mode: columns whose window holds odds, by the measurement that converted them. A column is
-    // converted back once kOddsLag measurements have passed since (organized input has finished with it
-    // by then), while its window is still in cache; a later touch converts it again.
-    struct OddsColumn {
-      ColumnIndex index;
-      std::size_t since;
-    };
-    std::vector<OddsColumn> odds_columns;
-    std::size_t odds_head = 0;
-    std::vector<ColumnIndex> converted_columns;  // each once
-    auto finish_until = [&](std::size_t since_limit) {
-      while (odds_head < odds_columns.size() && odds_columns[odds_head].since < since_limit) {
-        const ColumnIndex c = odds_columns[odds_head++].index;
-        kernel.finish_odds(grid.touch(c));
-        odds_state[c] = kFinished;
-      }
-      if (odds_head > 4096 && odds_head * 2 > odds_columns.size()) {
-        odds_columns.erase(odds_columns.begin(), odds_columns.begin() + static_cast<std::ptrdiff_t>(odds_head));
-        odds_head = 0;
-      }
-    };
+    float azimuth_factor[kTile];
+    double azimuth_b[kTile];
     std::size_t column_updates = 0;
-    for (std::size_t mi = 0; mi < measurements.size(); ++mi) {
-      if (mi > kOddsLag) finish_until(mi - kOddsLag);  // the same schedule for any thread count
-      const Measurement& m = measurements[mi];
-      const int e0 = std::max(m.elevation_first, row_begin), e1 = std::min(m.elevation_last, row_end - 1);
-      if (e0 > e1) continue;
-      const double sigma = model.sigma_depth_at(m.rho);
-      terms.reset(m.rho, sigma);
-      // B = B_azimuth + B_elevation and e^-B = e^-B_azimuth e^-B_elevation, per row and per column once.
-      for (int a = m.azimuth_first; a <= m.azimuth_last; ++a) {
-        const double d = (az.centre(a) - m.azimuth) * inv_sigma_azimuth;
-        azimuth_b[static_cast<std::size_t>(a - m.azimuth_first)] = d * d;
-        azimuth_f[static_cast<std::size_t>(a - m.azimuth_first)] = fast_exp(static_cast<float>(-d * d));
-      }
-      for (int e = e0; e <= e1; ++e) {
-        const double d = (el.centre(e) - m.elevation) * inv_sigma_elevation;
-        const double elevation_b = d * d;
-        const float elevation_f = fast_exp(static_cast<float>(-elevation_b));
-        for (int a = m.azimuth_first; a <= m.azimuth_last; ++a) {
-          const double b = azimuth_b[static_cast<std::size_t>(a - m.azimuth_first)] + elevation_b;
-          const float factor = azimuth_f[static_cast<std::size_t>(a - m.azimuth_first)] * elevation_f;
-          const ColumnIndex c = g.column(a, e);
-          ColumnData& column = grid.touch(c);
-          if (kernel.clamped() && odds_state[c] != kInOdds) {
-            if (odds_state[c] == kUntouched) converted_columns.push_back(c);
-            odds_state[c] = kInOdds;
-            kernel.begin_odds(column);
-            odds_columns.push_back({c, mi});
+    for (std::size_t t = 0; t < band_tiles; ++t) {
+      if (tile_begin[t] == tile_begin[t + 1]) continue;
+      const int a_first = static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile;
+      const int e_first = (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile;
+      const int a_last = std::min(a_first + kTile, g.width()) - 1, e_last = std::min(e_first + kTile, g.height()) - 1;
+      for (std::uint32_t k = tile_begin[t]; k < tile_begin[t + 1]; ++k) {
+        const Measurement& m = measurements[tile_items[k]];
+        const int a0 = std::max(m.azimuth_first, a_first), a1 = std::min(m.azimuth_last, a_last);
+        const int e0 = std::max(m.elevation_first, e_first), e1 = std::min(m.elevation_last, e_last);
+        const double sigma = model.sigma_depth_at(m.rho);
+        terms.reset(m.rho, sigma);
+        // B = B_azimuth + B_elevation and e^-B = e^-B_azimuth e^-B_elevation, per row and per column once.
+        for (int a = a0; a <= a1; ++a) {
+          const double d = (az.centre(a) - m.azimuth) * inv_sigma_azimuth;
+          azimuth_b[a - a_first] = d * d;
+          azimuth_factor[a - a_first] = fast_exp(static_cast<float>(-d * d));
+        }
+        for (int e = e0; e <= e1; ++e) {
+          const double d = (el.centre(e) - m.elevation) * inv_sigma_elevation;
+          const double elevation_b = d * d;
+          const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
+          for (int a = a0; a <= a1; ++a) {
+            ColumnScratch& s = scratch[(e - e_first) * kTile + (a - a_first)];
+            if (!s.loaded) kernel.load(grid.touch(g.column(a, e)), s);
+            const double b = azimuth_b[a - a_first] + elevation_b;
+            if (b <= kMaxFactoredB) {
+              kernel.apply(s, m.rho, b, sigma, terms, azimuth_factor[a - a_first] * elevation_factor);
+            } else {
+              column_terms.reset(m.rho, sigma, b);
+              kernel.apply(s, m.rho, b, sigma, column_terms, 1.0f);
+            }
+            ++column_updates;
           }
-          if (b <= kMaxFactoredB) {
-            kernel.apply(column, m.rho, b, sigma, terms, factor);
-          } else {
-            column_terms.reset(m.rho, sigma, b);
-            kernel.apply(column, m.rho, b, sigma, column_terms, 1.0f);
-          }
-          grid.mark_changed(c);
-          ++column_updates;
         }
       }
+      for (int e = e_first; e <= e_last; ++e)
+        for (int a = a_first; a <= a_last; ++a) {
+          ColumnScratch& s = scratch[(e - e_first) * kTile + (a - a_first)];
+          if (!s.loaded) continue;
+          const ColumnIndex c = g.column(a, e);
+          kernel.store(s, grid.touch(c));
+          grid.mark_changed(c);
+        }
     }
-    finish_until(measurements.size());
-    for (const ColumnIndex c : converted_columns) ColumnKernel::release_spare(grid.touch(c));
     updates[static_cast<std::size_t>(part)] = column_updates;
   });
   for (std::size_t u : updates) report.column_updates += u;
