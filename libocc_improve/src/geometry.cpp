@@ -34,7 +34,8 @@ void GeometryParams::validate() const {
 
 SphericalPoint to_spherical(double x, double y, double z) {
   SphericalPoint s;
-  const double horizontal = std::hypot(x, z);
+  // Plain sqrt, not std::hypot: inputs are floats, whose squares cannot overflow a double.
+  const double horizontal = std::sqrt(x * x + z * z);
   s.rho = std::sqrt(x * x + y * y + z * z);
   s.azimuth = std::atan2(x, z);
   s.elevation = std::atan2(y, horizontal);

@@ -7,7 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <memory>
+#include <limits>
+#include <utility>
 #include <sstream>
 
 namespace occ_improve {
@@ -147,6 +148,26 @@ private:
 struct Measurement {
   double rho, azimuth, elevation;
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
+};
+
+// The measurements of one call in input order: each input chunk's valid points at the chunk's start, so
+// the threads that convert the chunks write in place and nothing is merged.
+struct MeasurementChunks {
+  std::vector<Measurement> slots;
+  std::vector<std::pair<std::size_t, std::size_t>> ranges;  ///< [begin, end) of each chunk's measurements
+
+  template <typename Visit>
+  void for_each(Visit&& visit) const {
+    for (const auto& [begin, end] : ranges)
+      for (std::size_t i = begin; i < end; ++i) visit(i, slots[i]);
+  }
+};
+
+// Buffers kept by the calling thread from one call to the next: a frame's measurements alone are
+// megabytes, and fresh pages for them every frame cost more than the conversion itself.
+struct InsertionWorkspace {
+  MeasurementChunks measurements;
+  std::vector<std::vector<float>> scratch_rows;  ///< per worker, one depth row per column of a tile
 };
 
 // One measurement's bin terms, computed on demand over the bins its columns need. They are computed in
@@ -355,13 +376,13 @@ bool to_measurement(const float* p, const SphericalGeometry& g, const SensorMode
 // Splits the tile rows into `parts` bands of about equal work (column updates), so that neither thread
 // waits for the other where the scene is uneven (floor below, far wall or no returns above). Returns
 // parts + 1 tile-row boundaries. Any split gives the same result: each column has one owner.
-std::vector<int> balanced_bands(const std::vector<Measurement>& measurements, int tile_rows, int parts) {
+std::vector<int> balanced_bands(const MeasurementChunks& measurements, int tile_rows, int parts) {
   std::vector<double> work(static_cast<std::size_t>(tile_rows), 0.0);
-  for (const Measurement& m : measurements) {
+  measurements.for_each([&](std::size_t, const Measurement& m) {
     const double columns = m.azimuth_last - m.azimuth_first + 1;
     for (int e = m.elevation_first; e <= m.elevation_last; ++e)
       work[static_cast<std::size_t>(e / SphericalGrid::kTileSize)] += columns;
-  }
+  });
   double total = 0;
   for (double w : work) total += w;
   std::vector<int> begin(static_cast<std::size_t>(parts) + 1, tile_rows);
@@ -415,30 +436,30 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
     m << "insert_points: stride_floats = " << points.stride_floats << " is invalid: must be >= 3";
     throw InvalidInput(m.str());
   }
+  if (points.count > std::numeric_limits<std::uint32_t>::max())  // tiles index measurements with 32 bits
+    throw InvalidInput("insert_points: more than 2^32 - 1 points in one call; insert them in parts");
   const SphericalGeometry& g = grid.geometry();
   const int threads = detail::resolve_thread_count(options.threads);
 
   // 1. Points -> measurements, in input order (parallel over contiguous chunks).
-  std::vector<std::vector<Measurement>> chunks(static_cast<std::size_t>(threads));
+  thread_local InsertionWorkspace workspace;
+  MeasurementChunks& measurements = workspace.measurements;
+  if (measurements.slots.size() < points.count) measurements.slots.resize(points.count);
+  measurements.ranges.assign(static_cast<std::size_t>(threads), {0, 0});
   std::vector<InsertionReport> chunk_reports(static_cast<std::size_t>(threads));
   detail::run_parts(threads, [&](int part, int parts) {
     const std::size_t begin = points.count * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
     const std::size_t end = points.count * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
-    auto& out = chunks[static_cast<std::size_t>(part)];
-    out.reserve(end - begin);
-    Measurement m;
+    std::size_t kept = begin;
     for (std::size_t i = begin; i < end; ++i)
-      if (to_measurement(points.xyz + i * points.stride_floats, g, model, m,
+      if (to_measurement(points.xyz + i * points.stride_floats, g, model, measurements.slots[kept],
                          chunk_reports[static_cast<std::size_t>(part)]))
-        out.push_back(m);
+        ++kept;
+    measurements.ranges[static_cast<std::size_t>(part)] = {begin, kept};
   });
   InsertionReport report;
   report.points_received = points.count;
-  std::vector<Measurement> measurements;
-  for (std::size_t p = 0; p < chunks.size(); ++p) {
-    report += chunk_reports[p];
-    measurements.insert(measurements.end(), chunks[p].begin(), chunks[p].end());
-  }
+  for (const InsertionReport& r : chunk_reports) report += r;
 
   // 2. Measurements -> columns, tile by tile. Each thread owns a band of tile rows, so no two threads
   //    share a tile or a column, and every column sees its measurements in input order: results do not
@@ -454,6 +475,8 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   const double inv_sigma_elevation = 1.0 / model.params().sigma_elevation_rad;
   const auto depth_bins = static_cast<std::size_t>(g.depth().bins());
   std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
+  auto& workspace_rows = workspace.scratch_rows;
+  if (workspace_rows.size() < static_cast<std::size_t>(parts)) workspace_rows.resize(static_cast<std::size_t>(parts));
   detail::run_parts(parts, [&](int part, int) {
     const int first_tile_row = band_begin[static_cast<std::size_t>(part)];
     const int end_tile_row = band_begin[static_cast<std::size_t>(part) + 1];
@@ -468,16 +491,18 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
           visit(static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns) + static_cast<std::size_t>(t));
     };
     std::vector<std::uint32_t> tile_begin(band_tiles + 1, 0);
-    for (const Measurement& m : measurements) for_each_tile(m, [&](std::size_t t) { ++tile_begin[t + 1]; });
+    measurements.for_each([&](std::size_t, const Measurement& m) { for_each_tile(m, [&](std::size_t t) { ++tile_begin[t + 1]; }); });
     for (std::size_t t = 0; t < band_tiles; ++t) tile_begin[t + 1] += tile_begin[t];
     std::vector<std::uint32_t> tile_items(tile_begin.back()), next(tile_begin.begin(), tile_begin.end() - 1);
-    for (std::size_t mi = 0; mi < measurements.size(); ++mi)
-      for_each_tile(measurements[mi], [&](std::size_t t) { tile_items[next[t]++] = static_cast<std::uint32_t>(mi); });
+    measurements.for_each([&](std::size_t mi, const Measurement& m) {
+      for_each_tile(m, [&](std::size_t t) { tile_items[next[t]++] = static_cast<std::uint32_t>(mi); });
+    });
 
     // 2b. Tile by tile: load a column on its first measurement, store it after the tile's last.
-    const std::unique_ptr<float[]> scratch_rows(new float[kTile * kTile * depth_bins]);
+    std::vector<float>& scratch_rows = workspace_rows[static_cast<std::size_t>(part)];
+    scratch_rows.resize(kTile * kTile * depth_bins);
     ColumnScratch scratch[kTile * kTile];
-    for (int i = 0; i < kTile * kTile; ++i) scratch[i].v = scratch_rows.get() + static_cast<std::size_t>(i) * depth_bins;
+    for (int i = 0; i < kTile * kTile; ++i) scratch[i].v = scratch_rows.data() + static_cast<std::size_t>(i) * depth_bins;
     MeasurementTerms terms(g.depth()), column_terms(g.depth());
     float azimuth_factor[kTile];
     double azimuth_b[kTile];
@@ -488,7 +513,7 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
       const int e_first = (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile;
       const int a_last = std::min(a_first + kTile, g.width()) - 1, e_last = std::min(e_first + kTile, g.height()) - 1;
       for (std::uint32_t k = tile_begin[t]; k < tile_begin[t + 1]; ++k) {
-        const Measurement& m = measurements[tile_items[k]];
+        const Measurement& m = measurements.slots[tile_items[k]];
         const int a0 = std::max(m.azimuth_first, a_first), a1 = std::min(m.azimuth_last, a_last);
         const int e0 = std::max(m.elevation_first, e_first), e1 = std::min(m.elevation_last, e_last);
         const double sigma = model.sigma_depth_at(m.rho);
