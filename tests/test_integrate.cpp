@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -109,6 +110,41 @@ TEST(Integrate, ThreadCountDoesNotChangeTheResult) {
     EXPECT_EQ(a->uniform_end, b->uniform_end);
     EXPECT_EQ(a->window, b->window);
   }
+}
+
+TEST(Integrate, SurfaceKeptCurrentDuringInsertionMatchesASeparatePass) {
+  const SensorPreset p = kinect_v1_paper();
+  const SphericalGeometry g(p.geometry);
+  const SensorModel model(p.model);
+  SphericalGrid fused(g), separate(g);
+  SurfaceMap fused_surface = compute_surface(fused), separate_surface = compute_surface(separate);
+  for (std::uint32_t seed : {1u, 2u}) {  // the second frame changes some surfaces and leaves others
+    sample::SceneOptions so;
+    so.seed = seed;
+    const auto points = sample::generate_scene(so).points();
+    std::vector<ColumnIndex> fused_changed;
+    insert_points(fused, model, PointSpan::from(points), fused_surface, fused_changed, {2});
+    insert_points(separate, model, PointSpan::from(points), {2});
+    const std::vector<ColumnIndex> updated = separate.take_changed_columns();
+    std::vector<ColumnIndex> separate_changed = update_surface(separate, updated, separate_surface);
+    std::sort(fused_changed.begin(), fused_changed.end());
+    std::sort(separate_changed.begin(), separate_changed.end());
+    EXPECT_GT(fused_changed.size(), 1000u);
+    EXPECT_EQ(fused_changed, separate_changed);
+    EXPECT_EQ(fused_surface.bin, separate_surface.bin);
+    EXPECT_EQ(fused_surface.probability, separate_surface.probability);
+    EXPECT_EQ(fused_surface.unknown, separate_surface.unknown);
+    EXPECT_EQ(fused.take_changed_columns(), updated) << "the grid's record of updated columns is kept as well";
+  }
+}
+
+TEST(Integrate, SurfaceOfAnotherSizeIsRefused) {
+  const SensorPreset p = kinect_v1_paper();
+  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  SurfaceMap wrong;
+  std::vector<ColumnIndex> changed;
+  const std::vector<Eigen::Vector3f> points{{0.0f, 0.0f, 1.0f}};
+  EXPECT_THROW(insert_points(grid, SensorModel(p.model), PointSpan::from(points), wrong, changed), InvalidInput);
 }
 
 TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {

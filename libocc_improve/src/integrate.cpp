@@ -427,8 +427,11 @@ InsertionReport& InsertionReport::operator+=(const InsertionReport& o) {
   return *this;
 }
 
-InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points,
-                              const InsertionOptions& options) {
+namespace {
+
+// Both public insert_points: `surface` null, or the surface to keep current and where to list its changes.
+InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
+                       SurfaceMap* surface, std::vector<ColumnIndex>* surface_changed) {
   const auto start = std::chrono::steady_clock::now();
   if (points.count > 0 && points.xyz == nullptr) throw InvalidInput("insert_points: null point buffer with count > 0");
   if (points.stride_floats < 3) {
@@ -475,6 +478,7 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
   const double inv_sigma_elevation = 1.0 / model.params().sigma_elevation_rad;
   const auto depth_bins = static_cast<std::size_t>(g.depth().bins());
   std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
+  std::vector<std::vector<ColumnIndex>> changed(surface ? static_cast<std::size_t>(parts) : 0);
   auto& workspace_rows = workspace.scratch_rows;
   if (workspace_rows.size() < static_cast<std::size_t>(parts)) workspace_rows.resize(static_cast<std::size_t>(parts));
   detail::run_parts(parts, [&](int part, int) {
@@ -547,15 +551,44 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
           ColumnScratch& s = scratch[(e - e_first) * kTile + (a - a_first)];
           if (!s.loaded) continue;
           const ColumnIndex c = g.column(a, e);
-          kernel.store(s, grid.touch(c));
+          ColumnData& column = grid.touch(c);
+          kernel.store(s, column);
           grid.mark_changed(c);
+          if (surface) {
+            const SurfaceVoxel v = column_surface(&column, grid);
+            if (!(v == surface->at(c))) {
+              surface->set(c, v);  // columns of this thread's band only
+              changed[static_cast<std::size_t>(part)].push_back(c);
+            }
+          }
         }
     }
     updates[static_cast<std::size_t>(part)] = column_updates;
   });
   for (std::size_t u : updates) report.column_updates += u;
+  if (surface_changed) {
+    surface_changed->clear();
+    for (const auto& part : changed) surface_changed->insert(surface_changed->end(), part.begin(), part.end());
+  }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return report;
+}
+
+}  // namespace
+
+InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points,
+                              const InsertionOptions& options) {
+  return insert(grid, model, points, options, nullptr, nullptr);
+}
+
+InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
+                              std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options) {
+  const SphericalGeometry& g = grid.geometry();
+  if (surface.width != g.width() || surface.height != g.height() || surface.size() != g.column_count())
+    throw InvalidInput("surface map is " + std::to_string(surface.width) + " x " + std::to_string(surface.height) +
+                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                       " columns");
+  return insert(grid, model, points, options, &surface, &surface_changed);
 }
 
 std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image) {

@@ -78,18 +78,6 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
   return s;
 }
 
-namespace {
-void store(SurfaceMap& m, std::size_t i, const SurfaceVoxel& v) {
-  m.depth_m[i] = v.depth_m;
-  m.probability[i] = v.probability;
-  m.bin[i] = v.bin;
-  m.unknown[i] = v.unknown ? 1 : 0;
-}
-SurfaceVoxel load(const SurfaceMap& m, std::size_t i) {
-  return {m.depth_m[i], m.probability[i], m.bin[i], m.unknown[i] != 0};
-}
-}  // namespace
-
 SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
   const SphericalGeometry& g = grid.geometry();
   SurfaceMap m;
@@ -106,7 +94,7 @@ SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
     const std::size_t end = n * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
     for (std::size_t i = begin; i < end; ++i) {
       const ColumnData* c = access.find(static_cast<ColumnIndex>(i));
-      if (c && c->touched()) store(m, i, column_surface(c, grid));
+      if (c && c->touched()) m.set(i, column_surface(c, grid));
     }
   });
   return m;
@@ -123,8 +111,8 @@ std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::ve
     for (std::size_t i = begin; i < end; ++i) {
       const ColumnIndex c = columns[i];
       const SurfaceVoxel v = column_surface(grid.find(c), grid);
-      if (!(v == load(surface, c))) {
-        store(surface, c, v);  // distinct columns: no two parts write the same entry
+      if (!(v == surface.at(c))) {
+        surface.set(c, v);  // distinct columns: no two parts write the same entry
         changed[static_cast<std::size_t>(part)].push_back(c);
       }
     }

@@ -198,7 +198,6 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
   ++stats_.processed;
   stats_.convert_ms += convert_ms;
   stats_.insert_ms += result.report.insertion.seconds * 1e3;
-  stats_.surface_ms += result.report.surface_seconds * 1e3;
   stats_.improvement_ms += result.report.improvement_seconds * 1e3;
   stats_.regions_ms += regions_ms;
   stats_.callback_ms += callback_ms;

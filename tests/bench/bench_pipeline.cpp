@@ -42,7 +42,6 @@ void report(benchmark::State& state, const PipelineStatistics& s) {
   state.counters["dropped"] = static_cast<double>(s.dropped);
   state.counters["fps"] = s.processed_per_second();
   state.counters["insert_ms"] = s.mean_ms(s.insert_ms);
-  state.counters["surface_ms"] = s.mean_ms(s.surface_ms);
   state.counters["improvement_ms"] = s.mean_ms(s.improvement_ms);
   state.counters["regions_ms"] = s.mean_ms(s.regions_ms);
 }

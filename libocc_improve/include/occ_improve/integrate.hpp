@@ -18,6 +18,7 @@
 #include "occ_improve/grid.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/sensor_model.hpp"
+#include "occ_improve/surface.hpp"
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -66,6 +67,14 @@ struct InsertionReport {
 /// individual points. Deterministic: every column receives its measurements in input order.
 InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points,
                               const InsertionOptions& options = {});
+
+/// insert_points that also keeps `surface` (of this grid) current: each column the call updates gets its
+/// surface recomputed right after its voxels, while they are still in cache, instead of in a separate
+/// update_surface pass. Returns the columns whose surface changed (any order), as update_surface would
+/// for the updated columns. The grid's changed-column record is kept as by insert_points.
+/// Throws InvalidInput when `surface` is not the grid's size.
+InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
+                              std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options = {});
 
 /// Back-projects an organized depth image through its intrinsics and inserts it.
 /// Throws InvalidInput when the buffer is null or its size does not match the intrinsics.

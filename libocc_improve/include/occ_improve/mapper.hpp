@@ -1,7 +1,7 @@
 #pragma once
 // The facade for "insert frames, ask where to look": a grid, its sensor model, the surface and the
-// improvement map kept up to date together. No logic of its own: insert() is insert_points +
-// take_changed_columns + update_surface + update_improvement.
+// improvement map kept up to date together. No logic of its own: insert() is insert_points (keeping the
+// surface current) + update_improvement.
 #include "occ_improve/grid.hpp"
 #include "occ_improve/improvement.hpp"
 #include "occ_improve/integrate.hpp"
@@ -14,8 +14,8 @@
 namespace occ_improve {
 
 struct MapperReport {
-  InsertionReport insertion;
-  double surface_seconds = 0, improvement_seconds = 0;
+  InsertionReport insertion;  ///< its seconds include the surface update, done column by column inside it
+  double improvement_seconds = 0;
   std::size_t surface_columns_changed = 0, rays_recomputed = 0;
 };
 
@@ -25,7 +25,7 @@ public:
   /// Takes over a grid (e.g. a loaded map) and computes its surface and improvement.
   Mapper(SphericalGrid grid, const SensorModel& model);
 
-  /// Insertion + incremental surface + incremental improvement.
+  /// Insertion with the surface kept current + incremental improvement.
   MapperReport insert(PointSpan points, const InsertionOptions& options = {});
 
   const SphericalGeometry& geometry() const { return grid_.geometry(); }

@@ -17,17 +17,6 @@ namespace occ_improve {
 
 constexpr float kSurfaceTieTolerance = 1e-5f;  ///< log-odds; Delta P < 2.5e-6
 
-struct SurfaceMap {
-  int width = 0, height = 0;
-  std::vector<float> depth_m;         ///< surface depth per column (0 where unknown)
-  std::vector<float> probability;     ///< P of the surface voxel
-  std::vector<std::int32_t> bin;      ///< surface depth bin (-1 where unknown, depth_bins when all equal)
-  std::vector<std::uint8_t> unknown;  ///< 1 where the column was never updated
-
-  std::size_t size() const { return depth_m.size(); }
-  std::size_t known_count() const;
-};
-
 struct SurfaceVoxel {
   float depth_m = 0.0f;
   float probability = 0.5f;
@@ -38,8 +27,29 @@ struct SurfaceVoxel {
   }
 };
 
+struct SurfaceMap {
+  int width = 0, height = 0;
+  std::vector<float> depth_m;         ///< surface depth per column (0 where unknown)
+  std::vector<float> probability;     ///< P of the surface voxel
+  std::vector<std::int32_t> bin;      ///< surface depth bin (-1 where unknown, depth_bins when all equal)
+  std::vector<std::uint8_t> unknown;  ///< 1 where the column was never updated
+
+  std::size_t size() const { return depth_m.size(); }
+  std::size_t known_count() const;
+  SurfaceVoxel at(std::size_t column) const;
+  void set(std::size_t column, const SurfaceVoxel& voxel);
+};
+
 /// The surface voxel of one column (nullptr column = never touched).
 SurfaceVoxel column_surface(const ColumnData* column, const SphericalGrid& grid);
+
+inline SurfaceVoxel SurfaceMap::at(std::size_t c) const { return {depth_m[c], probability[c], bin[c], unknown[c] != 0}; }
+inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
+  depth_m[c] = v.depth_m;
+  probability[c] = v.probability;
+  bin[c] = v.bin;
+  unknown[c] = v.unknown ? 1 : 0;
+}
 
 /// Full computation over the grid (threads: 0 = hardware concurrency).
 SurfaceMap compute_surface(const SphericalGrid& grid, int threads = 0);

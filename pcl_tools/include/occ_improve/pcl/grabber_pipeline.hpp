@@ -77,8 +77,8 @@ struct PipelineStatistics {
   std::uint64_t rejected = 0;   ///< bad frames (see the header comment)
   std::uint64_t grabber_errors = 0;  ///< start/stop failures and errors reported by the source
   std::uint64_t in_flight = 0;  ///< waiting or being processed (0 once stopped)
-  /// Summed milliseconds over processed frames, per stage.
-  double convert_ms = 0, insert_ms = 0, surface_ms = 0, improvement_ms = 0, regions_ms = 0, callback_ms = 0;
+  /// Summed milliseconds over processed frames, per stage (insert_ms includes the surface update).
+  double convert_ms = 0, insert_ms = 0, improvement_ms = 0, regions_ms = 0, callback_ms = 0;
   double wall_seconds = 0;      ///< from start() to stop() (or to now while running)
   double processed_per_second() const { return wall_seconds > 0 ? processed / wall_seconds : 0.0; }
   double mean_ms(double total_ms) const { return processed > 0 ? total_ms / processed : 0.0; }
