@@ -64,7 +64,12 @@ void UniformAxis::overlapping(double lo, double hi, int& first, int& last) const
 }
 
 DepthAxis::DepthAxis(DepthBinning binning, double min_m, double max_m, int bins)
-    : binning_(binning), min_(min_m), max_(max_m), bins_(bins) {
+    : binning_(binning),
+      min_(min_m),
+      max_(max_m),
+      inverse_min_(1.0 / min_m),
+      bins_per_unit_(binning == DepthBinning::uniform ? bins / (max_m - min_m) : bins / (1.0 / min_m - 1.0 / max_m)),
+      bins_(bins) {
   edges_.resize(static_cast<std::size_t>(bins) + 1);
   centres_.resize(static_cast<std::size_t>(bins));
   if (binning == DepthBinning::uniform) {
@@ -92,19 +97,6 @@ int DepthAxis::bin(double rho) const {
   if (rho >= max_) return bins_;
   const int b = static_cast<int>(continuous_index(rho));
   return std::clamp(b, 0, bins_ - 1);
-}
-
-int DepthAxis::first_centre_above(double rho) const {
-  const double ci = continuous_index(rho);
-  // centre(b) > rho  <=>  b + 0.5 > ci
-  if (ci < -0.5) return 0;
-  if (ci >= bins_) return bins_;
-  int b = static_cast<int>(std::floor(ci - 0.5)) + 1;
-  b = std::clamp(b, 0, bins_);
-  // Exact fix-up against the stored centres (the closed forms can differ by one ulp).
-  while (b > 0 && centres_[static_cast<std::size_t>(b) - 1] > rho) --b;
-  while (b < bins_ && centres_[static_cast<std::size_t>(b)] <= rho) ++b;
-  return b;
 }
 
 double DepthAxis::width_at(double rho) const {

@@ -113,38 +113,6 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
 
-// DepthAxis::first_centre_above without the call, the division and the libm floor on the hot path: the
-// continuous bin index is guessed in closed form (uniform: linear in rho; inverse-depth: linear in 1/rho),
-// then the same fix-up against the stored centres makes the result identical (the first bin whose centre
-// is > rho).
-class CentreLocator {
-public:
-  explicit CentreLocator(const DepthAxis& depth)
-      : centres_(depth.centres().data()),
-        bins_(depth.bins()),
-        uniform_(depth.binning() == DepthBinning::uniform),
-        min_(depth.min()),
-        inverse_min_(1.0 / depth.min()),
-        bins_per_unit_(uniform_ ? depth.bins() / (depth.max() - depth.min())
-                                : depth.bins() / (1.0 / depth.min() - 1.0 / depth.max())) {}
-
-  int first_centre_above(double rho) const {
-    // centre(b) > rho  <=>  b + 0.5 > ci
-    const double ci = uniform_ ? (rho - min_) * bins_per_unit_
-                               : (rho > 0 ? (inverse_min_ - 1.0 / rho) * bins_per_unit_ : -1.0);
-    int b = !(ci >= -0.5) ? 0 : (ci >= bins_ ? bins_ : static_cast<int>(ci + 0.5));  // floor: ci + 0.5 >= 0
-    while (b > 0 && centres_[b - 1] > rho) --b;
-    while (b < bins_ && centres_[b] <= rho) ++b;
-    return b;
-  }
-
-private:
-  const double* centres_;
-  int bins_;
-  bool uniform_;
-  double min_, inverse_min_, bins_per_unit_;
-};
-
 struct Measurement {
   double rho, azimuth, elevation;
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
@@ -176,7 +144,7 @@ struct InsertionWorkspace {
 class MeasurementTerms {
 public:
   explicit MeasurementTerms(const DepthAxis& depth)
-      : locator_(depth), padded_bins_((depth.bins() + kTermsBlock - 1) / kTermsBlock * kTermsBlock) {
+      : depth_(depth), padded_bins_((depth.bins() + kTermsBlock - 1) / kTermsBlock * kTermsBlock) {
     const auto n = static_cast<std::size_t>(padded_bins_);
     centres_.assign(depth.centres().begin(), depth.centres().end());
     const double last = centres_.back(), spacing = depth.bins() > 1 ? last - centres_[centres_.size() - 2] : 1.0;
@@ -189,7 +157,7 @@ public:
     rho_bar_ = rho_bar;
     inv_sigma_ = 1.0 / sigma;
     folded_angular_term_ = static_cast<float>(folded_angular_term);
-    run_keep_ = locator_.first_centre_above(rho_bar + sigma * kNonPositiveT);
+    run_keep_ = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
     lo_ = hi_ = 0;
   }
   void ensure(int first, int last) {
@@ -222,7 +190,7 @@ private:
     opdf_bin_terms(centres_.data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
                    g_.data() + first);
   }
-  CentreLocator locator_;
+  const DepthAxis& depth_;
   int padded_bins_;
   std::vector<double> centres_;
   std::vector<float> e_, g_;
@@ -246,7 +214,7 @@ struct ColumnScratch {
 // Adds one measurement's truncated OPDF to one column.
 class ColumnKernel {
 public:
-  explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()), locator_(depth_) {
+  explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()) {
     clamped_ = grid.clamped();
     lmin_ = grid.log_odds_min();
     lmax_ = grid.log_odds_max();
@@ -284,7 +252,7 @@ public:
   /// `terms` are the measurement's, with a = e^-B the column's factor (or B folded in and a = 1).
   void apply(ColumnScratch& s, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
              float a) const {
-    const int end = locator_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
+    const int end = depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
     if (clamped_)
       apply_clamped(s, end, rho_bar, angular_term, sigma, a, terms);
     else
@@ -318,7 +286,7 @@ private:
     if (s.run_end == s.tail) {
       const double t_bound = -3.0 - 0.5 * angular_term;
       const double t_fresh = 0.5 * (lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
-      const int fresh = std::min(locator_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
+      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
       if (fresh > first) first = s.run_end = s.tail = fresh;
     }
     // 3. The remaining bins up to the support's end, evaluated; leading voxels at the lower clamp join
@@ -333,7 +301,7 @@ private:
   void apply_exact(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
                    MeasurementTerms& terms) const {
     const double t_linear = (kLinearU - 4.0 - angular_term) / 2.0;
-    const int linear_end = std::min(locator_.first_centre_above(rho_bar + sigma * t_linear), end);
+    const int linear_end = std::min(depth_.first_centre_above(rho_bar + sigma * t_linear), end);
     extend_tail(s, end, 0.0f);
     float* w = s.v;
     const double* centres = depth_.centres().data();
@@ -344,7 +312,6 @@ private:
   }
 
   const DepthAxis& depth_;
-  CentreLocator locator_;
   bool clamped_;
   float lmin_, lmax_, omin_, omax_;
 };

@@ -79,8 +79,19 @@ public:
   const std::vector<double>& centres() const { return centres_; }
   /// Bin containing rho: -1 below min, bins() at or beyond max.
   int bin(double rho) const;
-  /// Index of the first bin whose centre is strictly greater than rho, in [0, bins()].
-  int first_centre_above(double rho) const;
+  /// Index of the first bin whose centre is strictly greater than rho, in [0, bins()]. Inline: the
+  /// insertion calls it several times per (measurement, column) pair. The bin is guessed in closed form
+  /// (linear in rho, or in 1/rho), then fixed up against the stored centres, so the result is exact.
+  int first_centre_above(double rho) const {
+    const double ci = binning_ == DepthBinning::uniform ? (rho - min_) * bins_per_unit_
+                                                        : (rho > 0 ? (inverse_min_ - 1.0 / rho) * bins_per_unit_ : -1.0);
+    // centre(b) > rho  <=>  b + 0.5 > ci; the cast floors because ci + 0.5 >= 0 there.
+    int b = !(ci >= -0.5) ? 0 : (ci >= bins_ ? bins_ : static_cast<int>(ci + 0.5));
+    const double* centres = centres_.data();
+    while (b > 0 && centres[b - 1] > rho) --b;
+    while (b < bins_ && centres[b] <= rho) ++b;
+    return b;
+  }
   /// Width of the bin containing rho (the nearest or farthest bin outside the range).
   double width_at(double rho) const;
 
@@ -88,6 +99,7 @@ private:
   double continuous_index(double rho) const;  // bin coordinate: bin b spans [b, b+1)
   DepthBinning binning_ = DepthBinning::uniform;
   double min_ = 0, max_ = 1;
+  double inverse_min_ = 0, bins_per_unit_ = 1;  ///< bins per metre (uniform) or per 1/m (inverse depth)
   int bins_ = 1;
   std::vector<double> centres_, edges_;
 };
