@@ -115,6 +115,7 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
 
 struct Measurement {
   double rho, azimuth, elevation;
+  double sigma;  ///< depth sigma at rho: computed once, used in every tile the support spans
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
 };
 
@@ -139,19 +140,12 @@ struct InsertionWorkspace {
 };
 
 // One measurement's bin terms, computed on demand over the bins its columns need. They are computed in
-// whole blocks of kTermsBlock bins (the vector width), so the vector loop never ends in a scalar
-// remainder: the arrays and a copy of the centres are padded past the last bin for that.
+// whole blocks of kTermsBlock bins (the vector width), so the vector loop ends in a scalar remainder only
+// at the far end of the depth axis.
 class MeasurementTerms {
 public:
   explicit MeasurementTerms(const DepthAxis& depth)
-      : depth_(depth), padded_bins_((depth.bins() + kTermsBlock - 1) / kTermsBlock * kTermsBlock) {
-    const auto n = static_cast<std::size_t>(padded_bins_);
-    centres_.assign(depth.centres().begin(), depth.centres().end());
-    const double last = centres_.back(), spacing = depth.bins() > 1 ? last - centres_[centres_.size() - 2] : 1.0;
-    for (std::size_t i = centres_.size(); i < n; ++i) centres_.push_back(last + spacing * static_cast<double>(i + 1 - centres_.size()));
-    e_.resize(n);
-    g_.resize(n);
-  }
+      : depth_(depth), e_(static_cast<std::size_t>(depth.bins())), g_(static_cast<std::size_t>(depth.bins())) {}
 
   void reset(double rho_bar, double sigma, double folded_angular_term = 0.0) {
     rho_bar_ = rho_bar;
@@ -163,7 +157,7 @@ public:
   void ensure(int first, int last) {
     if (first >= last) return;
     first = first / kTermsBlock * kTermsBlock;
-    last = std::min((last + kTermsBlock - 1) / kTermsBlock * kTermsBlock, padded_bins_);
+    last = std::min((last + kTermsBlock - 1) / kTermsBlock * kTermsBlock, depth_.bins());
     if (lo_ == hi_) {
       compute(first, last);
       lo_ = first;
@@ -187,12 +181,10 @@ public:
 private:
   static constexpr int kTermsBlock = 8;
   void compute(int first, int last) {
-    opdf_bin_terms(centres_.data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
+    opdf_bin_terms(depth_.centres().data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
                    g_.data() + first);
   }
   const DepthAxis& depth_;
-  int padded_bins_;
-  std::vector<double> centres_;
   std::vector<float> e_, g_;
   double rho_bar_ = 0, inv_sigma_ = 1;
   float folded_angular_term_ = 0;
@@ -330,6 +322,7 @@ bool to_measurement(const float* p, const SphericalGeometry& g, const SensorMode
     return false;
   }
   m.rho = s.rho;
+  m.sigma = model.sigma_depth_at(s.rho);
   m.azimuth = s.azimuth;
   m.elevation = s.elevation;
   const double ka = model.support_azimuth_rad(), ke = model.support_elevation_rad();
@@ -487,7 +480,7 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
         const Measurement& m = measurements.slots[tile_items[k]];
         const int a0 = std::max(m.azimuth_first, a_first), a1 = std::min(m.azimuth_last, a_last);
         const int e0 = std::max(m.elevation_first, e_first), e1 = std::min(m.elevation_last, e_last);
-        const double sigma = model.sigma_depth_at(m.rho);
+        const double sigma = m.sigma;
         terms.reset(m.rho, sigma);
         // B = B_azimuth + B_elevation and e^-B = e^-B_azimuth e^-B_elevation, per row and per column once.
         for (int a = a0; a <= a1; ++a) {
