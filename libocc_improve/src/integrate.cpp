@@ -514,13 +514,9 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
           ColumnData& column = grid.touch(c);
           kernel.store(s, column);
           grid.mark_changed(c);
-          if (surface) {
-            const SurfaceVoxel v = column_surface(&column, grid);
-            if (!(v == surface->at(c))) {
-              surface->set(c, v);  // columns of this thread's band only
-              changed[static_cast<std::size_t>(part)].push_back(c);
-            }
-          }
+          // Columns of this thread's band only.
+          if (surface && refresh_column_surface(grid, c, &column, *surface))
+            changed[static_cast<std::size_t>(part)].push_back(c);
         }
     }
     updates[static_cast<std::size_t>(part)] = column_updates;

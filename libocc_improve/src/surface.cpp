@@ -78,6 +78,13 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
   return s;
 }
 
+bool refresh_column_surface(const SphericalGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface) {
+  const SurfaceVoxel v = column_surface(data, grid);
+  if (v == surface.at(column)) return false;
+  surface.set(column, v);
+  return true;
+}
+
 SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
   const SphericalGeometry& g = grid.geometry();
   SurfaceMap m;
@@ -110,11 +117,8 @@ std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::ve
     const std::size_t end = columns.size() * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(n);
     for (std::size_t i = begin; i < end; ++i) {
       const ColumnIndex c = columns[i];
-      const SurfaceVoxel v = column_surface(grid.find(c), grid);
-      if (!(v == surface.at(c))) {
-        surface.set(c, v);  // distinct columns: no two parts write the same entry
-        changed[static_cast<std::size_t>(part)].push_back(c);
-      }
+      // Distinct columns: no two parts write the same entry.
+      if (refresh_column_surface(grid, c, grid.find(c), surface)) changed[static_cast<std::size_t>(part)].push_back(c);
     }
   });
   std::vector<ColumnIndex> out = std::move(changed[0]);

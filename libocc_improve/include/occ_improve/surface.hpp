@@ -51,6 +51,11 @@ inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
   unknown[c] = v.unknown ? 1 : 0;
 }
 
+/// Recomputes the surface of `column` (whose data is `data`, nullptr if never touched) into `surface`;
+/// true when it changed (depth, P, bin or flag). The one step of update_surface and of the insertion
+/// that keeps a surface current.
+bool refresh_column_surface(const SphericalGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface);
+
 /// Full computation over the grid (threads: 0 = hardware concurrency).
 SurfaceMap compute_surface(const SphericalGrid& grid, int threads = 0);
 
