@@ -114,11 +114,9 @@ TEST(Geometry, ColumnIndexingIsRowMajorLikeAnImage) {
   EXPECT_EQ(g.azimuth_bin_of(c), 17);
   EXPECT_EQ(g.elevation_bin_of(c), 5);
   const Eigen::Vector3d dir = g.direction(17, 5);
-  const SphericalPoint s = to_spherical(dir.x(), dir.y(), dir.z());
-  int a, e;
-  ASSERT_TRUE(g.locate(s.azimuth, s.elevation, a, e));
-  EXPECT_EQ(a, 17);
-  EXPECT_EQ(e, 5);
+  ColumnIndex located;
+  ASSERT_TRUE(g.column_of(dir.x(), dir.y(), dir.z(), located));
+  EXPECT_EQ(located, c);
 }
 
 }  // namespace

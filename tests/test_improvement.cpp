@@ -104,9 +104,11 @@ TEST(Improvement, PipelineMatchesReferenceRayByRay) {
   // Paper preset and the range-dependent preset (sigma evaluated at the simulated depth).
   SensorPreset paper = kinect_v1_paper();
   paper.geometry.depth_bins = 256;
-  SensorPreset kinect = kinect_v1();
-  kinect.geometry.depth_bins = 512;
-  for (const auto& [preset, a0, e0] : {std::tuple{paper, 300, 220}, std::tuple{kinect, 280, 240}}) {
+  // Range-dependent noise over spherical bins and over the pixel-native binning.
+  SensorPreset spherical = kinect_v1_spherical(), pixel_native = kinect_v1();
+  spherical.geometry.depth_bins = pixel_native.geometry.depth_bins = 512;
+  for (const auto& [preset, a0, e0] :
+       {std::tuple{paper, 300, 220}, std::tuple{spherical, 280, 240}, std::tuple{pixel_native, 280, 240}}) {
     const ReferenceScene s = make_reference_scene(preset, a0, e0, 32, 32);
     const std::vector<double> expected = reference::improvement_map(s.ref);
     const SurfaceMap surface = compute_surface(s.fast);

@@ -79,20 +79,22 @@ TEST(Integrate, ClampedModeMatchesReferenceVoxelByVoxel) {
 }
 
 TEST(Integrate, RangeDependentSigmaMatchesReference) {
-  SensorPreset p = kinect_v1();
-  p.geometry.depth_bins = 1024;
-  const SphericalGeometry g = reference::crop(SphericalGeometry(p.geometry), 280, 240, 32, 32);
-  const SensorModel model(p.model);
-  GridOptions o;
-  o.mode = UpdateMode::exact;
-  SphericalGrid fast(g, o);
-  reference::DenseGrid ref(g, model, o);
-  const auto points = sample::generate_scene().points();
-  insert_points(fast, model, PointSpan::from(points));
-  ref.insert(points);
-  const Agreement a = compare(fast, ref);
-  EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << a.same_bin << " / " << a.columns;
-  EXPECT_LE(a.max_dp, 1e-4);
+  // Spherical bins and the pixel-native binning, with the sample camera's own intrinsics.
+  for (SensorPreset p : {kinect_v1_spherical(sample::generate_scene().intrinsics), kinect_v1(sample::generate_scene().intrinsics)}) {
+    p.geometry.depth_bins = 1024;
+    const SphericalGeometry g = reference::crop(SphericalGeometry(p.geometry), 280, 240, 32, 32);
+    const SensorModel model(p.model);
+    GridOptions o;
+    o.mode = UpdateMode::exact;
+    SphericalGrid fast(g, o);
+    reference::DenseGrid ref(g, model, o);
+    const auto points = sample::generate_scene().points();
+    insert_points(fast, model, PointSpan::from(points));
+    ref.insert(points);
+    const Agreement a = compare(fast, ref);
+    EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << p.name << ": " << a.same_bin << " / " << a.columns;
+    EXPECT_LE(a.max_dp, 1e-4) << p.name;
+  }
 }
 
 TEST(Integrate, ThreadCountDoesNotChangeTheResult) {
@@ -162,10 +164,9 @@ TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {
   EXPECT_EQ(r.points_inserted, 2u);
   EXPECT_EQ(r.beyond_depth_range, 1u);
   // The point beyond the range still carves its whole ray free.
-  int a, e;
-  const auto s = to_spherical(0.1, 0.1, 7.0);
-  ASSERT_TRUE(grid.geometry().locate(s.azimuth, s.elevation, a, e));
-  const SurfaceVoxel v = column_surface(grid.find(grid.geometry().column(a, e)), grid);
+  ColumnIndex c = 0;
+  ASSERT_TRUE(grid.geometry().column_of(0.1, 0.1, 7.0, c));
+  const SurfaceVoxel v = column_surface(grid.find(c), grid);
   EXPECT_EQ(v.bin, grid.geometry().depth().bins());
   EXPECT_NEAR(v.probability, 0.001, 1e-6);
 }

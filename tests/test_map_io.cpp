@@ -127,6 +127,28 @@ TEST_F(MapIo, MappingContinuedFromASavedMapEqualsUninterruptedMapping) {
   test::expect_same_improvement(uninterrupted.improvement(), resumed.improvement());
 }
 
+TEST_F(MapIo, PixelNativePresetRoundTripsWithItsCamera) {
+  const PinholeIntrinsics k{575.8, 576.0, 321.0, 238.5, 640, 480};
+  const SensorPreset preset = kinect_v1(k);
+  const SphericalGrid grid = sample_grid(preset, GridOptions{});
+  save_map(file("pinhole.occmap"), grid, preset.model);
+  const LoadedMap loaded = load_map(file("pinhole.occmap"));
+  EXPECT_EQ(loaded.grid.geometry().binning(), AngularBinning::pinhole);
+  EXPECT_EQ(loaded.grid.geometry().params().camera, k);
+  EXPECT_TRUE(loaded.grid.geometry() == grid.geometry());
+  EXPECT_EQ(loaded.model.sigma_u_px, preset.model.sigma_u_px);
+  expect_same_maps(grid, loaded.grid, preset.model);
+}
+
+TEST_F(MapIo, SphericalPresetKeepsItsObservableColumns) {
+  const SensorPreset preset = kinect_v1_spherical();
+  const SphericalGrid grid = sample_grid(preset, GridOptions{});
+  save_map(file("spherical.occmap"), grid, preset.model);
+  const LoadedMap loaded = load_map(file("spherical.occmap"));
+  EXPECT_EQ(loaded.grid.geometry().observable_count(), grid.geometry().observable_count());
+  EXPECT_LT(loaded.grid.geometry().observable_count(), loaded.grid.geometry().column_count());
+}
+
 TEST_F(MapIo, ExactModeInverseDepthPresetRoundTrips) {
   SensorPreset preset = kinect_v1();
   preset.geometry.depth_bins = 256;
@@ -204,7 +226,30 @@ protected:
 
 // Offsets from docs/MAP_FORMAT.md.
 constexpr std::size_t kMarkerOffset = 8, kVersionOffset = 12, kAzimuthBinsOffset = 16;
-constexpr std::size_t kFirstColumnOffset = 16 + 64 + 48 + 28 + 8;
+// geometry 64 + binning and camera 48, model 64, options 28, column count 8.
+constexpr std::size_t kFirstColumnOffset = 16 + 64 + 48 + 64 + 28 + 8;
+
+// The same map in format version 1: without the binning and camera (offsets 80-127) and the pixel
+// sigmas (176-191), as docs/MAP_FORMAT.md describes it.
+std::vector<char> as_version_1(const std::vector<char>& v2) {
+  std::vector<char> v1(v2.begin(), v2.begin() + 80);
+  v1.insert(v1.end(), v2.begin() + 128, v2.begin() + 176);
+  v1.insert(v1.end(), v2.begin() + 192, v2.end());
+  const std::uint32_t version = 1;
+  std::memcpy(v1.data() + kVersionOffset, &version, 4);
+  reseal(v1);
+  return v1;
+}
+
+TEST_F(BadMapFile, VersionOneMapsStillLoad) {
+  write_bytes(file("v1.occmap"), as_version_1(good_));
+  const LoadedMap old = load_map(file("v1.occmap"));
+  const LoadedMap current = load_map(file("good.occmap"));
+  EXPECT_EQ(old.grid.geometry().binning(), AngularBinning::spherical);
+  EXPECT_FALSE(old.grid.geometry().params().camera.has_value());
+  EXPECT_EQ(old.grid.touched_column_count(), touched_);
+  expect_same_maps(old.grid, current.grid, current.model);
+}
 
 TEST_F(BadMapFile, IntactFileLoads) { EXPECT_NO_THROW(load_map(file("good.occmap"))); }
 

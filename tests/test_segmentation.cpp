@@ -18,10 +18,9 @@ struct Scene {
     mapper.insert(PointSpan::from(points));
   }
   std::uint32_t label_at(const Segmentation& s, double x, double y, double z) const {
-    const SphericalPoint sp = to_spherical(x, y, z);
-    int a, e;
-    EXPECT_TRUE(mapper.geometry().locate(sp.azimuth, sp.elevation, a, e));
-    return s.label[mapper.geometry().column(a, e)];
+    ColumnIndex c = 0;
+    EXPECT_TRUE(mapper.geometry().column_of(x, y, z, c));
+    return s.label[c];
   }
 };
 

@@ -9,7 +9,27 @@ namespace occ_improve {
 
 using detail::require_parameter;
 
+void PinholeIntrinsics::validate() const {
+  require_parameter(std::isfinite(fx) && fx > 0, "fx", fx, "finite and > 0");
+  require_parameter(std::isfinite(fy) && fy > 0, "fy", fy, "finite and > 0");
+  require_parameter(std::isfinite(cx), "cx", cx, "finite");
+  require_parameter(std::isfinite(cy), "cy", cy, "finite");
+  require_parameter(width > 0 && width <= 65536, "width", width, "in [1, 65536]");
+  require_parameter(height > 0 && height <= 65536, "height", height, "in [1, 65536]");
+}
+
+const char* to_string(AngularBinning binning) {
+  return binning == AngularBinning::pinhole ? "pinhole" : "spherical";
+}
+
 void GeometryParams::validate() const {
+  if (camera) camera->validate();
+  if (angular_binning == AngularBinning::pinhole) {
+    require_parameter(camera.has_value(), "camera", 0, "set (the pinhole binning's columns are its pixels)");
+    require_parameter(azimuth_bins == camera->width, "azimuth_bins", azimuth_bins, "equal to the camera's width");
+    require_parameter(elevation_bins == camera->height, "elevation_bins", elevation_bins,
+                      "equal to the camera's height");
+  }
   require_parameter(azimuth_bins > 0, "azimuth_bins", azimuth_bins, "> 0");
   require_parameter(elevation_bins > 0, "elevation_bins", elevation_bins, "> 0");
   require_parameter(depth_bins > 0, "depth_bins", depth_bins, "> 0");
@@ -104,26 +124,93 @@ double DepthAxis::width_at(double rho) const {
   return upper(b) - lower(b);
 }
 
-SphericalGeometry::SphericalGeometry(const GeometryParams& params) : params_(params) {
-  params.validate();
-  azimuth_ = UniformAxis(params.azimuth_min_rad, params.azimuth_max_rad, params.azimuth_bins);
-  elevation_ = UniformAxis(params.elevation_min_rad, params.elevation_max_rad, params.elevation_bins);
-  depth_ = DepthAxis(params.depth_binning, params.depth_min_m, params.depth_max_m, params.depth_bins);
+namespace {
+
+// Continuous pixel position of a direction; false behind the camera (z <= 0).
+bool to_pixel(const PinholeIntrinsics& k, double x, double y, double z, double& u, double& v) {
+  if (!(z > 0)) return false;
+  u = k.fx * x / z + k.cx;
+  v = k.fy * y / z + k.cy;
+  return true;
 }
 
-bool SphericalGeometry::locate(double azimuth, double elevation, int& azimuth_bin, int& elevation_bin) const {
-  azimuth_bin = azimuth_.bin(azimuth);
-  elevation_bin = elevation_.bin(elevation);
-  return azimuth_bin >= 0 && elevation_bin >= 0;
+}  // namespace
+
+SphericalGeometry::SphericalGeometry(const GeometryParams& params) : params_(params) {
+  params.validate();
+  if (params.angular_binning == AngularBinning::pinhole) {
+    // Column i spans pixel positions [i - 0.5, i + 0.5): pixel centres are the column centres.
+    azimuth_ = UniformAxis(-0.5, params.azimuth_bins - 0.5, params.azimuth_bins);
+    elevation_ = UniformAxis(-0.5, params.elevation_bins - 0.5, params.elevation_bins);
+  } else {
+    azimuth_ = UniformAxis(params.azimuth_min_rad, params.azimuth_max_rad, params.azimuth_bins);
+    elevation_ = UniformAxis(params.elevation_min_rad, params.elevation_max_rad, params.elevation_bins);
+  }
+  depth_ = DepthAxis(params.depth_binning, params.depth_min_m, params.depth_max_m, params.depth_bins);
+  if (params.angular_binning == AngularBinning::spherical && params.camera) {
+    // A column is observable when the camera sees its centre direction.
+    const PinholeIntrinsics& k = *params.camera;
+    observable_.assign(column_count(), 0);
+    for (int e = 0; e < height(); ++e)
+      for (int a = 0; a < width(); ++a) {
+        const Eigen::Vector3d d = direction(a, e);
+        double u, v;
+        observable_[column(a, e)] = to_pixel(k, d.x(), d.y(), d.z(), u, v) && u >= -0.5 && u < k.width - 0.5 &&
+                                    v >= -0.5 && v < k.height - 0.5;
+      }
+  }
+}
+
+std::size_t SphericalGeometry::observable_count() const {
+  if (observable_.empty()) return column_count();
+  return static_cast<std::size_t>(std::count(observable_.begin(), observable_.end(), std::uint8_t{1}));
+}
+
+bool SphericalGeometry::project(double x, double y, double z, RayPosition& p) const {
+  if (params_.angular_binning == AngularBinning::pinhole) {
+    if (!to_pixel(*params_.camera, x, y, z, p.horizontal, p.vertical)) return false;
+    p.depth = z;
+  } else {
+    const SphericalPoint s = to_spherical(x, y, z);
+    p.horizontal = s.azimuth;
+    p.vertical = s.elevation;
+    p.depth = s.rho;
+  }
+  p.horizontal_bin = azimuth_.bin(p.horizontal);
+  p.vertical_bin = elevation_.bin(p.vertical);
+  return p.horizontal_bin >= 0 && p.vertical_bin >= 0;
+}
+
+Eigen::Vector3d SphericalGeometry::direction_at(double horizontal, double vertical) const {
+  if (params_.angular_binning == AngularBinning::pinhole) {
+    const PinholeIntrinsics& k = *params_.camera;
+    return Eigen::Vector3d((horizontal - k.cx) / k.fx, (vertical - k.cy) / k.fy, 1.0).normalized();
+  }
+  return from_spherical({1.0, horizontal, vertical});
 }
 
 Eigen::Vector3d SphericalGeometry::direction(int azimuth_bin, int elevation_bin) const {
-  return from_spherical({1.0, azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin)});
+  return direction_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin));
+}
+
+Eigen::Vector3d SphericalGeometry::point_at(double horizontal, double vertical, double depth) const {
+  const Eigen::Vector3d d = direction_at(horizontal, vertical);
+  // Pinhole columns' depth axis is z: scale the direction to unit z.
+  return params_.angular_binning == AngularBinning::pinhole ? Eigen::Vector3d(d * (depth / d.z()))
+                                                            : Eigen::Vector3d(d * depth);
+}
+
+bool SphericalGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || (x == 0 && y == 0 && z == 0)) return false;
+  RayPosition r;
+  if (!project(x, y, z, r)) return false;
+  c = column(r.horizontal_bin, r.vertical_bin);
+  return true;
 }
 
 bool SphericalGeometry::operator==(const SphericalGeometry& o) const {
   const GeometryParams &a = params_, &b = o.params_;
-  return a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
+  return a.angular_binning == b.angular_binning && a.camera == b.camera && a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
          a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&
          a.elevation_min_rad == b.elevation_min_rad && a.elevation_max_rad == b.elevation_max_rad &&
          a.depth_binning == b.depth_binning && a.depth_min_m == b.depth_min_m && a.depth_max_m == b.depth_max_m;

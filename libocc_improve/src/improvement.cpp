@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <type_traits>
 
@@ -70,14 +71,14 @@ struct WindowKernel {
   std::vector<std::uint8_t> run_contiguous;
 
   WindowKernel(const SphericalGeometry& g, const SensorModel& model) {
-    axis_offsets(g.azimuth(), model.support_azimuth_rad(), az_lo, az_hi, da_min, da_max);
-    axis_offsets(g.elevation(), model.support_elevation_rad(), el_lo, el_hi, de_min, de_max);
+    axis_offsets(g.azimuth(), model.support_horizontal(g.binning()), az_lo, az_hi, da_min, da_max);
+    axis_offsets(g.elevation(), model.support_vertical(g.binning()), el_lo, el_hi, de_min, de_max);
     const int across = offsets_across();
     angular_term.resize(static_cast<std::size_t>(across) * static_cast<std::size_t>(de_max - de_min + 1));
     for (int de = de_min; de <= de_max; ++de)
       for (int da = da_min; da <= da_max; ++da)
         angular_term[offset_index(da, de)] =
-            static_cast<float>(model.angular_term(da * g.azimuth().width(), de * g.elevation().width()));
+            static_cast<float>(model.angular_term(g.binning(), da * g.azimuth().width(), de * g.elevation().width()));
     needs_peak.resize(angular_term.size());
     for (std::size_t o = 0; o < angular_term.size(); ++o) needs_peak[o] = angular_term[o] < kPeakNegligibleB;
     for (int da = da_min; da <= da_max; ++da) {
@@ -186,6 +187,14 @@ struct WindowKernel {
   }
 };
 
+// Columns the sensor cannot observe hold NaN: "no value", never ranked (ranking.hpp).
+void mask_unobservable(const SphericalGeometry& g, int e, float* row) {
+  const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(g.width());
+  for (int a = 0; a < g.width(); ++a)
+    if (!g.observable(static_cast<ColumnIndex>(row_start + static_cast<std::size_t>(a))))
+      row[a] = std::numeric_limits<float>::quiet_NaN();
+}
+
 void require_bins(const SphericalGeometry& g, int a, int e) {
   if (a < 0 || a >= g.width())
     throw InvalidParameter("azimuth_bin = " + std::to_string(a) + " is outside [0, " + std::to_string(g.width()) + ")");
@@ -216,10 +225,11 @@ ImprovementMap compute_improvement(const SphericalGeometry& geometry, const Sens
   const int parts = std::min(detail::resolve_thread_count(threads), h);
   detail::run_parts(parts, [&](int part, int count) {
     std::vector<float> inv_sigma(static_cast<std::size_t>(geometry.width()));
-    for (int e = h * part / count; e < h * (part + 1) / count; ++e)
-      kernel.row(geometry, model, surface, e,
-                 map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(geometry.width()),
-                 inv_sigma);
+    for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
+      float* row = map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(geometry.width());
+      kernel.row(geometry, model, surface, e, row, inv_sigma);
+      mask_unobservable(geometry, e, row);
+    }
   });
   return map;
 }
@@ -278,8 +288,9 @@ std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, c
       for (int a = 0; a < w; ++a) {
         const std::size_t j = row_start + static_cast<std::size_t>(a);
         if (!affected[j]) continue;
-        map.value[j] = row_affected * 8 >= w ? scratch[static_cast<std::size_t>(a)]
-                                             : kernel.ray(geometry, model, surface, a, e);
+        map.value[j] = !geometry.observable(static_cast<ColumnIndex>(j)) ? std::numeric_limits<float>::quiet_NaN()
+                       : row_affected * 8 >= w                             ? scratch[static_cast<std::size_t>(a)]
+                                                                           : kernel.ray(geometry, model, surface, a, e);
       }
     }
   });

@@ -114,7 +114,7 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
 }
 
 struct Measurement {
-  double rho, azimuth, elevation;
+  double rho, azimuth, elevation;  ///< depth coordinate [m] and position in the binning's unit
   double sigma;  ///< depth sigma at rho: computed once, used in every tile the support spans
   int azimuth_first, azimuth_last, elevation_first, elevation_last;
 };
@@ -315,20 +315,19 @@ bool to_measurement(const float* p, const SphericalGeometry& g, const SensorMode
     ++report.skipped_invalid;
     return false;
   }
-  const SphericalPoint s = to_spherical(x, y, z);
-  int a, e;
-  if (!g.locate(s.azimuth, s.elevation, a, e)) {
+  RayPosition r;
+  if (!g.project(x, y, z, r)) {
     ++report.skipped_outside_fov;
     return false;
   }
-  m.rho = s.rho;
-  m.sigma = model.sigma_depth_at(s.rho);
-  m.azimuth = s.azimuth;
-  m.elevation = s.elevation;
-  const double ka = model.support_azimuth_rad(), ke = model.support_elevation_rad();
-  g.azimuth().overlapping(s.azimuth - ka, s.azimuth + ka, m.azimuth_first, m.azimuth_last);
-  g.elevation().overlapping(s.elevation - ke, s.elevation + ke, m.elevation_first, m.elevation_last);
-  if (s.rho >= g.depth().max()) ++report.beyond_depth_range;
+  m.rho = r.depth;
+  m.sigma = model.sigma_depth_at(r.depth);
+  m.azimuth = r.horizontal;
+  m.elevation = r.vertical;
+  const double ka = model.support_horizontal(g.binning()), ke = model.support_vertical(g.binning());
+  g.azimuth().overlapping(r.horizontal - ka, r.horizontal + ka, m.azimuth_first, m.azimuth_last);
+  g.elevation().overlapping(r.vertical - ke, r.vertical + ke, m.elevation_first, m.elevation_last);
+  if (r.depth >= g.depth().max()) ++report.beyond_depth_range;
   ++report.points_inserted;
   return true;
 }
@@ -434,8 +433,8 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
   const std::vector<int> band_begin = balanced_bands(measurements, tile_rows, parts);
   const ColumnKernel kernel(grid);
   const UniformAxis &az = g.azimuth(), &el = g.elevation();
-  const double inv_sigma_azimuth = 1.0 / model.params().sigma_azimuth_rad;
-  const double inv_sigma_elevation = 1.0 / model.params().sigma_elevation_rad;
+  const double inv_sigma_azimuth = 1.0 / model.sigma_horizontal(g.binning());
+  const double inv_sigma_elevation = 1.0 / model.sigma_vertical(g.binning());
   const auto depth_bins = static_cast<std::size_t>(g.depth().bins());
   std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
   std::vector<std::vector<ColumnIndex>> changed(surface ? static_cast<std::size_t>(parts) : 0);

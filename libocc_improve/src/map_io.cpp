@@ -116,9 +116,33 @@ void write_geometry(Writer& w, const GeometryParams& g) {
   w.put<std::uint32_t>(g.depth_binning == DepthBinning::uniform ? 0u : 1u);
   w.put<double>(g.depth_min_m);
   w.put<double>(g.depth_max_m);
+  // Since version 2: the angular binning and the camera.
+  w.put<std::uint32_t>(g.angular_binning == AngularBinning::spherical ? 0u : 1u);
+  w.put<std::uint32_t>(g.camera ? 1u : 0u);
+  const PinholeIntrinsics k = g.camera.value_or(PinholeIntrinsics{});
+  for (double v : {k.fx, k.fy, k.cx, k.cy}) w.put<double>(v);
+  w.put<std::int32_t>(k.width);
+  w.put<std::int32_t>(k.height);
 }
 
-GeometryParams read_geometry(Reader& r) {
+// Version 1 maps are spherical grids without a camera.
+void read_binning(Reader& r, GeometryParams& g) {
+  const auto binning = r.get<std::uint32_t>("geometry");
+  if (binning > 1) r.fail("unknown angular binning code " + std::to_string(binning));
+  g.angular_binning = binning == 0 ? AngularBinning::spherical : AngularBinning::pinhole;
+  const auto has_camera = r.get<std::uint32_t>("geometry");
+  if (has_camera > 1) r.fail("bad camera flag " + std::to_string(has_camera));
+  PinholeIntrinsics k;
+  k.fx = r.get<double>("geometry");
+  k.fy = r.get<double>("geometry");
+  k.cx = r.get<double>("geometry");
+  k.cy = r.get<double>("geometry");
+  k.width = r.get<std::int32_t>("geometry");
+  k.height = r.get<std::int32_t>("geometry");
+  if (has_camera) g.camera = k;
+}
+
+GeometryParams read_geometry(Reader& r, std::uint32_t version) {
   GeometryParams g;
   g.azimuth_bins = r.get<std::int32_t>("geometry");
   g.elevation_bins = r.get<std::int32_t>("geometry");
@@ -132,6 +156,7 @@ GeometryParams read_geometry(Reader& r) {
   g.depth_binning = binning == 0 ? DepthBinning::uniform : DepthBinning::inverse_depth;
   g.depth_min_m = r.get<double>("geometry");
   g.depth_max_m = r.get<double>("geometry");
+  if (version >= 2) read_binning(r, g);
   return g;
 }
 
@@ -142,9 +167,11 @@ void write_model(Writer& w, const SensorModelParams& m) {
   w.put<double>(m.sigma_depth_per_m2);
   w.put<double>(m.sigma_depth_floor_m);
   w.put<double>(m.support_k);
+  w.put<double>(m.sigma_u_px);  // since version 2
+  w.put<double>(m.sigma_v_px);
 }
 
-SensorModelParams read_model(Reader& r) {
+SensorModelParams read_model(Reader& r, std::uint32_t version) {
   SensorModelParams m;
   m.sigma_azimuth_rad = r.get<double>("sensor model");
   m.sigma_elevation_rad = r.get<double>("sensor model");
@@ -152,6 +179,10 @@ SensorModelParams read_model(Reader& r) {
   m.sigma_depth_per_m2 = r.get<double>("sensor model");
   m.sigma_depth_floor_m = r.get<double>("sensor model");
   m.support_k = r.get<double>("sensor model");
+  if (version >= 2) {
+    m.sigma_u_px = r.get<double>("sensor model");
+    m.sigma_v_px = r.get<double>("sensor model");
+  }
   return m;
 }
 
@@ -265,17 +296,17 @@ LoadedMap load_map(const std::string& path) {
   std::memcpy(&version, bytes.data() + sizeof(kMagic) + sizeof(marker), sizeof(version));
   if (marker == kByteOrderSwapped) fail("written on a machine of the other byte order");
   if (marker != kByteOrderMarker) fail("bad byte-order marker");
-  if (version != kMapFormatVersion)
-    fail("format version " + std::to_string(version) + ", this build reads version " +
-         std::to_string(kMapFormatVersion));
+  if (version < kOldestMapFormatVersion || version > kMapFormatVersion)
+    fail("format version " + std::to_string(version) + ", this build reads versions " +
+         std::to_string(kOldestMapFormatVersion) + " to " + std::to_string(kMapFormatVersion));
   const std::size_t body = bytes.size() - kChecksumBytes;
   std::uint64_t stored;
   std::memcpy(&stored, bytes.data() + body, sizeof(stored));
   if (stored != checksum(bytes.data(), body)) fail("checksum mismatch (file truncated or corrupt)");
 
   Reader r(bytes, body, path);
-  const GeometryParams geometry = read_geometry(r);
-  const SensorModelParams model = read_model(r);
+  const GeometryParams geometry = read_geometry(r, version);
+  const SensorModelParams model = read_model(r, version);
   const GridOptions options = read_options(r);
   validated(r, "geometry", [&] { geometry.validate(); });
   validated(r, "sensor model", [&] { model.validate(); });

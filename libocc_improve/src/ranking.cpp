@@ -22,8 +22,11 @@ void require_same_size(const ImprovementMap& map, const SurfaceMap& surface) {
 std::vector<RankedRay> top_rays(const ImprovementMap& map, const SurfaceMap& surface, int k) {
   detail::require_parameter(k > 0, "k", k, "> 0");
   require_same_size(map, surface);
-  std::vector<ColumnIndex> order(map.value.size());
-  for (std::size_t c = 0; c < order.size(); ++c) order[c] = static_cast<ColumnIndex>(c);
+  // Columns that are not observable hold NaN (improvement.hpp): never ranked.
+  std::vector<ColumnIndex> order;
+  order.reserve(map.value.size());
+  for (std::size_t c = 0; c < map.value.size(); ++c)
+    if (!std::isnan(map.value[c])) order.push_back(static_cast<ColumnIndex>(c));
   const auto better = [&](ColumnIndex a, ColumnIndex b) {
     return map.value[a] > map.value[b] || (map.value[a] == map.value[b] && a < b);
   };
@@ -58,7 +61,7 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
   for (std::size_t seed = 0; seed < map.value.size(); ++seed) {
     if (visited[seed] || !(map.value[seed] >= options.min_improvement)) continue;
     // Flood fill, 8-connected.
-    Region r{0.0, 0, map.value[seed], 0.0, 0.0, Eigen::Vector3d::Zero(), 0.0};
+    Region r{0.0, 0, map.value[seed], 0.0, 0.0, 0.0, 0.0, Eigen::Vector3d::Zero(), 0.0};
     double depth_sum = 0;
     std::size_t known = 0;
     visited[seed] = 1;
@@ -71,8 +74,8 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
       r.summed_improvement += v;
       ++r.area_columns;
       r.peak_improvement = std::max(r.peak_improvement, v);
-      r.centroid_azimuth_rad += geometry.azimuth().centre(a);
-      r.centroid_elevation_rad += geometry.elevation().centre(e);
+      r.centroid_horizontal += geometry.azimuth().centre(a);
+      r.centroid_vertical += geometry.elevation().centre(e);
       if (!surface.unknown[c]) {
         depth_sum += surface.depth_m[c];
         ++known;
@@ -88,9 +91,13 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
         }
     }
     if (r.area_columns < options.min_area_columns) continue;
-    r.centroid_azimuth_rad /= static_cast<double>(r.area_columns);
-    r.centroid_elevation_rad /= static_cast<double>(r.area_columns);
-    r.centroid_direction = from_spherical({1.0, r.centroid_azimuth_rad, r.centroid_elevation_rad}).normalized();
+    r.centroid_horizontal /= static_cast<double>(r.area_columns);
+    r.centroid_vertical /= static_cast<double>(r.area_columns);
+    r.centroid_direction = geometry.direction_at(r.centroid_horizontal, r.centroid_vertical);
+    const Eigen::Vector3d& d = r.centroid_direction;
+    const SphericalPoint angles = to_spherical(d.x(), d.y(), d.z());
+    r.centroid_azimuth_rad = angles.azimuth;
+    r.centroid_elevation_rad = angles.elevation;
     r.mean_depth_m = known ? depth_sum / static_cast<double>(known) : 0.0;
     regions.push_back(r);
   }

@@ -14,6 +14,8 @@ void SensorModelParams::validate() const {
                     "finite and > 0");
   require_parameter(std::isfinite(sigma_elevation_rad) && sigma_elevation_rad > 0, "sigma_elevation_rad",
                     sigma_elevation_rad, "finite and > 0");
+  require_parameter(std::isfinite(sigma_u_px) && sigma_u_px > 0, "sigma_u_px", sigma_u_px, "finite and > 0");
+  require_parameter(std::isfinite(sigma_v_px) && sigma_v_px > 0, "sigma_v_px", sigma_v_px, "finite and > 0");
   require_parameter(std::isfinite(sigma_depth_m) && sigma_depth_m >= 0, "sigma_depth_m", sigma_depth_m,
                     "finite and >= 0");
   require_parameter(std::isfinite(sigma_depth_per_m2) && sigma_depth_per_m2 >= 0, "sigma_depth_per_m2",

@@ -23,15 +23,14 @@ std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& clou
   outside = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const PointT& p = cloud[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-    const SphericalPoint s = to_spherical(p.x, p.y, p.z);
-    if (!(s.rho > 0)) continue;
-    int a = 0, e = 0;
-    if (!geometry.locate(s.azimuth, s.elevation, a, e)) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || (p.x == 0 && p.y == 0 && p.z == 0))
+      continue;
+    ColumnIndex column = 0;
+    if (!geometry.column_of(p.x, p.y, p.z, column)) {
       ++outside;
       continue;
     }
-    labels[i] = segmentation.label[geometry.column(a, e)];
+    labels[i] = segmentation.label[column];
   }
   return labels;
 }

@@ -114,11 +114,8 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) 
     out.y = p.y;
     out.z = p.z;
     out.surface_depth = out.probability = out.improvement = nan;
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) continue;
-    const SphericalPoint s = to_spherical(p.x, p.y, p.z);
-    int azimuth_bin = 0, elevation_bin = 0;
-    if (!(s.rho > 0.0) || !geometry.locate(s.azimuth, s.elevation, azimuth_bin, elevation_bin)) continue;
-    const ColumnIndex column = geometry.column(azimuth_bin, elevation_bin);
+    ColumnIndex column = 0;
+    if (!geometry.column_of(p.x, p.y, p.z, column)) continue;
     out.surface_depth = surface.depth_m[column];
     out.probability = surface.probability[column];
     out.improvement = improvement.value[column];

@@ -24,12 +24,11 @@ inline std::optional<float> spherical_log_odds(const SphericalGrid& grid, const 
                                                const Eigen::Vector3d& w, const OctomapExportOptions& options) {
   const SphericalGeometry& g = grid.geometry();
   const Eigen::Vector3d p = world_from_sensor.inverse() * w;
-  const SphericalPoint s = to_spherical(p.x(), p.y(), p.z());
-  int a, e;
-  if (!(s.rho > 0) || !g.locate(s.azimuth, s.elevation, a, e)) return std::nullopt;
-  const int bin = g.depth().bin(s.rho);
+  RayPosition r;
+  if (!(p.squaredNorm() > 0) || !g.project(p.x(), p.y(), p.z(), r)) return std::nullopt;
+  const int bin = g.depth().bin(r.depth);
   if (bin < 0 || bin >= g.depth().bins()) return std::nullopt;
-  const float value = grid.log_odds(g.column(a, e), bin);
+  const float value = grid.log_odds(g.column(r.horizontal_bin, r.vertical_bin), bin);
   if (std::abs(value) < logit(0.5 + options.unknown_band_probability)) return std::nullopt;
   return value;
 }

@@ -97,13 +97,11 @@ TEST_F(ImprovementFilterTest, ImprovementCloudIsAlignedWithTheInputAndTheMap) {
   std::size_t without_ray = 0;
   for (std::size_t i = 0; i < cloud_->size(); i += 97) {
     const auto& p = (*cloud_)[i];
-    int a = 0, e = 0;
-    const SphericalPoint s = to_spherical(p.x, p.y, p.z);
-    if (!std::isfinite(p.x) || !geometry.locate(s.azimuth, s.elevation, a, e)) {
+    ColumnIndex c = 0;
+    if (!geometry.column_of(p.x, p.y, p.z, c)) {
       EXPECT_TRUE(std::isnan(improvement[i].improvement));
       continue;
     }
-    const ColumnIndex c = geometry.column(a, e);
     EXPECT_EQ(improvement[i].improvement, mapper_->improvement().value[c]);
     EXPECT_EQ(improvement[i].probability, mapper_->surface().probability[c]);
     EXPECT_EQ(improvement[i].surface_depth, mapper_->surface().depth_m[c]);

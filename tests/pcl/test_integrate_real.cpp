@@ -28,6 +28,8 @@ void expect_exact_matches_reference(const pcl::PointCloud<pcl::PointXYZ>& cloud,
   for (const auto& p : cloud) points.emplace_back(p.x, p.y, p.z);
   GridOptions exact;
   exact.mode = UpdateMode::exact;
+  // Counted over all windows: the 99.9% of the issue is a share of columns, not of each small window.
+  std::size_t same = 0, columns = 0;
   for (const Window& w : windows) {
     const SphericalGeometry g = reference::crop(full, w.azimuth_first, w.elevation_first, w.width, w.height);
     SphericalGrid fast(g, exact);
@@ -36,17 +38,17 @@ void expect_exact_matches_reference(const pcl::PointCloud<pcl::PointXYZ>& cloud,
     ref.insert(points);
     ASSERT_GT(r.points_inserted, static_cast<std::size_t>(w.width * w.height / 4));
     const SurfaceMap s = compute_surface(fast);
-    std::size_t same = 0;
     double max_dp = 0;
+    columns += s.size();
     for (std::size_t c = 0; c < s.size(); ++c) {
       const auto rs = ref.surface(c);
       same += (rs.bin == s.bin[c] && rs.unknown == (s.unknown[c] != 0)) ? 1 : 0;
       max_dp = std::max(max_dp, std::abs(rs.probability - static_cast<double>(s.probability[c])));
     }
-    EXPECT_GE(same, static_cast<std::size_t>(std::ceil(0.999 * static_cast<double>(s.size()))))
-        << "window at " << w.azimuth_first << "," << w.elevation_first << ": " << same << " / " << s.size();
-    EXPECT_LE(max_dp, 1e-4);
+    EXPECT_LE(max_dp, 1e-4) << preset.name << ", window at " << w.azimuth_first << "," << w.elevation_first;
   }
+  EXPECT_GE(same, static_cast<std::size_t>(std::ceil(0.999 * static_cast<double>(columns))))
+      << preset.name << ": " << same << " / " << columns;
 }
 
 double clamped_exact_agreement(const pcl::PointCloud<pcl::PointXYZ>& cloud, const SensorPreset& preset) {
@@ -80,9 +82,10 @@ TEST(IntegrateReal, SevenScenesDepthImageExactMatchesReference) {
   OCC_REQUIRE_DATA(intrinsics, "sequences/7scenes_redkitchen/camera-intrinsics.txt");
   const LoadedFrame f = load_depth_frame(path, read_intrinsics_file(intrinsics), DepthEncoding::millimetres);
   expect_exact_matches_reference(f.cloud, kinect_v1_paper(), kWindows);
-  SensorPreset k = kinect_v1(*f.intrinsics);
-  k.geometry.depth_bins = 1024;  // keeps the dense reference small
-  expect_exact_matches_reference(f.cloud, k, {{300, 220, 24, 24}});
+  for (SensorPreset k : {kinect_v1_spherical(*f.intrinsics), kinect_v1(*f.intrinsics)}) {
+    k.geometry.depth_bins = 1024;  // keeps the dense reference small
+    expect_exact_matches_reference(f.cloud, k, {{300, 220, 32, 32}, {100, 60, 32, 32}, {520, 400, 32, 32}});
+  }
 }
 
 TEST(IntegrateReal, ClampedAndExactAgreeOnAWholeFrame) {

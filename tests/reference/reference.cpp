@@ -17,6 +17,36 @@ long double logit_opdf(long double d, long double b, long double s) {
   return log_p - std::log1p(-std::exp(log_p));
 }
 
+namespace {
+
+// A point's angular position and depth coordinate, from SPEC 1 (spherical) and SPEC 2c (pinhole) as
+// written, without the library's projection.
+struct Position {
+  double h = 0, v = 0, depth = 0;
+};
+
+bool reference_position(const SphericalGeometry& g, const Eigen::Vector3f& q, Position& out) {
+  const double x = q.x(), y = q.y(), z = q.z();
+  if (g.binning() == AngularBinning::pinhole) {
+    if (!(z > 0)) return false;
+    const PinholeIntrinsics& k = *g.params().camera;
+    out = {k.fx * x / z + k.cx, k.fy * y / z + k.cy, z};
+  } else {
+    out = {std::atan2(x, z), std::atan2(y, std::hypot(x, z)), std::sqrt(x * x + y * y + z * z)};
+  }
+  const auto inside = [](const UniformAxis& axis, double value) { return value >= axis.min() && value < axis.max(); };
+  return inside(g.azimuth(), out.h) && inside(g.elevation(), out.v);
+}
+
+double sigma_h(const SphericalGeometry& g, const SensorModelParams& p) {
+  return g.binning() == AngularBinning::pinhole ? p.sigma_u_px : p.sigma_azimuth_rad;
+}
+double sigma_v(const SphericalGeometry& g, const SensorModelParams& p) {
+  return g.binning() == AngularBinning::pinhole ? p.sigma_v_px : p.sigma_elevation_rad;
+}
+
+}  // namespace
+
 DenseGrid::DenseGrid(const SphericalGeometry& geometry, const SensorModel& model, const GridOptions& options)
     : geometry_(geometry), model_(model), options_(options), bins_(static_cast<std::size_t>(geometry.depth().bins())) {
   lmin_ = std::log(options.probability_min / (1 - options.probability_min));
@@ -30,26 +60,26 @@ void DenseGrid::insert(const std::vector<Eigen::Vector3f>& points) {
   const auto& p = model_.params();
   for (const auto& q : points) {
     if (!q.allFinite() || q.isZero()) continue;
-    const SphericalPoint s = to_spherical(q.x(), q.y(), q.z());
-    int ia, ie;
-    if (!g.locate(s.azimuth, s.elevation, ia, ie)) continue;
-    const double ka = p.support_k * p.sigma_azimuth_rad, ke = p.support_k * p.sigma_elevation_rad;
-    const double sigma = model_.sigma_depth_at(s.rho);
+    Position s;
+    if (!reference_position(g, q, s)) continue;
+    const double sh = sigma_h(g, p), sv = sigma_v(g, p);
+    const double ka = p.support_k * sh, ke = p.support_k * sv;
+    const double sigma = model_.sigma_depth_at(s.depth);
     for (int e = 0; e < g.height(); ++e) {
       // Column extent [lower, lower + width) overlaps [centre - k s, centre + k s].
       const double elo = g.elevation().lower(e), ehi = elo + g.elevation().width();
-      if (ehi <= s.elevation - ke || elo > s.elevation + ke) continue;
+      if (ehi <= s.v - ke || elo > s.v + ke) continue;
       for (int a = 0; a < g.width(); ++a) {
         const double alo = g.azimuth().lower(a), ahi = alo + g.azimuth().width();
-        if (ahi <= s.azimuth - ka || alo > s.azimuth + ka) continue;
-        const double da = (g.azimuth().centre(a) - s.azimuth) / p.sigma_azimuth_rad;
-        const double de = (g.elevation().centre(e) - s.elevation) / p.sigma_elevation_rad;
+        if (ahi <= s.h - ka || alo > s.h + ka) continue;
+        const double da = (g.azimuth().centre(a) - s.h) / sh;
+        const double de = (g.elevation().centre(e) - s.v) / sv;
         const long double b = da * da + de * de;
         const std::size_t column = g.column(a, e);
         touched_[column] = 1;
         for (std::size_t k = 0; k < bins_; ++k) {
           double& v = values_[column * bins_ + k];
-          v += static_cast<double>(logit_opdf(g.depth().centre(static_cast<int>(k)) - s.rho, b, sigma));
+          v += static_cast<double>(logit_opdf(g.depth().centre(static_cast<int>(k)) - s.depth, b, sigma));
           if (options_.mode == UpdateMode::clamped) v = std::min(std::max(v, lmin_), lmax_);
         }
       }
@@ -90,7 +120,8 @@ DenseGrid::Surface DenseGrid::surface(std::size_t column) const {
 std::vector<double> improvement_map(const SphericalGeometry& g, const SensorModel& model,
                                     const std::vector<DenseGrid::Surface>& surfaces) {
   const auto& p = model.params();
-  const double ka = p.support_k * p.sigma_azimuth_rad, ke = p.support_k * p.sigma_elevation_rad;
+  const double sh = sigma_h(g, p), sv = sigma_v(g, p);
+  const double ka = p.support_k * sh, ke = p.support_k * sv;
   std::vector<double> result(g.column_count(), 0.0);
   for (int ej = 0; ej < g.height(); ++ej)
     for (int aj = 0; aj < g.width(); ++aj) {
@@ -107,8 +138,8 @@ std::vector<double> improvement_map(const SphericalGeometry& g, const SensorMode
           if (ahi <= theta - ka || alo > theta + ka) continue;
           const DenseGrid::Surface& v = surfaces[g.column(a, e)];
           const double rho_i = v.unknown ? 0.0 : v.depth_m, p_i = v.unknown ? 0.5 : v.probability;
-          const double da = (g.azimuth().centre(a) - theta) / p.sigma_azimuth_rad;
-          const double de = (g.elevation().centre(e) - phi) / p.sigma_elevation_rad;
+          const double da = (g.azimuth().centre(a) - theta) / sh;
+          const double de = (g.elevation().centre(e) - phi) / sv;
           const long double logit_s = logit_opdf(rho_i - rho_j, da * da + de * de, sigma);
           const double p_s = static_cast<double>(1.0L / (1.0L + std::exp(-logit_s)));
           const double den = p_i * p_s + (1 - p_i) * (1 - p_s);
@@ -128,10 +159,18 @@ std::vector<double> improvement_map(const DenseGrid& grid) {
 
 SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height) {
   GeometryParams p = full.params();
-  p.azimuth_min_rad = full.azimuth().lower(azimuth_first);
-  p.azimuth_max_rad = full.azimuth().lower(azimuth_first) + width * full.azimuth().width();
-  p.elevation_min_rad = full.elevation().lower(elevation_first);
-  p.elevation_max_rad = full.elevation().lower(elevation_first) + height * full.elevation().width();
+  if (p.angular_binning == AngularBinning::pinhole) {
+    // The same pixels of a smaller image: the principal point moves with the crop's origin.
+    p.camera->cx -= azimuth_first;
+    p.camera->cy -= elevation_first;
+    p.camera->width = width;
+    p.camera->height = height;
+  } else {
+    p.azimuth_min_rad = full.azimuth().lower(azimuth_first);
+    p.azimuth_max_rad = full.azimuth().lower(azimuth_first) + width * full.azimuth().width();
+    p.elevation_min_rad = full.elevation().lower(elevation_first);
+    p.elevation_max_rad = full.elevation().lower(elevation_first) + height * full.elevation().width();
+  }
   p.azimuth_bins = width;
   p.elevation_bins = height;
   return SphericalGeometry(p);

@@ -1,16 +1,46 @@
 #pragma once
-// Spherical grid geometry (SPEC 1-2, 2b): angular binning in azimuth and elevation and depth binning
-// (uniform or uniform in inverse depth), behind one type. Insertion and improvement only ask this type
-// for bins, extents and centres, so another binning is added here without touching them.
+// Grid geometry (SPEC 1-2, 2b, 2c): an angular binning of directions into columns (rays) and a depth
+// binning along each column (uniform or uniform in inverse depth), behind one type. The kernels ask it
+// only for a direction's continuous position (project), the columns a support overlaps (the two
+// uniform axes, in the binning's own angular unit), a column's centre (point) and, with the sensor
+// model, the angular term in that unit. A new binning is added in project()/point() and its axes;
+// insertion, surface, improvement and everything after them are unchanged.
 //
-// Frame: the sensor's optical frame (x right, y down, z forward). Units: metres and radians.
-//   rho = |p|, azimuth theta = atan2(x, z), elevation phi = atan2(y, hypot(x, z)).
+// Binnings:
+//  - spherical (the paper, SPEC 2): columns uniform in azimuth theta = atan2(x, z) and elevation
+//    phi = atan2(y, hypot(x, z)), radians; the depth axis is the range rho = |p|.
+//  - pinhole (pixel-native, SPEC 2c): column (u, v) is pixel (u, v) of a pinhole camera, positions in
+//    pixels (u = fx x / z + cx, v = fy y / z + cy); the depth axis is z. z rather than the range
+//    because the sensor measures and quantises z (a Kinect's disparity is per z), so a flat wall facing
+//    the camera falls in one depth bin at every pixel instead of in rings of range bins.
+//  - a LiDAR's rings would be a third: project() to (azimuth, ring position) with a non-uniform
+//    elevation axis; the kernels read axes only through centre() and overlapping().
+// Frame: the sensor's optical frame (x right, y down, z forward). Units: metres; radians or pixels.
 #include <Eigen/Core>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace occ_improve {
+
+/// A pinhole depth camera (pixels; u right, v down).
+struct PinholeIntrinsics {
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  int width = 640, height = 480;
+  void validate() const;
+  bool operator==(const PinholeIntrinsics& o) const {
+    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && width == o.width && height == o.height;
+  }
+  bool operator!=(const PinholeIntrinsics& o) const { return !(*this == o); }
+};
+
+enum class AngularBinning {
+  spherical,  ///< uniform azimuth x elevation bins, radians; depth is the range (the paper)
+  pinhole,    ///< one column per camera pixel, pixels; depth is z (SPEC 2c)
+};
+
+const char* to_string(AngularBinning binning);
 
 enum class DepthBinning {
   uniform,        ///< bins uniform in rho over [depth_min_m, depth_max_m) (the paper: [0, 5 m))
@@ -18,9 +48,16 @@ enum class DepthBinning {
 };
 
 struct GeometryParams {
+  AngularBinning angular_binning = AngularBinning::spherical;
+  /// pinhole: the camera whose pixels are the columns (required; its size must equal the bin counts).
+  /// spherical: when set, columns whose centre direction falls outside this camera's image are not
+  /// observable (SPEC 2c): they take no part in ranking, regions, stop signals or the filter.
+  std::optional<PinholeIntrinsics> camera;
+  /// Angular bin counts (columns per row and rows), for both binnings.
   int azimuth_bins = 640;
   int elevation_bins = 480;
   int depth_bins = 512;
+  /// Spherical binning's angular range (unused by the pinhole binning, whose range is the image).
   double azimuth_min_rad = -0.497418836818384;  ///< -28.5 deg
   double azimuth_max_rad = 0.497418836818384;
   double elevation_min_rad = -0.375245789179833;  ///< -21.5 deg
@@ -106,15 +143,35 @@ private:
 
 using ColumnIndex = std::uint32_t;
 
-/// The whole grid's geometry: azimuth x elevation columns (rays), each with depth bins.
+/// Where a point falls in the grid: continuous angular position (the binning's unit), the columns'
+/// bins containing it, and its coordinate on the depth axis (range or z).
+struct RayPosition {
+  double horizontal = 0, vertical = 0;  ///< azimuth/elevation [rad] or u/v [px]
+  int horizontal_bin = -1, vertical_bin = -1;
+  double depth = 0;  ///< range [m] (spherical) or z [m] (pinhole)
+};
+
+/// The whole grid's geometry: columns (rays) in rows like image pixels, each with depth bins.
 /// Columns are numbered like image pixels: column = elevation_bin * azimuth_bins + azimuth_bin.
+/// "azimuth"/"elevation" name the horizontal and vertical angular axes of either binning.
 class SphericalGeometry {
 public:
   explicit SphericalGeometry(const GeometryParams& params);
   const GeometryParams& params() const { return params_; }
+  AngularBinning binning() const { return params_.angular_binning; }
+  /// Horizontal / vertical angular axes, in the binning's unit (radians, or pixels from -0.5).
   const UniformAxis& azimuth() const { return azimuth_; }
   const UniformAxis& elevation() const { return elevation_; }
   const DepthAxis& depth() const { return depth_; }
+  /// Position of a point (sensor frame); false when its direction is outside the field of view
+  /// (for the pinhole binning also z <= 0). The point must be finite and not the origin.
+  bool project(double x, double y, double z, RayPosition& position) const;
+  /// The column of a point (sensor frame): the one point-to-column rule of every caller. False for an
+  /// invalid point (a coordinate not finite, or the origin) and outside the field of view.
+  bool column_of(double x, double y, double z, ColumnIndex& column) const;
+  /// Columns a camera can observe (every column, unless a spherical grid was given a camera).
+  bool observable(ColumnIndex c) const { return observable_.empty() || observable_[c] != 0; }
+  std::size_t observable_count() const;
   int width() const { return azimuth_.bins(); }    ///< columns per elevation row (image width)
   int height() const { return elevation_.bins(); }  ///< elevation rows (image height)
   std::size_t column_count() const { return static_cast<std::size_t>(width()) * height(); }
@@ -124,20 +181,24 @@ public:
   }
   int azimuth_bin_of(ColumnIndex c) const { return static_cast<int>(c % static_cast<ColumnIndex>(width())); }
   int elevation_bin_of(ColumnIndex c) const { return static_cast<int>(c / static_cast<ColumnIndex>(width())); }
-  /// Column containing the direction, false when outside the angular range.
-  bool locate(double azimuth, double elevation, int& azimuth_bin, int& elevation_bin) const;
   /// Unit direction through the centre of a column.
   Eigen::Vector3d direction(int azimuth_bin, int elevation_bin) const;
-  /// Point at depth rho on the ray through the centre of a column.
-  Eigen::Vector3d point(int azimuth_bin, int elevation_bin, double rho) const {
-    return direction(azimuth_bin, elevation_bin) * rho;
+  /// Unit direction at a continuous angular position (the binning's unit), e.g. a region's centroid.
+  Eigen::Vector3d direction_at(double horizontal, double vertical) const;
+  /// Point at coordinate `depth` of the depth axis (range, or z for the pinhole binning) on the ray
+  /// through the centre of a column.
+  Eigen::Vector3d point(int azimuth_bin, int elevation_bin, double depth) const {
+    return point_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin), depth);
   }
+  /// The same at a continuous angular position.
+  Eigen::Vector3d point_at(double horizontal, double vertical, double depth) const;
   bool operator==(const SphericalGeometry& other) const;
 
 private:
   GeometryParams params_;
   UniformAxis azimuth_, elevation_;
   DepthAxis depth_;
+  std::vector<std::uint8_t> observable_;  ///< empty: every column observable
 };
 
 }  // namespace occ_improve

@@ -30,6 +30,8 @@
 namespace occ_improve {
 
 /// Improvement per column, same indexing as SurfaceMap / ColumnIndex (row = elevation bin).
+/// Columns the sensor cannot observe (SphericalGeometry::observable) hold NaN in the maps computed by
+/// compute_improvement / update_improvement: they have no value to act on (use nan-aware reductions).
 struct ImprovementMap {
   int width = 0, height = 0;
   std::vector<float> value;

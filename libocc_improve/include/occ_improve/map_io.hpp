@@ -16,8 +16,10 @@
 
 namespace occ_improve {
 
-/// The format version this build writes and the only one it reads.
-constexpr std::uint32_t kMapFormatVersion = 1;
+/// The format version this build writes. Version 2 added the angular binning and the camera; version 1
+/// maps (spherical, no camera) still load.
+constexpr std::uint32_t kMapFormatVersion = 2;
+constexpr std::uint32_t kOldestMapFormatVersion = 1;
 
 /// Writes `grid` and the sensor model it was built with to `path` (atomically: temp file + rename).
 /// Throws IoError when the folder is not writable or the write fails (the target is then untouched).

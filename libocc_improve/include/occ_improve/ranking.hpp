@@ -4,8 +4,11 @@
 // Conventions (docs/METHOD.md, "Ranking"):
 //  - regions are 8-connected (diagonal neighbours join), so a thin diagonal no-data band or depth edge
 //    stays one region;
-//  - a region's centroid is the mean of its columns' centre angles (each column counts once, so the
-//    centroid is the middle of the area to re-acquire, not pulled towards its peak).
+//  - a region's centroid is the mean of its columns' centre positions in the binning's unit (angles, or
+//    pixels), so each column counts once and the centroid is the middle of the area to re-acquire, not
+//    pulled towards its peak;
+//  - columns that are not observable (NaN improvement, improvement.hpp) are never ranked, never in a
+//    region and never counted by the stop signal.
 #include "occ_improve/geometry.hpp"
 #include "occ_improve/improvement.hpp"
 #include "occ_improve/surface.hpp"
@@ -38,7 +41,8 @@ struct Region {
   double summed_improvement;
   std::size_t area_columns;
   float peak_improvement;
-  double centroid_azimuth_rad, centroid_elevation_rad;  ///< mean of the columns' centre angles
+  double centroid_horizontal, centroid_vertical;        ///< mean column centre, binning's unit (rad or px)
+  double centroid_azimuth_rad, centroid_elevation_rad;  ///< angles of centroid_direction (SPEC 1)
   Eigen::Vector3d centroid_direction;                   ///< unit vector in the sensor frame
   double mean_depth_m;                                  ///< over known columns, 0 if none
 };

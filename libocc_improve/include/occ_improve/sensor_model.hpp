@@ -2,6 +2,10 @@
 // The sensor occupancy PDF of eq. 1 (SPEC 3) and its noise model (SPEC 2b).
 //   P_s = 1/2 (1 + exp(-u))^-1 + 1/3 exp(-(d^2/s^2 + B)),
 //   d = rho - rho_bar, B = d_theta^2/s_theta^2 + d_phi^2/s_phi^2, u = 2 (d + 2 s)/s + B.
+// The angular offsets and sigmas are in the grid binning's unit: radians (spherical) or pixels (pinhole);
+// rho is the binning's depth coordinate (range, or z).
+#include "occ_improve/geometry.hpp"
+
 #include <cmath>
 
 namespace occ_improve {
@@ -9,6 +13,9 @@ namespace occ_improve {
 struct SensorModelParams {
   double sigma_azimuth_rad = 4.33589667773576e-4;    ///< sqrt(1.88e-7 rad^2), the paper
   double sigma_elevation_rad = 4.33589667773576e-4;
+  /// Angular sigmas of the pixel-native binning: the quantisation of one pixel, 1/sqrt(12) px.
+  double sigma_u_px = 0.288675134594813;
+  double sigma_v_px = 0.288675134594813;
   /// Depth noise: sigma_rho(rho) = max(sigma_depth_floor_m, sigma_depth_m + sigma_depth_per_m2 * rho^2).
   double sigma_depth_m = 0.0472228758124704;  ///< sqrt(2.23e3 mm^2), the paper's constant
   double sigma_depth_per_m2 = 0.0;            ///< quadratic term [1/m]; Kinect: 1.425e-3 (Khoshelham 2012)
@@ -27,12 +34,20 @@ public:
     double s = params_.sigma_depth_m + params_.sigma_depth_per_m2 * rho_m * rho_m;
     return s > params_.sigma_depth_floor_m ? s : params_.sigma_depth_floor_m;
   }
-  double support_azimuth_rad() const { return params_.support_k * params_.sigma_azimuth_rad; }
-  double support_elevation_rad() const { return params_.support_k * params_.sigma_elevation_rad; }
-  /// B of eq. 1 for angular offsets.
-  double angular_term(double d_azimuth, double d_elevation) const {
-    const double a = d_azimuth / params_.sigma_azimuth_rad, e = d_elevation / params_.sigma_elevation_rad;
-    return a * a + e * e;
+  /// Angular sigmas in the binning's unit: (azimuth, elevation) [rad] or (u, v) [px].
+  double sigma_horizontal(AngularBinning b) const {
+    return b == AngularBinning::pinhole ? params_.sigma_u_px : params_.sigma_azimuth_rad;
+  }
+  double sigma_vertical(AngularBinning b) const {
+    return b == AngularBinning::pinhole ? params_.sigma_v_px : params_.sigma_elevation_rad;
+  }
+  /// Half-widths of the region of support, k sigma, in the binning's unit.
+  double support_horizontal(AngularBinning b) const { return params_.support_k * sigma_horizontal(b); }
+  double support_vertical(AngularBinning b) const { return params_.support_k * sigma_vertical(b); }
+  /// B of eq. 1 for angular offsets in the binning's unit.
+  double angular_term(AngularBinning b, double d_horizontal, double d_vertical) const {
+    const double h = d_horizontal / sigma_horizontal(b), v = d_vertical / sigma_vertical(b);
+    return h * h + v * v;
   }
 
 private:

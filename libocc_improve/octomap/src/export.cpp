@@ -46,38 +46,63 @@ double known_far_m(const SphericalGrid& grid) {
   return last_bin < 0 ? g.depth().min() : g.depth().upper(last_bin);
 }
 
-// Volume of the frustum out to far_m: solid angle (azimuth span x (sin el_max - sin el_min)) x (r^3 / 3).
-double frustum_volume_m3(const SphericalGeometry& g, double far_m) {
-  const GeometryParams& p = g.params();
-  const double solid_angle =
-      (p.azimuth_max_rad - p.azimuth_min_rad) * (std::sin(p.elevation_max_rad) - std::sin(p.elevation_min_rad));
-  return solid_angle * std::max(0.0, std::pow(far_m, 3) - std::pow(p.depth_min_m, 3)) / 3.0;
+// The field of view's boundary sampled on a lattice of kSamples x kSamples angular positions (the axes'
+// extents, in the binning's unit), for any binning.
+constexpr int kSamples = 17;
+template <typename Visit>
+void for_each_lattice_position(const SphericalGeometry& g, Visit&& visit) {
+  const UniformAxis &h = g.azimuth(), &v = g.elevation();
+  for (int i = 0; i < kSamples; ++i)
+    for (int j = 0; j < kSamples; ++j)
+      visit(i, j, h.min() + i * (h.max() - h.min()) / (kSamples - 1), v.min() + j * (v.max() - v.min()) / (kSamples - 1));
 }
 
-// World-frame bounding box of the frustum out to far_m: its boundary sampled on a 17 x 17 angular
-// lattice at the near and far depths (and the sensor origin), padded by the far cap's bulge between samples.
+// Volume of the field of view out to depth coordinate far_m: per lattice cell, its solid angle (the
+// parallelogram of two edge directions) x (r_far^3 - r_near^3) / 3 at the cell's first corner. An
+// estimate for the memory cap only.
+double frustum_volume_m3(const SphericalGeometry& g, double far_m) {
+  std::vector<Eigen::Vector3d> d(kSamples * kSamples);
+  std::vector<double> far_range(d.size());
+  for_each_lattice_position(g, [&](int i, int j, double h, double v) {
+    d[static_cast<std::size_t>(i * kSamples + j)] = g.direction_at(h, v);
+    far_range[static_cast<std::size_t>(i * kSamples + j)] = g.point_at(h, v, far_m).norm();
+  });
+  const double near_m = g.depth().min();
+  double volume = 0;
+  for (int i = 0; i + 1 < kSamples; ++i)
+    for (int j = 0; j + 1 < kSamples; ++j) {
+      const auto at = [&](int a, int b) { return static_cast<std::size_t>(a * kSamples + b); };
+      const double solid_angle = (d[at(i + 1, j)] - d[at(i, j)]).cross(d[at(i, j + 1)] - d[at(i, j)]).norm();
+      volume += solid_angle * std::max(0.0, std::pow(far_range[at(i, j)], 3) - std::pow(near_m, 3)) / 3.0;
+    }
+  return volume;
+}
+
+// World-frame bounding box of the field of view out to far_m: the lattice at the near and far depths
+// (and the sensor origin), padded by the far cap's bulge between lattice directions.
 void frustum_bounds(const SphericalGeometry& g, double far_m, const Eigen::Isometry3d& pose, Eigen::Vector3d& lo,
                     Eigen::Vector3d& hi) {
-  constexpr int kSamples = 17;
-  const GeometryParams& p = g.params();
   lo = hi = pose.translation();
-  double widest_step = 0;
-  for (int i = 0; i < kSamples; ++i)
-    for (int j = 0; j < kSamples; ++j) {
-      SphericalPoint s;
-      const double step_az = (p.azimuth_max_rad - p.azimuth_min_rad) / (kSamples - 1);
-      const double step_el = (p.elevation_max_rad - p.elevation_min_rad) / (kSamples - 1);
-      widest_step = std::max({widest_step, step_az, step_el});
-      s.azimuth = p.azimuth_min_rad + i * step_az;
-      s.elevation = p.elevation_min_rad + j * step_el;
-      for (double rho : {p.depth_min_m, far_m}) {
-        s.rho = rho;
-        const Eigen::Vector3d w = pose * from_spherical(s);
-        lo = lo.cwiseMin(w);
-        hi = hi.cwiseMax(w);
-      }
+  double widest_step_rad = 0, far_range = 0;
+  for_each_lattice_position(g, [&](int i, int j, double h, double v) {
+    for (double depth : {g.depth().min(), far_m}) {
+      const Eigen::Vector3d p = g.point_at(h, v, depth);
+      far_range = std::max(far_range, p.norm());
+      const Eigen::Vector3d w = pose * p;
+      lo = lo.cwiseMin(w);
+      hi = hi.cwiseMax(w);
     }
-  const double bulge = far_m * (1.0 - std::cos(widest_step)) + 1e-6;
+    const Eigen::Vector3d d = g.direction_at(h, v);
+    if (i + 1 < kSamples) {
+      const double next_h = h + (g.azimuth().max() - g.azimuth().min()) / (kSamples - 1);
+      widest_step_rad = std::max(widest_step_rad, std::acos(std::min(1.0, d.dot(g.direction_at(next_h, v)))));
+    }
+    if (j + 1 < kSamples) {
+      const double next_v = v + (g.elevation().max() - g.elevation().min()) / (kSamples - 1);
+      widest_step_rad = std::max(widest_step_rad, std::acos(std::min(1.0, d.dot(g.direction_at(h, next_v)))));
+    }
+  });
+  const double bulge = far_range * (1.0 - std::cos(widest_step_rad)) + 1e-6;
   lo.array() -= bulge;
   hi.array() += bulge;
 }
@@ -142,7 +167,7 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
 
   const double log_odds_band = logit(0.5 + options.unknown_band_probability);
   const GeometryParams& params = geometry.params();
-  const double near2 = params.depth_min_m * params.depth_min_m, far2 = far_m * far_m;
+  const double near2 = params.depth_min_m * params.depth_min_m;
   // Sensor-frame position of a leaf centre: p = R^T (c - t), stepped along world z inside the loop.
   const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
   const Eigen::Vector3d origin = world_from_sensor.translation();
@@ -158,14 +183,14 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
       Eigen::Vector3d p = sensor_from_world * (first - origin);
       for (unsigned kz = key_lo[2]; kz <= key_hi[2]; ++kz, p += step_z) {
         ++report.leaves_examined;
+        // The depth coordinate (range or z) is at most the range: leaves nearer than the grid start are out.
         const double rho2 = p.squaredNorm();
-        if (rho2 >= far2 || rho2 < near2 || rho2 == 0.0) continue;
-        const SphericalPoint s = to_spherical(p.x(), p.y(), p.z());
-        int azimuth_bin, elevation_bin;
-        if (!geometry.locate(s.azimuth, s.elevation, azimuth_bin, elevation_bin)) continue;
-        const int bin = geometry.depth().bin(s.rho);
+        if (rho2 < near2 || rho2 == 0.0) continue;
+        RayPosition ray;
+        if (!geometry.project(p.x(), p.y(), p.z(), ray) || ray.depth >= far_m) continue;
+        const int bin = geometry.depth().bin(ray.depth);
         if (bin < 0 || bin >= geometry.depth().bins()) continue;
-        const float value = accessor.log_odds(geometry.column(azimuth_bin, elevation_bin), bin);
+        const float value = accessor.log_odds(geometry.column(ray.horizontal_bin, ray.vertical_bin), bin);
         if (std::abs(value) < log_odds_band) {
           ++report.left_unknown;
           continue;
