@@ -2,6 +2,7 @@
 
 #include "fast_math.hpp"
 #include "occ_improve/errors.hpp"
+#include "opdf_kernel.hpp"
 #include "parallel.hpp"
 
 #include <algorithm>
@@ -29,30 +30,23 @@ void require_matching_surface(const SphericalGeometry& g, const SurfaceMap& s) {
 }
 
 // imp_i of eq. 3 for one surface voxel (probability p) at d_rho from the simulated measurement, whose
-// angular offset has the angular term b_angular = B:
-//   P_s = 1/2 (1 + a)^-1 + b,  a = exp(-(2t + 4 + B)) = exp(-u),  b = exp(-(t^2 + B) - log 3),  t = d_rho/sigma.
-// B and log 3 sit inside the exponents, not in factors outside them: fast_exp clamps its argument to
-// [-87, 88], so a and b never leave the normal float range (no underflow of a factor that would lose the
-// free-space carving of a far offset, no subnormal operands that cost a microcode assist per lane).
-// Far in front a <= 2e38, P_s stays ~1e-38. With D = 1 + a and N = 1/2 + b D, P_s = N / D and eq. 3 needs
-// one division. A certain prior (p = 0 or 1, den = 0) is left unchanged by Bayes: imp_i = 0.
-// Branch-free so the row loop vectorises.
+// angular offset has the angular term b_angular = B, with eq. 1 from opdf_kernel.hpp: P_s = n / (n + m),
+// so the posterior p P_s / (p P_s + (1 - p)(1 - P_s)) = p n / (p n + (1 - p) m) needs one division.
+// Far in front x <= 2e38 and P_s stays ~1e-38. A certain prior (p = 0 or 1, den = 0) is left unchanged by
+// Bayes: imp_i = 0. Branch-free so the row loop vectorises.
 //
-// kWithPeak = false drops b, for window offsets with B >= kPeakNegligibleB: there b / P_s and b / (1 - P_s)
+// kWithPeak = false drops g, for window offsets with B >= kPeakNegligibleB: there g / P_s and g / (1 - P_s)
 // are both below (2/3)(e^-B + e^-(3 + 2B)) < 8e-8 for every d_rho, and a relative error eps in P_s and
 // in 1 - P_s moves the posterior of eq. 3 by at most eps / 2, so imp_i changes by < 4e-8.
 constexpr float kPeakNegligibleB = 16.0f;
 
 template <bool kWithPeak>
 inline float surface_term(float p, float d_rho, float inv_sigma, float b_angular) {
-  constexpr float kLog3 = 1.09861228866811f;
   const float t = d_rho * inv_sigma;
-  const float a = detail::fast_exp(-(2.0f * t + 4.0f + b_angular));
-  const float b = kWithPeak ? detail::fast_exp(-(t * t + b_angular) - kLog3) : 0.0f;
-  const float d = 1.0f + a;
-  const float n = 0.5f + b * d;
-  const float num = p * n;
-  const float den = num + (1.0f - p) * (d - n);
+  const detail::OpdfOdds odds =
+      detail::opdf_odds(detail::opdf_x(t, b_angular), kWithPeak ? detail::opdf_g(t, b_angular) : 0.0f);
+  const float num = p * odds.n;
+  const float den = num + (1.0f - p) * odds.m;
   const float imp = num / (den > 0.0f ? den : 1.0f) - p;  // selects, not branches: the loop vectorises
   return den > 0.0f ? imp : 0.0f;
 }

@@ -2,6 +2,7 @@
 
 #include "fast_math.hpp"
 #include "occ_improve/errors.hpp"
+#include "opdf_kernel.hpp"
 #include "parallel.hpp"
 
 #include <algorithm>
@@ -50,16 +51,16 @@ constexpr double kLinearU = -20.0;
 constexpr double kNonPositiveT = -1.5;
 constexpr double kBoundMargin = 0.2;
 
-// e_b = e^-(2 t_b + 4) and g_b = e^-(t_b^2) / 3 for bins [0, n): the B-free factors of e^-u and of the peak
-// term, shared by every column of one measurement (a column multiplies both by e^-B).
+// e_b = x and g_b = g of eq. 1 (opdf_kernel.hpp) at B = 0 for bins [0, n): the B-free factors, shared by
+// every column of one measurement (a column multiplies both by e^-B).
 // With angular_term = B0 != 0 the factor e^-B0 is folded in (for columns with B > kMaxFactoredB).
 OCC_IMPROVE_VECTOR_KERNEL
 void opdf_bin_terms(const double* centres, int n, double rho_bar, double inv_sigma, float angular_term, float* e,
                     float* g) {
   for (int i = 0; i < n; ++i) {
     const float t = static_cast<float>((centres[i] - rho_bar) * inv_sigma);
-    e[i] = fast_exp(-(2.0f * t + 4.0f + angular_term));
-    g[i] = fast_exp(-(t * t + angular_term)) * (1.0f / 3.0f);
+    e[i] = detail::opdf_x(t, angular_term);
+    g[i] = detail::opdf_g(t, angular_term);
   }
 }
 
@@ -67,11 +68,10 @@ void opdf_bin_terms(const double* centres, int n, double rho_bar, double inv_sig
 // lose e^-u where e_b is large.
 constexpr double kMaxFactoredB = 60.0;
 
-// logit P_s from the bin terms, with a = e^-B: x = e^-u, P = 1/(2(1+x)) + g and the odds P/(1-P)
-// rearranged so that numerator and denominator both stay accurate near P = 1/2.
+// logit P_s from the bin terms, with a = e^-B the column's factor.
 inline float logit_from_terms(float e, float g, float a) {
-  const float x = e * a, gx = g * a * (1.0f + x);
-  return fast_log((0.5f + gx) / (0.5f + x - gx));
+  const detail::OpdfOdds odds = detail::opdf_odds(e * a, g * a);
+  return fast_log(odds.n / odds.m);
 }
 
 OCC_IMPROVE_VECTOR_KERNEL
@@ -84,8 +84,8 @@ void logit_profile_from_terms(const float* e, const float* g, int n, float a, fl
 OCC_IMPROVE_VECTOR_KERNEL
 void multiply_odds_clamped(float* o, const float* e, const float* g, int n, float a, float omin, float omax) {
   for (int i = 0; i < n; ++i) {
-    const float x = e[i] * a, gx = g[i] * a * (1.0f + x);
-    const float v = o[i] * ((0.5f + gx) / (0.5f + x - gx));
+    const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
+    const float v = o[i] * (odds.n / odds.m);
     o[i] = v < omin ? omin : (v > omax ? omax : v);
   }
 }

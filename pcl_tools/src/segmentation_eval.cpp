@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -95,37 +96,36 @@ pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path) 
   return cloud;
 }
 
-template <typename PointT>
-PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud) {
+namespace {
+
+// The fit over an organized cloud's points, which PCL lays out row-major at a float stride.
+template <typename PointT, typename Fit>
+IntrinsicsFit fit_cloud(const pcl::PointCloud<PointT>& cloud, Fit fit) {
   if (!cloud.isOrganized() || cloud.height <= 1)
     throw InvalidInput("intrinsics can only be estimated from an organized cloud (height > 1)");
-  // Normal equations of the two independent line fits u = fx a + cx (a = x/z), v = fy b + cy (b = y/z).
-  double saa = 0, sa = 0, sau = 0, su = 0, sbb = 0, sb = 0, sbv = 0, sv = 0;
-  std::size_t n = 0;
-  for (std::uint32_t v = 0; v < cloud.height; ++v)
-    for (std::uint32_t u = 0; u < cloud.width; ++u) {
-      const PointT& p = cloud.at(u, v);
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || p.z <= 0) continue;
-      const double a = p.x / p.z, b = p.y / p.z;
-      saa += a * a, sa += a, sau += a * u, su += u;
-      sbb += b * b, sb += b, sbv += b * v, sv += v;
-      ++n;
-    }
-  if (n < 100) throw InvalidInput("too few valid points to estimate the camera intrinsics");
-  const double dn = static_cast<double>(n);
-  const double det_u = dn * saa - sa * sa, det_v = dn * sbb - sb * sb;
-  if (det_u <= 0 || det_v <= 0) throw InvalidInput("the valid points do not span the image: cannot estimate intrinsics");
-  PinholeIntrinsics k;
-  k.fx = (dn * sau - sa * su) / det_u;
-  k.cx = (su - k.fx * sa) / dn;
-  k.fy = (dn * sbv - sb * sv) / det_v;
-  k.cy = (sv - k.fy * sb) / dn;
-  k.width = static_cast<int>(cloud.width);
-  k.height = static_cast<int>(cloud.height);
-  k.validate();
-  return k;
+  static_assert(sizeof(PointT) % sizeof(float) == 0, "PCL points are float-aligned");
+  return fit(&cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height),
+             sizeof(PointT) / sizeof(float));
 }
 
+}  // namespace
+
+template <typename PointT>
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud) {
+  return fit_cloud(cloud, [](const float* xyz, int w, int h, std::size_t stride) { return fit_intrinsics(xyz, w, h, stride); });
+}
+
+template <typename PointT>
+PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud) {
+  return fit_cloud(cloud, [](const float* xyz, int w, int h, std::size_t stride) {
+           return fit_intrinsics_checked(xyz, w, h, stride);
+         }).intrinsics;
+}
+
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZ>&);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBL>&);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBA>&);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGB>&);
 template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZ>&);
 template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBL>&);
 template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBA>&);

@@ -32,11 +32,12 @@ void set_store_counters(benchmark::State& state, const SphericalGrid& grid, cons
   state.counters["B_per_col"] = touched ? static_cast<double>(grid.memory_bytes()) / static_cast<double>(touched) : 0.0;
 }
 
-// One frame into an empty grid per iteration; args: threads.
+// One frame into an empty grid per iteration; args: threads, preset (bench::PresetArg).
 void insert_one_frame(benchmark::State& state, Input input) {
   const auto* points = input_points(input, state);
   if (!points) return;
-  const SensorPreset preset = kinect_v1_paper();
+  const SensorPreset preset = bench::input_preset(input, static_cast<int>(state.range(1)));
+  state.SetLabel(bench::preset_label(static_cast<int>(state.range(1))));
   const SensorModel model(preset.model);
   SphericalGrid grid{SphericalGeometry(preset.geometry)};
   InsertionOptions options;
@@ -56,10 +57,10 @@ void insert_one_frame(benchmark::State& state, Input input) {
 
 void BM_InsertSampleFrame(benchmark::State& state) { insert_one_frame(state, Input::sample); }
 void BM_InsertRealFrame(benchmark::State& state) { insert_one_frame(state, Input::real); }
-BENCHMARK(BM_InsertSampleFrame)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Repetitions(5)
-    ->ReportAggregatesOnly(true);
-BENCHMARK(BM_InsertRealFrame)->ArgName("threads")->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->Repetitions(5)
-    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_InsertSampleFrame)->ArgNames({"threads", "paper"})->ArgsProduct({{1, 2}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_InsertRealFrame)->ArgNames({"threads", "paper"})->ArgsProduct({{1, 2}, {0, 1}})
+    ->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
 
 // Memory after 1 and after 100 frames of the same static view (the same frame inserted again: a static
 // camera). The figure to watch is growth = MB after 100 / MB after 1.

@@ -2,6 +2,8 @@
 // Inputs shared by the benchmarks: the generated sample frame and the real frames in ../shared/data,
 // found through OCC_IMPROVE_DATA_DIR (environment), else the folder configured at build time.
 #include "occ_improve/integrate.hpp"
+#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <Eigen/Core>
@@ -82,5 +84,20 @@ inline const std::vector<Eigen::Vector3f>* input_points(Input input, benchmark::
   }
   return &points;
 }
+
+/// The presets a benchmark compares (its last argument): the real-use default and the paper's.
+enum PresetArg : int { kRealUse = 0, kPaper = 1 };
+
+/// kinect_v1 with the input's own camera (the sample's intrinsics, or those fitted to the real frame's
+/// 640 x 480 organized points), or kinect_v1_paper.
+inline SensorPreset input_preset(Input input, int preset_arg) {
+  if (preset_arg == kPaper) return kinect_v1_paper();
+  if (input == Input::sample) return kinect_v1(sample::generate_scene().intrinsics);
+  std::string error;
+  const auto& points = real_points(error);
+  return kinect_v1(fit_intrinsics(points.front().data(), 640, 480, 3).intrinsics);
+}
+
+inline const char* preset_label(int preset_arg) { return preset_arg == kPaper ? "kinect_v1_paper" : "kinect_v1"; }
 
 }  // namespace occ_improve::bench

@@ -13,6 +13,7 @@
 //  - boundary precision / recall: boundary pixels (a 4-neighbour with another label, both valid) of the
 //    prediction within boundary_tolerance_px (Chebyshev) of a ground-truth boundary pixel, and back.
 // Only points valid in the ground truth (label != 0) count; a predicted label 0 means "no segment".
+#include "occ_improve/intrinsics_fit.hpp"
 #include "occ_improve/presets.hpp"
 
 #include <pcl/point_cloud.h>
@@ -29,8 +30,13 @@ namespace occ_improve {
 pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path);
 
 /// Pinhole intrinsics of an organized cloud from a pinhole camera, fitted by least squares to
-/// u = fx x/z + cx and v = fy y/z + cy over its valid points. Throws InvalidInput when the cloud is not
-/// organized or has fewer than 100 valid points.
+/// u = fx x/z + cx and v = fy y/z + cy over its valid points (fit_intrinsics), with the fit's residual.
+/// Throws InvalidInput when the cloud is not organized or has fewer than 100 valid points.
+template <typename PointT>
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud);
+
+/// The intrinsics alone; also refuses a poor fit (RMS residual above kMaxIntrinsicsFitResidualPx) with
+/// InvalidInput naming the residual and -intrinsics.
 template <typename PointT>
 PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud);
 
