@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cstdio>
 #include <fstream>
 #include <iterator>
@@ -217,6 +219,34 @@ TEST(Render, LegendShowsTheColourBarAndLabels) {
     EXPECT_GT(dark, 10) << "label of " << tenths;
   }
   EXPECT_NO_THROW(encode_png(legend));
+}
+
+TEST(Render, NotObservableColumnsAreNeutralGreyNotTheNoDataRed) {
+  const auto grey = improvement_colour(std::numeric_limits<float>::quiet_NaN());
+  EXPECT_EQ(grey, (std::array<std::uint8_t, 3>{kNotObservableGrey, kNotObservableGrey, kNotObservableGrey}));
+  EXPECT_NE(grey, improvement_colour(0.324f));
+  EXPECT_EQ(improvement_colour(0.324f), (std::array<std::uint8_t, 3>{255, 0, 0}));
+}
+
+TEST(Render, OverlayBlendsTheColoursOverTheImage) {
+  ImprovementMap map;
+  map.width = 2;
+  map.height = 1;
+  map.value = {0.324f, 0.0f};
+  Image colour;
+  colour.width = 2;
+  colour.height = 1;
+  colour.channels = 3;
+  colour.pixels = {0, 0, 0, 200, 200, 200};
+  const Image half = render_overlay(map, colour);
+  EXPECT_EQ(half.pixels[0], 128);  // red 255 over black
+  EXPECT_EQ(half.pixels[1], 0);
+  EXPECT_EQ(half.pixels[4], 200);  // green 200 over grey 200
+  EXPECT_EQ(render_overlay(map, colour, 0.0).pixels, colour.pixels);
+  colour.width = 1;
+  EXPECT_THROW(render_overlay(map, colour), InvalidInput);
+  colour.width = 2;
+  EXPECT_THROW(render_overlay(map, colour, 1.5), InvalidParameter);
 }
 
 }  // namespace

@@ -140,7 +140,7 @@ void draw_text(Image& im, const std::string& text, int centre_x, int y, int scal
 }  // namespace
 
 std::array<std::uint8_t, 3> improvement_colour(float value) {
-  if (std::isnan(value)) return {0, 0, 0};
+  if (std::isnan(value)) return {kNotObservableGrey, kNotObservableGrey, kNotObservableGrey};
   const auto& first = kColourStops[0];
   const auto& last = kColourStops[std::size(kColourStops) - 1];
   if (value <= first.value) return {first.r, first.g, first.b};
@@ -252,6 +252,22 @@ void write_png(const std::string& path, const Image& image) {
   if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
     throw IoError("cannot write '" + path + "'");
   if (std::fclose(file.release()) != 0) throw IoError("cannot write '" + path + "' (close failed)");
+}
+
+Image render_overlay(const ImprovementMap& map, const Image& colour, double improvement_weight) {
+  detail::require_parameter(improvement_weight >= 0 && improvement_weight <= 1, "improvement_weight",
+                            improvement_weight, "in [0, 1]");
+  if (colour.width != map.width || colour.height != map.height || colour.channels != 3 ||
+      colour.pixels.size() != static_cast<std::size_t>(colour.width) * static_cast<std::size_t>(colour.height) * 3)
+    throw InvalidInput("overlay: colour image of " + std::to_string(colour.width) + " x " +
+                       std::to_string(colour.height) + " x " + std::to_string(colour.channels) +
+                       " does not match the improvement map's " + std::to_string(map.width) + " x " +
+                       std::to_string(map.height) + " RGB");
+  Image out = render_improvement(map);
+  for (std::size_t i = 0; i < out.pixels.size(); ++i)
+    out.pixels[i] = static_cast<std::uint8_t>(std::lround(improvement_weight * out.pixels[i] +
+                                                          (1.0 - improvement_weight) * colour.pixels[i]));
+  return out;
 }
 
 }  // namespace occ_improve

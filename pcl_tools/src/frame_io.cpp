@@ -182,21 +182,40 @@ DepthImage16 read_depth_image16(const std::string& path) {
   throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png or .pgm)");
 }
 
+namespace {
+
+// The registered colour of an organized cloud's points (PCL packs rgb and rgba alike), row-major RGB.
+Image colour_image(const pcl::PCLPointCloud2& blob) {
+  pcl::PointCloud<pcl::PointXYZRGB> cloud;
+  pcl::fromPCLPointCloud2(blob, cloud);
+  Image image;
+  image.width = static_cast<int>(cloud.width);
+  image.height = static_cast<int>(cloud.height);
+  image.channels = 3;
+  image.pixels.reserve(cloud.size() * 3);
+  for (const auto& p : cloud) image.pixels.insert(image.pixels.end(), {p.r, p.g, p.b});
+  return image;
+}
+
+}  // namespace
+
 LoadedFrame load_pcd_frame(const std::string& path) {
   pcl::PCLPointCloud2 blob;
   pcl::PCDReader reader;
   require_pcd_header(path);
   if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
-  bool has_x = false, has_y = false, has_z = false;
+  bool has_x = false, has_y = false, has_z = false, has_colour = false;
   for (const auto& f : blob.fields) {
     has_x |= f.name == "x";
     has_y |= f.name == "y";
     has_z |= f.name == "z";
+    has_colour |= f.name == "rgb" || f.name == "rgba";
   }
   if (!has_x || !has_y || !has_z) throw FormatError("PCD file '" + path + "' has no x, y, z fields");
   LoadedFrame frame;
   frame.path = path;
   pcl::fromPCLPointCloud2(blob, frame.cloud);
+  if (has_colour && blob.height > 1) frame.colour = colour_image(blob);
   return frame;
 }
 

@@ -14,7 +14,7 @@ namespace occ_improve {
 
 template <typename PointT>
 ImprovementFilter<PointT>::ImprovementFilter(bool extract_removed_indices)
-    : pcl::FilterIndices<PointT>(extract_removed_indices) {
+    : pcl::FilterIndices<PointT>(extract_removed_indices), mapper_(std::make_shared<Mapper>(kinect_v1())) {
   filter_name_ = "ImprovementFilter";
 }
 

@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/segmentation_eval.hpp"
 
 #include <pcl/console/parse.h>
 
@@ -10,6 +11,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <sstream>
 
 namespace occ_improve {
@@ -135,7 +137,17 @@ bool help_requested(int argc, const char* const* argv) {
 SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
   if (o.sigma_depth_m) p.model.sigma_depth_m = *o.sigma_depth_m;
   if (o.sigma_depth_per_m2) p.model.sigma_depth_per_m2 = *o.sigma_depth_per_m2;
-  if (o.sigma_angle_rad) p.model.sigma_azimuth_rad = p.model.sigma_elevation_rad = *o.sigma_angle_rad;
+  if (o.sigma_angle_rad) {
+    p.model.sigma_azimuth_rad = p.model.sigma_elevation_rad = *o.sigma_angle_rad;
+    // The pixel-native binning's sigmas are in pixels: the same angle at the image centre.
+    if (p.camera) {
+      p.model.sigma_u_px = std::tan(*o.sigma_angle_rad) * p.camera->fx;
+      p.model.sigma_v_px = std::tan(*o.sigma_angle_rad) * p.camera->fy;
+    }
+  }
+  if ((o.fov_horizontal_deg || o.fov_vertical_deg) && p.geometry.angular_binning == AngularBinning::pinhole)
+    throw InvalidParameter("-fov applies to spherical grids; preset " + p.name +
+                           " has one column per camera pixel (its field of view is the image's)");
   if (o.support_k) p.model.support_k = *o.support_k;
   if (o.depth_bins) p.geometry.depth_bins = *o.depth_bins;
   if (o.depth_max_m) p.geometry.depth_max_m = *o.depth_max_m;
@@ -162,7 +174,85 @@ SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
 
 SensorPreset ToolOptions::preset_for_camera(const std::optional<PinholeIntrinsics>& camera) const {
   if (intrinsics || !camera || !preset.camera) return preset;
-  return apply_overrides(preset_from_pinhole(*camera, PinholePresetOptions{}, preset_name), overrides);
+  return apply_overrides(preset_by_name(preset_name, *camera), overrides);
+}
+
+namespace {
+
+bool is_depth_image(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext == ".png" || ext == ".pgm";
+}
+
+bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
+  // Fitted cameras of one sensor agree to ~1e-4 px; a principal point half a pixel off (319.5 against 320,
+  // both common) moves every pixel-native column by half its width.
+  constexpr double kTolerancePx = 0.05;
+  return a.width == b.width && a.height == b.height && std::abs(a.fx - b.fx) <= kTolerancePx &&
+         std::abs(a.fy - b.fy) <= kTolerancePx && std::abs(a.cx - b.cx) <= kTolerancePx &&
+         std::abs(a.cy - b.cy) <= kTolerancePx;
+}
+
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
+  ToolFrame frame;
+  std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
+  frame.camera_source = options.intrinsics ? options.intrinsics_flag : source.intrinsics ? "the dataset's camera-intrinsics.txt" : "";
+  if (!camera && is_depth_image(source.path))
+    throw InvalidParameter("'" + source.path + "' is a depth image and no intrinsics were found for it: give "
+                           "-intrinsics FX,FY,CX,CY[,W,H] or -intrinsics_file PATH");
+  LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
+  frame.name = source.path;
+  if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
+  if (!camera && options.preset_needs_camera()) {
+    if (loaded.cloud.height <= 1)
+      throw InvalidInput("'" + source.path + "' is not organized, so its camera cannot be fitted; preset " +
+                         options.preset_name + " needs one: give -intrinsics (or -preset kinect_v1_paper)");
+    const IntrinsicsFit fit = estimate_intrinsics_fit(loaded.cloud);
+    if (!(fit.rms_residual_px <= kMaxIntrinsicsFitResidualPx)) {
+      std::ostringstream m;
+      m << "'" << source.path << "': " << "intrinsics fitted to its points miss their pixels by " << fit.rms_residual_px
+        << " px RMS (at most " << kMaxIntrinsicsFitResidualPx << " accepted): not a pinhole range image; give -intrinsics";
+      throw InvalidInput(m.str());
+    }
+    camera = fit.intrinsics;
+    std::ostringstream why;
+    why << "fitted to " << source.path << ", RMS residual " << fit.rms_residual_px << " px over " << fit.points_used
+        << " points";
+    frame.camera_source = why.str();
+  }
+  frame.camera = camera;
+  frame.cloud = std::move(loaded.cloud);
+  frame.colour = std::move(loaded.colour);
+  return frame;
+}
+
+}  // namespace
+
+std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
+  std::vector<ToolFrame> frames;
+  for (const std::string& input : options.inputs)
+    for (const FrameSource& source : expand_input(input)) {
+      frames.push_back(read_tool_frame(options, source));
+      const ToolFrame &first = frames.front(), &last = frames.back();
+      if (first.camera && last.camera && !same_camera(*first.camera, *last.camera))
+        throw InvalidInput("'" + source.path + "' was taken with another camera than '" + first.name +
+                           "' (" + describe_camera({last}) + " against " + describe_camera({first}) +
+                           "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
+    }
+  return frames;
+}
+
+std::string describe_camera(const std::vector<ToolFrame>& frames) {
+  for (const ToolFrame& f : frames) {
+    if (!f.camera) continue;
+    const PinholeIntrinsics& k = *f.camera;
+    char text[160];
+    std::snprintf(text, sizeof text, "camera fx=%.2f fy=%.2f cx=%.2f cy=%.2f %dx%d", k.fx, k.fy, k.cx, k.cy, k.width,
+                  k.height);
+    return std::string(text) + " (" + f.camera_source + ")";
+  }
+  return "no camera (the preset's grid does not depend on one)";
 }
 
 ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec& spec) {
@@ -179,8 +269,14 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
   const auto intrinsics_list = value_of(argc, argv, "-intrinsics");
   const auto intrinsics_file = value_of(argc, argv, "-intrinsics_file");
   if (intrinsics_list && intrinsics_file) throw InvalidParameter("give -intrinsics or -intrinsics_file, not both");
-  if (intrinsics_list) t.intrinsics = intrinsics_from_list(*intrinsics_list);
-  if (intrinsics_file) t.intrinsics = read_intrinsics_file(*intrinsics_file);
+  if (intrinsics_list) {
+    t.intrinsics = intrinsics_from_list(*intrinsics_list);
+    t.intrinsics_flag = "-intrinsics";
+  }
+  if (intrinsics_file) {
+    t.intrinsics = read_intrinsics_file(*intrinsics_file);
+    t.intrinsics_flag = "-intrinsics_file " + *intrinsics_file;
+  }
 
   if (const auto e = value_of(argc, argv, "-depth_encoding")) {
     try {
@@ -208,9 +304,7 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
     o.fov_vertical_deg = fov[1];
   }
 
-  SensorPreset base = preset_by_name(t.preset_name);
-  if (t.intrinsics && base.camera) base = preset_from_pinhole(*t.intrinsics, PinholePresetOptions{}, t.preset_name);
-  t.preset = apply_overrides(base, o);
+  t.preset = apply_overrides(t.intrinsics ? preset_by_name(t.preset_name, *t.intrinsics) : preset_by_name(t.preset_name), o);
 
   if (const auto mode = value_of(argc, argv, "-mode")) {
     if (*mode == "clamped")
@@ -240,22 +334,24 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
 
 std::string usage_common() {
   return R"(Sensor and grid:
-  -preset NAME              kinect_v1_paper (the paper: 640x480x512 bins, 57x43 deg, 0-5 m, constant
-                            sigmas) or kinect_v1 (field of view from the intrinsics, inverse-depth bins
-                            0.5-8 m, sigma_rho = 1.425e-3 rho^2)
+  -preset NAME              kinect_v1 (default: one column per camera pixel, depth along z, 2048
+                            inverse-depth bins 0.5-8 m, sigma_z = 1.425e-3 z^2), kinect_v1_paper (the
+                            paper: 640x480x512 spherical bins, 57x43 deg, 0-5 m, constant sigmas) or
+                            kinect_v1_spherical (kinect_v1's depth model over spherical bins)
   -sigma_depth M            constant depth sigma [m]
   -sigma_depth_quadratic C  depth sigma term growing with rho^2 [1/m] (sigma = sigma_depth + C rho^2)
-  -sigma_angle RAD          azimuth and elevation sigma [rad]
+  -sigma_angle RAD          angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre)
   -support_k K              region of support in standard deviations (default 2)
   -depth_bins N             number of depth bins
   -depth_max M              far end of the depth range [m]
-  -fov H,V                  field of view centred on the optical axis [deg]
+  -fov H,V                  field of view centred on the optical axis [deg] (spherical grids only)
   -mode clamped|exact       clamp the log-odds after each update (default) or sum them as eq. 2 does
   -clamp paper|octomap      clamping thresholds: 0.001/0.999 (default) or OctoMap's 0.1192/0.971
   -k K                      how many top rays/regions to report (K > 0)
 Inputs (positional, fused in order, all from the same viewpoint):
-  FILE.pcd                  any PCD with x y z fields, organized or not, metres, optical frame
-  FILE.png / FILE.pgm       16-bit depth image, back-projected through the intrinsics
+  FILE.pcd                  any PCD with x y z fields, metres, optical frame; with a camera preset its
+                            intrinsics are fitted to its organized points unless -intrinsics is given
+  FILE.png / FILE.pgm       16-bit depth image, back-projected through -intrinsics or the dataset's file
   FOLDER                    a 3DMatch/SUN3D/7-Scenes folder: its *.depth.png frames and camera-intrinsics.txt
   -intrinsics FX,FY,CX,CY[,W,H]  depth camera intrinsics [pixels] (default size 640x480)
   -intrinsics_file PATH     "fx fy cx cy [w h]" or a 3x3 matrix (camera-intrinsics.txt)

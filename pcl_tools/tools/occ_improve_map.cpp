@@ -36,7 +36,9 @@ void print_usage(const char* program) {
             << "       " << program << " -sample -o OUTDIR\n\n"
             << "Fuses the input frames (one viewpoint, in order) into a spherical occupancy grid and writes the\n"
             << "improvement map (where one more measurement would change the map most) to OUTDIR:\n"
-            << "  depth.png occupancy.png improvement.png legend.png  the maps as images (rows = elevation)\n"
+            << "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
+            << "                pixel-aligned with the input depth image; grey = columns no pixel can see)\n"
+            << "  overlay.png   the improvement colours over the frame's colour (PCDs with rgb/rgba)\n"
             << "  surface.pcd   organized PointImprovement cloud (x y z surface_depth probability improvement)\n"
             << "  regions.csv   the K best connected regions, ranked by summed improvement\n"
             << "  rays.csv      the K best single rays\n\n"
@@ -47,18 +49,14 @@ void print_usage(const char* program) {
             << "                            so preset flags are ignored; input frames are fused on top of it\n"
             << "  -save MAP.occmap          save the resulting grid (written atomically)\n"
             << "  -threads N                worker threads (default 0: all cores)\n"
-            << "  -min_improvement V        a region's rays have improvement >= V (default 0.05)\n\n"
+            << "  -min_improvement V        a region's rays have improvement >= V (default 0.2: above\n"
+            << "                            a ray seen once, below no data)\n\n"
             << usage_common();
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
-
-struct Frame {
-  std::string name;
-  pcl::PointCloud<pcl::PointXYZ> cloud;
-};
 
 // A folder that is removed unless committed: outputs are written there and renamed into place at the
 // end, so a failure never leaves files that look complete.
@@ -177,34 +175,17 @@ int run(int argc, char** argv) {
 
   // Read.
   auto start = std::chrono::steady_clock::now();
-  std::vector<Frame> frames;
-  std::optional<PinholeIntrinsics> found_camera;
+  std::vector<ToolFrame> frames;
   if (use_sample) {
     const sample::SampleFrame scene = sample::generate_scene();
-    Frame f{"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)};
-    found_camera = scene.intrinsics;
-    frames.push_back(std::move(f));
+    frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
+                      scene.intrinsics, "the built-in sample's camera"});
   } else {
-    for (const std::string& input : options.inputs) {
-      for (const FrameSource& source : expand_input(input)) {
-        // A depth image without intrinsics anywhere gets the Kinect v1's (OpenNI's defaults, TUM's too).
-        const bool assumed = !options.intrinsics && !source.intrinsics;
-        const auto camera = options.intrinsics ? options.intrinsics
-                                               : source.intrinsics ? source.intrinsics : kinect_v1_intrinsics();
-        LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
-        if (!found_camera && loaded.intrinsics) found_camera = loaded.intrinsics;
-        std::string name = source.path;
-        if (loaded.encoding) {
-          name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding);
-          name += assumed ? ", Kinect v1 intrinsics assumed: give -intrinsics if they differ)" : ")";
-        }
-        frames.push_back({name, std::move(loaded.cloud)});
-      }
-    }
+    frames = read_tool_frames(options);
   }
   const double read_seconds = seconds_since(start);
 
-  SensorPreset preset = options.preset_for_camera(found_camera);
+  SensorPreset preset = options.preset_for_camera(frames.empty() ? std::nullopt : frames.front().camera);
   Mapper mapper = [&] {
     if (load_path.empty()) return Mapper(preset, options.grid);
     LoadedMap loaded = load_map(load_path);
@@ -216,7 +197,7 @@ int run(int argc, char** argv) {
 
   // Insert (insertion with the surface kept current, then the incremental improvement; timed by the mapper).
   MapperReport total;
-  for (const Frame& frame : frames) {
+  for (const ToolFrame& frame : frames) {
     const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
     if (r.insertion.points_received == r.insertion.skipped_invalid)
       throw InvalidInput("'" + frame.name + "' holds no valid points (" + std::to_string(r.insertion.points_received) +
@@ -244,6 +225,12 @@ int run(int argc, char** argv) {
   write_png(staging.file("occupancy.png"), render_occupancy(mapper.surface()));
   write_png(staging.file("improvement.png"), render_improvement(mapper.improvement()));
   write_png(staging.file("legend.png"), render_improvement_legend());
+  // With a pixel-native grid the map is pixel-aligned with the frame's registered colour.
+  const bool overlay = !frames.empty() && frames.front().colour &&
+                       mapper.geometry().binning() == AngularBinning::pinhole &&
+                       frames.front().colour->width == mapper.geometry().width() &&
+                       frames.front().colour->height == mapper.geometry().height();
+  if (overlay) write_png(staging.file("overlay.png"), render_overlay(mapper.improvement(), *frames.front().colour));
   save_improvement_cloud(staging.file("surface.pcd"),
                          to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
   write_regions_csv(staging.file("regions.csv"), regions);
@@ -255,10 +242,11 @@ int run(int argc, char** argv) {
   // Summary.
   const InsertionReport& in = total.insertion;
   const GeometryParams& g = preset.geometry;
-  std::printf("preset %s: %d x %d x %d bins, depth %.2f-%.2f m, %s mode\n", preset.name.c_str(), g.azimuth_bins,
-              g.elevation_bins, g.depth_bins, g.depth_min_m, g.depth_max_m,
+  std::printf("preset %s: %s binning, %d x %d x %d bins, depth %.2f-%.2f m, %s mode\n", preset.name.c_str(),
+              to_string(g.angular_binning), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_min_m, g.depth_max_m,
               options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
-  for (const Frame& f : frames) std::printf("read %s: %zu points\n", f.name.c_str(), f.cloud.size());
+  std::printf("%s\n", describe_camera(frames).c_str());
+  for (const ToolFrame& f : frames) std::printf("read %s: %zu points\n", f.name.c_str(), f.cloud.size());
   std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
               "%zu used beyond the depth range (free space only)\n",
               in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
@@ -280,8 +268,8 @@ int run(int argc, char** argv) {
                 rays.front().azimuth_bin, rays.front().elevation_bin, static_cast<double>(rays.front().improvement),
                 static_cast<double>(rays.front().depth_m));
   std::printf("stop: %s (%s)\n", stop.stop ? "yes" : "no", stop.reason.c_str());
-  std::printf("wrote %s/: depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv\n",
-              out_dir.c_str());
+  std::printf("wrote %s/: depth.png occupancy.png improvement.png legend.png%s surface.pcd regions.csv rays.csv\n",
+              out_dir.c_str(), overlay ? " overlay.png" : "");
   return 0;
 }
 

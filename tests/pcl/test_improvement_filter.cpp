@@ -223,8 +223,16 @@ TEST_F(ImprovementFilterTest, PointsWithoutARayAreNeverKept) {
   }
 }
 
+TEST_F(ImprovementFilterTest, DefaultMapIsThePixelNativeKinectPreset) {
+  ImprovementFilter<pcl::PointXYZ> filter;
+  ASSERT_TRUE(filter.getMapper());
+  EXPECT_EQ(filter.getMapper()->geometry().binning(), AngularBinning::pinhole);
+  EXPECT_EQ(filter.getMapper()->geometry().params().camera, kinect_v1_intrinsics());
+}
+
 TEST_F(ImprovementFilterTest, ErrorsGiveAnEmptyOutput) {
   ImprovementFilter<pcl::PointXYZ> no_map;
+  no_map.setMapper(nullptr);
   no_map.setInputCloud(cloud_);
   Cloud out;
   no_map.filter(out);

@@ -1,6 +1,7 @@
 #include "occ_improve/pcl/tool_options.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "support/test_data.hpp"
 
 #include <gtest/gtest.h>
 
@@ -40,11 +41,13 @@ std::string error_of(std::initializer_list<std::string> args, const ToolSpec& sp
   return "";
 }
 
-TEST(ToolOptions, DefaultsAreThePaperPresetClampedWithNoInputs) {
+TEST(ToolOptions, DefaultsAreThePixelNativePresetClampedWithNoInputs) {
   const ToolOptions t = parse({});
-  EXPECT_EQ(t.preset_name, "kinect_v1_paper");
-  EXPECT_EQ(t.preset.geometry.azimuth_bins, kinect_v1_paper().geometry.azimuth_bins);
-  EXPECT_EQ(t.preset.model.sigma_depth_m, kinect_v1_paper().model.sigma_depth_m);
+  EXPECT_EQ(t.preset_name, "kinect_v1");
+  EXPECT_EQ(t.preset.geometry.angular_binning, AngularBinning::pinhole);
+  EXPECT_EQ(t.preset.geometry.depth_bins, kinect_v1().geometry.depth_bins);
+  EXPECT_EQ(t.preset.model.sigma_depth_per_m2, kinect_v1().model.sigma_depth_per_m2);
+  EXPECT_TRUE(t.preset_needs_camera());
   EXPECT_EQ(t.grid.mode, UpdateMode::clamped);
   EXPECT_EQ(t.grid.probability_min, GridOptions{}.probability_min);
   EXPECT_FALSE(t.intrinsics);
@@ -63,7 +66,7 @@ TEST(ToolOptions, InputsAreThePositionalArgumentsInOrderNotFlagValues) {
 }
 
 TEST(ToolOptions, OverridesReachThePreset) {
-  const ToolOptions t = parse({"-sigma_depth", "0.01", "-sigma_depth_quadratic", "0.002", "-sigma_angle", "0.001",
+  const ToolOptions t = parse({"-preset", "kinect_v1_paper", "-sigma_depth", "0.01", "-sigma_depth_quadratic", "0.002", "-sigma_angle", "0.001",
                                "-support_k", "3", "-depth_bins", "256", "-depth_max", "4", "-fov", "60,40"});
   EXPECT_DOUBLE_EQ(t.preset.model.sigma_depth_m, 0.01);
   EXPECT_DOUBLE_EQ(t.preset.model.sigma_depth_per_m2, 0.002);
@@ -74,6 +77,10 @@ TEST(ToolOptions, OverridesReachThePreset) {
   EXPECT_DOUBLE_EQ(t.preset.geometry.depth_max_m, 4);
   EXPECT_NEAR(t.preset.geometry.azimuth_max_rad - t.preset.geometry.azimuth_min_rad, 60 * M_PI / 180, 1e-12);
   EXPECT_NEAR(t.preset.geometry.elevation_max_rad, 20 * M_PI / 180, 1e-12);
+  // On the pixel-native grid the angle becomes pixels, and the field of view is the image's.
+  const ToolOptions pixels = parse({"-sigma_angle", "0.001"});
+  EXPECT_NEAR(pixels.preset.model.sigma_u_px, std::tan(0.001) * 525, 1e-9);
+  EXPECT_NE(error_of({"-fov", "60,40"}).find("-fov applies to spherical grids"), std::string::npos);
 }
 
 TEST(ToolOptions, ModeClampAndEncoding) {
@@ -97,7 +104,7 @@ TEST(ToolOptions, IntrinsicsBuildTheCameraPreset) {
   ASSERT_TRUE(t.preset.camera);
   EXPECT_EQ(t.preset.camera->fy, 571);
   // The paper preset keeps its own geometry whatever the camera.
-  const ToolOptions paper = parse({"-intrinsics", "570,571,320,240,320,240"});
+  const ToolOptions paper = parse({"-preset", "kinect_v1_paper", "-intrinsics", "570,571,320,240,320,240"});
   EXPECT_EQ(paper.preset.geometry.azimuth_bins, 640);
 }
 
@@ -114,7 +121,11 @@ TEST(ToolOptions, PresetForCameraUsesAFoundCameraUnlessOneWasGiven) {
   EXPECT_EQ(p.geometry.depth_bins, 128);  // overrides re-applied
   const ToolOptions given = parse({"-preset", "kinect_v1", "-intrinsics", "525,525,319.5,239.5"});
   EXPECT_EQ(given.preset_for_camera(found).geometry.azimuth_bins, 640);
-  EXPECT_EQ(parse({}).preset_for_camera(found).geometry.azimuth_bins, 640);  // paper preset
+  EXPECT_EQ(parse({"-preset", "kinect_v1_paper"}).preset_for_camera(found).geometry.azimuth_bins, 640);
+  // The spherical camera preset keeps its binning for the found camera.
+  const SensorPreset spherical = parse({"-preset", "kinect_v1_spherical"}).preset_for_camera(found);
+  EXPECT_EQ(spherical.geometry.angular_binning, AngularBinning::spherical);
+  EXPECT_EQ(spherical.geometry.azimuth_bins, 320);
 }
 
 TEST(ToolOptions, IntrinsicsFile) {
@@ -168,6 +179,31 @@ TEST(ToolOptions, HelpAndUsage) {
   for (const char* flag : {"-preset", "-sigma_depth", "-sigma_angle", "-depth_bins", "-depth_max", "-fov", "-mode",
                            "-clamp", "-intrinsics", "-intrinsics_file", "-depth_encoding", "-k"})
     EXPECT_NE(usage.find(flag), std::string::npos) << flag;
+}
+
+TEST(ToolFrames, IntrinsicsAreNeverAssumed) {
+  OCC_REQUIRE_DATA(depth, "formats/open3d_rgbd/TUM_depth.png");
+  OCC_REQUIRE_DATA(capture, "kinect/pcl_tutorials/pairwise/capture0001.pcd");
+  OCC_REQUIRE_DATA(office, "kinect/pcl_test/office1.pcd");
+  // A depth image without intrinsics anywhere is refused, naming the flags.
+  EXPECT_EQ(error_of({depth}), "");  // parsing alone succeeds; reading refuses
+  try {
+    read_tool_frames(parse({depth}));
+    FAIL() << "expected InvalidParameter";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("-intrinsics"), std::string::npos) << e.what();
+  }
+  const auto with_flags = read_tool_frames(parse({depth, "-intrinsics", "525,525,319.5,239.5"}));
+  ASSERT_EQ(with_flags.size(), 1u);
+  EXPECT_EQ(with_flags.front().camera_source, "-intrinsics");
+  // An organized PCD gets its camera fitted, and says so.
+  const auto fitted = read_tool_frames(parse({office}));
+  ASSERT_TRUE(fitted.front().camera);
+  EXPECT_NEAR(fitted.front().camera->cx, 320.0, 0.01);  // office1 is centred at 320, not 319.5
+  EXPECT_NE(describe_camera(fitted).find("fitted to"), std::string::npos);
+  // Frames through different cameras are refused; the paper preset needs no camera at all.
+  EXPECT_THROW(read_tool_frames(parse({capture, office})), InvalidInput);
+  EXPECT_FALSE(read_tool_frames(parse({"-preset", "kinect_v1_paper", capture})).front().camera);
 }
 
 }  // namespace

@@ -32,7 +32,10 @@ struct RankedRay {
 std::vector<RankedRay> top_rays(const ImprovementMap& map, const SurfaceMap& surface, int k);
 
 struct RegionOptions {
-  float min_improvement = 0.05f;      ///< a column belongs to a region when its improvement >= this
+  /// A column belongs to a region when its improvement >= this. 0.2 lies between the level of a ray
+  /// observed once (~0.14 pixel-native, ~0.13 paper preset) and the no-data level (0.324), so regions are
+  /// the areas without data (holes, shadows, beyond range) and their borders, not the observed surface.
+  float min_improvement = 0.2f;
   std::size_t min_area_columns = 4;   ///< smaller regions are dropped (isolated noisy rays)
   void validate() const;              ///< NaN / infinite threshold -> InvalidParameter
 };

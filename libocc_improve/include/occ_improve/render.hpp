@@ -3,7 +3,8 @@
 //
 // Improvement colour map (docs/METHOD.md, "Rendering"), piecewise linear in RGB between breakpoints:
 //   <= -0.3 dark blue (0,0,128), -0.1 blue (0,64,255), 0 green (0,200,0), 0.1 yellow (255,255,0),
-//   0.2 orange (255,140,0), >= 0.3 red (255,0,0).
+//   0.26 orange (255,160,0), 0.31 (255,100,0), >= 0.322 red (255,0,0) = the no-data level.
+// Columns that are not observable (NaN) are neutral grey (128,128,128), unlike the no-data red.
 // It is non-linear in value: most of the colour range is spent on [-0.1, 0.3], where the paper's
 // picture lives (observed-once ~0.13, no data ~0.32, discontinuities negative).
 #include "occ_improve/improvement.hpp"
@@ -31,8 +32,14 @@ Image render_improvement(const ImprovementMap& map);
 /// RGB legend: the colour bar from -0.4 to 0.4, ticks every 0.1 labelled with a built-in 3 x 5 digit font.
 Image render_improvement_legend();
 
-/// The colour map above (NaN -> black).
+/// The colour map above (NaN -> neutral grey).
 std::array<std::uint8_t, 3> improvement_colour(float value);
+constexpr std::uint8_t kNotObservableGrey = 128;
+
+/// The improvement colours blended over a registered RGB image of the same size (pixel-native grids
+/// are pixel-aligned with the depth camera): improvement_weight * colour map + (1 - w) * image.
+/// Throws InvalidInput for a colour image of another size, InvalidParameter for a weight outside [0, 1].
+Image render_overlay(const ImprovementMap& map, const Image& colour, double improvement_weight = 0.5);
 
 /// Writes an 8-bit grey or RGB PNG. Throws IoError when the file cannot be written, InvalidInput for an
 /// inconsistent image.

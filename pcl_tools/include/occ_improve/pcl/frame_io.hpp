@@ -3,6 +3,7 @@
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
 // disparity PGM). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
 #include "occ_improve/presets.hpp"
+#include "occ_improve/render.hpp"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -46,6 +47,7 @@ struct LoadedFrame {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
   std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
+  std::optional<Image> colour;                  ///< registered RGB of an organized PCD with rgb/rgba
 };
 
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.

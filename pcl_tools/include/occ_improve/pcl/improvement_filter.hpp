@@ -21,6 +21,9 @@
 // getImprovementCloud(): per input point (aligned with the input cloud, same width/height) its x y z,
 // and the surface depth, surface probability and improvement of its ray (NaN where it has no ray).
 //
+// Default map: its own, preset kinect_v1 (pixel-native, Kinect v1 intrinsics fx = fy = 525); give
+// setSensorPreset(kinect_v1(intrinsics)) for another camera.
+//
 // Explicitly instantiated for PointXYZ, PointXYZI, PointXYZRGB, PointXYZRGBA and PointXYZL.
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/point_types.hpp"

@@ -14,7 +14,7 @@ namespace occ_improve {
 
 /// What a tool adds to the common flags.
 struct ToolSpec {
-  std::string default_preset = "kinect_v1_paper";
+  std::string default_preset = "kinect_v1";  ///< the real-use, pixel-native preset in every tool
   int default_top_k = 10;
   /// The tool's own flags that take a value (e.g. "-o"), so their values are not taken as inputs.
   std::vector<std::string> value_flags;
@@ -36,6 +36,7 @@ struct ToolOptions {
   SensorPreset preset;  ///< the named preset (built from `intrinsics` when it is camera-based) + overrides
   GridOptions grid;
   std::optional<PinholeIntrinsics> intrinsics;  ///< from -intrinsics or -intrinsics_file
+  std::string intrinsics_flag;                  ///< "-intrinsics" or "-intrinsics_file PATH", for messages
   std::optional<DepthEncoding> depth_encoding;  ///< unset: chosen per file (see frame_io.hpp)
   int top_k = 10;
   std::vector<std::string> inputs;  ///< positional arguments, in command-line order
@@ -43,7 +44,28 @@ struct ToolOptions {
   /// The preset again for a camera found with the input (e.g. a folder's camera-intrinsics.txt) when no
   /// intrinsics were given on the command line; overrides are re-applied. Paper presets ignore it.
   SensorPreset preset_for_camera(const std::optional<PinholeIntrinsics>& camera) const;
+  /// Whether the preset is built from a camera (kinect_v1, kinect_v1_spherical), so frames need one.
+  bool preset_needs_camera() const { return preset.camera.has_value(); }
 };
+
+/// One input frame of a tool, with the camera it is seen through and where that camera came from.
+struct ToolFrame {
+  std::string name;  ///< the file, with its depth encoding for depth images
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  std::optional<PinholeIntrinsics> camera;
+  std::string camera_source;  ///< "-intrinsics", "camera-intrinsics.txt ...", "fitted to the cloud, ..."
+  std::optional<Image> colour;  ///< registered colour (organized PCDs with rgb/rgba)
+};
+
+/// Reads every input (expand_input: files and dataset folders, in order). Intrinsics are never assumed:
+/// a depth image is back-projected through -intrinsics/-intrinsics_file or its dataset's intrinsics
+/// file, and refused without either; a PCD's camera, when the preset needs one and none was given, is
+/// fitted to its organized points (estimate_intrinsics; refused when unorganized or a poor fit, naming
+/// -intrinsics). Frames seen through different cameras are refused: one viewpoint, one camera.
+std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
+
+/// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
+std::string describe_camera(const std::vector<ToolFrame>& frames);
 
 /// True when -h or --help is among the arguments.
 bool help_requested(int argc, const char* const* argv);
