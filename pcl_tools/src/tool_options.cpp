@@ -194,6 +194,8 @@ bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
          std::abs(a.cy - b.cy) <= kTolerancePx;
 }
 
+}  // namespace
+
 ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
   ToolFrame frame;
   std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
@@ -226,8 +228,6 @@ ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source)
   frame.colour = std::move(loaded.colour);
   return frame;
 }
-
-}  // namespace
 
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
   std::vector<ToolFrame> frames;

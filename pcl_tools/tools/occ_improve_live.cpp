@@ -130,10 +130,12 @@ int run(int argc, const char* const* argv_in) {
   std::shared_ptr<pcl::Grabber> grabber;
   FileSequenceGrabber* file_source = nullptr;
   SensorPreset preset = options.preset;
-  std::string source_text;
+  std::string source_text, camera_text;
   if (device || !oni.empty()) {
     grabber = open_openni2_grabber(device ? *device : oni);
     source_text = device ? "OpenNI2 device " + (device->empty() ? std::string("(first)") : *device) : "recording " + oni;
+    camera_text = options.intrinsics ? "camera from " + options.intrinsics_flag
+                                     : "camera: Kinect v1 defaults fx = fy = 525 (give -intrinsics for another device)";
   } else if (!depth_dir.empty()) {
     DepthSequence sequence = scan_depth_sequence(depth_dir);
     if (max_frames > 0 && sequence.frames.size() > static_cast<std::size_t>(max_frames))
@@ -141,6 +143,7 @@ int run(int argc, const char* const* argv_in) {
     const std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : sequence.intrinsics;
     if (!camera) throw InvalidParameter("-depth_dir " + depth_dir + ": no camera-intrinsics.txt there; give -intrinsics or -intrinsics_file");
     if (!options.intrinsics) preset = options.preset_for_camera(camera);
+    camera_text = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
     DepthSequenceOptions sequence_options;
     sequence_options.fps = fps;
     sequence_options.use_poses = !pcl::console::find_switch(n, argv, "-no_poses");
@@ -154,6 +157,11 @@ int run(int argc, const char* const* argv_in) {
     std::vector<std::string> files = pcd_dir.empty() ? options.inputs : PcdSequenceGrabber(pcd_dir).files();
     if (max_frames > 0 && files.size() > static_cast<std::size_t>(max_frames))
       files.resize(static_cast<std::size_t>(max_frames));
+    if (files.empty()) throw InvalidInput("no PCD files to replay");
+    // The first frame's camera (fitted to its organized points unless -intrinsics is given).
+    const ToolFrame first = read_tool_frame(options, FrameSource{files.front(), std::nullopt});
+    preset = options.preset_for_camera(first.camera);
+    camera_text = describe_camera({first});
     auto source = std::make_shared<PcdSequenceGrabber>(files, fps);
     source_text = (pcd_dir.empty() ? std::string("PCD files") : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
     file_source = source.get();
@@ -205,6 +213,7 @@ int run(int argc, const char* const* argv_in) {
     file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
   pipeline.attach(*grabber);
 
+  pcl::console::print_info("%s\n", camera_text.c_str());
   pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source_text.c_str(),
                            preset.name.c_str(), preset.geometry.azimuth_bins, preset.geometry.elevation_bins,
                            preset.geometry.depth_bins, depth_max_m);

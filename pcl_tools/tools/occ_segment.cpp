@@ -43,18 +43,19 @@ int run(int argc, char** argv) {
   if (out_dir.empty()) throw InvalidParameter("-o OUTDIR is required");
   if (options.inputs.size() != 1) throw InvalidParameter("give exactly one input frame (see -h)");
 
-  const LoadedFrame frame = load_frame(options.inputs.front(), options.intrinsics, options.depth_encoding);
+  const std::vector<ToolFrame> frames = read_tool_frames(options);
+  if (frames.size() != 1) throw InvalidParameter("give exactly one input frame (a folder holds " + std::to_string(frames.size()) + ")");
+  const ToolFrame& frame = frames.front();
   if (frame.cloud.height <= 1)
-    throw InvalidInput("'" + frame.path + "' is not organized (height 1): the segmentation needs a range image");
+    throw InvalidInput("'" + frame.name + "' is not organized (height 1): the segmentation needs a range image");
   const std::size_t valid = static_cast<std::size_t>(std::count_if(
       frame.cloud.begin(), frame.cloud.end(), [](const pcl::PointXYZ& p) { return std::isfinite(p.z) && p.z > 0; }));
   if (valid == 0) {
-    std::printf("'%s' holds no valid point: no segments\n", frame.path.c_str());
+    std::printf("'%s' holds no valid point: no segments\n", frame.name.c_str());
     return 0;
   }
-  const auto camera = options.intrinsics ? options.intrinsics
-                                         : (frame.intrinsics ? frame.intrinsics : estimate_intrinsics(frame.cloud));
-  const SensorPreset preset = options.preset_for_camera(camera);
+  const SensorPreset preset = options.preset_for_camera(frame.camera);
+  std::printf("%s\n", describe_camera(frames).c_str());
   SegmentationParams params = segmentation_defaults(preset);
   pcl::console::parse_argument(argc, argv, "-contour", params.contour_improvement_below);
   int min_segment = static_cast<int>(params.min_segment_columns);

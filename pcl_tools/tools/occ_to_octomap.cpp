@@ -99,32 +99,25 @@ struct Source {
 };
 
 Source build_from_frames(const ToolOptions& options, bool use_sample) {
-  std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
-  std::optional<PinholeIntrinsics> camera;
+  std::vector<ToolFrame> frames;
   Source source;
   if (use_sample) {
     const sample::SampleFrame scene = sample::generate_scene();
-    clouds.push_back(organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height));
-    camera = scene.intrinsics;
+    frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
+                      scene.intrinsics, "the built-in sample's camera"});
     source.description = "built-in sample frame";
   } else {
-    for (const std::string& input : options.inputs)
-      for (const FrameSource& frame : expand_input(input)) {
-        LoadedFrame loaded =
-            load_frame(frame.path, options.intrinsics ? options.intrinsics : frame.intrinsics, options.depth_encoding);
-        if (!camera && loaded.intrinsics) camera = loaded.intrinsics;
-        clouds.push_back(std::move(loaded.cloud));
-      }
-    source.description = std::to_string(clouds.size()) + " frame(s)";
+    frames = read_tool_frames(options);
+    source.description = std::to_string(frames.size()) + " frame(s)";
   }
-  const SensorPreset preset = options.preset_for_camera(camera);
+  const SensorPreset preset = options.preset_for_camera(frames.empty() ? std::nullopt : frames.front().camera);
   source.model = preset.model;
   source.grid.emplace(SphericalGeometry(preset.geometry), options.grid);
   const SensorModel model(preset.model);
-  for (const auto& cloud : clouds) source.insertion += insert_points(*source.grid, model, span_of(cloud));
+  for (const ToolFrame& frame : frames) source.insertion += insert_points(*source.grid, model, span_of(frame.cloud));
   if (source.insertion.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
-  source.description += ", preset " + preset.name;
+  source.description += ", preset " + preset.name + ", " + describe_camera(frames);
   return source;
 }
 

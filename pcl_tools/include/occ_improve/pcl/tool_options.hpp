@@ -63,6 +63,8 @@ struct ToolFrame {
 /// fitted to its organized points (estimate_intrinsics; refused when unorganized or a poor fit, naming
 /// -intrinsics). Frames seen through different cameras are refused: one viewpoint, one camera.
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
+/// One frame by the same rules.
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source);
 
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
