@@ -25,6 +25,7 @@ void print_usage(const char* program) {
       "intrinsics) and PCL's OrganizedMultiPlaneSegmentation + OrganizedConnectedComponentSegmentation\n"
       "with EuclideanClusterComparator, dominant plane left out in both unless said otherwise.\n"
       "  -no_plane                ours without dominant-plane removal\n"
+      "  -preset NAME             ours: kinect_v1 (default), kinect_v1_spherical or kinect_v1_paper\n"
       "  -contour V               ours: contour rays have improvement < V (default -0.02)\n"
       "  -min_segment N           ours: smallest segment in rays (default 200)\n"
       "  -plane_distance D        ours: plane inlier band in m (default 0.01)\n"
@@ -77,7 +78,9 @@ int main(int argc, char** argv) {
     int min_cluster = static_cast<int>(pcl_params.min_cluster_points);
     pcl::console::parse_argument(argc, argv, "-pcl_min_cluster", min_cluster);
     pcl_params.min_cluster_points = static_cast<std::size_t>(std::max(1, min_cluster));
-    SegmentationParams ours = segmentation_defaults(kinect_v1());
+    std::string preset_name = "kinect_v1";
+    pcl::console::parse_argument(argc, argv, "-preset", preset_name);
+    SegmentationParams ours = segmentation_defaults(preset_by_name(preset_name));
     pcl::console::parse_argument(argc, argv, "-contour", ours.contour_improvement_below);
     int min_segment = static_cast<int>(ours.min_segment_columns);
     pcl::console::parse_argument(argc, argv, "-min_segment", min_segment);
@@ -103,7 +106,7 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < cloud.size(); ++i) truth[i] = cloud[i].label;
       const int width = static_cast<int>(cloud.width), height = static_cast<int>(cloud.height);
 
-      const auto our_result = segment_cloud(cloud, kinect_v1(estimate_intrinsics(cloud)), ours);
+      const auto our_result = segment_cloud(cloud, preset_by_name(preset_name, estimate_intrinsics(cloud)), ours);
       const auto our_score = evaluate_segmentation(truth, our_result.point_labels, width, height);
       print_row(name, "ours", our_score, our_result.total_seconds());
       ours_total.add(our_score, our_result.total_seconds());
