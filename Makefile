@@ -8,7 +8,7 @@ CMAKE_FLAGS ?=
 CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
             -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) $(CMAKE_FLAGS)
 
-.PHONY: all deps configure build test demo bench segment-eval consumer-test install clean
+.PHONY: all deps configure build test demo bench segment-eval map-eval consumer-test install clean
 
 all: build
 
@@ -36,6 +36,11 @@ bench: configure
 DATA_DIR ?= $(CURDIR)/../shared/data
 segment-eval: build
 	$(BUILD_DIR)/pcl_tools/occ_segment_eval $(DATA_DIR)/segmentation/mosd_learn/*.pcd
+
+# The improvement map on real frames, default preset: known against unknown rays, ranking and regions,
+# repeated frames, grid end (tests/pcl/test_map_quality.cpp prints the table and checks the targets).
+map-eval: build
+	OCC_IMPROVE_DATA_DIR=$(DATA_DIR) $(BUILD_DIR)/tests/test_map_quality
 
 install: build
 	cmake --install $(BUILD_DIR) --prefix $(INSTALL_DIR) >/dev/null

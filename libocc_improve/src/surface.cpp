@@ -67,6 +67,12 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
     s.probability = static_cast<float>(probability_from_logit(best));
     return s;
   }
+  if (last == bins - 1 && best < -kSurfaceTieTolerance) {  // rising to a peak beyond the grid
+    s.bin = bins;
+    s.depth_m = static_cast<float>(depth.max());
+    s.probability = static_cast<float>(probability_from_logit(c->value(0)));
+    return s;
+  }
   if (grid.clamped() && best >= grid.log_odds_max()) {  // saturated peak: centre of the run
     s.bin = (first + last) / 2;
     s.depth_m = static_cast<float>(0.5 * (depth.centre(first) + depth.centre(last)));

@@ -106,6 +106,12 @@ DenseGrid::Surface DenseGrid::surface(std::size_t column) const {
     s.probability = 1.0 / (1.0 + std::exp(-best));
     return s;
   }
+  if (last == bins_ - 1 && best < -kSurfaceTieTolerance) {  // surface.hpp: a peak beyond the grid
+    s.bin = static_cast<int>(bins_);
+    s.depth_m = depth.max();
+    s.probability = 1.0 / (1.0 + std::exp(-v[0]));
+    return s;
+  }
   if (options_.mode == UpdateMode::clamped && best >= lmax_) {
     s.bin = static_cast<int>((first + last) / 2);
     s.depth_m = 0.5 * (depth.centre(static_cast<int>(first)) + depth.centre(static_cast<int>(last)));
