@@ -50,9 +50,17 @@ std::size_t point_stride_floats(const py::array& a) {
   return static_cast<std::size_t>(stride / f);
 }
 
+/// Any array-like (nested lists too) as an ndarray, without a copy when it already is one.
+py::array as_array(const py::handle& object) {
+  py::array a = py::array::ensure(object);
+  if (!a) throw py::error_already_set();
+  return a;
+}
+
 }  // namespace
 
-PointsInput points_from_array(const py::array& points) {
+PointsInput points_from_array(const py::handle& object) {
+  const py::array points = as_array(object);
   require_real_numbers(points, "points");
   const bool shaped = (points.ndim() == 2 || points.ndim() == 3) && points.shape(points.ndim() - 1) == 3;
   if (!shaped)
@@ -75,7 +83,8 @@ PointsInput points_from_array(const py::array& points) {
   return in;
 }
 
-DepthInput depth_from_array(const py::array& depth, const PinholeIntrinsics& intrinsics) {
+DepthInput depth_from_array(const py::handle& object, const PinholeIntrinsics& intrinsics) {
+  const py::array depth = as_array(object);
   require_real_numbers(depth, "depth");
   if (depth.ndim() != 2 || depth.shape(0) != intrinsics.height || depth.shape(1) != intrinsics.width) {
     throw InvalidInput("depth must be an H x W array matching the intrinsics (" + std::to_string(intrinsics.height) +

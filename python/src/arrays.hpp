@@ -21,8 +21,8 @@ struct PointsInput {
   py::object keep;
   bool copied = false;
 };
-/// Raises InvalidInput for another shape, TypeError for a non-numeric dtype.
-PointsInput points_from_array(const py::array& points);
+/// Any array-like. Raises InvalidInput for another shape, TypeError for a non-numeric dtype.
+PointsInput points_from_array(const py::handle& points);
 
 /// A depth image (H x W) in the units `scale` converts to metres; `keep` owns the converted copy.
 struct DepthInput {
@@ -32,7 +32,7 @@ struct DepthInput {
   bool copied = false;
 };
 /// Raises InvalidInput when the shape is not intrinsics.height x intrinsics.width.
-DepthInput depth_from_array(const py::array& depth, const PinholeIntrinsics& intrinsics);
+DepthInput depth_from_array(const py::handle& depth, const PinholeIntrinsics& intrinsics);
 
 /// A read-only H x W array over `data` that keeps `owner` alive (a view: it follows later changes).
 template <class T>

@@ -13,9 +13,9 @@ namespace occ_improve::python {
 namespace {
 
 /// Seconds per frame of: insert, regions, a copy of the improvement map; on a fresh Mapper.
-std::vector<double> reference_frames(const SensorPreset& preset, const std::vector<py::array>& frames, int threads) {
+std::vector<double> reference_frames(const SensorPreset& preset, const std::vector<py::object>& frames, int threads) {
   std::vector<PointsInput> inputs;
-  for (const py::array& f : frames) inputs.push_back(points_from_array(f));
+  for (const py::object& f : frames) inputs.push_back(points_from_array(f));
   Mapper mapper(preset);
   InsertionOptions options;
   options.threads = threads;

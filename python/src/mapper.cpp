@@ -8,6 +8,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <array>
 #include <cmath>
 
 namespace occ_improve::python {
@@ -33,14 +34,14 @@ void bind_reports(py::module_& m) {
   def_fields_repr(mr, {"insertion", "improvement_seconds", "surface_columns_changed", "rays_recomputed"});
 }
 
-MapperReport insert_points_array(PyMapper& self, const py::array& points, int threads) {
+MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads) {
   const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
   InsertionOptions options;
   options.threads = threads;
   return with_mapper(self, [&](Mapper& m) { return m.insert(in.span, options); });
 }
 
-MapperReport insert_depth_array(PyMapper& self, const py::array& depth, const PinholeIntrinsics& intrinsics,
+MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const PinholeIntrinsics& intrinsics,
                                 double scale, int threads) {
   occ_improve::detail::require_parameter(std::isfinite(scale) && scale > 0, "scale", scale, "finite and > 0");
   const DepthInput in = depth_from_array(depth, intrinsics);
@@ -146,6 +147,13 @@ void bind_mapper_class(py::module_& m) {
                               elevation_bin, "inside [0, height)");
     return Eigen::Vector3d(s.mapper.geometry().direction(azimuth_bin, elevation_bin));
   }, py::arg("azimuth_bin"), py::arg("elevation_bin"), "Unit direction (sensor frame) through a ray's centre.");
+  c.def("locate", [](PyMapper& s, const std::array<double, 3>& p) -> std::optional<std::pair<int, int>> {
+    // std::array, not Eigen: GCC 12 gives a false maybe-uninitialized warning in pybind11's Eigen caster.
+    const SphericalPoint sp = to_spherical(p[0], p[1], p[2]);
+    int a = 0, e = 0;
+    if (!s.mapper.geometry().locate(sp.azimuth, sp.elevation, a, e)) return std::nullopt;
+    return std::make_pair(a, e);
+  }, py::arg("point"), "(azimuth_bin, elevation_bin) of the ray through a sensor-frame point, None outside the field of view.");
   c.def("__repr__", [](PyMapper& s) {
     return "Mapper(" + std::to_string(s.mapper.geometry().width()) + " x " +
            std::to_string(s.mapper.geometry().height()) + " x " + std::to_string(s.mapper.geometry().depth().bins()) + ")";
