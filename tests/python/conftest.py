@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
+from typing import Optional
 
 import numpy as np
 import pytest
@@ -15,9 +16,11 @@ import pytest
 import occ_improve as oi
 
 
-def data_dir() -> Path | None:
-    for candidate in (os.environ.get("OCC_IMPROVE_DATA_DIR"), os.environ.get("OCC_IMPROVE_DATA_DIR_DEFAULT"),
-                      str(Path(__file__).resolve().parents[2].parent / "shared" / "data")):
+def data_dir() -> Optional[Path]:
+    chosen = os.environ.get("OCC_IMPROVE_DATA_DIR")  # when set, it alone decides, as in the C++ tests
+    candidates = [chosen] if chosen else [os.environ.get("OCC_IMPROVE_DATA_DIR_DEFAULT"),
+                                          str(Path(__file__).resolve().parents[2].parent / "shared" / "data")]
+    for candidate in candidates:
         if candidate and Path(candidate).is_dir():
             return Path(candidate)
     return None
