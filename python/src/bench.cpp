@@ -12,33 +12,35 @@
 namespace occ_improve::python {
 namespace {
 
-/// Seconds per frame of: insert, regions, a copy of the improvement map; on a fresh Mapper.
-std::vector<double> reference_frames(const SensorPreset& preset, const std::vector<py::object>& frames, int threads) {
+/// Seconds per frame of: insert, regions, a copy of the improvement map; on `target`'s Mapper, so that
+/// a benchmark can interleave these frames with the same frames through Python on another Mapper.
+std::vector<double> reference_frames(PyMapper& target, const std::vector<py::object>& frames, int threads) {
   std::vector<PointsInput> inputs;
   for (const py::object& f : frames) inputs.push_back(points_from_array(f));
-  Mapper mapper(preset);
   InsertionOptions options;
   options.threads = threads;
-  std::vector<double> seconds;
-  volatile float sink = 0;
-  py::gil_scoped_release release;
-  for (const PointsInput& in : inputs) {
-    const auto start = std::chrono::steady_clock::now();
-    mapper.insert(in.span, options);
-    const auto regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface());
-    std::vector<float> improvement = mapper.improvement().value;
-    seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    sink = improvement.back() + static_cast<float>(regions.size());  // the copy may not be optimised away
-  }
-  (void)sink;
-  return seconds;
+  return with_mapper(target, [&](Mapper& mapper) {
+    std::vector<double> seconds;
+    volatile float sink = 0;
+    for (const PointsInput& in : inputs) {
+      const auto start = std::chrono::steady_clock::now();
+      mapper.insert(in.span, options);
+      const auto regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface());
+      std::vector<float> improvement = mapper.improvement().value;
+      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      sink = improvement.back() + static_cast<float>(regions.size());  // the copy may not be optimised away
+    }
+    (void)sink;
+    return seconds;
+  });
 }
 
 }  // namespace
 
 void bind_bench(py::module_& m) {
-  m.def("_reference_frame_seconds", &reference_frames, py::arg("preset"), py::arg("frames"), py::arg("threads") = 0,
-        "Benchmark helper: per-frame seconds of Mapper.insert + regions() + improvement() done in C++.");
+  m.def("_reference_frame_seconds", &reference_frames, py::arg("mapper"), py::arg("frames"), py::arg("threads") = 0,
+        "Benchmark helper: per-frame seconds of Mapper.insert + regions() + improvement() made from C++ "
+        "on this Mapper.");
 }
 
 }  // namespace occ_improve::python

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """What a full 640x480 frame costs through Python against the same calls made from C++.
 
-Per frame, on one Mapper: insert the frame's points (N x 3 float32, read in place), find the regions,
-copy the improvement map out. The C++ side is the module's _reference_frame_seconds, which makes those
-calls in C++ on the same arrays with the same library build, so the difference is the binding's cost
-(argument conversion, GIL release, the Mapper's lock, result conversion). Rounds alternate Python and
-C++, and the figure is the ratio of median round times, because the machine is shared.
+Per frame: insert the frame's points (N x 3 float32, read in place), find the regions, copy the
+improvement map out. The C++ side is occ_improve._core._reference_frame_seconds, which makes those calls
+in C++ (same arrays, same library build, timed inside C++) on a second Mapper fed the same frames, so the
+difference is the binding's cost: argument conversion, GIL release, the Mapper's lock, result conversion.
+The machine is shared, so each frame is run through both sides back to back (alternating which goes
+first) and the figure is the median of the per-frame ratios, with the ratio of summed times beside it.
 
     make python-bench        (or: PYTHONPATH=build/python python3 tests/bench/bench_python.py)
 """
@@ -29,50 +30,73 @@ def sample_frames(count: int):
     return frames
 
 
-def python_round(preset: oi.SensorPreset, frames, threads: int):
+def python_frame(mapper: oi.Mapper, points: np.ndarray, threads: int) -> float:
+    start = time.perf_counter()
+    mapper.insert(points, threads=threads)
+    mapper.regions()
+    mapper.improvement()
+    return time.perf_counter() - start
+
+
+def cpp_frame(mapper: oi.Mapper, points: np.ndarray, threads: int) -> float:
+    return oi._core._reference_frame_seconds(mapper, [points], threads)[0]
+
+
+def measure(preset, frames, sequences: int, threads: int):
+    """Paired per-frame times (python, cpp) over `sequences` runs of the frames on fresh Mappers."""
+    pairs = []
+    for s in range(sequences):
+        py_mapper, cpp_mapper = oi.Mapper(preset), oi.Mapper(preset)
+        for i, points in enumerate(frames):
+            if (s + i) % 2 == 0:  # alternate which side goes first
+                p = python_frame(py_mapper, points, threads)
+                c = cpp_frame(cpp_mapper, points, threads)
+            else:
+                c = cpp_frame(cpp_mapper, points, threads)
+                p = python_frame(py_mapper, points, threads)
+            pairs.append((p, c))
+    return pairs
+
+
+def fixed_costs(preset) -> str:
+    """The binding's own per-call costs, measured where the library has (almost) nothing to do."""
     mapper = oi.Mapper(preset)
-    seconds = []
-    for points in frames:
+
+    def per_call(f, n=2000):
         start = time.perf_counter()
-        mapper.insert(points, threads=threads)
-        mapper.regions()
-        mapper.improvement()
-        seconds.append(time.perf_counter() - start)
-    return seconds
+        for _ in range(n):
+            f()
+        return (time.perf_counter() - start) / n * 1e6
 
-
-def measure(preset, frames, rounds: int, threads: int):
-    python, cpp = [], []
-    for r in range(rounds):
-        # Alternate which side goes first so that a slow spell on the shared machine hits both.
-        if r % 2 == 0:
-            python.append(sum(python_round(preset, frames, threads)))
-            cpp.append(sum(oi._reference_frame_seconds(preset, frames, threads)))
-        else:
-            cpp.append(sum(oi._reference_frame_seconds(preset, frames, threads)))
-            python.append(sum(python_round(preset, frames, threads)))
-    return python, cpp
+    return (f"  per call: a Mapper method doing no work (GIL release + lock) {per_call(mapper.touched_columns):.1f} us, "
+            f"improvement() copy {per_call(mapper.improvement, 300):.0f} us, "
+            f"improvement(copy=False) {per_call(lambda: mapper.improvement(copy=False)):.1f} us")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--frames", type=int, default=5, help="frames per round")
-    parser.add_argument("--rounds", type=int, default=9)
+    parser.add_argument("--frames", type=int, default=5, help="frames per sequence")
+    parser.add_argument("--sequences", type=int, default=6)
     parser.add_argument("--threads", type=int, default=0, help="insertion threads (0: all cores)")
     parser.add_argument("--preset", default="kinect_v1_paper", choices=oi.preset_names())
     args = parser.parse_args()
     preset = oi.preset_by_name(args.preset)
     frames = sample_frames(args.frames)
-    python_round(preset, frames[:1], args.threads)  # warm-up: first-touch allocations, caches
-    python, cpp = measure(preset, frames, args.rounds, args.threads)
-    per_frame = lambda xs: statistics.median(xs) / len(frames) * 1e3  # noqa: E731
-    overhead = statistics.median(python) / statistics.median(cpp) - 1
-    best = min(python) / min(cpp) - 1
-    print(f"preset {args.preset}, {len(frames)} frames of {frames[0].shape[0]} points per round, "
-          f"{args.rounds} rounds, threads={args.threads}")
-    print(f"  C++    : {per_frame(cpp):8.2f} ms per frame (median round)")
-    print(f"  Python : {per_frame(python):8.2f} ms per frame (median round)")
-    print(f"  overhead: {overhead * 100:+.2f}% of median rounds, {best * 100:+.2f}% of best rounds (target <= 5%)")
+    measure(preset, frames[:2], 1, args.threads)  # warm-up: first-touch allocations, caches
+    pairs = measure(preset, frames, args.sequences, args.threads)
+    python = [p for p, _ in pairs]
+    cpp = [c for _, c in pairs]
+    ratios = sorted(p / c - 1 for p, c in pairs)
+    ratio = statistics.median(ratios)
+    quartiles = statistics.quantiles(ratios, n=4)
+    summed = sum(python) / sum(cpp) - 1
+    print(f"preset {args.preset}, {len(pairs)} frames of {frames[0].shape[0]} points "
+          f"({args.sequences} sequences of {len(frames)}), threads={args.threads}")
+    print(f"  C++    : {statistics.median(cpp) * 1e3:8.2f} ms per frame (median)")
+    print(f"  Python : {statistics.median(python) * 1e3:8.2f} ms per frame (median)")
+    print(f"  overhead: {ratio * 100:+.2f}% (median of per-frame ratios; quartiles {quartiles[0] * 100:+.1f}% .. "
+          f"{quartiles[2] * 100:+.1f}%), {summed * 100:+.2f}% (summed times); target <= 5%")
+    print(fixed_costs(preset))
 
 
 if __name__ == "__main__":

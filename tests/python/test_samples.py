@@ -26,7 +26,11 @@ def test_overlay_sample_writes_its_png(tmp_path):
 def test_benchmark_reference_times_every_frame():
     depth, intrinsics = oi.sample_depth()
     points = oi.depth_to_points(depth, intrinsics).reshape(-1, 3)
-    seconds = oi._reference_frame_seconds(oi.kinect_v1_paper(), [points, points[::2]], threads=1)
+    cpp, python = oi.Mapper(oi.kinect_v1_paper()), oi.Mapper(oi.kinect_v1_paper())
+    seconds = oi._core._reference_frame_seconds(cpp, [points, points[::2]], threads=1)
     assert len(seconds) == 2 and all(s > 0 for s in seconds)
+    python.insert(points)
+    python.insert(points[::2])
+    np.testing.assert_array_equal(cpp.improvement(), python.improvement())  # the same work was timed
     with pytest.raises(oi.InvalidInput):
-        oi._reference_frame_seconds(oi.kinect_v1_paper(), [np.zeros((3, 2), np.float32)])
+        oi._core._reference_frame_seconds(cpp, [np.zeros((3, 2), np.float32)])
