@@ -59,6 +59,7 @@ python-wheel-test: deps
 # A full 640x480 frame through Python against the same calls timed in C++ (docs/PYTHON.md, "Speed").
 python-bench: build
 	PYTHONPATH=$(BUILD_DIR)/python $(PYTHON) tests/bench/bench_python.py
+	PYTHONPATH=$(BUILD_DIR)/python $(PYTHON) tests/bench/bench_python.py --cpu
 
 # The sample: a real 7-Scenes frame's improvement map over its colour image, saved to out/python/.
 python-sample: build

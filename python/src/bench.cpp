@@ -8,13 +8,24 @@
 #include <pybind11/stl.h>
 
 #include <chrono>
+#include <ctime>
 
 namespace occ_improve::python {
 namespace {
 
+/// Wall-clock seconds, or the calling thread's CPU seconds: with threads=1 the latter leaves out the time
+/// the thread waited for a core, the main noise on a shared machine (Python: time.thread_time()).
+double now_seconds(bool thread_cpu) {
+  if (!thread_cpu) return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 /// Seconds per frame of: insert, regions, a copy of the improvement map; on `target`'s Mapper, so that
 /// a benchmark can interleave these frames with the same frames through Python on another Mapper.
-std::vector<double> reference_frames(PyMapper& target, const std::vector<py::object>& frames, int threads) {
+std::vector<double> reference_frames(PyMapper& target, const std::vector<py::object>& frames, int threads,
+                                     bool thread_cpu) {
   std::vector<PointsInput> inputs;
   for (const py::object& f : frames) inputs.push_back(points_from_array(f));
   InsertionOptions options;
@@ -23,11 +34,11 @@ std::vector<double> reference_frames(PyMapper& target, const std::vector<py::obj
     std::vector<double> seconds;
     volatile float sink = 0;
     for (const PointsInput& in : inputs) {
-      const auto start = std::chrono::steady_clock::now();
+      const double start = now_seconds(thread_cpu);
       mapper.insert(in.span, options);
       const auto regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface());
       std::vector<float> improvement = mapper.improvement().value;
-      seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+      seconds.push_back(now_seconds(thread_cpu) - start);
       sink = improvement.back() + static_cast<float>(regions.size());  // the copy may not be optimised away
     }
     (void)sink;
@@ -39,8 +50,9 @@ std::vector<double> reference_frames(PyMapper& target, const std::vector<py::obj
 
 void bind_bench(py::module_& m) {
   m.def("_reference_frame_seconds", &reference_frames, py::arg("mapper"), py::arg("frames"), py::arg("threads") = 0,
+        py::arg("thread_cpu") = false,
         "Benchmark helper: per-frame seconds of Mapper.insert + regions() + improvement() made from C++ "
-        "on this Mapper.");
+        "on this Mapper; thread_cpu=True: the calling thread's CPU time instead of wall time.");
 }
 
 }  // namespace occ_improve::python
