@@ -61,13 +61,16 @@ MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const P
   });
 }
 
+template <class T>
+using MapGetter = const std::vector<T>& (*)(const Mapper&);
+
 /// A map of the Mapper as an H x W array: a copy, or a read-only view that keeps the Mapper alive.
-template <class T, class Get>
-py::array map_array(PyMapper& self, const py::object& owner, bool copy, Get get,
-                    const py::dtype& dtype = py::dtype::of<T>()) {
+template <class T>
+py::array map_array(const py::object& owner, bool copy, MapGetter<T> get, const py::dtype& dtype) {
+  PyMapper& self = owner.cast<PyMapper&>();
   const int h = self.mapper.geometry().height(), w = self.mapper.geometry().width();  // fixed for its life
   if (!copy) return view_2d<T>(get(self.mapper).data(), h, w, owner, dtype);
-  py::array out = empty_2d(h, w, dtype);
+  py::array out = empty_2d(h, w, dtype);  // allocated with the GIL, filled without it
   T* dst = static_cast<T*>(out.mutable_data());
   with_mapper(self, [&](Mapper& m) {
     const std::vector<T>& src = get(m);
@@ -76,39 +79,32 @@ py::array map_array(PyMapper& self, const py::object& owner, bool copy, Get get,
   return out;
 }
 
-void bind_map_outputs(py::class_<PyMapper>& c) {
-  const char* note = " H x W (row = elevation bin, column = azimuth bin). copy=True (default): a new array. "
-                     "copy=False: a read-only view of the Mapper's own buffer, valid as long as the view exists "
-                     "(it keeps the Mapper alive) and updated in place by later inserts (do not read it while "
-                     "another thread inserts).";
-  c.def("depth", [](const py::object& o, bool copy) {
-    PyMapper& s = o.cast<PyMapper&>();
-    return map_array<float>(s, o, copy, [](const Mapper& m) -> const auto& { return m.surface().depth_m; });
-  }, py::arg("copy") = true, (std::string("Surface depth in metres (0 where unknown), float32.") + note).c_str());
-  c.def("probability", [](const py::object& o, bool copy) {
-    PyMapper& s = o.cast<PyMapper&>();
-    return map_array<float>(s, o, copy, [](const Mapper& m) -> const auto& { return m.surface().probability; });
-  }, py::arg("copy") = true, (std::string("Occupancy probability of the surface voxel, float32.") + note).c_str());
-  c.def("unknown", [](const py::object& o, bool copy) {
-    PyMapper& s = o.cast<PyMapper&>();
-    return map_array<std::uint8_t>(s, o, copy, [](const Mapper& m) -> const auto& { return m.surface().unknown; },
-                                   py::dtype("?"));
-  }, py::arg("copy") = true, (std::string("True where the ray was never updated, bool.") + note).c_str());
-  c.def("surface_bin", [](const py::object& o, bool copy) {
-    PyMapper& s = o.cast<PyMapper&>();
-    return map_array<std::int32_t>(s, o, copy, [](const Mapper& m) -> const auto& { return m.surface().bin; });
-  }, py::arg("copy") = true,
-     (std::string("Surface depth bin, int32 (-1 unknown, depth_bins when all bins are equal).") + note).c_str());
-  c.def("improvement", [](const py::object& o, bool copy) {
-    PyMapper& s = o.cast<PyMapper&>();
-    return map_array<float>(s, o, copy, [](const Mapper& m) -> const auto& { return m.improvement().value; });
-  }, py::arg("copy") = true, (std::string("Expected improvement per ray (eqs. 3-4), float32.") + note).c_str());
+template <class T>
+void def_map_output(py::class_<PyMapper>& c, const char* name, MapGetter<T> get, const std::string& what,
+                    const py::dtype& dtype = py::dtype::of<T>()) {
+  static const std::string note =
+      " H x W (row = elevation bin, column = azimuth bin). copy=True (default): a new array. copy=False: a "
+      "read-only view of the Mapper's own buffer, valid as long as the view exists (it keeps the Mapper "
+      "alive) and updated in place by later inserts (do not read it while another thread inserts).";
+  c.def(name, [get, dtype](const py::object& self, bool copy) { return map_array<T>(self, copy, get, dtype); },
+        py::arg("copy") = true, (what + note).c_str());
 }
 
-void bind_mapper_class(py::module_& m) {
-  py::class_<PyMapper> c(m, "Mapper",
-                         "A spherical grid with its sensor model, surface and improvement map, kept up to date "
-                         "together. Methods release the GIL; calls on one Mapper from several threads are serialised.");
+void bind_map_outputs(py::class_<PyMapper>& c) {
+  def_map_output<float>(c, "depth", [](const Mapper& m) -> const auto& { return m.surface().depth_m; },
+                        "Surface depth in metres (0 where unknown), float32.");
+  def_map_output<float>(c, "probability", [](const Mapper& m) -> const auto& { return m.surface().probability; },
+                        "Occupancy probability of the surface voxel, float32.");
+  // The flags are 0/1 bytes, so numpy's 1-byte bool can view them directly.
+  def_map_output<std::uint8_t>(c, "unknown", [](const Mapper& m) -> const auto& { return m.surface().unknown; },
+                               "True where the ray was never updated, bool.", py::dtype("?"));
+  def_map_output<std::int32_t>(c, "surface_bin", [](const Mapper& m) -> const auto& { return m.surface().bin; },
+                               "Surface depth bin, int32 (-1 unknown, depth_bins when all bins are equal).");
+  def_map_output<float>(c, "improvement", [](const Mapper& m) -> const auto& { return m.improvement().value; },
+                        "Expected improvement per ray (eqs. 3-4), float32.");
+}
+
+void bind_mapper_insertion(py::class_<PyMapper>& c) {
   c.def(py::init([](const SensorPreset& preset, const GridOptions& options) {
           return std::make_unique<PyMapper>(Mapper(preset, options));
         }),
@@ -123,7 +119,10 @@ void bind_mapper_class(py::module_& m) {
         "Inserts an H x W depth image (z-depth; value * scale = metres, 0 or NaN = no return) through its "
         "intrinsics. A C-contiguous float32 image is read in place; others (e.g. uint16 millimetres with "
         "scale=0.001) are converted first. Releases the GIL.");
-  bind_map_outputs(c);
+}
+
+void bind_mapper_properties(py::class_<PyMapper>& c) {
+  // Geometry, model and options never change after construction: read without the lock.
   c.def_property_readonly("width", [](PyMapper& s) { return s.mapper.geometry().width(); }, "Azimuth bins.");
   c.def_property_readonly("height", [](PyMapper& s) { return s.mapper.geometry().height(); }, "Elevation bins.");
   c.def_property_readonly("geometry", [](PyMapper& s) { return s.mapper.geometry().params(); }, "GeometryParams (a copy).");
@@ -134,6 +133,21 @@ void bind_mapper_class(py::module_& m) {
   c.def("touched_columns", [](PyMapper& s) {
     return with_mapper(s, [](Mapper& mp) { return mp.grid().touched_column_count(); });
   }, "Rays that hold any data.");
+  c.def("__repr__", [](PyMapper& s) {
+    const SphericalGeometry& g = s.mapper.geometry();
+    return "Mapper(" + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " x " +
+           std::to_string(g.depth().bins()) + ")";
+  });
+}
+
+void require_bins(const SphericalGeometry& g, int azimuth_bin, int elevation_bin) {
+  occ_improve::detail::require_parameter(azimuth_bin >= 0 && azimuth_bin < g.width(), "azimuth_bin", azimuth_bin,
+                                         "inside [0, width)");
+  occ_improve::detail::require_parameter(elevation_bin >= 0 && elevation_bin < g.height(), "elevation_bin",
+                                         elevation_bin, "inside [0, height)");
+}
+
+void bind_mapper_rays(py::class_<PyMapper>& c) {
   c.def("ray_improvement", [](PyMapper& s, int azimuth_bin, int elevation_bin) {
     return with_mapper(s, [&](Mapper& mp) {
       return ray_improvement(mp.geometry(), mp.model(), mp.surface(), azimuth_bin, elevation_bin);
@@ -141,10 +155,7 @@ void bind_mapper_class(py::module_& m) {
   }, py::arg("azimuth_bin"), py::arg("elevation_bin"),
         "Eqs. 3-4 for one ray, recomputed from the surface (double precision; the map holds the float value).");
   c.def("direction", [](PyMapper& s, int azimuth_bin, int elevation_bin) {
-    occ_improve::detail::require_parameter(azimuth_bin >= 0 && azimuth_bin < s.mapper.geometry().width(), "azimuth_bin",
-                              azimuth_bin, "inside [0, width)");
-    occ_improve::detail::require_parameter(elevation_bin >= 0 && elevation_bin < s.mapper.geometry().height(), "elevation_bin",
-                              elevation_bin, "inside [0, height)");
+    require_bins(s.mapper.geometry(), azimuth_bin, elevation_bin);
     return Eigen::Vector3d(s.mapper.geometry().direction(azimuth_bin, elevation_bin));
   }, py::arg("azimuth_bin"), py::arg("elevation_bin"), "Unit direction (sensor frame) through a ray's centre.");
   c.def("locate", [](PyMapper& s, const std::array<double, 3>& p) -> std::optional<std::pair<int, int>> {
@@ -154,10 +165,16 @@ void bind_mapper_class(py::module_& m) {
     if (!s.mapper.geometry().locate(sp.azimuth, sp.elevation, a, e)) return std::nullopt;
     return std::make_pair(a, e);
   }, py::arg("point"), "(azimuth_bin, elevation_bin) of the ray through a sensor-frame point, None outside the field of view.");
-  c.def("__repr__", [](PyMapper& s) {
-    return "Mapper(" + std::to_string(s.mapper.geometry().width()) + " x " +
-           std::to_string(s.mapper.geometry().height()) + " x " + std::to_string(s.mapper.geometry().depth().bins()) + ")";
-  });
+}
+
+void bind_mapper_class(py::module_& m) {
+  py::class_<PyMapper> c(m, "Mapper",
+                         "A spherical grid with its sensor model, surface and improvement map, kept up to date "
+                         "together. Methods release the GIL; calls on one Mapper from several threads are serialised.");
+  bind_mapper_insertion(c);
+  bind_map_outputs(c);
+  bind_mapper_properties(c);
+  bind_mapper_rays(c);
 }
 
 }  // namespace
