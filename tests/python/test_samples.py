@@ -34,3 +34,11 @@ def test_benchmark_reference_times_every_frame():
     np.testing.assert_array_equal(cpp.improvement(), python.improvement())  # the same work was timed
     with pytest.raises(oi.InvalidInput):
         oi._core._reference_frame_seconds(cpp, [np.zeros((3, 2), np.float32)])
+
+
+def test_acquisition_loop_sample_stops_on_the_static_sequence():
+    run = subprocess.run([sys.executable, str(ROOT / "samples/python/acquire_until_stop.py"), "--max-frames", "40"],
+                         capture_output=True, text=True, check=True)
+    last = run.stdout.strip().splitlines()[-1]
+    assert last.startswith("stop after "), last
+    assert 8 <= int(last.split()[2]) <= 35 and "look next at azimuth" in run.stdout
