@@ -1,10 +1,13 @@
 // Saving and loading maps, and the OctoMap export where the module was built with it.
 #include "bindings.hpp"
 
+#include "occ_improve/errors.hpp"
 #include "occ_improve/map_io.hpp"
 
-#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
 #include <pybind11/stl.h>
+
+#include <Eigen/Geometry>
 
 #ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
 #include "occ_improve/octomap/export.hpp"
@@ -35,9 +38,18 @@ void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
 }
 
 #ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
-Eigen::Isometry3d pose_from(const std::optional<Eigen::Matrix4d>& world_from_sensor) {
+// The pose arrives as a numpy array, not through pybind11's Eigen caster: GCC 12 gives a false
+// maybe-uninitialized warning inside that caster for fixed-size matrices.
+using PoseArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+Eigen::Isometry3d pose_from(const std::optional<PoseArray>& world_from_sensor) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  if (world_from_sensor) pose.matrix() = *world_from_sensor;  // add_to_octree rejects a non-rigid one
+  if (!world_from_sensor) return pose;
+  const PoseArray& m = *world_from_sensor;
+  if (m.ndim() != 2 || m.shape(0) != 4 || m.shape(1) != 4)
+    throw InvalidParameter("world_from_sensor must be a 4 x 4 matrix");
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = m.at(r, c);  // add_to_octree rejects a non-rigid one
   return pose;
 }
 
@@ -57,12 +69,13 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
       .def_readonly("seconds", &OctomapExportReport::seconds);
   def_fields_repr(r, {"leaves_examined", "occupied_written", "free_written", "left_unknown", "seconds"});
   c.def("export_octomap", [](PyMapper& self, const py::object& path, double resolution_m,
-                             const std::optional<Eigen::Matrix4d>& world_from_sensor, const OctomapExportOptions& options) {
+                             const std::optional<PoseArray>& world_from_sensor, const OctomapExportOptions& options) {
     const std::string p = path_string(path);
     require_octomap_output_path(p);  // before any work, as the tools do
+    const Eigen::Isometry3d pose = pose_from(world_from_sensor);
     return with_mapper(self, [&](Mapper& mp) {
       OctomapExportReport report;
-      const auto tree = to_octree(mp.grid(), pose_from(world_from_sensor), resolution_m, options, &report);
+      const auto tree = to_octree(mp.grid(), pose, resolution_m, options, &report);
       write_octree(*tree, p);
       return report;
     });

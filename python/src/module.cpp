@@ -9,5 +9,5 @@ PYBIND11_MODULE(_core, m) {
   bind_mapper(m);
   bind_analysis(m);
   bind_io(m);
-  bind_bench(m);
+  bind_internals(m);
 }

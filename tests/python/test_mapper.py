@@ -173,3 +173,22 @@ def test_calls_from_two_threads_are_serialised(sample):
     sequential.insert_depth(depth, intrinsics)
     sequential.insert_depth(depth, intrinsics)
     assert_same_maps(shared, sequential)
+
+
+def test_the_documented_layouts_are_read_in_place_and_the_others_copied(sample_points, sample):
+    read_in_place = oi._core._points_read_in_place
+    pts = np.ascontiguousarray(sample_points[:1000])
+    padded = np.concatenate([pts, np.zeros((len(pts), 1), np.float32)], axis=1)
+    organized = np.ascontiguousarray(pts).reshape(10, 100, 3)
+    organized_padded = np.concatenate([organized, np.zeros((10, 100, 1), np.float32)], axis=2)
+    assert read_in_place(pts) and read_in_place(organized)
+    assert read_in_place(padded[:, :3]) and read_in_place(organized_padded[..., :3])
+    assert read_in_place(pts[::2])  # a constant stride of 6 floats
+    assert read_in_place(organized[:, ::2])  # every other point of each row: still one stride throughout
+    for copied in (pts.astype(np.float64), np.asfortranarray(pts), pts.astype(">f4"), pts[::-1],
+                   organized[:, :50], pts.tolist()):  # organized[:, :50]: rows jump after 50 points
+        assert not read_in_place(copied)
+    depth, k = sample
+    assert oi._core._depth_read_in_place(depth, k)
+    for copied in (depth.astype(np.float64), np.asfortranarray(depth), (depth * 1000).astype(np.uint16)):
+        assert not oi._core._depth_read_in_place(copied, k)

@@ -44,3 +44,8 @@ def test_bad_extension_pose_and_resolution_raise_invalid_parameter(tmp_path):
     assert not (tmp_path / "map.bt").exists()
     with pytest.raises(oi.ResourceLimit):
         mapper.export_octomap(tmp_path / "map.bt", 0.05, options=oi.OctomapExportOptions(memory_cap_bytes=1000))
+
+
+def test_pose_must_be_a_4_by_4_matrix(tmp_path):
+    with pytest.raises(oi.InvalidParameter, match="4 x 4"):
+        small_mapper().export_octomap(tmp_path / "map.bt", 0.05, world_from_sensor=np.eye(3))

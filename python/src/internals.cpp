@@ -1,5 +1,6 @@
-// The C++ side of `make python-bench`: the per-frame calls the benchmark makes from Python, timed in
-// C++ in the same process, on the same arrays, with the same library build.
+// Underscore helpers, not API: the C++ side of `make python-bench` (the per-frame calls the benchmark
+// makes from Python, timed in C++ in the same process, on the same arrays, with the same library build),
+// and what the tests need to check that the documented input layouts are read in place.
 #include "arrays.hpp"
 #include "bindings.hpp"
 
@@ -48,11 +49,16 @@ std::vector<double> reference_frames(PyMapper& target, const std::vector<py::obj
 
 }  // namespace
 
-void bind_bench(py::module_& m) {
+void bind_internals(py::module_& m) {
   m.def("_reference_frame_seconds", &reference_frames, py::arg("mapper"), py::arg("frames"), py::arg("threads") = 0,
         py::arg("thread_cpu") = false,
         "Benchmark helper: per-frame seconds of Mapper.insert + regions() + improvement() made from C++ "
         "on this Mapper; thread_cpu=True: the calling thread's CPU time instead of wall time.");
+  m.def("_points_read_in_place", [](const py::object& points) { return !points_from_array(points).copied; },
+        py::arg("points"), "Test helper: whether Mapper.insert reads these points without a copy.");
+  m.def("_depth_read_in_place", [](const py::object& depth, const PinholeIntrinsics& intrinsics) {
+    return !depth_from_array(depth, intrinsics).copied;
+  }, py::arg("depth"), py::arg("intrinsics"), "Test helper: whether Mapper.insert_depth reads this image without a copy.");
 }
 
 }  // namespace occ_improve::python
