@@ -4,11 +4,15 @@ BUILD_TYPE ?= Release
 JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 INSTALL_DIR ?= $(CURDIR)/$(BUILD_DIR)/_install
 CMAKE_FLAGS ?=
+# The Python bindings are built for (and tested with) Debian's interpreter, whose numpy/pytest/matplotlib
+# install-deps.sh installs; a `python3` earlier on PATH (pyenv, conda) may lack them.
+PYTHON ?= $(shell test -x /usr/bin/python3 && echo /usr/bin/python3 || command -v python3)
 # VTK is not needed by our PCL components; leaving it out halves configure time.
 CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
-            -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) $(CMAKE_FLAGS)
+            -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
 
-.PHONY: all deps configure build test demo bench segment-eval map-eval consumer-test install clean
+.PHONY: all deps configure build test demo bench segment-eval map-eval consumer-test install clean \
+        python-wheel-test python-bench python-sample
 
 all: build
 
@@ -51,6 +55,20 @@ consumer-test: install
 	      -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE >/dev/null
 	cmake --build $(BUILD_DIR)/consumer -j $(JOBS)
 	$(BUILD_DIR)/consumer/occ_improve_consumer
+
+# pip builds the wheel from this checkout (scikit-build-core, pyproject.toml), installs it in a fresh
+# virtual environment and runs the pytest suite against the installed package (docs/PYTHON.md).
+python-wheel-test: deps
+	./scripts/python-wheel-test.sh $(PYTHON) $(BUILD_DIR)/wheel-test
+
+# A full 640x480 frame through Python against the same calls timed in C++ (docs/PYTHON.md, "Speed").
+python-bench: build
+	PYTHONPATH=$(BUILD_DIR)/python $(PYTHON) tests/bench/bench_python.py
+	PYTHONPATH=$(BUILD_DIR)/python $(PYTHON) tests/bench/bench_python.py --cpu
+
+# The sample: a real 7-Scenes frame's improvement map over its colour image, saved to out/python/.
+python-sample: build
+	PYTHONPATH=$(BUILD_DIR)/python MPLBACKEND=Agg $(PYTHON) samples/python/improvement_overlay.py --out out/python
 
 clean:
 	rm -rf $(BUILD_DIR)

@@ -1,0 +1,62 @@
+"""occ_improve: where should the range sensor look next?
+
+Python bindings of the C++ library: range data from one viewpoint is fused into a spherical occupancy
+grid, the surface of highest occupancy probability is extracted along every ray, and the expected
+improvement of one more measurement is computed per ray and ranked into regions worth re-acquiring.
+
+    import occ_improve as oi
+    mapper = oi.Mapper(oi.kinect_v1_paper())
+    depth, intrinsics = oi.sample_depth()
+    mapper.insert_depth(depth, intrinsics)
+    improvement = mapper.improvement()      # H x W float32
+    regions = mapper.regions()              # list of Region, best first
+
+See docs/PYTHON.md for input layouts (which ones are read in place), output lifetimes and threads.
+"""
+from ._core import (  # noqa: F401  (re-exported)
+    MAP_FORMAT_VERSION,
+    HAS_OCTOMAP,
+    DepthBinning,
+    Error,
+    FormatError,
+    GeometryParams,
+    GridOptions,
+    InsertionReport,
+    InvalidInput,
+    InvalidParameter,
+    IoError,
+    Mapper,
+    MapperReport,
+    PinholeIntrinsics,
+    PinholePresetOptions,
+    ProgressCriteria,
+    Region,
+    RegionOptions,
+    ResourceLimit,
+    Segment,
+    Segmentation,
+    SegmentationParams,
+    SensorModelParams,
+    SensorPreset,
+    StopCriteria,
+    StopMonitor,
+    StopSignal,
+    UpdateMode,
+    kinect_v1,
+    kinect_v1_intrinsics,
+    kinect_v1_paper,
+    load_map,
+    preset_by_name,
+    preset_from_pinhole,
+    preset_names,
+    render_improvement_legend,
+    render_segmentation,
+    sample_depth,
+    segmentation_defaults,
+)
+from .frames import depth_to_points, read_depth_png, read_intrinsics  # noqa: F401
+
+if HAS_OCTOMAP:
+    from ._core import OctomapExportOptions, OctomapExportReport  # noqa: F401
+
+__version__ = "0.1.0"

@@ -1,0 +1,75 @@
+"""Reading real frames without PCL: 16-bit depth PNGs (7-Scenes, TUM, SUN3D) and intrinsics files.
+
+PNG decoding uses Pillow (installed with matplotlib), imported only when a PNG is read, so the core
+module needs numpy alone.
+"""
+from __future__ import annotations
+
+import os
+from typing import Union
+
+import numpy as np
+
+from ._core import InvalidInput, IoError, PinholeIntrinsics
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def read_depth_png(path: PathLike, scale: float = 0.001) -> np.ndarray:
+    """A 16-bit depth PNG as an H x W float32 array in metres (value * scale; 0 stays 0 = no return).
+
+    scale: 0.001 for millimetres (Kinect/OpenNI, 7-Scenes, SUN3D), 1/5000 for TUM.
+    Raises IoError when the file cannot be read, InvalidInput when it is not a 16-bit grey image.
+    """
+    try:
+        from PIL import Image
+    except ImportError as e:  # the message says what to install, not just that an import failed
+        raise ImportError("read_depth_png needs Pillow (Debian: python3-pil; pip: pillow)") from e
+    try:
+        with Image.open(os.fspath(path)) as image:
+            mode = image.mode
+            values = np.asarray(image)
+    except OSError as e:
+        raise IoError(f"cannot read depth image '{os.fspath(path)}': {e}") from e
+    # Pillow reports 16-bit grey PNGs as "I;16" or widens them to 32-bit "I".
+    if values.ndim != 2 or mode not in ("I", "I;16", "I;16B") or values.max(initial=0) > 65535:
+        raise InvalidInput(f"'{os.fspath(path)}' is not a 16-bit grey depth image (mode {mode}, shape {values.shape})")
+    return (values.astype(np.float32) * np.float32(scale)).astype(np.float32)
+
+
+def read_intrinsics(path: PathLike, width: int = 640, height: int = 480) -> PinholeIntrinsics:
+    """Intrinsics from a text file: "fx fy cx cy [width height]" or a 3 x 3 matrix (7-Scenes, 3DMatch)."""
+    try:
+        with open(os.fspath(path)) as f:
+            numbers = [float(v) for v in f.read().split()]
+    except OSError as e:
+        raise IoError(f"cannot read intrinsics '{os.fspath(path)}': {e}") from e
+    except ValueError as e:
+        raise InvalidInput(f"intrinsics '{os.fspath(path)}' hold something other than numbers") from e
+    if len(numbers) == 9:
+        fx, _, cx, _, fy, cy = numbers[:6]
+    elif len(numbers) in (4, 6):
+        fx, fy, cx, cy = numbers[:4]
+        if len(numbers) == 6:
+            width, height = int(numbers[4]), int(numbers[5])
+    else:
+        raise InvalidInput(f"intrinsics '{os.fspath(path)}': expected 4, 6 or 9 numbers, got {len(numbers)}")
+    k = PinholeIntrinsics(fx=fx, fy=fy, cx=cx, cy=cy, width=width, height=height)
+    k.validate()
+    return k
+
+
+def depth_to_points(depth: np.ndarray, intrinsics: PinholeIntrinsics) -> np.ndarray:
+    """Back-projects an H x W depth image (metres) to an H x W x 3 float32 cloud; no return -> NaN.
+
+    The same formula as the library's insertion, for plotting or for handing points to other tools.
+    """
+    depth = np.asarray(depth, dtype=np.float32)
+    if depth.shape != (intrinsics.height, intrinsics.width):
+        raise InvalidInput(f"depth has shape {depth.shape}, the intrinsics say ({intrinsics.height}, {intrinsics.width})")
+    v, u = np.mgrid[0 : intrinsics.height, 0 : intrinsics.width]
+    valid = np.isfinite(depth) & (depth > 0)
+    z = np.where(valid, depth, np.nan).astype(np.float32)
+    x = ((u - intrinsics.cx) * z / intrinsics.fx).astype(np.float32)
+    y = ((v - intrinsics.cy) * z / intrinsics.fy).astype(np.float32)
+    return np.stack([x, y, z], axis=-1)

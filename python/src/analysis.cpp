@@ -1,0 +1,175 @@
+// Where to look next (regions, rays, the stop signal), segmentation and the map images.
+#include "arrays.hpp"
+#include "bindings.hpp"
+
+#include "occ_improve/ranking.hpp"
+#include "occ_improve/render.hpp"
+#include "occ_improve/segmentation.hpp"
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+namespace occ_improve::python {
+namespace {
+
+py::class_<PyMapper> mapper_class(py::module_& m) { return py::reinterpret_borrow<py::class_<PyMapper>>(m.attr("Mapper")); }
+
+void bind_region_types(py::module_& m) {
+  py::class_<RegionOptions> o(m, "RegionOptions", "Which rays form regions (improvement threshold, minimum area).");
+  def_keyword_init<RegionOptions>(o);
+  o.def_readwrite("min_improvement", &RegionOptions::min_improvement)
+      .def_readwrite("min_area_columns", &RegionOptions::min_area_columns)
+      .def("validate", &RegionOptions::validate);
+  def_fields_repr(o, {"min_improvement", "min_area_columns"});
+  py::class_<Region> r(m, "Region", "An 8-connected region of high improvement (read-only).");
+  r.def_readonly("summed_improvement", &Region::summed_improvement)
+      .def_readonly("area_columns", &Region::area_columns)
+      .def_readonly("peak_improvement", &Region::peak_improvement)
+      .def_readonly("centroid_azimuth_rad", &Region::centroid_azimuth_rad)
+      .def_readonly("centroid_elevation_rad", &Region::centroid_elevation_rad)
+      .def_readonly("centroid_direction", &Region::centroid_direction, "Unit vector in the sensor frame, shape (3,).")
+      .def_readonly("mean_depth_m", &Region::mean_depth_m, "Over known rays, 0 if none.");
+  def_fields_repr(r, {"summed_improvement", "area_columns", "peak_improvement", "centroid_azimuth_rad",
+                      "centroid_elevation_rad", "mean_depth_m"});
+}
+
+void bind_stop_types(py::module_& m) {
+  py::class_<StopCriteria> c(m, "StopCriteria", "Absolute thresholds of the stop signal.");
+  def_keyword_init<StopCriteria>(c);
+  c.def_readwrite("total_improvement_below", &StopCriteria::total_improvement_below)
+      .def_readwrite("best_region_below", &StopCriteria::best_region_below)
+      .def_readwrite("ray_floor", &StopCriteria::ray_floor)
+      .def("validate", &StopCriteria::validate);
+  def_fields_repr(c, {"total_improvement_below", "best_region_below", "ray_floor"});
+  py::class_<ProgressCriteria> p(m, "ProgressCriteria", "When a sequence of frames has stopped paying.");
+  def_keyword_init<ProgressCriteria>(p);
+  p.def_readwrite("min_relative_gain", &ProgressCriteria::min_relative_gain)
+      .def_readwrite("patience", &ProgressCriteria::patience)
+      .def("validate", &ProgressCriteria::validate);
+  def_fields_repr(p, {"min_relative_gain", "patience"});
+  py::class_<StopSignal> s(m, "StopSignal", "Whether to stop acquiring, with the totals and a reason for logs.");
+  s.def_readonly("stop", &StopSignal::stop)
+      .def_readonly("total_improvement", &StopSignal::total_improvement)
+      .def_readonly("best_region_improvement", &StopSignal::best_region_improvement)
+      .def_readonly("reason", &StopSignal::reason)
+      .def("__bool__", [](const StopSignal& x) { return x.stop; });
+  def_fields_repr(s, {"stop", "total_improvement", "best_region_improvement", "reason"});
+}
+
+std::vector<Region> mapper_regions(PyMapper& self, const RegionOptions& options) {
+  return with_mapper(self, [&](Mapper& mp) {
+    return find_regions(mp.geometry(), mp.improvement(), mp.surface(), options);
+  });
+}
+
+/// top_rays as a structured array (column, azimuth_bin, elevation_bin, improvement, depth_m), best first.
+py::array mapper_top_rays(PyMapper& self, int k) {
+  const auto rays = with_mapper(self, [&](Mapper& mp) { return top_rays(mp.improvement(), mp.surface(), k); });
+  py::array_t<RankedRay> out(static_cast<py::ssize_t>(rays.size()));
+  std::copy(rays.begin(), rays.end(), out.mutable_data());
+  return out;
+}
+
+void bind_ranking(py::module_& m) {
+  PYBIND11_NUMPY_DTYPE(RankedRay, column, azimuth_bin, elevation_bin, improvement, depth_m);
+  bind_region_types(m);
+  bind_stop_types(m);
+  auto c = mapper_class(m);
+  c.def("regions", &mapper_regions, py::arg("options") = RegionOptions{},
+        "8-connected regions of improvement >= options.min_improvement, largest summed improvement first.");
+  c.def("top_rays", &mapper_top_rays, py::arg("k"),
+        "The k rays of highest improvement, best first, as a structured array with fields column, "
+        "azimuth_bin, elevation_bin (int), improvement, depth_m (float32; depth 0 where unknown).");
+  c.def("stop_signal", [](PyMapper& self, const StopCriteria& criteria, const RegionOptions& options) {
+    return with_mapper(self, [&](Mapper& mp) {
+      return stop_signal(mp.improvement(), find_regions(mp.geometry(), mp.improvement(), mp.surface(), options),
+                         criteria);
+    });
+  }, py::arg("criteria") = StopCriteria{}, py::arg("region_options") = RegionOptions{},
+        "Stop when the total improvement or the best region fall below the criteria.");
+  py::class_<StopMonitor>(m, "StopMonitor", "The stop signal over a sequence of frames (thresholds or stalled progress).")
+      .def(py::init<const StopCriteria&, const ProgressCriteria&>(), py::arg("criteria") = StopCriteria{},
+           py::arg("progress") = ProgressCriteria{})
+      .def("update", [](StopMonitor& monitor, PyMapper& mapper, std::optional<std::vector<Region>> regions) {
+        if (!regions) regions = mapper_regions(mapper, RegionOptions{});
+        return with_mapper(mapper, [&](Mapper& mp) { return monitor.update(mp.improvement(), *regions); });
+      }, py::arg("mapper"), py::arg("regions") = py::none(),
+           "Call once per frame, after inserting it. regions=None: mapper.regions() with default options.")
+      .def_property_readonly("stalled_frames", &StopMonitor::stalled_frames);
+}
+
+void bind_segmentation_types(py::module_& m) {
+  py::class_<SegmentationParams> p(m, "SegmentationParams", "Contour threshold, minimum segment size, dominant plane.");
+  def_keyword_init<SegmentationParams>(p);
+  p.def_readwrite("contour_improvement_below", &SegmentationParams::contour_improvement_below)
+      .def_readwrite("min_segment_columns", &SegmentationParams::min_segment_columns)
+      .def_readwrite("remove_dominant_plane", &SegmentationParams::remove_dominant_plane)
+      .def_readwrite("plane_distance_m", &SegmentationParams::plane_distance_m)
+      .def_readwrite("plane_min_columns", &SegmentationParams::plane_min_columns)
+      .def_readwrite("plane_ransac_iterations", &SegmentationParams::plane_ransac_iterations)
+      .def_readwrite("plane_seed", &SegmentationParams::plane_seed)
+      .def("validate", &SegmentationParams::validate);
+  def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane"});
+  m.def("segmentation_defaults", &segmentation_defaults, py::arg("preset"),
+        "Segmentation parameters scaled for a preset's noise model.");
+  py::class_<Segment> s(m, "Segment", "One segment (read-only).");
+  s.def_readonly("label", &Segment::label)
+      .def_readonly("columns", &Segment::columns)
+      .def_readonly("centroid_m", &Segment::centroid_m)
+      .def_readonly("mean_depth_m", &Segment::mean_depth_m)
+      .def_readonly("plane", &Segment::plane);
+  def_fields_repr(s, {"label", "columns", "mean_depth_m", "plane"});
+}
+
+void bind_segmentation_result(py::module_& m) {
+  py::class_<Segmentation> r(m, "Segmentation", "Labels per ray; label and contour are read-only views kept alive by it.");
+  r.def_property_readonly("label", [](const py::object& self) {
+     const auto& s = self.cast<const Segmentation&>();
+     return view_2d(s.label.data(), s.height, s.width, self);
+   }, "H x W uint32, 0 = no segment; label l is segments[l - 1].")
+      .def_property_readonly("contour", [](const py::object& self) {
+        const auto& s = self.cast<const Segmentation&>();
+        return view_2d(s.contour.data(), s.height, s.width, self, py::dtype("?"));
+      }, "H x W bool, True on contour rays.")
+      .def_readonly("segments", &Segmentation::segments, "Largest first.")
+      .def_readonly("valid_columns", &Segmentation::valid_columns)
+      .def_readonly("contour_columns", &Segmentation::contour_columns)
+      .def_readonly("attached_columns", &Segmentation::attached_columns)
+      .def_readonly("plane_columns", &Segmentation::plane_columns);
+  def_fields_repr(r, {"valid_columns", "contour_columns", "attached_columns", "plane_columns"});
+  mapper_class(m).def("segment", [](PyMapper& self, const SegmentationParams& params) {
+    return with_mapper(self, [&](Mapper& mp) {
+      return segment_improvement(mp.geometry(), mp.surface(), mp.improvement(), params);
+    });
+  }, py::arg("params") = SegmentationParams{}, "Segments the surface along the improvement map's negative band.");
+}
+
+/// An Image as an H x W x 3 (or H x W) uint8 array (a copy).
+py::array image_array(const Image& image) {
+  std::vector<py::ssize_t> shape{image.height, image.width};
+  if (image.channels > 1) shape.push_back(image.channels);
+  py::array_t<std::uint8_t> out(shape);
+  std::copy(image.pixels.begin(), image.pixels.end(), out.mutable_data());
+  return out;
+}
+
+void bind_render(py::module_& m) {
+  mapper_class(m).def("render_improvement", [](PyMapper& self) {
+    return image_array(with_mapper(self, [](Mapper& mp) { return render_improvement(mp.improvement()); }));
+  }, "The improvement map in the project's colour map (docs/METHOD.md), H x W x 3 uint8.");
+  m.def("render_segmentation", [](const Segmentation& s) { return image_array(render_segmentation(s)); },
+        py::arg("segmentation"), "Each label's fixed colour, H x W x 3 uint8 (black = no segment).");
+  m.def("render_improvement_legend", [] { return image_array(render_improvement_legend()); },
+        "The colour bar from -0.4 to 0.4, H x W x 3 uint8.");
+}
+
+}  // namespace
+
+void bind_analysis(py::module_& m) {
+  bind_ranking(m);
+  bind_segmentation_types(m);
+  bind_segmentation_result(m);
+  bind_render(m);
+}
+
+}  // namespace occ_improve::python

@@ -1,0 +1,105 @@
+#include "arrays.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <sstream>
+#include <string>
+
+namespace occ_improve::python {
+namespace {
+
+std::string shape_text(const py::array& a) {
+  std::ostringstream s;
+  s << "(";
+  for (py::ssize_t i = 0; i < a.ndim(); ++i) s << (i ? ", " : "") << a.shape(i);
+  s << (a.ndim() == 1 ? ",)" : ")");
+  return s.str();
+}
+
+/// Booleans, complex numbers, strings and objects are not coordinates: a TypeError, as numpy gives.
+void require_real_numbers(const py::array& a, const char* what) {
+  const char kind = a.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u')
+    throw py::type_error(std::string(what) + " must be a real numeric array, got dtype " +
+                         std::string(py::str(a.dtype())));
+}
+
+/// The only element layout the library reads in place: 4-byte floats, native byte order, aligned.
+bool is_native_float32(const py::array& a) {
+  const bool aligned = (py::detail::array_proxy(a.ptr())->flags & py::detail::npy_api::NPY_ARRAY_ALIGNED_) != 0;
+  return a.dtype().kind() == 'f' && a.itemsize() == 4 && a.dtype().attr("isnative").cast<bool>() && aligned;
+}
+
+/// The constant distance in floats between consecutive points, 0 when there is none the library can use.
+/// The leading axes are folded into one run of points: each must continue where the ones inside it end
+/// (true for C order and for slices like cloud[:, :, :3] of an H x W x 4 array).
+std::size_t point_stride_floats(const py::array& a) {
+  const py::ssize_t f = static_cast<py::ssize_t>(sizeof(float));
+  if (a.strides(a.ndim() - 1) != f) return 0;
+  py::ssize_t count = 1, stride = 3 * f;  // the run folded so far
+  for (py::ssize_t axis = a.ndim() - 2; axis >= 0; --axis) {
+    if (a.shape(axis) == 1) continue;
+    if (count == 1) {
+      stride = a.strides(axis);
+    } else if (a.strides(axis) != count * stride) {
+      return 0;
+    }
+    count *= a.shape(axis);
+  }
+  if (stride < 3 * f || stride % f != 0) return 0;  // overlapping, reversed or misaligned points
+  return static_cast<std::size_t>(stride / f);
+}
+
+/// Any array-like (nested lists too) as an ndarray, without a copy when it already is one.
+py::array as_array(const py::handle& object) {
+  py::array a = py::array::ensure(object);
+  if (!a) throw py::error_already_set();
+  return a;
+}
+
+}  // namespace
+
+PointsInput points_from_array(const py::handle& object) {
+  const py::array points = as_array(object);
+  require_real_numbers(points, "points");
+  const bool shaped = (points.ndim() == 2 || points.ndim() == 3) && points.shape(points.ndim() - 1) == 3;
+  if (!shaped)
+    throw InvalidInput("points must be an N x 3 or H x W x 3 array of x, y, z, got shape " + shape_text(points));
+  PointsInput in;
+  in.span.count = static_cast<std::size_t>(points.size() / 3);
+  const std::size_t stride = is_native_float32(points) ? point_stride_floats(points) : 0;
+  if (in.span.count == 0) return in;
+  if (stride != 0) {
+    in.keep = points;
+    in.span.xyz = static_cast<const float*>(points.data());
+    in.span.stride_floats = stride;
+    return in;
+  }
+  auto converted = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(points);
+  if (!converted) throw py::error_already_set();
+  in.span.xyz = converted.data();
+  in.keep = std::move(converted);
+  in.copied = true;
+  return in;
+}
+
+DepthInput depth_from_array(const py::handle& object, const PinholeIntrinsics& intrinsics) {
+  const py::array depth = as_array(object);
+  require_real_numbers(depth, "depth");
+  if (depth.ndim() != 2 || depth.shape(0) != intrinsics.height || depth.shape(1) != intrinsics.width) {
+    throw InvalidInput("depth must be an H x W array matching the intrinsics (" + std::to_string(intrinsics.height) +
+                       ", " + std::to_string(intrinsics.width) + "), got shape " + shape_text(depth));
+  }
+  DepthInput in;
+  in.pixels = static_cast<std::size_t>(depth.size());
+  const bool readable = is_native_float32(depth) && (depth.flags() & py::array::c_style);
+  auto converted = readable ? py::reinterpret_borrow<py::array>(depth)
+                            : py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(depth);
+  if (!converted) throw py::error_already_set();
+  in.depth = static_cast<const float*>(converted.data());
+  in.keep = std::move(converted);
+  in.copied = !readable;
+  return in;
+}
+
+}  // namespace occ_improve::python

@@ -1,0 +1,74 @@
+#pragma once
+// Shared pieces of the Python module: one bind_* function per library header group, the Mapper holder
+// that serialises calls from several Python threads, and small helpers for struct bindings.
+#include "occ_improve/mapper.hpp"
+
+#include <pybind11/pybind11.h>
+
+#include <initializer_list>
+#include <mutex>
+#include <string>
+#include <utility>
+
+namespace occ_improve::python {
+
+namespace py = pybind11;
+
+void bind_errors(py::module_& m);
+void bind_presets(py::module_& m);
+void bind_mapper(py::module_& m);
+void bind_analysis(py::module_& m);
+void bind_io(py::module_& m);
+void bind_internals(py::module_& m);
+
+/// The Python `Mapper`: the C++ Mapper plus a mutex. Calls release the GIL (so a grabber thread keeps
+/// running) and then take the mutex, so two Python threads never modify one Mapper at the same time.
+struct PyMapper {
+  explicit PyMapper(Mapper m) : mapper(std::move(m)) {}
+  Mapper mapper;
+  std::mutex mutex;
+};
+
+/// Runs f(mapper) with the GIL released and the Mapper's mutex held. The lock is declared after the GIL
+/// release, so it is given back before the GIL is retaken: a thread that holds the GIL and waits for
+/// the mutex can never block the thread that holds the mutex. f must not touch Python objects.
+template <class F>
+auto with_mapper(PyMapper& m, F&& f) {
+  py::gil_scoped_release release;
+  std::lock_guard<std::mutex> lock(m.mutex);
+  return f(m.mapper);
+}
+
+/// A constructor from keyword arguments only, each naming a field: T(fx=500.0, width=320). An unknown
+/// name is a TypeError, as for a Python function; values are checked by the field's own type.
+template <class T, class Class>
+void def_keyword_init(Class& cls) {
+  cls.def(py::init([](const py::kwargs& kwargs) {
+            py::object self = py::cast(T{});
+            for (const auto& item : kwargs) {
+              const std::string name = py::str(item.first);
+              if (!py::hasattr(self, item.first))
+                throw py::type_error(std::string(py::str(py::type::of(self).attr("__name__"))) +
+                                     "() got an unexpected keyword argument '" + name + "'");
+              py::setattr(self, item.first, item.second);
+            }
+            return self.cast<T>();
+          }),
+          "Defaults for every field; keyword arguments set fields by name.");
+}
+
+/// __repr__ as Name(field=value, ...) over the listed fields.
+template <class Class>
+void def_fields_repr(Class& cls, std::initializer_list<const char*> fields) {
+  std::vector<std::string> names(fields.begin(), fields.end());
+  cls.def("__repr__", [names](const py::object& self) {
+    std::string out = std::string(py::str(py::type::of(self).attr("__name__"))) + "(";
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (i) out += ", ";
+      out += names[i] + "=" + std::string(py::repr(self.attr(names[i].c_str())));
+    }
+    return out + ")";
+  });
+}
+
+}  // namespace occ_improve::python

@@ -1,0 +1,59 @@
+// The library's error hierarchy as Python exceptions with the same messages. Each also derives from the
+// built-in exception a Python caller would catch for that kind of failure (ValueError for bad values,
+// OSError for files that cannot be read or written), so generic handlers work too.
+#include "bindings.hpp"
+
+#include "occ_improve/errors.hpp"
+
+namespace occ_improve::python {
+namespace {
+
+// Returns a handle that owns one reference on purpose: the translator uses it until the interpreter
+// exits, and a static py::object would be released after Python is finalised.
+py::handle new_exception(py::module_& m, const char* name, py::tuple bases, const char* doc) {
+  const std::string qualified = std::string("occ_improve.") + name;
+  PyObject* type = PyErr_NewExceptionWithDoc(qualified.c_str(), doc, bases.ptr(), nullptr);
+  if (!type) throw py::error_already_set();
+  m.attr(name) = py::handle(type);
+  return py::handle(type);
+}
+
+}  // namespace
+
+void bind_errors(py::module_& m) {
+  const py::object builtins = py::module_::import("builtins");
+  // Static: the translator below runs long after this function returns.
+  static py::handle error, invalid_parameter, invalid_input, io_error, format_error, resource_limit;
+  error = new_exception(m, "Error", py::make_tuple(builtins.attr("RuntimeError")),
+                        "Root of every exception raised by occ_improve.");
+  invalid_parameter = new_exception(m, "InvalidParameter", py::make_tuple(error, builtins.attr("ValueError")),
+                                    "A parameter is out of its accepted range (the message names it and the range).");
+  invalid_input = new_exception(m, "InvalidInput", py::make_tuple(error, builtins.attr("ValueError")),
+                                "Input data cannot be used as a whole (empty, wrong shape, wrong size).");
+  io_error = new_exception(m, "IoError", py::make_tuple(error, builtins.attr("OSError")),
+                           "A file cannot be opened, read or written.");
+  format_error = new_exception(m, "FormatError", py::make_tuple(error, builtins.attr("ValueError")),
+                               "A file was read but is not in the expected format (corrupt, truncated, other version).");
+  resource_limit = new_exception(m, "ResourceLimit", py::make_tuple(error),
+                                 "A request would exceed a configured resource limit (e.g. the grid memory cap).");
+  // Most derived first: the C++ types form a hierarchy and the first matching catch wins.
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const InvalidParameter& e) {
+      PyErr_SetString(invalid_parameter.ptr(), e.what());
+    } catch (const InvalidInput& e) {
+      PyErr_SetString(invalid_input.ptr(), e.what());
+    } catch (const IoError& e) {
+      PyErr_SetString(io_error.ptr(), e.what());
+    } catch (const FormatError& e) {
+      PyErr_SetString(format_error.ptr(), e.what());
+    } catch (const ResourceLimit& e) {
+      PyErr_SetString(resource_limit.ptr(), e.what());
+    } catch (const Error& e) {
+      PyErr_SetString(error.ptr(), e.what());
+    }
+  });
+}
+
+}  // namespace occ_improve::python

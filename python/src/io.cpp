@@ -1,0 +1,102 @@
+// Saving and loading maps, and the OctoMap export where the module was built with it.
+#include "bindings.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/map_io.hpp"
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <Eigen/Geometry>
+
+#ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
+#include "occ_improve/octomap/export.hpp"
+#endif
+
+namespace occ_improve::python {
+namespace {
+
+/// Accepts str and os.PathLike (pathlib.Path), as Python's own file functions do.
+std::string path_string(const py::object& path) {
+  return py::str(py::module_::import("os").attr("fspath")(path));
+}
+
+void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
+  m.attr("MAP_FORMAT_VERSION") = kMapFormatVersion;
+  c.def("save", [](PyMapper& self, const py::object& path) {
+    const std::string p = path_string(path);
+    with_mapper(self, [&](Mapper& mp) { save_map(p, mp.grid(), mp.model().params()); });
+  }, py::arg("path"), "Writes the grid and its sensor model (atomically: temp file + rename). Raises IoError.");
+  m.def("load_map", [](const py::object& path) {
+    const std::string p = path_string(path);
+    py::gil_scoped_release release;
+    LoadedMap loaded = load_map(p);
+    return std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model)));
+  }, py::arg("path"),
+        "A Mapper continuing from a saved map (surface and improvement recomputed). Raises IoError when "
+        "the file cannot be read, FormatError when it is not a valid map.");
+}
+
+#ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
+// The pose arrives as a numpy array, not through pybind11's Eigen caster: GCC 12 gives a false
+// maybe-uninitialized warning inside that caster for fixed-size matrices.
+using PoseArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+Eigen::Isometry3d pose_from(const std::optional<PoseArray>& world_from_sensor) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  if (!world_from_sensor) return pose;
+  const PoseArray& m = *world_from_sensor;
+  if (m.ndim() != 2 || m.shape(0) != 4 || m.shape(1) != 4)
+    throw InvalidParameter("world_from_sensor must be a 4 x 4 matrix");
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = m.at(r, c);  // add_to_octree rejects a non-rigid one
+  return pose;
+}
+
+void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
+  py::class_<OctomapExportOptions> o(m, "OctomapExportOptions", "Occupancy threshold, unknown band, memory cap.");
+  def_keyword_init<OctomapExportOptions>(o);
+  o.def_readwrite("occupancy_threshold", &OctomapExportOptions::occupancy_threshold)
+      .def_readwrite("unknown_band_probability", &OctomapExportOptions::unknown_band_probability)
+      .def_readwrite("memory_cap_bytes", &OctomapExportOptions::memory_cap_bytes)
+      .def("validate", &OctomapExportOptions::validate);
+  def_fields_repr(o, {"occupancy_threshold", "unknown_band_probability", "memory_cap_bytes"});
+  py::class_<OctomapExportReport> r(m, "OctomapExportReport", "What the export wrote.");
+  r.def_readonly("leaves_examined", &OctomapExportReport::leaves_examined)
+      .def_readonly("occupied_written", &OctomapExportReport::occupied_written)
+      .def_readonly("free_written", &OctomapExportReport::free_written)
+      .def_readonly("left_unknown", &OctomapExportReport::left_unknown)
+      .def_readonly("seconds", &OctomapExportReport::seconds);
+  def_fields_repr(r, {"leaves_examined", "occupied_written", "free_written", "left_unknown", "seconds"});
+  c.def("export_octomap", [](PyMapper& self, const py::object& path, double resolution_m,
+                             const std::optional<PoseArray>& world_from_sensor, const OctomapExportOptions& options) {
+    const std::string p = path_string(path);
+    require_octomap_output_path(p);  // before any work, as the tools do
+    const Eigen::Isometry3d pose = pose_from(world_from_sensor);
+    return with_mapper(self, [&](Mapper& mp) {
+      OctomapExportReport report;
+      const auto tree = to_octree(mp.grid(), pose, resolution_m, options, &report);
+      write_octree(*tree, p);
+      return report;
+    });
+  }, py::arg("path"), py::arg("resolution_m"), py::arg("world_from_sensor") = py::none(),
+        py::arg("options") = OctomapExportOptions{},
+        "Writes the grid as an OctoMap .bt (maximum likelihood) or .ot (log-odds) file at resolution_m, "
+        "seen from world_from_sensor (4 x 4 rigid transform, default identity).");
+}
+#endif
+
+}  // namespace
+
+void bind_io(py::module_& m) {
+  auto c = py::reinterpret_borrow<py::class_<PyMapper>>(m.attr("Mapper"));
+  bind_map_io(m, c);
+#ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
+  m.attr("HAS_OCTOMAP") = true;
+  bind_octomap(m, c);
+#else
+  m.attr("HAS_OCTOMAP") = false;
+#endif
+}
+
+}  // namespace occ_improve::python

@@ -1,0 +1,187 @@
+// The Mapper: insertion of points and depth images (GIL released), and its maps as numpy arrays.
+#include "arrays.hpp"
+#include "bindings.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/improvement.hpp"
+
+#include <pybind11/eigen.h>
+#include <pybind11/stl.h>
+
+#include <array>
+#include <cmath>
+
+namespace occ_improve::python {
+namespace {
+
+void bind_reports(py::module_& m) {
+  py::class_<InsertionReport> r(m, "InsertionReport",
+                                "What happened to every point: received = inserted + skipped_invalid + skipped_outside_fov.");
+  r.def_readonly("points_received", &InsertionReport::points_received)
+      .def_readonly("points_inserted", &InsertionReport::points_inserted)
+      .def_readonly("skipped_invalid", &InsertionReport::skipped_invalid, "NaN/Inf coordinate or no return")
+      .def_readonly("skipped_outside_fov", &InsertionReport::skipped_outside_fov)
+      .def_readonly("beyond_depth_range", &InsertionReport::beyond_depth_range, "inserted; only their free space counts")
+      .def_readonly("column_updates", &InsertionReport::column_updates)
+      .def_readonly("seconds", &InsertionReport::seconds);
+  def_fields_repr(r, {"points_received", "points_inserted", "skipped_invalid", "skipped_outside_fov",
+                      "beyond_depth_range", "seconds"});
+  py::class_<MapperReport> mr(m, "MapperReport", "One Mapper.insert: the insertion and the improvement update.");
+  mr.def_readonly("insertion", &MapperReport::insertion)
+      .def_readonly("improvement_seconds", &MapperReport::improvement_seconds)
+      .def_readonly("surface_columns_changed", &MapperReport::surface_columns_changed)
+      .def_readonly("rays_recomputed", &MapperReport::rays_recomputed);
+  def_fields_repr(mr, {"insertion", "improvement_seconds", "surface_columns_changed", "rays_recomputed"});
+}
+
+MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads) {
+  const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
+  InsertionOptions options;
+  options.threads = threads;
+  return with_mapper(self, [&](Mapper& m) { return m.insert(in.span, options); });
+}
+
+MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const PinholeIntrinsics& intrinsics,
+                                double scale, int threads) {
+  occ_improve::detail::require_parameter(std::isfinite(scale) && scale > 0, "scale", scale, "finite and > 0");
+  const DepthInput in = depth_from_array(depth, intrinsics);
+  InsertionOptions options;
+  options.threads = threads;
+  return with_mapper(self, [&](Mapper& m) {
+    // Scaling happens here, without the GIL; the back-projection is the library's own.
+    std::vector<float> scaled;
+    const float* metres = in.depth;
+    if (scale != 1.0) {
+      scaled.assign(in.depth, in.depth + in.pixels);
+      for (float& d : scaled) d = static_cast<float>(d * scale);
+      metres = scaled.data();
+    }
+    const auto points = depth_image_to_points(DepthImage{metres, in.pixels, intrinsics});
+    return m.insert(PointSpan::from(points), options);
+  });
+}
+
+template <class T>
+using MapGetter = const std::vector<T>& (*)(const Mapper&);
+
+/// A map of the Mapper as an H x W array: a copy, or a read-only view that keeps the Mapper alive.
+template <class T>
+py::array map_array(const py::object& owner, bool copy, MapGetter<T> get, const py::dtype& dtype) {
+  PyMapper& self = owner.cast<PyMapper&>();
+  const int h = self.mapper.geometry().height(), w = self.mapper.geometry().width();  // fixed for its life
+  if (!copy) return view_2d<T>(get(self.mapper).data(), h, w, owner, dtype);
+  py::array out = empty_2d(h, w, dtype);  // allocated with the GIL, filled without it
+  T* dst = static_cast<T*>(out.mutable_data());
+  with_mapper(self, [&](Mapper& m) {
+    const std::vector<T>& src = get(m);
+    std::copy(src.begin(), src.end(), dst);
+  });
+  return out;
+}
+
+template <class T>
+void def_map_output(py::class_<PyMapper>& c, const char* name, MapGetter<T> get, const std::string& what,
+                    const py::dtype& dtype = py::dtype::of<T>()) {
+  static const std::string note =
+      " H x W (row = elevation bin, column = azimuth bin). copy=True (default): a new array. copy=False: a "
+      "read-only view of the Mapper's own buffer, valid as long as the view exists (it keeps the Mapper "
+      "alive) and updated in place by later inserts (do not read it while another thread inserts).";
+  c.def(name, [get, dtype](const py::object& self, bool copy) { return map_array<T>(self, copy, get, dtype); },
+        py::arg("copy") = true, (what + note).c_str());
+}
+
+void bind_map_outputs(py::class_<PyMapper>& c) {
+  def_map_output<float>(c, "depth", [](const Mapper& m) -> const auto& { return m.surface().depth_m; },
+                        "Surface depth in metres (0 where unknown), float32.");
+  def_map_output<float>(c, "probability", [](const Mapper& m) -> const auto& { return m.surface().probability; },
+                        "Occupancy probability of the surface voxel, float32.");
+  // The flags are 0/1 bytes, so numpy's 1-byte bool can view them directly.
+  def_map_output<std::uint8_t>(c, "unknown", [](const Mapper& m) -> const auto& { return m.surface().unknown; },
+                               "True where the ray was never updated, bool.", py::dtype("?"));
+  def_map_output<std::int32_t>(c, "surface_bin", [](const Mapper& m) -> const auto& { return m.surface().bin; },
+                               "Surface depth bin, int32 (-1 unknown, depth_bins when all bins are equal).");
+  def_map_output<float>(c, "improvement", [](const Mapper& m) -> const auto& { return m.improvement().value; },
+                        "Expected improvement per ray (eqs. 3-4), float32.");
+}
+
+void bind_mapper_insertion(py::class_<PyMapper>& c) {
+  c.def(py::init([](const SensorPreset& preset, const GridOptions& options) {
+          return std::make_unique<PyMapper>(Mapper(preset, options));
+        }),
+        py::arg("preset"), py::arg("options") = GridOptions{});
+  c.def("insert", &insert_points_array, py::arg("points"), py::arg("threads") = 0,
+        "Inserts points in the sensor frame (metres): an N x 3 or H x W x 3 array. float32 arrays whose points "
+        "lie at one constant stride (C order, or slices like cloud[..., :3]) are read in place; other dtypes "
+        "and layouts are converted to a float32 copy first. NaN/Inf/zero points are skipped and counted. "
+        "threads=0: all cores. Releases the GIL.");
+  c.def("insert_depth", &insert_depth_array, py::arg("depth"), py::arg("intrinsics"), py::arg("scale") = 1.0,
+        py::arg("threads") = 0,
+        "Inserts an H x W depth image (z-depth; value * scale = metres, 0 or NaN = no return) through its "
+        "intrinsics. A C-contiguous float32 image is read in place; others (e.g. uint16 millimetres with "
+        "scale=0.001) are converted first. Releases the GIL.");
+}
+
+void bind_mapper_properties(py::class_<PyMapper>& c) {
+  // Geometry, model and options never change after construction: read without the lock.
+  c.def_property_readonly("width", [](PyMapper& s) { return s.mapper.geometry().width(); }, "Azimuth bins.");
+  c.def_property_readonly("height", [](PyMapper& s) { return s.mapper.geometry().height(); }, "Elevation bins.");
+  c.def_property_readonly("geometry", [](PyMapper& s) { return s.mapper.geometry().params(); }, "GeometryParams (a copy).");
+  c.def_property_readonly("model", [](PyMapper& s) { return s.mapper.model().params(); }, "SensorModelParams (a copy).");
+  c.def_property_readonly("options", [](PyMapper& s) { return s.mapper.grid().options(); }, "GridOptions (a copy).");
+  c.def("memory_bytes", [](PyMapper& s) { return with_mapper(s, [](Mapper& mp) { return mp.grid().memory_bytes(); }); },
+        "Heap bytes held by the grid's store.");
+  c.def("touched_columns", [](PyMapper& s) {
+    return with_mapper(s, [](Mapper& mp) { return mp.grid().touched_column_count(); });
+  }, "Rays that hold any data.");
+  c.def("__repr__", [](PyMapper& s) {
+    const SphericalGeometry& g = s.mapper.geometry();
+    return "Mapper(" + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " x " +
+           std::to_string(g.depth().bins()) + ")";
+  });
+}
+
+void require_bins(const SphericalGeometry& g, int azimuth_bin, int elevation_bin) {
+  occ_improve::detail::require_parameter(azimuth_bin >= 0 && azimuth_bin < g.width(), "azimuth_bin", azimuth_bin,
+                                         "inside [0, width)");
+  occ_improve::detail::require_parameter(elevation_bin >= 0 && elevation_bin < g.height(), "elevation_bin",
+                                         elevation_bin, "inside [0, height)");
+}
+
+void bind_mapper_rays(py::class_<PyMapper>& c) {
+  c.def("ray_improvement", [](PyMapper& s, int azimuth_bin, int elevation_bin) {
+    return with_mapper(s, [&](Mapper& mp) {
+      return ray_improvement(mp.geometry(), mp.model(), mp.surface(), azimuth_bin, elevation_bin);
+    });
+  }, py::arg("azimuth_bin"), py::arg("elevation_bin"),
+        "Eqs. 3-4 for one ray, recomputed from the surface (double precision; the map holds the float value).");
+  c.def("direction", [](PyMapper& s, int azimuth_bin, int elevation_bin) {
+    require_bins(s.mapper.geometry(), azimuth_bin, elevation_bin);
+    return Eigen::Vector3d(s.mapper.geometry().direction(azimuth_bin, elevation_bin));
+  }, py::arg("azimuth_bin"), py::arg("elevation_bin"), "Unit direction (sensor frame) through a ray's centre.");
+  c.def("locate", [](PyMapper& s, const std::array<double, 3>& p) -> std::optional<std::pair<int, int>> {
+    // std::array, not Eigen: GCC 12 gives a false maybe-uninitialized warning in pybind11's Eigen caster.
+    const SphericalPoint sp = to_spherical(p[0], p[1], p[2]);
+    int a = 0, e = 0;
+    if (!s.mapper.geometry().locate(sp.azimuth, sp.elevation, a, e)) return std::nullopt;
+    return std::make_pair(a, e);
+  }, py::arg("point"), "(azimuth_bin, elevation_bin) of the ray through a sensor-frame point, None outside the field of view.");
+}
+
+void bind_mapper_class(py::module_& m) {
+  py::class_<PyMapper> c(m, "Mapper",
+                         "A spherical grid with its sensor model, surface and improvement map, kept up to date "
+                         "together. Methods release the GIL; calls on one Mapper from several threads are serialised.");
+  bind_mapper_insertion(c);
+  bind_map_outputs(c);
+  bind_mapper_properties(c);
+  bind_mapper_rays(c);
+}
+
+}  // namespace
+
+void bind_mapper(py::module_& m) {
+  bind_reports(m);
+  bind_mapper_class(m);
+}
+
+}  // namespace occ_improve::python

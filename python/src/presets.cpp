@@ -1,0 +1,139 @@
+// Presets, geometry and sensor-model parameters, grid options: plain structs with keyword constructors.
+#include "bindings.hpp"
+
+#include "occ_improve/grid.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cstring>
+
+namespace occ_improve::python {
+namespace {
+
+void bind_intrinsics(py::module_& m) {
+  py::class_<PinholeIntrinsics> k(m, "PinholeIntrinsics", "A pinhole depth camera (pixels; u right, v down).");
+  def_keyword_init<PinholeIntrinsics>(k);
+  k.def_readwrite("fx", &PinholeIntrinsics::fx)
+      .def_readwrite("fy", &PinholeIntrinsics::fy)
+      .def_readwrite("cx", &PinholeIntrinsics::cx)
+      .def_readwrite("cy", &PinholeIntrinsics::cy)
+      .def_readwrite("width", &PinholeIntrinsics::width)
+      .def_readwrite("height", &PinholeIntrinsics::height)
+      .def("validate", &PinholeIntrinsics::validate, "Raises InvalidParameter naming the first bad field.");
+  def_fields_repr(k, {"fx", "fy", "cx", "cy", "width", "height"});
+  m.def("kinect_v1_intrinsics", &kinect_v1_intrinsics, "Kinect v1 as OpenNI reports it (fx = fy = 525).");
+}
+
+void bind_geometry_params(py::module_& m) {
+  py::enum_<DepthBinning>(m, "DepthBinning", "How the depth axis is divided.")
+      .value("uniform", DepthBinning::uniform, "bins uniform in rho")
+      .value("inverse_depth", DepthBinning::inverse_depth, "bins uniform in 1/rho");
+  py::class_<GeometryParams> g(m, "GeometryParams", "The spherical grid's bins and ranges (radians, metres).");
+  def_keyword_init<GeometryParams>(g);
+  g.def_readwrite("azimuth_bins", &GeometryParams::azimuth_bins)
+      .def_readwrite("elevation_bins", &GeometryParams::elevation_bins)
+      .def_readwrite("depth_bins", &GeometryParams::depth_bins)
+      .def_readwrite("azimuth_min_rad", &GeometryParams::azimuth_min_rad)
+      .def_readwrite("azimuth_max_rad", &GeometryParams::azimuth_max_rad)
+      .def_readwrite("elevation_min_rad", &GeometryParams::elevation_min_rad)
+      .def_readwrite("elevation_max_rad", &GeometryParams::elevation_max_rad)
+      .def_readwrite("depth_binning", &GeometryParams::depth_binning)
+      .def_readwrite("depth_min_m", &GeometryParams::depth_min_m)
+      .def_readwrite("depth_max_m", &GeometryParams::depth_max_m)
+      .def("validate", &GeometryParams::validate, "Raises InvalidParameter naming the first bad field.");
+  def_fields_repr(g, {"azimuth_bins", "elevation_bins", "depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
+}
+
+void bind_model_params(py::module_& m) {
+  py::class_<SensorModelParams> s(m, "SensorModelParams",
+                                  "Eq. 1's noise model: sigma_rho = max(floor, sigma_depth_m + sigma_depth_per_m2 rho^2).");
+  def_keyword_init<SensorModelParams>(s);
+  s.def_readwrite("sigma_azimuth_rad", &SensorModelParams::sigma_azimuth_rad)
+      .def_readwrite("sigma_elevation_rad", &SensorModelParams::sigma_elevation_rad)
+      .def_readwrite("sigma_depth_m", &SensorModelParams::sigma_depth_m)
+      .def_readwrite("sigma_depth_per_m2", &SensorModelParams::sigma_depth_per_m2)
+      .def_readwrite("sigma_depth_floor_m", &SensorModelParams::sigma_depth_floor_m)
+      .def_readwrite("support_k", &SensorModelParams::support_k)
+      .def("validate", &SensorModelParams::validate, "Raises InvalidParameter naming the first bad field.");
+  def_fields_repr(s, {"sigma_azimuth_rad", "sigma_elevation_rad", "sigma_depth_m", "sigma_depth_per_m2",
+                      "sigma_depth_floor_m", "support_k"});
+}
+
+void bind_preset(py::module_& m) {
+  py::class_<SensorPreset> p(m, "SensorPreset", "A grid geometry and a sensor model that belong together.");
+  def_keyword_init<SensorPreset>(p);
+  p.def_readwrite("name", &SensorPreset::name)
+      .def_readwrite("geometry", &SensorPreset::geometry)
+      .def_readwrite("model", &SensorPreset::model)
+      .def_readwrite("camera", &SensorPreset::camera, "The intrinsics it was built from, or None.");
+  def_fields_repr(p, {"name", "geometry", "camera"});
+
+  py::class_<PinholePresetOptions> o(m, "PinholePresetOptions", "Depth axis and noise for preset_from_pinhole.");
+  def_keyword_init<PinholePresetOptions>(o);
+  o.def_readwrite("depth_bins", &PinholePresetOptions::depth_bins)
+      .def_readwrite("depth_binning", &PinholePresetOptions::depth_binning)
+      .def_readwrite("depth_min_m", &PinholePresetOptions::depth_min_m)
+      .def_readwrite("depth_max_m", &PinholePresetOptions::depth_max_m)
+      .def_readwrite("sigma_depth_m", &PinholePresetOptions::sigma_depth_m)
+      .def_readwrite("sigma_depth_per_m2", &PinholePresetOptions::sigma_depth_per_m2)
+      .def_readwrite("sigma_depth_floor_m", &PinholePresetOptions::sigma_depth_floor_m)
+      .def_readwrite("support_k", &PinholePresetOptions::support_k);
+  def_fields_repr(o, {"depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
+
+  m.def("kinect_v1_paper", &kinect_v1_paper, "The paper's set-up: 640 x 480 x 512 bins, 57 x 43 deg, [0, 5 m).");
+  m.def("kinect_v1", &kinect_v1, py::arg("intrinsics") = kinect_v1_intrinsics(),
+        "For real use: field of view from the intrinsics, inverse-depth bins over [0.5 m, 8 m].");
+  m.def("preset_from_pinhole", &preset_from_pinhole, py::arg("intrinsics"),
+        py::arg("options") = PinholePresetOptions{}, py::arg("name") = "pinhole",
+        "A preset for any pinhole depth camera: one column per pixel over the image's angular extent.");
+  m.def("preset_by_name", &preset_by_name, py::arg("name"),
+        "'kinect_v1_paper' or 'kinect_v1'; raises InvalidParameter listing the known names.");
+  m.def("preset_names", &preset_names, "The names preset_by_name accepts.");
+}
+
+void bind_grid_options(py::module_& m) {
+  py::enum_<UpdateMode>(m, "UpdateMode", "How log-odds are accumulated.")
+      .value("clamped", UpdateMode::clamped, "clamped after each update, as OctoMap does (default)")
+      .value("exact", UpdateMode::exact, "eq. 2 exactly, no bounds");
+  py::class_<GridOptions> g(m, "GridOptions", "Update mode, clamping probabilities and the memory cap.");
+  def_keyword_init<GridOptions>(g);
+  g.def_readwrite("mode", &GridOptions::mode)
+      .def_readwrite("probability_min", &GridOptions::probability_min)
+      .def_readwrite("probability_max", &GridOptions::probability_max)
+      .def_readwrite("memory_cap_bytes", &GridOptions::memory_cap_bytes)
+      .def("validate", &GridOptions::validate, "Raises InvalidParameter naming the first bad field.")
+      .def_static("octomap_clamping", &GridOptions::octomap_clamping, "OctoMap's clamping (0.1192 / 0.971).");
+  def_fields_repr(g, {"mode", "probability_min", "probability_max", "memory_cap_bytes"});
+}
+
+/// The built-in sample frame as (depth H x W float32 metres, intrinsics); 0 = no return.
+py::tuple sample_depth(std::uint32_t seed, bool noise, bool quantise, bool projector_shadow) {
+  sample::SceneOptions options;
+  options.seed = seed;
+  options.noise = noise;
+  options.quantise = quantise;
+  options.projector_shadow = projector_shadow;
+  const sample::SampleFrame frame = sample::generate_scene(options);
+  py::array_t<float> depth({frame.intrinsics.height, frame.intrinsics.width});
+  std::memcpy(depth.mutable_data(), frame.depth_m.data(), frame.depth_m.size() * sizeof(float));
+  return py::make_tuple(depth, frame.intrinsics);
+}
+
+}  // namespace
+
+void bind_presets(py::module_& m) {
+  bind_intrinsics(m);
+  bind_geometry_params(m);
+  bind_model_params(m);
+  bind_preset(m);
+  bind_grid_options(m);
+  m.def("sample_depth", &sample_depth, py::arg("seed") = 1, py::arg("noise") = true, py::arg("quantise") = true,
+        py::arg("projector_shadow") = true,
+        "The built-in Kinect-like sample frame (floor, wall, recess, box, pole, shadows, dark poster): "
+        "(depth, intrinsics), depth an H x W float32 array of z-depth in metres, 0 = no return.");
+}
+
+}  // namespace occ_improve::python

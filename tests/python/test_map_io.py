@@ -1,0 +1,79 @@
+"""Saving and loading maps (tests/test_map_io.cpp through Python): exact round trips, errors."""
+import os
+
+import numpy as np
+import pytest
+
+import occ_improve as oi
+from conftest import assert_same_maps
+
+
+def test_round_trip_is_exact_and_mapping_continues_as_if_uninterrupted(tmp_path, paper_mapper):
+    path = tmp_path / "scene.occmap"
+    paper_mapper.save(path)
+    loaded = oi.load_map(str(path))  # str and pathlib.Path both work
+    assert_same_maps(loaded, paper_mapper)
+    assert loaded.model.sigma_depth_m == paper_mapper.model.sigma_depth_m
+    second = oi.sample_depth(seed=2)
+    loaded.insert_depth(*second)
+    paper_mapper.insert_depth(*second)
+    assert_same_maps(loaded, paper_mapper)
+
+
+def test_exact_mode_inverse_depth_preset_round_trips(tmp_path, sample):
+    depth, intrinsics = sample
+    preset = oi.kinect_v1(intrinsics)
+    preset.geometry.depth_bins = 256  # exact mode updates every bin: fewer bins keep the test quick
+    mapper = oi.Mapper(preset, oi.GridOptions(mode=oi.UpdateMode.exact))
+    mapper.insert_depth(depth, intrinsics)
+    mapper.save(tmp_path / "exact.occmap")
+    loaded = oi.load_map(tmp_path / "exact.occmap")
+    assert loaded.options.mode == oi.UpdateMode.exact
+    assert loaded.geometry.depth_binning == oi.DepthBinning.inverse_depth
+    assert_same_maps(loaded, mapper)
+
+
+def test_missing_file_is_an_os_error_naming_it(tmp_path):
+    missing = tmp_path / "nothing.occmap"
+    with pytest.raises(oi.IoError, match="nothing.occmap") as e:
+        oi.load_map(missing)
+    assert isinstance(e.value, OSError)
+
+
+def test_corrupt_or_foreign_files_are_format_errors(tmp_path, paper_mapper):
+    foreign = tmp_path / "notes.occmap"
+    foreign.write_bytes(b"this is not a map at all, just some text long enough to hold a header" * 4)
+    with pytest.raises(oi.FormatError) as e:
+        oi.load_map(foreign)
+    assert isinstance(e.value, ValueError) and str(e.value)
+    good = tmp_path / "good.occmap"
+    paper_mapper.save(good)
+    data = bytearray(good.read_bytes())
+    data[len(data) // 2] ^= 0x10
+    flipped = tmp_path / "flipped.occmap"
+    flipped.write_bytes(bytes(data))
+    with pytest.raises(oi.FormatError, match="checksum"):
+        oi.load_map(flipped)
+    truncated = tmp_path / "truncated.occmap"
+    truncated.write_bytes(good.read_bytes()[:1000])
+    with pytest.raises(oi.FormatError):
+        oi.load_map(truncated)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write into a read-only folder")
+def test_unwritable_folder_is_an_io_error(tmp_path, paper_mapper):
+    folder = tmp_path / "ro"
+    folder.mkdir()
+    folder.chmod(0o500)
+    try:
+        with pytest.raises(oi.IoError):
+            paper_mapper.save(folder / "m.occmap")
+    finally:
+        folder.chmod(0o700)
+
+
+def test_saving_into_a_missing_folder_is_an_io_error_and_leaves_nothing(tmp_path, paper_mapper):
+    with pytest.raises(oi.IoError):
+        paper_mapper.save(tmp_path / "no" / "such" / "folder" / "m.occmap")
+    assert not (tmp_path / "no").exists()
+    assert np.isfinite(paper_mapper.improvement()).all()

@@ -1,0 +1,51 @@
+"""OctoMap export where the module was built with it (tests/octomap through Python)."""
+import numpy as np
+import pytest
+
+import occ_improve as oi
+
+pytestmark = pytest.mark.skipif(not oi.HAS_OCTOMAP, reason="module built without the OctoMap adapter")
+
+
+def small_mapper():
+    """A 2 m depth range keeps the export fast at 5 cm."""
+    preset = oi.kinect_v1_paper()
+    preset.geometry.depth_max_m = 2.5
+    depth, intrinsics = oi.sample_depth()
+    mapper = oi.Mapper(preset)
+    mapper.insert_depth(depth, intrinsics)
+    return mapper
+
+
+def test_bt_and_ot_files_are_written_with_occupied_and_free_space(tmp_path):
+    mapper = small_mapper()
+    report = mapper.export_octomap(tmp_path / "map.bt", 0.05)
+    assert report.occupied_written > 0 and report.free_written > 0
+    assert report.leaves_examined >= report.occupied_written + report.free_written + report.left_unknown
+    assert (tmp_path / "map.bt").read_bytes().startswith(b"# Octomap OcTree binary file")
+    pose = np.eye(4)
+    pose[:3, 3] = (1.0, 2.0, 0.5)
+    moved = mapper.export_octomap(tmp_path / "map.ot", 0.05, world_from_sensor=pose)
+    assert (tmp_path / "map.ot").read_bytes().startswith(b"# Octomap OcTree file")
+    # A translation moves the frustum across leaf boundaries: about, not exactly, as many leaves.
+    assert moved.occupied_written == pytest.approx(report.occupied_written, rel=0.2)
+
+
+def test_bad_extension_pose_and_resolution_raise_invalid_parameter(tmp_path):
+    mapper = small_mapper()
+    with pytest.raises(oi.InvalidParameter, match="txt"):
+        mapper.export_octomap(tmp_path / "map.txt", 0.05)
+    sheared = np.eye(4)
+    sheared[0, 1] = 0.5
+    with pytest.raises(oi.InvalidParameter):
+        mapper.export_octomap(tmp_path / "map.bt", 0.05, world_from_sensor=sheared)
+    with pytest.raises(oi.InvalidParameter):
+        mapper.export_octomap(tmp_path / "map.bt", -1.0)
+    assert not (tmp_path / "map.bt").exists()
+    with pytest.raises(oi.ResourceLimit):
+        mapper.export_octomap(tmp_path / "map.bt", 0.05, options=oi.OctomapExportOptions(memory_cap_bytes=1000))
+
+
+def test_pose_must_be_a_4_by_4_matrix(tmp_path):
+    with pytest.raises(oi.InvalidParameter, match="4 x 4"):
+        small_mapper().export_octomap(tmp_path / "map.bt", 0.05, world_from_sensor=np.eye(3))
