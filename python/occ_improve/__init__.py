@@ -16,6 +16,7 @@ See docs/PYTHON.md for input layouts (which ones are read in place), output life
 from ._core import (  # noqa: F401  (re-exported)
     MAP_FORMAT_VERSION,
     HAS_OCTOMAP,
+    AngularBinning,
     DepthBinning,
     Error,
     FormatError,
@@ -45,6 +46,7 @@ from ._core import (  # noqa: F401  (re-exported)
     kinect_v1,
     kinect_v1_intrinsics,
     kinect_v1_paper,
+    kinect_v1_spherical,
     load_map,
     preset_by_name,
     preset_from_pinhole,

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import enum
 import os
-from typing import List, Optional, Sequence, Tuple, Union
+from typing import List, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -38,7 +38,13 @@ class DepthBinning(enum.Enum):
     uniform = ...
     inverse_depth = ...
 
+class AngularBinning(enum.Enum):
+    spherical = ...
+    pinhole = ...
+
 class GeometryParams:
+    angular_binning: AngularBinning
+    camera: Optional[PinholeIntrinsics]
     azimuth_bins: int
     elevation_bins: int
     depth_bins: int
@@ -55,6 +61,8 @@ class GeometryParams:
 class SensorModelParams:
     sigma_azimuth_rad: float
     sigma_elevation_rad: float
+    sigma_u_px: float
+    sigma_v_px: float
     sigma_depth_m: float
     sigma_depth_per_m2: float
     sigma_depth_floor_m: float
@@ -70,6 +78,7 @@ class SensorPreset:
     def __init__(self, **fields: object) -> None: ...
 
 class PinholePresetOptions:
+    angular_binning: AngularBinning
     depth_bins: int
     depth_binning: DepthBinning
     depth_min_m: float
@@ -82,9 +91,13 @@ class PinholePresetOptions:
 
 def kinect_v1_paper() -> SensorPreset: ...
 def kinect_v1(intrinsics: PinholeIntrinsics = ...) -> SensorPreset: ...
+def kinect_v1_spherical(intrinsics: PinholeIntrinsics = ...) -> SensorPreset: ...
 def preset_from_pinhole(intrinsics: PinholeIntrinsics, options: PinholePresetOptions = ...,
                         name: str = "pinhole") -> SensorPreset: ...
+@overload
 def preset_by_name(name: str) -> SensorPreset: ...
+@overload
+def preset_by_name(name: str, intrinsics: PinholeIntrinsics) -> SensorPreset: ...
 def preset_names() -> List[str]: ...
 
 class UpdateMode(enum.Enum):

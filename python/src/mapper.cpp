@@ -160,10 +160,10 @@ void bind_mapper_rays(py::class_<PyMapper>& c) {
   }, py::arg("azimuth_bin"), py::arg("elevation_bin"), "Unit direction (sensor frame) through a ray's centre.");
   c.def("locate", [](PyMapper& s, const std::array<double, 3>& p) -> std::optional<std::pair<int, int>> {
     // std::array, not Eigen: GCC 12 gives a false maybe-uninitialized warning in pybind11's Eigen caster.
-    const SphericalPoint sp = to_spherical(p[0], p[1], p[2]);
-    int a = 0, e = 0;
-    if (!s.mapper.geometry().locate(sp.azimuth, sp.elevation, a, e)) return std::nullopt;
-    return std::make_pair(a, e);
+    const SphericalGeometry& g = s.mapper.geometry();
+    ColumnIndex c = 0;
+    if (!g.column_of(p[0], p[1], p[2], c)) return std::nullopt;
+    return std::make_pair(g.azimuth_bin_of(c), g.elevation_bin_of(c));
   }, py::arg("point"), "(azimuth_bin, elevation_bin) of the ray through a sensor-frame point, None outside the field of view.");
 }
 

@@ -31,9 +31,16 @@ void bind_geometry_params(py::module_& m) {
   py::enum_<DepthBinning>(m, "DepthBinning", "How the depth axis is divided.")
       .value("uniform", DepthBinning::uniform, "bins uniform in rho")
       .value("inverse_depth", DepthBinning::inverse_depth, "bins uniform in 1/rho");
-  py::class_<GeometryParams> g(m, "GeometryParams", "The spherical grid's bins and ranges (radians, metres).");
+  py::enum_<AngularBinning>(m, "AngularBinning", "How directions are divided into rays (columns).")
+      .value("spherical", AngularBinning::spherical, "uniform azimuth x elevation bins; depth is the range")
+      .value("pinhole", AngularBinning::pinhole, "one column per camera pixel; depth is z");
+  py::class_<GeometryParams> g(m, "GeometryParams",
+                               "The grid's binning, bins and ranges (radians or pixels, metres).");
   def_keyword_init<GeometryParams>(g);
-  g.def_readwrite("azimuth_bins", &GeometryParams::azimuth_bins)
+  g.def_readwrite("angular_binning", &GeometryParams::angular_binning)
+      .def_readwrite("camera", &GeometryParams::camera,
+                     "pinhole: the camera whose pixels are the columns; spherical: marks observable columns, or None.")
+      .def_readwrite("azimuth_bins", &GeometryParams::azimuth_bins)
       .def_readwrite("elevation_bins", &GeometryParams::elevation_bins)
       .def_readwrite("depth_bins", &GeometryParams::depth_bins)
       .def_readwrite("azimuth_min_rad", &GeometryParams::azimuth_min_rad)
@@ -44,7 +51,7 @@ void bind_geometry_params(py::module_& m) {
       .def_readwrite("depth_min_m", &GeometryParams::depth_min_m)
       .def_readwrite("depth_max_m", &GeometryParams::depth_max_m)
       .def("validate", &GeometryParams::validate, "Raises InvalidParameter naming the first bad field.");
-  def_fields_repr(g, {"azimuth_bins", "elevation_bins", "depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
+  def_fields_repr(g, {"angular_binning", "azimuth_bins", "elevation_bins", "depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
 }
 
 void bind_model_params(py::module_& m) {
@@ -53,6 +60,8 @@ void bind_model_params(py::module_& m) {
   def_keyword_init<SensorModelParams>(s);
   s.def_readwrite("sigma_azimuth_rad", &SensorModelParams::sigma_azimuth_rad)
       .def_readwrite("sigma_elevation_rad", &SensorModelParams::sigma_elevation_rad)
+      .def_readwrite("sigma_u_px", &SensorModelParams::sigma_u_px)
+      .def_readwrite("sigma_v_px", &SensorModelParams::sigma_v_px)
       .def_readwrite("sigma_depth_m", &SensorModelParams::sigma_depth_m)
       .def_readwrite("sigma_depth_per_m2", &SensorModelParams::sigma_depth_per_m2)
       .def_readwrite("sigma_depth_floor_m", &SensorModelParams::sigma_depth_floor_m)
@@ -73,7 +82,8 @@ void bind_preset(py::module_& m) {
 
   py::class_<PinholePresetOptions> o(m, "PinholePresetOptions", "Depth axis and noise for preset_from_pinhole.");
   def_keyword_init<PinholePresetOptions>(o);
-  o.def_readwrite("depth_bins", &PinholePresetOptions::depth_bins)
+  o.def_readwrite("angular_binning", &PinholePresetOptions::angular_binning)
+      .def_readwrite("depth_bins", &PinholePresetOptions::depth_bins)
       .def_readwrite("depth_binning", &PinholePresetOptions::depth_binning)
       .def_readwrite("depth_min_m", &PinholePresetOptions::depth_min_m)
       .def_readwrite("depth_max_m", &PinholePresetOptions::depth_max_m)
@@ -85,12 +95,17 @@ void bind_preset(py::module_& m) {
 
   m.def("kinect_v1_paper", &kinect_v1_paper, "The paper's set-up: 640 x 480 x 512 bins, 57 x 43 deg, [0, 5 m).");
   m.def("kinect_v1", &kinect_v1, py::arg("intrinsics") = kinect_v1_intrinsics(),
-        "For real use: field of view from the intrinsics, inverse-depth bins over [0.5 m, 8 m].");
+        "For real use (the default): one column per pixel of the camera, depth along z, inverse-depth bins "
+        "over [0.5 m, 8 m].");
+  m.def("kinect_v1_spherical", &kinect_v1_spherical, py::arg("intrinsics") = kinect_v1_intrinsics(),
+        "kinect_v1's depth model over spherical bins spanning the image (columns outside it not observable).");
   m.def("preset_from_pinhole", &preset_from_pinhole, py::arg("intrinsics"),
         py::arg("options") = PinholePresetOptions{}, py::arg("name") = "pinhole",
         "A preset for any pinhole depth camera: one column per pixel over the image's angular extent.");
-  m.def("preset_by_name", &preset_by_name, py::arg("name"),
-        "'kinect_v1_paper' or 'kinect_v1'; raises InvalidParameter listing the known names.");
+  m.def("preset_by_name", py::overload_cast<const std::string&>(&preset_by_name), py::arg("name"),
+        "'kinect_v1', 'kinect_v1_paper' or 'kinect_v1_spherical'; raises InvalidParameter listing the known names.");
+  m.def("preset_by_name", py::overload_cast<const std::string&, const PinholeIntrinsics&>(&preset_by_name),
+        py::arg("name"), py::arg("intrinsics"), "The named preset for this camera (kinect_v1_paper ignores it).");
   m.def("preset_names", &preset_names, "The names preset_by_name accepts.");
 }
 

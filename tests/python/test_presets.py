@@ -24,18 +24,26 @@ def test_kinect_preset_is_built_from_its_intrinsics():
     assert p.camera is not None and p.camera.fx == 585
     assert p.geometry.depth_binning == oi.DepthBinning.inverse_depth
     assert p.model.sigma_depth_per_m2 > 0
-    # Angular sigma is one pixel's quantisation, as the paper derives its own.
-    assert p.model.sigma_azimuth_rad == pytest.approx(1 / 585 / math.sqrt(12), abs=0.05 / 585)
+    # Pixel-native: one column per pixel, sigma = one pixel's quantisation, a pixel lands in its own column.
+    assert p.geometry.angular_binning == oi.AngularBinning.pinhole
+    assert p.model.sigma_u_px == pytest.approx(1 / math.sqrt(12))
     mapper = oi.Mapper(p)
-    for u, v in ((0, 0), (639, 0), (0, 479), (639, 479), (320, 240)):  # every corner is inside the grid
-        assert mapper.locate(((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)) is not None
+    for u, v in ((0, 0), (639, 0), (0, 479), (639, 479), (320, 240)):
+        assert mapper.locate(((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)) == (u, v)
+    # The spherical variant keeps every pixel inside its grid too.
+    s = oi.kinect_v1_spherical(k)
+    assert s.geometry.angular_binning == oi.AngularBinning.spherical
+    assert s.model.sigma_azimuth_rad == pytest.approx(1 / 585 / math.sqrt(12), abs=0.05 / 585)
+    spherical = oi.Mapper(s)
+    for u, v in ((0, 0), (639, 0), (0, 479), (639, 479), (320, 240)):
+        assert spherical.locate(((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)) is not None
 
 
 def test_lookup_by_name_and_its_error():
-    assert oi.preset_names() == ["kinect_v1_paper", "kinect_v1"]
+    assert oi.preset_names() == ["kinect_v1", "kinect_v1_paper", "kinect_v1_spherical"]
     for name in oi.preset_names():
         assert oi.preset_by_name(name).name == name
-    with pytest.raises(oi.InvalidParameter, match="known presets are kinect_v1_paper, kinect_v1") as e:
+    with pytest.raises(oi.InvalidParameter, match="known presets are kinect_v1, kinect_v1_paper, kinect_v1_spherical") as e:
         oi.preset_by_name("kinect_v9")
     assert isinstance(e.value, ValueError) and isinstance(e.value, oi.Error)
 
