@@ -67,7 +67,8 @@ BENCHMARK(BM_InsertRealFrame)->ArgNames({"threads", "paper"})->ArgsProduct({{1, 
 void insert_static_view(benchmark::State& state, Input input) {
   const auto* points = input_points(input, state);
   if (!points) return;
-  const SensorPreset preset = kinect_v1_paper();
+  const SensorPreset preset = bench::input_preset(input, static_cast<int>(state.range(0)));
+  state.SetLabel(bench::preset_label(static_cast<int>(state.range(0))));
   const SensorModel model(preset.model);
   InsertionOptions options;
   options.threads = 2;
@@ -92,8 +93,8 @@ void insert_static_view(benchmark::State& state, Input input) {
 
 void BM_StaticView100FramesSample(benchmark::State& state) { insert_static_view(state, Input::sample); }
 void BM_StaticView100FramesReal(benchmark::State& state) { insert_static_view(state, Input::real); }
-BENCHMARK(BM_StaticView100FramesSample)->Iterations(1)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_StaticView100FramesReal)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StaticView100FramesSample)->ArgName("paper")->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_StaticView100FramesReal)->ArgName("paper")->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 #if OCC_IMPROVE_BENCH_WITH_OCTOMAP
 // OctoMap's insertPointCloud of the same cloud; args: resolution in mm. ratio = OctoMap seconds over

@@ -12,6 +12,8 @@
 //       of L_min voxels is left alone there;
 //    b) for t <= -3 - B/2, logit P_s <= log(1/2) + u + 0.072, so an untouched voxel (L = 0) with
 //       log(1/2) + u <= L_min - 0.2 ends at L_min;
+//    b') for B >= 15 (a pixel-native return's diagonal neighbours, B = 24) |logit P_s| < 4.5e-7 wherever
+//       t > -1.5, so a column whose leading L_min run reaches t = -1.5 is not updated at all (a) + SPEC 4);
 //    c) while a column is being updated its window holds odds e^L (one exp and one log per voxel and
 //       call instead of a log per voxel and measurement); the clamps map to L_min/L_max exactly and the
 //       round trip moves other voxels by < 5e-7 + 2e-7 |L| (once per column and call: a column is loaded
