@@ -1,10 +1,25 @@
 include(CMakePackageConfigHelpers)
 set(occ_improve_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/occ_improve)
 
-install(EXPORT occ_improve_targets
-        NAMESPACE occ_improve::
-        FILE occ_improve-targets.cmake
-        DESTINATION ${occ_improve_cmake_dir})
+# One export set per component, so that a user of occ_improve::core alone never needs PCL or OctoMap:
+# find_package(occ_improve CONFIG REQUIRED COMPONENTS core) loads only the core's targets.
+set(occ_improve_components core)
+if(TARGET occ_improve_octomap)
+  list(APPEND occ_improve_components octomap)
+endif()
+if(TARGET occ_improve_pcl)
+  list(APPEND occ_improve_components pcl)
+endif()
+set(occ_improve_pcl_uses_octomap OFF)
+if(TARGET occ_improve_pcl AND TARGET occ_improve_octomap)
+  set(occ_improve_pcl_uses_octomap ON)
+endif()
+foreach(component ${occ_improve_components})
+  install(EXPORT occ_improve_${component}_targets
+          NAMESPACE occ_improve::
+          FILE occ_improve-${component}-targets.cmake
+          DESTINATION ${occ_improve_cmake_dir})
+endforeach()
 
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/occ_improve-config.cmake.in
                               ${PROJECT_BINARY_DIR}/occ_improve-config.cmake

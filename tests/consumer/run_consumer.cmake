@@ -1,0 +1,33 @@
+# ctest's consumer test: installs the build into a scratch prefix, then configures, builds and runs
+# tests/consumer against it twice: asking for the core alone with PCL and OctoMap made unfindable (a core
+# user needs neither), and asking for every component.
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P run_consumer.cmake
+foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "run_consumer.cmake needs -D${var}=...")
+  endif()
+endforeach()
+
+function(run)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    string(REPLACE ";" " " command "${ARGN}")
+    message(FATAL_ERROR "consumer test: '${command}' failed (${rc})")
+  endif()
+endfunction()
+
+set(prefix ${WORK_DIR}/prefix)
+file(REMOVE_RECURSE ${WORK_DIR})
+run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+foreach(case core all)
+  set(build ${WORK_DIR}/${case})
+  if(case STREQUAL "core")
+    set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=core -DCMAKE_DISABLE_FIND_PACKAGE_PCL=TRUE
+                -DCMAKE_DISABLE_FIND_PACKAGE_octomap=TRUE)
+  else()
+    set(options -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE)
+  endif()
+  run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${build} -DCMAKE_PREFIX_PATH=${prefix} ${options})
+  run(${CMAKE_COMMAND} --build ${build})
+  run(${build}/occ_improve_consumer)
+endforeach()
