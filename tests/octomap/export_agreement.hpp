@@ -52,23 +52,22 @@ struct Agreement {
   double fraction() const { return compared ? static_cast<double>(agreed) / compared : 0.0; }
 };
 
-/// Random points in the grid's frustum (uniform in angle, uniform in volume along depth). A sample counts
+/// Random points in the grid's frustum (uniform in the binning's angular position, uniform in volume
+/// along depth), for either binning. A sample counts
 /// only when its OcTree leaf lies "away from boundaries": the leaf's centre and its 8 corners (pulled in
 /// by 0.1 %) all fall in spherical voxels of the same class.
 inline Agreement compare_occupancy(const SphericalGrid& grid, const Eigen::Isometry3d& pose, const octomap::OcTree& tree,
                                    const OctomapExportOptions& options, int samples, unsigned seed = 7) {
-  const GeometryParams& p = grid.geometry().params();
+  const SphericalGeometry& g = grid.geometry();
+  const GeometryParams& p = g.params();
   std::mt19937 random(seed);
-  std::uniform_real_distribution<double> az(p.azimuth_min_rad, p.azimuth_max_rad),
-      el(p.elevation_min_rad, p.elevation_max_rad), cube(std::pow(p.depth_min_m, 3), std::pow(p.depth_max_m, 3));
+  std::uniform_real_distribution<double> az(g.azimuth().min(), g.azimuth().max()),
+      el(g.elevation().min(), g.elevation().max()), cube(std::pow(p.depth_min_m, 3), std::pow(p.depth_max_m, 3));
   const double half = 0.4995 * tree.getResolution();
   Agreement result;
   for (int i = 0; i < samples; ++i) {
-    SphericalPoint s;
-    s.azimuth = az(random);
-    s.elevation = el(random);
-    s.rho = std::cbrt(cube(random));
-    const Eigen::Vector3d w = pose * from_spherical(s);
+    const double h = az(random), v = el(random);
+    const Eigen::Vector3d w = pose * g.point_at(h, v, std::cbrt(cube(random)));
     const octomap::point3d c = tree.keyToCoord(tree.coordToKey(w.x(), w.y(), w.z()));
     const Eigen::Vector3d centre(c.x(), c.y(), c.z());
     const Occupancy expected = spherical_occupancy(grid, pose, centre, options);

@@ -98,6 +98,19 @@ TEST_F(OctomapExport, FilesReadBackAgreeWithTheGrid) {
   EXPECT_EQ(entry_count(), 2u) << "no temporary file may be left behind";
 }
 
+TEST_F(OctomapExport, PixelNativeGridAgreesToo) {
+  const SensorPreset preset = kinect_v1(sample::generate_scene().intrinsics);
+  SphericalGrid grid(SphericalGeometry(preset.geometry));
+  insert_points(grid, SensorModel(preset.model), PointSpan::from(sample::generate_scene().points()));
+  const Eigen::Isometry3d pose = some_pose();
+  const OctomapExportOptions options;
+  OctomapExportReport report;
+  const auto tree = to_octree(grid, pose, kResolution, options, &report);
+  EXPECT_GT(report.free_written, 100000u);
+  EXPECT_GT(report.occupied_written, 1000u);
+  expect_agreement(test::compare_occupancy(grid, pose, *tree, options, 20000));
+}
+
 TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBounds) {
   for (UpdateMode mode : {UpdateMode::clamped, UpdateMode::exact}) {
     const SphericalGrid& grid = sample_grid(mode);
