@@ -181,6 +181,55 @@ struct WindowKernel {
   }
 };
 
+// Rays whose window holds a changed column: j with lo[j] <= c - j <= hi[j] on both axes. A few changed
+// columns are scattered to the rays around them (cost proportional to the change); a whole frame's are
+// gathered row by row over a mask, one byte OR per window offset and ray, in the row loop's offset order
+// (vectorised; the scatter costs ~9 branchy updates per column, twice the whole improvement map).
+std::vector<std::uint8_t> affected_rays(const SphericalGeometry& g, const WindowKernel& kernel,
+                                        const std::vector<ColumnIndex>& changed) {
+  const std::size_t columns = g.column_count();
+  std::vector<std::uint8_t> affected(columns, 0);
+  for (const ColumnIndex c : changed)
+    if (c >= columns)
+      throw InvalidInput("changed column " + std::to_string(c) + " is outside the grid (" + std::to_string(columns) +
+                         " columns)");
+  if (changed.size() < columns / 16) {
+    for (const ColumnIndex c : changed) {
+      const int ca = g.azimuth_bin_of(c), ce = g.elevation_bin_of(c);
+      for (int e = std::max(0, ce - kernel.de_max); e <= std::min(g.height() - 1, ce - kernel.de_min); ++e) {
+        const auto ue = static_cast<std::size_t>(e);
+        if (ce - e < kernel.el_lo[ue] || ce - e > kernel.el_hi[ue]) continue;
+        for (int a = std::max(0, ca - kernel.da_max); a <= std::min(g.width() - 1, ca - kernel.da_min); ++a) {
+          const auto ua = static_cast<std::size_t>(a);
+          if (ca - a >= kernel.az_lo[ua] && ca - a <= kernel.az_hi[ua]) affected[g.column(a, e)] = 1;
+        }
+      }
+    }
+    return affected;
+  }
+  std::vector<std::uint8_t> mask(columns, 0);
+  for (const ColumnIndex c : changed) mask[c] = 1;
+  const int w = g.width();
+  for (int e = 0; e < g.height(); ++e) {
+    std::uint8_t* row = affected.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+    const auto ue = static_cast<std::size_t>(e);
+    for (int de = kernel.el_lo[ue]; de <= kernel.el_hi[ue]; ++de) {
+      const std::uint8_t* other = mask.data() + static_cast<std::size_t>(e + de) * static_cast<std::size_t>(w);
+      for (int da = kernel.da_min; da <= kernel.da_max; ++da) {
+        const auto r = static_cast<std::size_t>(da - kernel.da_min);
+        if (kernel.run_contiguous[r]) {
+          for (int x = kernel.run_first[r]; x < kernel.run_end[r]; ++x) row[x] |= other[x + da];
+        } else {
+          for (int x = std::max(0, -da); x < std::min(w, w - da); ++x)
+            if (kernel.az_lo[static_cast<std::size_t>(x)] <= da && da <= kernel.az_hi[static_cast<std::size_t>(x)])
+              row[x] |= other[x + da];
+        }
+      }
+    }
+  }
+  return affected;
+}
+
 // Columns the sensor cannot observe hold NaN: "no value", never ranked (ranking.hpp).
 void mask_unobservable(const SphericalGeometry& g, int e, float* row) {
   const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(g.width());
@@ -246,22 +295,7 @@ std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, c
                        std::to_string(geometry.height()) + " columns");
   const WindowKernel kernel(geometry, model);
 
-  // Rays whose window holds a changed column: j with lo[j] <= c - j <= hi[j] on both axes.
-  std::vector<std::uint8_t> affected(columns, 0);
-  for (const ColumnIndex c : changed_surface_columns) {
-    if (c >= columns)
-      throw InvalidInput("changed column " + std::to_string(c) + " is outside the grid (" + std::to_string(columns) +
-                         " columns)");
-    const int ca = geometry.azimuth_bin_of(c), ce = geometry.elevation_bin_of(c);
-    for (int e = std::max(0, ce - kernel.de_max); e <= std::min(geometry.height() - 1, ce - kernel.de_min); ++e) {
-      const auto ue = static_cast<std::size_t>(e);
-      if (ce - e < kernel.el_lo[ue] || ce - e > kernel.el_hi[ue]) continue;
-      for (int a = std::max(0, ca - kernel.da_max); a <= std::min(geometry.width() - 1, ca - kernel.da_min); ++a) {
-        const auto ua = static_cast<std::size_t>(a);
-        if (ca - a >= kernel.az_lo[ua] && ca - a <= kernel.az_hi[ua]) affected[geometry.column(a, e)] = 1;
-      }
-    }
-  }
+  const std::vector<std::uint8_t> affected = affected_rays(geometry, kernel, changed_surface_columns);
   std::vector<ColumnIndex> rays;
   for (std::size_t c = 0; c < columns; ++c)
     if (affected[c]) rays.push_back(static_cast<ColumnIndex>(c));
