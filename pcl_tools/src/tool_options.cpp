@@ -238,6 +238,23 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
   return t;
 }
 
+OutputFolder open_output_folder(int argc, const char* const* argv, const std::string& tool,
+                                const std::string& fallback) {
+  std::string folder = fallback;
+  pcl::console::parse_argument(argc, argv, "-o", folder);
+  if (folder.empty()) throw InvalidParameter("-o needs a folder name");
+  return OutputFolder(folder, tool, pcl::console::find_switch(argc, argv, "-overwrite"));
+}
+
+std::string usage_output_folder(const std::string& fallback) {
+  return "  -o OUTDIR                 output folder" + (fallback.empty() ? std::string(" (required)") : " (default " + fallback + ")") +
+         "; written in a staging folder\n"
+         "                            and moved into place at the end. A folder that holds files this tool did\n"
+         "                            not write (marker " + kOutputMarkerName + ") is refused\n"
+         "  -overwrite                write into such a folder anyway: files of the same names are replaced,\n"
+         "                            nothing else is touched\n";
+}
+
 std::string usage_common() {
   return R"(Sensor and grid:
   -preset NAME              kinect_v1_paper (the paper: 640x480x512 bins, 57x43 deg, 0-5 m, constant

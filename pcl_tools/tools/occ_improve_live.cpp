@@ -15,7 +15,6 @@
 #include <chrono>
 #include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <mutex>
 #include <thread>
@@ -44,7 +43,7 @@ void print_usage(const char* program) {
             << "With poses, every frame is moved into the FIRST frame's sensor frame (the grid has one\n"
             << "viewpoint).\n\n"
             << "Pipeline:\n"
-            << "  -o DIR                    output folder for depth.png, occupancy.png, improvement.png (default .)\n"
+            << usage_output_folder("occ_improve_live_out")
             << "  -save_every N             also write the maps every N processed frames (default 0: at the end)\n"
             << "  -load MAP.occmap          continue a saved grid from the same viewpoint (it carries its own\n"
             << "                            preset; preset flags are ignored; poses are relative to this run's first frame)\n"
@@ -77,10 +76,13 @@ std::optional<std::string> take_device_flag(std::vector<const char*>& args) {
   return std::nullopt;
 }
 
-void write_maps(const Mapper& mapper, const std::string& dir, double depth_max_m) {
-  write_png(dir + "/depth.png", render_depth(mapper.surface(), depth_max_m));
-  write_png(dir + "/occupancy.png", render_occupancy(mapper.surface()));
-  write_png(dir + "/improvement.png", render_improvement(mapper.improvement()));
+// Every write publishes the whole set, so the folder always holds one consistent state of the map.
+void write_maps(const Mapper& mapper, OutputFolder& out, double depth_max_m) {
+  write_png(out.file("depth.png"), render_depth(mapper.surface(), depth_max_m));
+  write_png(out.file("occupancy.png"), render_occupancy(mapper.surface()));
+  write_png(out.file("improvement.png"), render_improvement(mapper.improvement()));
+  write_png(out.file("improvement_legend.png"), render_improvement_legend());
+  out.commit();
 }
 
 template <typename T>
@@ -102,16 +104,15 @@ int run(int argc, const char* const* argv_in) {
   spec.default_preset = "kinect_v1";
   spec.value_flags = {"-oni",     "-pcd_dir",    "-depth_dir", "-o",   "-save_every",
                       "-fps",     "-threads",    "-max_frames", "-load", "-save"};
-  spec.switches = {"-drop", "-no_poses", "-stop_on_signal"};
+  spec.switches = {"-drop", "-no_poses", "-stop_on_signal", "-overwrite"};
   const ToolOptions options = parse_tool_options(n, argv, spec);
 
-  std::string oni, pcd_dir, depth_dir, out_dir = ".", load_path, save_path;
+  std::string oni, pcd_dir, depth_dir, load_path, save_path;
   pcl::console::parse_argument(n, argv, "-load", load_path);
   pcl::console::parse_argument(n, argv, "-save", save_path);
   pcl::console::parse_argument(n, argv, "-oni", oni);
   pcl::console::parse_argument(n, argv, "-pcd_dir", pcd_dir);
   pcl::console::parse_argument(n, argv, "-depth_dir", depth_dir);
-  pcl::console::parse_argument(n, argv, "-o", out_dir);
   const int save_every = parse_number(n, argv, "-save_every", 0, 0);
   const float fps = parse_number(n, argv, "-fps", 0.0f, 0.0f);
   const int threads = parse_number(n, argv, "-threads", 0, 0);
@@ -122,9 +123,7 @@ int run(int argc, const char* const* argv_in) {
   const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() + !options.inputs.empty();
   if (sources != 1)
     throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir or PCD files); see -h");
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw IoError("cannot create output folder '" + out_dir + "': " + ec.message());
+  OutputFolder out = open_output_folder(n, argv, "occ_improve_live", "occ_improve_live_out");
 
   // The source, and the sensor preset that fits it.
   std::shared_ptr<pcl::Grabber> grabber;
@@ -195,7 +194,7 @@ int run(int argc, const char* const* argv_in) {
     }
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
-      write_maps(pipeline.mapper(), out_dir, depth_max_m);
+      write_maps(pipeline.mapper(), out, depth_max_m);
       save_grid();
       ++maps_written;
     }
@@ -229,8 +228,7 @@ int run(int argc, const char* const* argv_in) {
   }
   pipeline.stop();
   if (terminal) std::fprintf(stderr, "\n");
-  write_maps(pipeline.mapper(), out_dir, depth_max_m);
-  write_png(out_dir + "/improvement_legend.png", render_improvement_legend());
+  write_maps(pipeline.mapper(), out, depth_max_m);
   save_grid();
   if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
 
@@ -255,7 +253,7 @@ int run(int argc, const char* const* argv_in) {
     }
   }
   pcl::console::print_info("Wrote %s/{depth,occupancy,improvement,improvement_legend}.png (%d intermediate writes)\n",
-                           out_dir.c_str(), maps_written.load());
+                           out.path().c_str(), maps_written.load());
   return s.processed > 0 ? 0 : 1;
 }
 

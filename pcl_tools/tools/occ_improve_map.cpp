@@ -17,14 +17,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-namespace fs = std::filesystem;
 using namespace occ_improve;
 
 namespace {
@@ -41,7 +38,7 @@ void print_usage(const char* program) {
             << "  regions.csv   the K best connected regions, ranked by summed improvement\n"
             << "  rays.csv      the K best single rays\n\n"
             << "Tool options:\n"
-            << "  -o OUTDIR                 output folder (default occ_improve_out); replaced as a whole at the end\n"
+            << usage_output_folder("occ_improve_out")
             << "  -sample                   use the built-in generated Kinect-like frame instead of input files\n"
             << "  -load MAP.occmap          start from a saved grid (same viewpoint); it carries its own preset,\n"
             << "                            so preset flags are ignored; input frames are fused on top of it\n"
@@ -58,54 +55,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 struct Frame {
   std::string name;
   pcl::PointCloud<pcl::PointXYZ> cloud;
-};
-
-// A folder that is removed unless committed: outputs are written there and renamed into place at the
-// end, so a failure never leaves files that look complete.
-class StagingFolder {
-public:
-  explicit StagingFolder(const fs::path& target) : target_(target) {
-    const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(parent, ec))
-      throw IoError("cannot write output folder '" + target.string() + "': '" + parent.string() +
-                    (fs::exists(parent, ec) ? "' is not a folder" : "' does not exist"));
-    staging_ = parent / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    if (!fs::create_directory(staging_, ec) || ec)
-      throw IoError("cannot write output folder '" + target.string() + "': cannot create '" + staging_.string() +
-                    "'" + (ec ? ": " + ec.message() : ""));
-  }
-  StagingFolder(const StagingFolder&) = delete;
-  StagingFolder& operator=(const StagingFolder&) = delete;
-  ~StagingFolder() {
-    std::error_code ec;
-    if (!committed_) fs::remove_all(staging_, ec);
-  }
-  std::string file(const std::string& name) const { return (staging_ / name).string(); }
-
-  /// Replaces the target by the staged folder (an existing target is moved aside first, then removed).
-  void commit() {
-    std::error_code ec;
-    fs::path old;
-    if (fs::exists(target_, ec)) {
-      if (!fs::is_directory(target_, ec)) throw IoError("output '" + target_.string() + "' exists and is not a folder");
-      old = staging_;
-      old += ".old";
-      fs::rename(target_, old, ec);
-      if (ec) throw IoError("cannot replace output folder '" + target_.string() + "': " + ec.message());
-    }
-    fs::rename(staging_, target_, ec);
-    if (ec) {
-      if (!old.empty()) fs::rename(old, target_, ec);
-      throw IoError("cannot move the outputs into '" + target_.string() + "'");
-    }
-    committed_ = true;
-    if (!old.empty()) fs::remove_all(old, ec);
-  }
-
-private:
-  fs::path target_, staging_;
-  bool committed_ = false;
 };
 
 void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
@@ -143,12 +92,9 @@ void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, 
 int run(int argc, char** argv) {
   ToolSpec spec;
   spec.value_flags = {"-o", "-threads", "-min_improvement", "-load", "-save"};
-  spec.switches = {"-sample"};
+  spec.switches = {"-sample", "-overwrite"};
   const ToolOptions options = parse_tool_options(argc, argv, spec);
   const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
-  std::string out_dir = "occ_improve_out";
-  pcl::console::parse_argument(argc, argv, "-o", out_dir);
-  if (out_dir.empty()) throw InvalidParameter("-o needs a folder name");
   std::string load_path, save_path;
   pcl::console::parse_argument(argc, argv, "-load", load_path);
   pcl::console::parse_argument(argc, argv, "-save", save_path);
@@ -172,8 +118,8 @@ int run(int argc, char** argv) {
   if (!use_sample && options.inputs.empty() && load_path.empty())
     throw InvalidParameter("no input: give PCD / depth image files or a dataset folder, -sample or -load (see -h)");
 
-  // Fail on an unwritable output folder before any work.
-  StagingFolder staging{fs::path(out_dir)};
+  // Fail on an unwritable or foreign output folder before any work.
+  OutputFolder staging = open_output_folder(argc, argv, "occ_improve_map", "occ_improve_out");
 
   // Read.
   auto start = std::chrono::steady_clock::now();
@@ -281,7 +227,7 @@ int run(int argc, char** argv) {
                 static_cast<double>(rays.front().depth_m));
   std::printf("stop: %s (%s)\n", stop.stop ? "yes" : "no", stop.reason.c_str());
   std::printf("wrote %s/: depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv\n",
-              out_dir.c_str());
+              staging.path().c_str());
   return 0;
 }
 

@@ -2,6 +2,7 @@
 // The command-line flags every occ_improve tool shares (sensor preset and its overrides, update mode,
 // camera intrinsics, depth encoding, input files), parsed once in the style of PCL's tools
 // (pcl::console::parse_argument / find_switch). Every bad flag throws InvalidParameter naming the flag.
+#include "occ_improve/atomic_file.hpp"
 #include "occ_improve/grid.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
@@ -58,6 +59,15 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
 
 /// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
 SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
+
+/// The output folder named by -o (else `fallback`) for `tool`, refused when it already holds files the
+/// tool did not write unless -overwrite is among the arguments (see OutputFolder). The tool lists "-o" in
+/// its value flags and "-overwrite" in its switches.
+OutputFolder open_output_folder(int argc, const char* const* argv, const std::string& tool,
+                                const std::string& fallback);
+
+/// Usage text of -o and -overwrite, for a tool's -h.
+std::string usage_output_folder(const std::string& fallback);
 
 /// Usage text of the common flags, for a tool's -h.
 std::string usage_common();
