@@ -230,6 +230,12 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
     }
   }
 
+  try {
+    require_within_memory_cap(t.preset.geometry, t.grid.memory_cap_bytes);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov)");
+  }
+
   t.top_k = spec.default_top_k;
   if (const auto text = value_of(argc, argv, "-k")) {
     t.top_k = to_int("-k", *text);

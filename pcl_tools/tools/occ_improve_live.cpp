@@ -166,7 +166,7 @@ int run(int argc, const char* const* argv_in) {
   // A saved map fixes the geometry and the model; the source's frames must fit it.
   std::shared_ptr<Mapper> mapper;
   if (!load_path.empty()) {
-    LoadedMap loaded = load_map(load_path);
+    LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
     mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
     preset.name = "loaded from " + load_path;
     preset.geometry = mapper->geometry().params();

@@ -153,7 +153,7 @@ int run(int argc, char** argv) {
   SensorPreset preset = options.preset_for_camera(found_camera);
   Mapper mapper = [&] {
     if (load_path.empty()) return Mapper(preset, options.grid);
-    LoadedMap loaded = load_map(load_path);
+    LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
     preset.name = "loaded from " + load_path;
     preset.geometry = loaded.grid.geometry().params();
     preset.model = loaded.model;

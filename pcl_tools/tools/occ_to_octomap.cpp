@@ -165,7 +165,7 @@ int run(int argc, char** argv) {
   auto start = std::chrono::steady_clock::now();
   std::vector<Source> grids;
   for (const std::string& path : load_paths) {
-    LoadedMap loaded = load_map(path);
+    LoadedMap loaded = load_map(path, options.grid.memory_cap_bytes);
     Source source;
     source.grid.emplace(std::move(loaded.grid));
     source.model = loaded.model;
