@@ -6,10 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <unistd.h>
 
 namespace occ_improve {
 namespace {
@@ -131,6 +133,29 @@ TEST_F(OutputFolderTest, AFileOrAMissingParentIsRefused) {
   EXPECT_THROW(OutputFolder(file("file"), "tool_a", true), IoError);
   EXPECT_THROW(OutputFolder(file("missing/out"), "tool_a", true), IoError);
   EXPECT_EQ(contents(file("file")), "x");
+}
+
+// A save killed mid-write left *.partial-* files and .OUT.tmp-PID folders that nothing removed.
+TEST_F(OutputFolderTest, LeftoversOfDeadWritersAreRemovedOnTheNextWrite) {
+  const std::string own = std::to_string(::getpid());
+  put("a.txt.partial-999999999-1f", "dead writer");  // beyond Linux's pid_max: no such process
+  put("a.txt.partial-" + own + "-2f", "a live writer: this process");
+  put("a.txt.partial-" + own + "-3f", "this PID, but from before this process started");
+  fs::last_write_time(file("a.txt.partial-" + own + "-3f"), fs::file_time_type::clock::now() - std::chrono::hours(24 * 365));
+  put("b.txt.partial-999999999-1f", "another target's: not this write's to judge");
+  write_file_atomically(file("a.txt"), "test file", [](std::ostream& out) { return static_cast<bool>(out << "x"); });
+  EXPECT_FALSE(fs::exists(file("a.txt.partial-999999999-1f")));
+  EXPECT_TRUE(fs::exists(file("a.txt.partial-" + own + "-2f")));
+  EXPECT_FALSE(fs::exists(file("a.txt.partial-" + own + "-3f")));
+  EXPECT_TRUE(fs::exists(file("b.txt.partial-999999999-1f")));
+
+  fs::create_directories(file(".out.tmp-999999999"));
+  put(".out.tmp-999999999/depth.png", "half");
+  fs::create_directories(file(".out.tmp-999999999.old"));
+  publish(file("out"), false, "one");
+  EXPECT_FALSE(fs::exists(file(".out.tmp-999999999")));
+  EXPECT_FALSE(fs::exists(file(".out.tmp-999999999.old")));
+  EXPECT_EQ(contents(file("out/result.txt")), "one");
 }
 
 }  // namespace

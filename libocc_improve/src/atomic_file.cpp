@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <fstream>
 #include <optional>
 #include <random>
@@ -14,13 +15,63 @@ namespace occ_improve {
 namespace fs = std::filesystem;
 namespace {
 
+// "<path>.partial-<pid>-<random>": the PID lets a later write tell a dead writer's leftover from a live one.
 std::string temporary_name(const std::string& path) {
   static std::atomic<unsigned> counter{0};
   std::random_device random;
   std::ostringstream name;
-  name << path << ".partial-" << std::hex << random() << '-' << counter++;
+  name << path << ".partial-" << ::getpid() << '-' << std::hex << random() << counter++;
   return name.str();
 }
+
+// When process `pid` started, from /proc (Linux); nullopt when no such process is running.
+std::optional<fs::file_time_type::duration> process_start_since_epoch(long pid) {
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string text;
+  if (!stat || !std::getline(stat, text) || text.rfind(')') == std::string::npos) return std::nullopt;
+  std::istringstream fields(text.substr(text.rfind(')') + 2));  // after "pid (name) "
+  std::string field;
+  for (int i = 3; i < 22 && fields >> field;) ++i;  // field 22: start time in clock ticks since boot
+  unsigned long long ticks = 0, boot = 0;
+  if (!(fields >> ticks)) return std::nullopt;
+  std::ifstream proc_stat("/proc/stat");
+  for (std::string key; proc_stat >> key;)
+    if (key == "btime" && proc_stat >> boot) break;
+  const double seconds = static_cast<double>(boot) + static_cast<double>(ticks) / static_cast<double>(::sysconf(_SC_CLK_TCK));
+  return std::chrono::duration_cast<fs::file_time_type::duration>(std::chrono::duration<double>(seconds));
+}
+
+// A leftover named by the PID of its writer is stale when that PID is not running, or runs a process
+// that started after the leftover was last modified (the PID was reused: the writer is gone).
+bool is_stale(const fs::path& leftover, long pid) {
+  const auto started = process_start_since_epoch(pid);
+  if (!started) return true;
+  std::error_code ec;
+  const fs::file_time_type modified = fs::last_write_time(leftover, ec);
+  if (ec) return false;
+  const auto modified_since_epoch = std::chrono::duration_cast<fs::file_time_type::duration>(
+      std::chrono::system_clock::now().time_since_epoch() - (fs::file_time_type::clock::now() - modified));
+  // One second of slack: /proc's start time has clock-tick resolution, btime whole seconds.
+  return modified_since_epoch + std::chrono::seconds(1) < *started;
+}
+
+}  // namespace
+
+void remove_stale_leftovers(const std::string& folder, const std::string& prefix) {
+  std::error_code ec;
+  for (fs::directory_iterator it(folder.empty() ? "." : folder, ec), end; it != end && !ec; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::size_t end_of_pid = std::min(name.find_first_not_of("0123456789", prefix.size()), name.size());
+    const std::size_t length = end_of_pid - prefix.size();
+    if (length == 0 || length > 9) continue;  // not named by a PID: not ours to judge
+    const long pid = std::stol(name.substr(prefix.size(), length));
+    std::error_code ignored;
+    if (is_stale(it->path(), pid)) fs::remove_all(it->path(), ignored);
+  }
+}
+
+namespace {
 
 // The files an earlier run of `tool` listed in `folder`'s marker; nullopt without a marker of `tool`.
 std::optional<std::vector<std::string>> files_listed_by(const fs::path& folder, const std::string& tool) {
@@ -48,6 +99,8 @@ bool holds_only(const fs::path& folder, const std::vector<std::string>& listed) 
 
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write) {
+  const fs::path target(path);
+  remove_stale_leftovers(target.parent_path().string(), target.filename().string() + ".partial-");
   const std::string temporary = temporary_name(path);
   bool written = false;
   {
@@ -81,7 +134,9 @@ OutputFolder::OutputFolder(const std::string& target, const std::string& tool, b
     throw IoError("output folder '" + shown_ + "' already holds files " + tool_ +
                   " did not write: choose another -o, or give -overwrite to write into it (files of the "
                   "same names are replaced, nothing else is touched)");
-  staging_ = parent / ("." + target_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  const std::string staging_prefix = "." + target_.filename().string() + ".tmp-";
+  remove_stale_leftovers(parent.string(), staging_prefix);
+  staging_ = parent / (staging_prefix + std::to_string(::getpid()));
   fs::create_directory(staging_, ec);
   if (ec) throw IoError("cannot write output folder '" + shown_ + "': cannot create '" + staging_.string() + "': " +
                         ec.message());

@@ -20,6 +20,12 @@ namespace occ_improve {
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write);
 
+/// Removes the entries of `folder` named "<prefix><pid>..." that a writer killed mid-write left behind:
+/// those whose PID is not running, or is running a process that started after the entry was last
+/// modified (the PID was reused). A live writer's entries are kept. Called before each write to the same
+/// place (write_file_atomically: "<name>.partial-", OutputFolder: ".<name>.tmp-").
+void remove_stale_leftovers(const std::string& folder, const std::string& prefix);
+
 /// The file by which an output folder says which tool wrote it: the tool's name on the first line, then
 /// one line per file the tool wrote there.
 inline constexpr const char* kOutputMarkerName = ".occ_improve_output";
