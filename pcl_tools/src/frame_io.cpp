@@ -10,6 +10,7 @@
 #include <png.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -277,6 +278,10 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
     k.cx = v[2];
     k.cy = v[3];
     if (v.size() == 6) {
+      // Checked before the cast: a double beyond int's range does not convert.
+      for (const double size : {v[4], v[5]})
+        if (!(size >= 1 && size <= 65536 && size == std::floor(size)))
+          throw FormatError("intrinsics file '" + path + "': width and height must be whole numbers in [1, 65536]");
       k.width = static_cast<int>(v[4]);
       k.height = static_cast<int>(v[5]);
     }

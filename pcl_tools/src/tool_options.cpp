@@ -1,7 +1,5 @@
 #include "occ_improve/pcl/tool_options.hpp"
 
-#include <cstdio>
-
 #include "occ_improve/errors.hpp"
 
 #include <pcl/console/parse.h>
@@ -9,7 +7,11 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <exception>
+#include <new>
 #include <sstream>
 
 namespace occ_improve {
@@ -288,16 +290,77 @@ Inputs (positional, fused in order, all from the same viewpoint):
 )";
 }
 
+namespace {
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+extern "C" void record_stop_signal(int signal) { g_stop_signal = signal; }
+
+void install_stop_signals() {
+  struct sigaction action {};
+  action.sa_handler = record_stop_signal;
+  action.sa_flags = SA_RESETHAND;  // a second Ctrl-C kills at once; the next run removes what is left
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+std::string& current_input() {
+  static std::string input;
+  return input;
+}
+// The innermost input whose scope an exception left: recorded while unwinding, read by run_tool.
+std::string& failed_input() {
+  static std::string input;
+  return input;
+}
+
+// One line on stderr: the message, and the input being worked on when the message does not name it.
+int report_failure(const std::string& message) {
+  std::string line = message;
+  std::replace(line.begin(), line.end(), '\n', ' ');
+  const std::string& input = failed_input();
+  if (!input.empty() && line.find(input) == std::string::npos) line += " (input '" + input + "')";
+  std::fprintf(stderr, "error: %s\n", line.c_str());
+  return 1;
+}
+
+}  // namespace
+
+InputScope::InputScope(const std::string& input) : previous_(current_input()), uncaught_(std::uncaught_exceptions()) {
+  current_input() = input;
+}
+
+InputScope::~InputScope() {
+  if (std::uncaught_exceptions() > uncaught_ && failed_input().empty()) failed_input() = current_input();
+  current_input() = previous_;
+}
+
+Interrupted::Interrupted(int signal)
+    : std::runtime_error(std::string("interrupted by ") + (signal == SIGTERM ? "SIGTERM" : "SIGINT")), signal_(signal) {}
+
+int stop_signal_received() { return static_cast<int>(g_stop_signal); }
+
+void throw_if_interrupted() {
+  if (const int signal = stop_signal_received()) throw Interrupted(signal);
+}
+
 int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv)) {
   if (help_requested(argc, argv)) {
     print_usage(argv[0]);
     return 0;
   }
+  install_stop_signals();
   try {
     return run(argc, argv);
+  } catch (const Interrupted& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 128 + e.signal();
+  } catch (const std::bad_alloc&) {
+    return report_failure("out of memory (std::bad_alloc)");
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
+    return report_failure(e.what());
+  } catch (...) {
+    return report_failure("unknown exception");
   }
 }
 

@@ -13,7 +13,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <mutex>
@@ -25,9 +24,6 @@ namespace {
 
 using namespace occ_improve;
 using Pipeline = GrabberPipeline<pcl::PointXYZ>;
-
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_sigint(int) { g_interrupted = 1; }
 
 void print_usage(const char* program) {
   std::cout << "Usage: " << program << " <source> [options]\n"
@@ -154,11 +150,15 @@ int run(int argc, const char* const* argv_in) {
     if (max_frames > 0 && files.size() > static_cast<std::size_t>(max_frames))
       files.resize(static_cast<std::size_t>(max_frames));
     auto source = std::make_shared<PcdSequenceGrabber>(files, fps);
-    source_text = (pcd_dir.empty() ? std::string("PCD files") : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
+    const std::string files_text = files.empty() ? std::string("no PCD file")
+                                   : files.size() == 1 ? files.front()
+                                                       : files.front() + " and " + std::to_string(files.size() - 1) + " more";
+    source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
     file_source = source.get();
     grabber = source;
   }
 
+  const InputScope scope(source_text);
   PipelineOptions pipeline_options;
   pipeline_options.insertion.threads = threads;
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
@@ -207,7 +207,6 @@ int run(int argc, const char* const* argv_in) {
   pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source_text.c_str(),
                            preset.name.c_str(), preset.geometry.azimuth_bins, preset.geometry.elevation_bins,
                            preset.geometry.depth_bins, depth_max_m);
-  std::signal(SIGINT, on_sigint);
   pipeline.start();
   const char* stop_reason = "source finished";
   // On a terminal the progress line rewrites itself; in a log, one line every 5 s.
@@ -221,13 +220,17 @@ int run(int argc, const char* const* argv_in) {
                    terminal ? "\r" : "", static_cast<unsigned long long>(s.received),
                    static_cast<unsigned long long>(s.processed), static_cast<unsigned long long>(s.dropped),
                    static_cast<unsigned long long>(s.rejected), s.processed_per_second(), terminal ? "" : "\n");
-    if (g_interrupted) { stop_reason = "interrupted (Ctrl-C)"; break; }
+    if (stop_signal_received()) { stop_reason = "interrupted"; break; }
     if (stop_on_signal && stop_signalled) { stop_reason = "stop signal"; break; }
     if (max_frames > 0 && s.processed >= static_cast<std::uint64_t>(max_frames)) { stop_reason = "-max_frames reached"; break; }
     if (file_source && !file_source->isRunning() && s.in_flight == 0) break;
   }
   pipeline.stop();
   if (terminal) std::fprintf(stderr, "\n");
+  if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !stop_signal_received())
+    throw InvalidInput("no frame of " + source_text + " was used (" + std::to_string(s.rejected) +
+                       " rejected: empty, all NaN or all zero, or of the wrong size; " +
+                       std::to_string(s.grabber_errors) + " unreadable)");
   write_maps(pipeline.mapper(), out, depth_max_m);
   save_grid();
   if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
@@ -254,7 +257,9 @@ int run(int argc, const char* const* argv_in) {
   }
   pcl::console::print_info("Wrote %s/{depth,occupancy,improvement,improvement_legend}.png (%d intermediate writes)\n",
                            out.path().c_str(), maps_written.load());
-  return s.processed > 0 ? 0 : 1;
+  // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.
+  if (const int signal = stop_signal_received()) throw Interrupted(signal);
+  return 0;
 }
 
 }  // namespace

@@ -89,6 +89,72 @@ void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, 
   if (!out.flush()) throw IoError("cannot write '" + path + "'");
 }
 
+void print_points(const InsertionReport& in) {
+  std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
+              "%zu used beyond the depth range (free space only)\n",
+              in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
+              in.beyond_depth_range);
+}
+
+std::vector<Frame> sample_frames(std::optional<PinholeIntrinsics>& found_camera) {
+  const sample::SampleFrame scene = sample::generate_scene();
+  found_camera = scene.intrinsics;
+  std::vector<Frame> frames;
+  frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)});
+  return frames;
+}
+
+// Every frame of the inputs, in order. A frame without a valid point is refused here, before any work.
+std::vector<Frame> read_frames(const ToolOptions& options, std::optional<PinholeIntrinsics>& found_camera) {
+  std::vector<Frame> frames;
+  try {
+    for (const std::string& input : options.inputs) {
+      InputScope input_scope(input);
+      for (const FrameSource& source : expand_input(input)) {
+        throw_if_interrupted();
+        InputScope frame_scope(source.path);
+        // A depth image without intrinsics anywhere gets the Kinect v1's (OpenNI's defaults, TUM's too).
+        const bool assumed = !options.intrinsics && !source.intrinsics;
+        const auto camera = options.intrinsics ? options.intrinsics
+                                               : source.intrinsics ? source.intrinsics : kinect_v1_intrinsics();
+        LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
+        require_valid_points(span_of(loaded.cloud), source.path);
+        if (!found_camera && loaded.intrinsics) found_camera = loaded.intrinsics;
+        std::string name = source.path;
+        if (loaded.encoding) {
+          name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding);
+          name += assumed ? ", Kinect v1 intrinsics assumed: give -intrinsics if they differ)" : ")";
+        }
+        frames.push_back({name, std::move(loaded.cloud)});
+      }
+    }
+  } catch (const Interrupted&) {
+    std::printf("read %zu frame(s) before the interruption; nothing written\n", frames.size());
+    throw;
+  }
+  return frames;
+}
+
+MapperReport insert_frames(Mapper& mapper, const std::vector<Frame>& frames, const InsertionOptions& insertion) {
+  MapperReport total;
+  std::size_t inserted = 0;
+  try {
+    for (const Frame& frame : frames) {
+      throw_if_interrupted();
+      InputScope scope(frame.name);
+      const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
+      total.insertion += r.insertion;
+      total.improvement_seconds += r.improvement_seconds;
+      ++inserted;
+    }
+  } catch (const Interrupted&) {
+    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n", inserted, frames.size());
+    print_points(total.insertion);
+    throw;
+  }
+  return total;
+}
+
 int run(int argc, char** argv) {
   ToolSpec spec;
   spec.value_flags = {"-o", "-threads", "-min_improvement", "-load", "-save"};
@@ -123,31 +189,8 @@ int run(int argc, char** argv) {
 
   // Read.
   auto start = std::chrono::steady_clock::now();
-  std::vector<Frame> frames;
   std::optional<PinholeIntrinsics> found_camera;
-  if (use_sample) {
-    const sample::SampleFrame scene = sample::generate_scene();
-    Frame f{"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)};
-    found_camera = scene.intrinsics;
-    frames.push_back(std::move(f));
-  } else {
-    for (const std::string& input : options.inputs) {
-      for (const FrameSource& source : expand_input(input)) {
-        // A depth image without intrinsics anywhere gets the Kinect v1's (OpenNI's defaults, TUM's too).
-        const bool assumed = !options.intrinsics && !source.intrinsics;
-        const auto camera = options.intrinsics ? options.intrinsics
-                                               : source.intrinsics ? source.intrinsics : kinect_v1_intrinsics();
-        LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
-        if (!found_camera && loaded.intrinsics) found_camera = loaded.intrinsics;
-        std::string name = source.path;
-        if (loaded.encoding) {
-          name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding);
-          name += assumed ? ", Kinect v1 intrinsics assumed: give -intrinsics if they differ)" : ")";
-        }
-        frames.push_back({name, std::move(loaded.cloud)});
-      }
-    }
-  }
+  const std::vector<Frame> frames = use_sample ? sample_frames(found_camera) : read_frames(options, found_camera);
   const double read_seconds = seconds_since(start);
 
   SensorPreset preset = options.preset_for_camera(found_camera);
@@ -161,15 +204,7 @@ int run(int argc, char** argv) {
   }();
 
   // Insert (insertion with the surface kept current, then the incremental improvement; timed by the mapper).
-  MapperReport total;
-  for (const Frame& frame : frames) {
-    const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
-    if (r.insertion.points_received == r.insertion.skipped_invalid)
-      throw InvalidInput("'" + frame.name + "' holds no valid points (" + std::to_string(r.insertion.points_received) +
-                         " points, all NaN or at the origin)");
-    total.insertion += r.insertion;
-    total.improvement_seconds += r.improvement_seconds;
-  }
+  const MapperReport total = insert_frames(mapper, frames, insertion);
   if (!frames.empty() && total.insertion.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
 
@@ -194,6 +229,7 @@ int run(int argc, char** argv) {
                          to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
   write_regions_csv(staging.file("regions.csv"), regions);
   write_rays_csv(staging.file("rays.csv"), mapper.geometry(), rays);
+  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
   if (!save_path.empty()) save_map(save_path, mapper.grid(), mapper.model().params());
   const double write_seconds = seconds_since(start);
@@ -205,10 +241,7 @@ int run(int argc, char** argv) {
               g.elevation_bins, g.depth_bins, g.depth_min_m, g.depth_max_m,
               options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
   for (const Frame& f : frames) std::printf("read %s: %zu points\n", f.name.c_str(), f.cloud.size());
-  std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
-              "%zu used beyond the depth range (free space only)\n",
-              in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
-              in.beyond_depth_range);
+  print_points(in);
   std::printf("time [s]: read %.3f, insert+surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
               read_seconds, in.seconds, total.improvement_seconds, ranking_seconds,
               write_seconds);

@@ -2,6 +2,7 @@
 // closing remark) and writes a labelled cloud, label and contour images and a per-segment table.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
@@ -41,15 +42,12 @@ int run(int argc, char** argv) {
   // Fail on an unwritable or foreign output folder before any work.
   OutputFolder out = open_output_folder(argc, argv, "occ_segment", "");
 
+  const InputScope scope(options.inputs.front());
   const LoadedFrame frame = load_frame(options.inputs.front(), options.intrinsics, options.depth_encoding);
   if (frame.cloud.height <= 1)
     throw InvalidInput("'" + frame.path + "' is not organized (height 1): the segmentation needs a range image");
-  const std::size_t valid = static_cast<std::size_t>(std::count_if(
-      frame.cloud.begin(), frame.cloud.end(), [](const pcl::PointXYZ& p) { return std::isfinite(p.z) && p.z > 0; }));
-  if (valid == 0) {
-    std::printf("'%s' holds no valid point: no segments\n", frame.path.c_str());
-    return 0;
-  }
+  require_valid_points(span_of(frame.cloud), frame.path);
+  throw_if_interrupted();
   const auto camera = options.intrinsics ? options.intrinsics
                                          : (frame.intrinsics ? frame.intrinsics : estimate_intrinsics(frame.cloud));
   const SensorPreset preset = options.preset_for_camera(camera);
@@ -62,6 +60,7 @@ int run(int argc, char** argv) {
   params.remove_dominant_plane = pcl::console::find_switch(argc, argv, "-plane");
 
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
+  throw_if_interrupted();
 
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
   labelled.width = frame.cloud.width;
@@ -95,6 +94,7 @@ int run(int argc, char** argv) {
         << s.centroid_m.y() << ',' << s.centroid_m.z() << ',' << s.mean_depth_m << ',' << (s.plane ? 1 : 0) << '\n';
   csv.close();
   if (!csv) throw IoError("cannot write '" + csv_path + "'");
+  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
 
   const Segmentation& seg = result.segmentation;

@@ -110,8 +110,11 @@ Source build_from_frames(const ToolOptions& options, bool use_sample) {
   } else {
     for (const std::string& input : options.inputs)
       for (const FrameSource& frame : expand_input(input)) {
+        throw_if_interrupted();
+        const InputScope scope(frame.path);
         LoadedFrame loaded =
             load_frame(frame.path, options.intrinsics ? options.intrinsics : frame.intrinsics, options.depth_encoding);
+        require_valid_points(span_of(loaded.cloud), frame.path);
         if (!camera && loaded.intrinsics) camera = loaded.intrinsics;
         clouds.push_back(std::move(loaded.cloud));
       }
@@ -165,6 +168,8 @@ int run(int argc, char** argv) {
   auto start = std::chrono::steady_clock::now();
   std::vector<Source> grids;
   for (const std::string& path : load_paths) {
+    throw_if_interrupted();
+    const InputScope scope(path);
     LoadedMap loaded = load_map(path, options.grid.memory_cap_bytes);
     Source source;
     source.grid.emplace(std::move(loaded.grid));
@@ -192,6 +197,7 @@ int run(int argc, char** argv) {
     report.left_unknown += r.left_unknown;
     report.seconds += r.seconds;
   }
+  throw_if_interrupted();  // before the output is written: an interrupted run leaves nothing behind
   start = std::chrono::steady_clock::now();
   write_octree(*tree, output);
   const double write_seconds = seconds_since(start);

@@ -8,6 +8,7 @@
 #include "occ_improve/presets.hpp"
 
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -49,9 +50,43 @@ struct ToolOptions {
 /// True when -h or --help is among the arguments.
 bool help_requested(int argc, const char* const* argv);
 
-/// The shared main() of the command-line tools: prints usage on -h/--help (exit 0), otherwise runs
-/// `run` and turns any exception into a one-line "error: ..." on stderr and exit code 1.
+/// The shared main() of the command-line tools: prints usage on -h/--help (exit 0), otherwise installs
+/// the stop-signal handlers and runs `run`. Any exception, std::bad_alloc and non-standard ones included,
+/// becomes ONE line "error: ..." on stderr naming the input being worked on (InputScope) and exit code 1;
+/// Interrupted becomes "interrupted by SIG..." and exit code 128 + the signal number.
 int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv));
+
+/// Names the input a tool is working on while it lives, so that run_tool's error line names it even for
+/// a failure whose message does not (std::bad_alloc). Nested scopes name the innermost input.
+class InputScope {
+public:
+  explicit InputScope(const std::string& input);
+  InputScope(const InputScope&) = delete;
+  InputScope& operator=(const InputScope&) = delete;
+  ~InputScope();
+
+private:
+  std::string previous_;
+  int uncaught_;
+};
+
+/// A tool stopped by SIGINT or SIGTERM. Not an occ_improve::Error: nothing is wrong with the input.
+class Interrupted : public std::runtime_error {
+public:
+  explicit Interrupted(int signal);
+  int signal() const { return signal_; }
+
+private:
+  int signal_;
+};
+
+/// The first SIGINT/SIGTERM received since run_tool installed its handlers, or 0. The handlers only
+/// record the signal (so that the tool can stop between steps, remove its staging files and print what
+/// it did); they reset themselves, so a second signal ends the process at once.
+int stop_signal_received();
+
+/// Throws Interrupted when a stop signal was received; tools call it between steps (frames, files).
+void throw_if_interrupted();
 
 /// Parses the common flags. Throws InvalidParameter naming the flag on any bad value or unknown flag,
 /// IoError/FormatError for an unreadable -intrinsics_file.
