@@ -8,7 +8,7 @@ CMAKE_FLAGS ?=
 CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
             -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) $(CMAKE_FLAGS)
 
-.PHONY: all deps configure build test demo bench segment-eval consumer-test install clean
+.PHONY: all deps configure build test demo bench segment-eval consumer-test install clean fuzz
 
 all: build
 
@@ -47,5 +47,14 @@ consumer-test: install
 	cmake --build $(BUILD_DIR)/consumer -j $(JOBS)
 	$(BUILD_DIR)/consumer/occ_improve_consumer
 
+# One fuzz target per parser, FUZZ_SECONDS each (tests/fuzz/README.md): libFuzzer under clang when
+# it can be installed (build dir $(FUZZ_BUILD_DIR)), else the built-in mutation driver in $(BUILD_DIR).
+FUZZ_SECONDS ?= 60
+FUZZ_BUILD_DIR ?= build-fuzz
+fuzz:
+	./scripts/install-deps.sh fuzz || echo "fuzz: clang/libFuzzer not installable: using the built-in mutation driver"
+	BUILD_DIR=$(BUILD_DIR) FUZZ_BUILD_DIR=$(FUZZ_BUILD_DIR) FUZZ_SECONDS=$(FUZZ_SECONDS) JOBS=$(JOBS) \
+	  CONFIGURE="$(CONFIGURE)" ./scripts/fuzz.sh
+
 clean:
-	rm -rf $(BUILD_DIR)
+	rm -rf $(BUILD_DIR) $(FUZZ_BUILD_DIR)

@@ -5,6 +5,10 @@ set -euo pipefail
 
 packages=(cmake g++ make pkg-config libeigen3-dev liboctomap-dev libpcl-dev libopenni2-dev
           libgtest-dev libbenchmark-dev zlib1g-dev libpng-dev)
+# `install-deps.sh fuzz` (make fuzz) also installs clang and libFuzzer for the libFuzzer engine.
+if [ "${1:-}" = "fuzz" ]; then
+  packages+=(clang libfuzzer-14-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
