@@ -5,9 +5,9 @@ set -euo pipefail
 
 packages=(cmake g++ make pkg-config libeigen3-dev liboctomap-dev libpcl-dev libopenni2-dev
           libgtest-dev libbenchmark-dev zlib1g-dev libpng-dev)
-# `install-deps.sh fuzz` (make fuzz) also installs clang and libFuzzer for the libFuzzer engine.
+# `install-deps.sh fuzz` (make fuzz) also installs clang, libFuzzer and the sanitizer runtimes it links.
 if [ "${1:-}" = "fuzz" ]; then
-  packages+=(clang libfuzzer-14-dev)
+  packages+=(clang libfuzzer-14-dev libclang-rt-14-dev)
 fi
 
 missing=()

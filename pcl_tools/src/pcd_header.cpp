@@ -113,6 +113,27 @@ std::vector<std::string> tokens(const std::string& line) {
   return t;
 }
 
+// PCL 1.13's readHeader does not stop at DATA: it goes on reading lines as header while they start like
+// one (by prefix, empty lines skipped), so a second header after DATA (say binary_compressed with an
+// uncompressed size of 4 GiB) would replace the one checked here. Such a file is refused.
+void require_no_header_after_data(const std::string& head, std::size_t at, const HeaderParser& parser) {
+  static const char* const kPclKeys[] = {"VERSION", "FIELDS", "COLUMNS", "SIZE", "TYPE", "COUNT",
+                                         "WIDTH", "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+  while (at < head.size()) {
+    const std::size_t end = std::min(head.find('\n', at), head.size());
+    const std::string text = head.substr(at, end - at);
+    at = end + 1;
+    if (text.empty()) continue;  // PCL skips empty lines
+    std::istringstream line(text);
+    std::string first;
+    line >> first;
+    if (first.rfind('#', 0) == 0) continue;  // and comments
+    for (const char* key : kPclKeys)
+      if (first.rfind(key, 0) == 0) parser.fail("a header line ('" + first + "') follows the DATA line");
+    return;
+  }
+}
+
 // The header is read from the file's first 64 KiB only, so a file without line breaks costs no memory.
 PcdHeader parse_header(std::istream& file, std::uint64_t file_size, const std::string& path) {
   std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMaxHeaderBytes)), '\0');
@@ -136,6 +157,7 @@ PcdHeader parse_header(std::istream& file, std::uint64_t file_size, const std::s
     if (key == "DATA") {
       parser.check_complete(h);
       h.data_offset = at;
+      require_no_header_after_data(head, at, parser);
       return h;
     }
   }

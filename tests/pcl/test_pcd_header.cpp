@@ -98,6 +98,15 @@ TEST_F(PcdHeaderTest, MalformedLinesAreRefused) {
   expect_refused_naming(no_height, "no HEIGHT");
 }
 
+// Found by the fuzzer: PCL goes on reading header lines after DATA, so a second header (here claiming a
+// 4 GiB binary_compressed body) replaced the checked one and PCL allocated gigabytes.
+TEST_F(PcdHeaderTest, AHeaderAfterTheDataLineIsRefused) {
+  const std::string second = header("2", "1", "2", "4 4 4", "1 1 1", "binary_compressed");
+  expect_refused_naming(header() + "\n" + second, "follows the DATA line");
+  expect_refused_naming(header() + "# a comment\n" + second, "follows the DATA line");
+  EXPECT_EQ(refusal(header() + "1 2 3\n4 5 6\n"), "") << "numbers after DATA are data";
+}
+
 TEST_F(PcdHeaderTest, DeclaredDataMustFitTheFile) {
   expect_refused_naming(header("640", "480", "307200", "4 4 4", "1 1 1", "binary") + std::string(100, '\0'),
                         "DATA binary declares");
