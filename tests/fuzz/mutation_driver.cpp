@@ -80,8 +80,10 @@ void install_handlers(const Flags& flags) {
   std::snprintf(g_artifact, sizeof g_artifact, "%s", flags.artifact_prefix.c_str());
   for (int s : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGALRM}) std::signal(s, on_crash);
   std::set_terminate(on_terminate);
+#ifndef __SANITIZE_ADDRESS__  // ASan reserves terabytes of address space for its shadow memory
   const rlimit limit{static_cast<rlim_t>(flags.rss_limit_mb) << 20, static_cast<rlim_t>(flags.rss_limit_mb) << 20};
   setrlimit(RLIMIT_AS, &limit);
+#endif
 }
 
 Flags parse_flags(int argc, char** argv) {
