@@ -27,6 +27,8 @@
 #include <vector>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size);
+// Defined only when ASan is linked in (tested at run time: the build may undefine __SANITIZE_ADDRESS__).
+extern "C" void __asan_init() __attribute__((weak));
 
 namespace {
 
@@ -80,10 +82,9 @@ void install_handlers(const Flags& flags) {
   std::snprintf(g_artifact, sizeof g_artifact, "%s", flags.artifact_prefix.c_str());
   for (int s : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT, SIGALRM}) std::signal(s, on_crash);
   std::set_terminate(on_terminate);
-#ifndef __SANITIZE_ADDRESS__  // ASan reserves terabytes of address space for its shadow memory
+  if (__asan_init) return;  // ASan reserves terabytes of address space for its shadow: no limit under it
   const rlimit limit{static_cast<rlim_t>(flags.rss_limit_mb) << 20, static_cast<rlim_t>(flags.rss_limit_mb) << 20};
   setrlimit(RLIMIT_AS, &limit);
-#endif
 }
 
 Flags parse_flags(int argc, char** argv) {
