@@ -6,10 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <unistd.h>
 
 namespace occ_improve {
 namespace {
@@ -54,6 +56,106 @@ TEST_F(AtomicFile, UnwritablePlacesAreIoErrors) {
   EXPECT_THROW(write_file_atomically(file("folder"), "test file", writer), IoError);
   EXPECT_EQ(entry_count(), 1u);
   EXPECT_TRUE(fs::is_empty(file("folder")));
+}
+
+// OutputFolder: what a tool did not write is never replaced or removed.
+class OutputFolderTest : public AtomicFile {
+protected:
+  void put(const std::string& name, const std::string& text) { std::ofstream(file(name), std::ios::binary) << text; }
+  void publish(const std::string& target, bool overwrite, const std::string& text) {
+    OutputFolder out(target, "tool_a", overwrite);
+    std::ofstream(out.file("result.txt")) << text;
+    out.commit();
+  }
+};
+
+TEST_F(OutputFolderTest, NewFolderGetsTheFilesAndAMarker) {
+  publish(file("out"), false, "one");
+  EXPECT_EQ(contents(file("out/result.txt")), "one");
+  EXPECT_EQ(contents(file("out/") + kOutputMarkerName), "tool_a\nresult.txt\n");
+  EXPECT_EQ(entry_count(), 1u) << "no staging folder may remain";
+}
+
+TEST_F(OutputFolderTest, OwnPreviousOutputIsReplaced) {
+  publish(file("out"), false, "one");
+  publish(file("out"), false, "two");
+  EXPECT_EQ(contents(file("out/result.txt")), "two");
+  EXPECT_EQ(entry_count(), 1u);
+}
+
+TEST_F(OutputFolderTest, ForeignFolderIsRefusedAndKept) {
+  fs::create_directory(file("data"));
+  put("data/frame.depth.png", "frame");
+  try {
+    OutputFolder out(file("data"), "tool_a", false);
+    FAIL() << "a folder the tool did not write must be refused";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("-overwrite"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(contents(file("data/frame.depth.png")), "frame");
+  EXPECT_EQ(entry_count(), 1u);
+}
+
+TEST_F(OutputFolderTest, AnotherToolsOutputIsForeign) {
+  publish(file("out"), false, "one");
+  EXPECT_THROW(OutputFolder(file("out"), "tool_b", false), IoError);
+}
+
+TEST_F(OutputFolderTest, UserFileInOwnOutputMakesItForeign) {
+  publish(file("out"), false, "one");
+  put("out/notes.txt", "mine");
+  EXPECT_THROW(publish(file("out"), false, "two"), IoError);
+  publish(file("out"), true, "two");
+  EXPECT_EQ(contents(file("out/notes.txt")), "mine");
+  EXPECT_EQ(contents(file("out/result.txt")), "two");
+}
+
+TEST_F(OutputFolderTest, OverwriteReplacesOnlySameNames) {
+  fs::create_directory(file("data"));
+  put("data/frame.depth.png", "frame");
+  put("data/result.txt", "old");
+  publish(file("data"), true, "new");
+  EXPECT_EQ(contents(file("data/frame.depth.png")), "frame");
+  EXPECT_EQ(contents(file("data/result.txt")), "new");
+  EXPECT_FALSE(fs::exists(file("data/") + kOutputMarkerName)) << "a foreign folder is not marked as the tool's";
+}
+
+TEST_F(OutputFolderTest, UncommittedOutputLeavesNothing) {
+  {
+    OutputFolder out(file("out"), "tool_a", false);
+    std::ofstream(out.file("result.txt")) << "half";
+  }
+  EXPECT_EQ(entry_count(), 0u);
+}
+
+TEST_F(OutputFolderTest, AFileOrAMissingParentIsRefused) {
+  put("file", "x");
+  EXPECT_THROW(OutputFolder(file("file"), "tool_a", true), IoError);
+  EXPECT_THROW(OutputFolder(file("missing/out"), "tool_a", true), IoError);
+  EXPECT_EQ(contents(file("file")), "x");
+}
+
+// A save killed mid-write left *.partial-* files and .OUT.tmp-PID folders that nothing removed.
+TEST_F(OutputFolderTest, LeftoversOfDeadWritersAreRemovedOnTheNextWrite) {
+  const std::string own = std::to_string(::getpid());
+  put("a.txt.partial-999999999-1f", "dead writer");  // beyond Linux's pid_max: no such process
+  put("a.txt.partial-" + own + "-2f", "a live writer: this process");
+  put("a.txt.partial-" + own + "-3f", "this PID, but from before this process started");
+  fs::last_write_time(file("a.txt.partial-" + own + "-3f"), fs::file_time_type::clock::now() - std::chrono::hours(24 * 365));
+  put("b.txt.partial-999999999-1f", "another target's: not this write's to judge");
+  write_file_atomically(file("a.txt"), "test file", [](std::ostream& out) { return static_cast<bool>(out << "x"); });
+  EXPECT_FALSE(fs::exists(file("a.txt.partial-999999999-1f")));
+  EXPECT_TRUE(fs::exists(file("a.txt.partial-" + own + "-2f")));
+  EXPECT_FALSE(fs::exists(file("a.txt.partial-" + own + "-3f")));
+  EXPECT_TRUE(fs::exists(file("b.txt.partial-999999999-1f")));
+
+  fs::create_directories(file(".out.tmp-999999999"));
+  put(".out.tmp-999999999/depth.png", "half");
+  fs::create_directories(file(".out.tmp-999999999.old"));
+  publish(file("out"), false, "one");
+  EXPECT_FALSE(fs::exists(file(".out.tmp-999999999")));
+  EXPECT_FALSE(fs::exists(file(".out.tmp-999999999.old")));
+  EXPECT_EQ(contents(file("out/result.txt")), "one");
 }
 
 }  // namespace

@@ -321,6 +321,29 @@ TEST_F(BadMapFile, ConsistentChecksumButInvalidContentsAreRefused) {
   }
 }
 
+// A 172-byte map asking for 2^31 - 1 depth bins allocated 2 x 16 GiB before any check, and the cap it was
+// checked against came from the file itself.
+TEST_F(BadMapFile, SizesAreCheckedAgainstTheCallersCapBeforeAllocating) {
+  auto bytes = good_;
+  const std::int32_t huge_bins = 2147483647;
+  std::memcpy(bytes.data() + kAzimuthBinsOffset + 8, &huge_bins, 4);
+  const std::uint64_t file_cap = ~std::uint64_t{0};  // a forged file raising its own cap
+  std::memcpy(bytes.data() + kFirstColumnOffset - 16, &file_cap, 8);
+  reseal(bytes);
+  write_bytes(file("huge.occmap"), bytes);
+  try {
+    load_map(file("huge.occmap"));
+    FAIL() << "2^31 - 1 depth bins must exceed the default cap";
+  } catch (const ResourceLimit& e) {
+    EXPECT_NE(std::string(e.what()).find("huge.occmap"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("2147483647"), std::string::npos) << e.what();
+  }
+  // The intact map: refused under a small cap of the caller's, loaded with the caller's cap otherwise.
+  EXPECT_THROW(load_map(file("good.occmap"), 1 << 20), ResourceLimit);
+  const std::size_t cap = std::size_t{64} << 20;
+  EXPECT_EQ(load_map(file("good.occmap"), cap).grid.options().memory_cap_bytes, cap);
+}
+
 TEST_F(MapIo, MissingFileOrFolderIsAnIoError) {
   EXPECT_THROW(load_map(file("absent.occmap")), IoError);
   EXPECT_THROW(load_map(folder_.string()), IoError);

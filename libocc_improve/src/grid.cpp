@@ -23,17 +23,25 @@ GridOptions GridOptions::octomap_clamping() {
   return o;
 }
 
+double grid_worst_case_bytes(const GeometryParams& g) {
+  const double voxels = static_cast<double>(g.azimuth_bins) * g.elevation_bins * g.depth_bins;
+  return voxels * sizeof(float) + 2.0 * sizeof(double) * (g.depth_bins + 1.0);
+}
+
+void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_bytes) {
+  const double worst_case = grid_worst_case_bytes(g);
+  if (worst_case <= static_cast<double>(memory_cap_bytes)) return;
+  std::ostringstream m;
+  m << "grid of " << g.azimuth_bins << " x " << g.elevation_bins << " x " << g.depth_bins << " bins may need up to "
+    << worst_case / (1 << 20) << " MiB, above memory_cap_bytes = " << static_cast<double>(memory_cap_bytes) / (1 << 20)
+    << " MiB";
+  throw ResourceLimit(m.str());
+}
+
 SphericalGrid::SphericalGrid(const SphericalGeometry& geometry, const GridOptions& options)
     : geometry_(geometry), options_(options) {
   options.validate();
-  const double worst_case = static_cast<double>(geometry.column_count()) * geometry.depth().bins() * sizeof(float);
-  if (worst_case > static_cast<double>(options.memory_cap_bytes)) {
-    std::ostringstream m;
-    m << "grid of " << geometry.width() << " x " << geometry.height() << " x " << geometry.depth().bins()
-      << " bins may need up to " << worst_case / (1 << 20) << " MiB, above memory_cap_bytes = "
-      << static_cast<double>(options.memory_cap_bytes) / (1 << 20) << " MiB";
-    throw ResourceLimit(m.str());
-  }
+  require_within_memory_cap(geometry.params(), options.memory_cap_bytes);
   log_odds_min_ = static_cast<float>(logit(options.probability_min));
   log_odds_max_ = static_cast<float>(logit(options.probability_max));
   tiles_x_ = (geometry.width() + kTileSize - 1) / kTileSize;

@@ -91,7 +91,7 @@ private:
   const std::string& path_;
 };
 
-std::vector<char> read_file(const std::string& path) {
+std::vector<char> read_file(const std::string& path, std::size_t memory_cap_bytes) {
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) throw IoError("cannot read map '" + path + "': it is a folder");
   std::ifstream in(path, std::ios::binary);
@@ -99,6 +99,9 @@ std::vector<char> read_file(const std::string& path) {
   in.seekg(0, std::ios::end);
   const std::streamoff size = in.tellg();
   if (size < 0) throw IoError("cannot determine the size of map '" + path + "' (not a regular file?)");
+  if (static_cast<std::uint64_t>(size) > memory_cap_bytes)
+    throw ResourceLimit("map '" + path + "' of " + std::to_string(size) + " bytes exceeds memory_cap_bytes = " +
+                        std::to_string(memory_cap_bytes));
   in.seekg(0, std::ios::beg);
   std::vector<char> bytes(static_cast<std::size_t>(size));
   if (size > 0 && !in.read(bytes.data(), size)) throw IoError("cannot read map '" + path + "'");
@@ -285,8 +288,8 @@ void save_map(const std::string& path, const SphericalGrid& grid, const SensorMo
   });
 }
 
-LoadedMap load_map(const std::string& path) {
-  const std::vector<char> bytes = read_file(path);
+LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
+  const std::vector<char> bytes = read_file(path, memory_cap_bytes);
   auto fail = [&](const std::string& problem) { throw FormatError("map '" + path + "': " + problem); };
   if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
     fail("not an occ_improve map (bad magic)");
@@ -307,10 +310,17 @@ LoadedMap load_map(const std::string& path) {
   Reader r(bytes, body, path);
   const GeometryParams geometry = read_geometry(r, version);
   const SensorModelParams model = read_model(r, version);
-  const GridOptions options = read_options(r);
+  GridOptions options = read_options(r);
   validated(r, "geometry", [&] { geometry.validate(); });
   validated(r, "sensor model", [&] { model.validate(); });
   validated(r, "grid options", [&] { options.validate(); });
+  // The caller's cap, never the file's (a forged file would raise its own), before the geometry allocates.
+  options.memory_cap_bytes = memory_cap_bytes;
+  try {
+    require_within_memory_cap(geometry, memory_cap_bytes);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit("map '" + path + "': geometry: " + e.what());
+  }
   LoadedMap loaded{SphericalGrid(SphericalGeometry(geometry), options), model};
   read_columns(r, loaded.grid);
   return loaded;

@@ -7,10 +7,17 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+
+// The cap is checked before the geometry allocates its depth axis (a huge depth_bins would allocate first).
+const GeometryParams& within_cap(const GeometryParams& geometry, const GridOptions& options) {
+  require_within_memory_cap(geometry, options.memory_cap_bytes);
+  return geometry;
+}
 }  // namespace
 
 Mapper::Mapper(const SensorPreset& preset, const GridOptions& options)
-    : Mapper(SphericalGrid(SphericalGeometry(preset.geometry), options), SensorModel(preset.model)) {}
+    : Mapper(SphericalGrid(SphericalGeometry(within_cap(preset.geometry, options)), options),
+             SensorModel(preset.model)) {}
 
 Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(grid)), model_(model) {
   grid_.take_changed_columns();  // the surface below already accounts for everything in the grid

@@ -2,9 +2,26 @@
 
 #include "occ_improve/errors.hpp"
 
+#include <cmath>
 #include <string>
 
 namespace occ_improve {
+
+std::size_t valid_point_count(PointSpan points) {
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < points.count; ++i) {
+    const float* p = points.xyz + i * points.stride_floats;
+    const bool finite = std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]);
+    valid += finite && (p[0] != 0 || p[1] != 0 || p[2] != 0) ? 1 : 0;
+  }
+  return valid;
+}
+
+void require_valid_points(PointSpan points, const std::string& name) {
+  if (valid_point_count(points) == 0)
+    throw InvalidInput("'" + name + "' holds no valid point (" + std::to_string(points.count) +
+                       " points, all NaN, infinite or at the origin)");
+}
 
 pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f>& points, int width, int height) {
   if (width <= 0 || height <= 0 ||

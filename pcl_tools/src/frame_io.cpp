@@ -3,13 +3,14 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate.hpp"
+#include "occ_improve/pcl/pcd_header.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
-#include <pcl/io/pcd_io.h>
 #include <png.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -36,37 +37,57 @@ void png_error_to_string(png_structp png, png_const_charp message) {
 }
 void png_ignore_warning(png_structp, png_const_charp) {}
 
+// A depth image's size is checked before any pixel buffer exists: against a pixel cap, and against what
+// the file's bytes can hold (a 23-byte header must not make us allocate 20 GB).
+void require_image_size(const std::string& path, std::uint64_t width, std::uint64_t height, std::uint64_t file_can_hold) {
+  const std::uint64_t pixels = width * height;  // both < 2^32: no overflow
+  std::string problem;
+  if (pixels == 0) problem = "is empty";
+  else if (pixels > kMaxDepthImagePixels) problem = "exceeds the cap of " + std::to_string(kMaxDepthImagePixels) + " pixels";
+  else if (pixels > file_can_hold) problem = "is more than the file can hold (" + std::to_string(file_can_hold) + " pixels)";
+  if (!problem.empty())
+    throw FormatError("depth image '" + path + "': width x height = " + std::to_string(width) + " x " +
+                      std::to_string(height) + " " + problem);
+}
+
+// Frees libpng's read and info structs on every way out, exceptions included.
+struct PngReader {
+  png_structp png = nullptr;
+  png_infop info = nullptr;
+  ~PngReader() { png_destroy_read_struct(&png, &info, nullptr); }
+};
+
 DepthImage16 read_png16(const std::string& path) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw IoError("cannot open depth image '" + path + "'");
   unsigned char signature[8];
   if (std::fread(signature, 1, 8, file.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0)
     throw FormatError("'" + path + "' is not a PNG file");
+  std::error_code ec;
+  const std::uint64_t file_size = std::filesystem::file_size(path, ec);
   std::string png_message;
-  png_structp png =
-      png_create_read_struct(PNG_LIBPNG_VER_STRING, &png_message, &png_error_to_string, &png_ignore_warning);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (!png || !info) {
-    png_destroy_read_struct(&png, &info, nullptr);
-    throw IoError("libpng could not be initialised");
-  }
+  PngReader reader;
+  reader.png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &png_message, &png_error_to_string, &png_ignore_warning);
+  reader.info = reader.png ? png_create_info_struct(reader.png) : nullptr;
+  if (!reader.png || !reader.info) throw IoError("libpng could not be initialised");
+  png_structp png = reader.png;
+  png_infop info = reader.info;
   DepthImage16 image;
   std::vector<png_bytep> rows;
-  if (setjmp(png_jmpbuf(png))) {
-    png_destroy_read_struct(&png, &info, nullptr);
-    throw FormatError("'" + path + "' is a corrupt or truncated PNG (" + png_message + ")");
-  }
+  if (setjmp(png_jmpbuf(png))) throw FormatError("'" + path + "' is a corrupt or truncated PNG (" + png_message + ")");
   png_init_io(png, file.get());
   png_set_sig_bytes(png, 8);
   png_read_info(png, info);
   const int bit_depth = png_get_bit_depth(png, info), colour = png_get_color_type(png, info);
   if (bit_depth != 16 || (colour != PNG_COLOR_TYPE_GRAY)) {
-    png_destroy_read_struct(&png, &info, nullptr);
     std::ostringstream m;
     m << "'" << path << "' is a " << bit_depth << "-bit PNG of colour type " << colour
       << ": a depth image must be 16-bit single-channel";
     throw FormatError(m.str());
   }
+  // Deflate expands at most ~1032-fold: a file cannot hold more 2-byte pixels than that.
+  require_image_size(path, png_get_image_width(png, info), png_get_image_height(png, info),
+                     ec ? kMaxDepthImagePixels : file_size * 1032 / 2);
   png_set_swap(png);  // PNG is big-endian; we read host-order uint16
   image.width = static_cast<int>(png_get_image_width(png, info));
   image.height = static_cast<int>(png_get_image_height(png, info));
@@ -77,7 +98,6 @@ DepthImage16 read_png16(const std::string& path) {
         reinterpret_cast<png_bytep>(image.values.data() + static_cast<std::size_t>(v) * image.width);
   png_read_image(png, rows.data());
   png_read_end(png, nullptr);
-  png_destroy_read_struct(&png, &info, nullptr);
   return image;
 }
 
@@ -90,6 +110,11 @@ DepthImage16 read_pgm16(const std::string& path) {
   if (magic != "P5" || !in || width <= 0 || height <= 0 || max_value < 256 || max_value > 65535)
     throw FormatError("'" + path + "' is not a 16-bit binary PGM (P5)");
   in.get();  // the single whitespace after the header
+  const std::streamoff header = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::uint64_t pixel_bytes = static_cast<std::uint64_t>(in.tellg() - header);
+  in.seekg(header);
+  require_image_size(path, static_cast<std::uint64_t>(width), static_cast<std::uint64_t>(height), pixel_bytes / 2);
   DepthImage16 image{width, height, {}};
   image.values.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   std::vector<unsigned char> raw(image.values.size() * 2);
@@ -128,31 +153,6 @@ float decode(std::uint16_t v, DepthEncoding e) {
       return 351.3f / (1092.5f - static_cast<float>(v));
   }
   return 0.0f;
-}
-
-// PCL 1.13's reader dereferences missing header fields and crashes on a file that is not a PCD at all,
-// so the header is checked here first: text lines up to DATA, with FIELDS, SIZE, TYPE, WIDTH and POINTS.
-void require_pcd_header(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw IoError("cannot open PCD file '" + path + "'");
-  if (in.peek() == std::ifstream::traits_type::eof()) throw FormatError("PCD file '" + path + "' is empty");
-  const std::vector<std::string> required = {"FIELDS", "SIZE", "TYPE", "WIDTH", "POINTS"};
-  std::vector<bool> seen(required.size(), false);
-  std::string line;
-  for (int lines = 0; lines < 64 && std::getline(in, line); ++lines) {
-    if (line.empty() || line[0] == '#') continue;
-    for (unsigned char ch : line)
-      if (ch < 9 || (ch > 13 && ch < 32) || ch > 126)
-        throw FormatError("'" + path + "' is not a PCD file (binary data before the DATA line)");
-    const std::string key = line.substr(0, line.find(' '));
-    if (key == "DATA") {
-      for (std::size_t i = 0; i < required.size(); ++i)
-        if (!seen[i]) throw FormatError("'" + path + "' is not a PCD file (no " + required[i] + " line)");
-      return;
-    }
-    for (std::size_t i = 0; i < required.size(); ++i) seen[i] = seen[i] || key == required[i];
-  }
-  throw FormatError("'" + path + "' is not a PCD file (no PCD header ending in a DATA line)");
 }
 
 }  // namespace
@@ -201,17 +201,10 @@ Image colour_image(const pcl::PCLPointCloud2& blob) {
 
 LoadedFrame load_pcd_frame(const std::string& path) {
   pcl::PCLPointCloud2 blob;
-  pcl::PCDReader reader;
-  require_pcd_header(path);
-  if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
-  bool has_x = false, has_y = false, has_z = false, has_colour = false;
-  for (const auto& f : blob.fields) {
-    has_x |= f.name == "x";
-    has_y |= f.name == "y";
-    has_z |= f.name == "z";
-    has_colour |= f.name == "rgb" || f.name == "rgba";
-  }
-  if (!has_x || !has_y || !has_z) throw FormatError("PCD file '" + path + "' has no x, y, z fields");
+  read_pcd_file(path, blob);
+  for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
+  bool has_colour = false;
+  for (const auto& f : blob.fields) has_colour |= f.name == "rgb" || f.name == "rgba";
   LoadedFrame frame;
   frame.path = path;
   pcl::fromPCLPointCloud2(blob, frame.cloud);
@@ -305,6 +298,10 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
     k.cx = v[2];
     k.cy = v[3];
     if (v.size() == 6) {
+      // Checked before the cast: a double beyond int's range does not convert.
+      for (const double size : {v[4], v[5]})
+        if (!(size >= 1 && size <= 65536 && size == std::floor(size)))
+          throw FormatError("intrinsics file '" + path + "': width and height must be whole numbers in [1, 65536]");
       k.width = static_cast<int>(v[4]);
       k.height = static_cast<int>(v[5]);
     }

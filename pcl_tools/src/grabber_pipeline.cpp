@@ -149,6 +149,8 @@ void PipelineEngine::run() {
 void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
   const double t0 = now_seconds();
   if (frame.points.count == 0) return reject(index, "empty frame");
+  if (valid_point_count(frame.points) == 0)
+    return reject(index, "no valid point (" + std::to_string(frame.points.count) + " points, all NaN, infinite or at the origin)");
   const bool organized = frame.height > 1;
   if (options_.require_organized && !organized)
     return reject(index, "unorganized frame (" + std::to_string(frame.points.count) +

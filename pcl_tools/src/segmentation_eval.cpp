@@ -1,11 +1,11 @@
 #include "occ_improve/pcl/segmentation_eval.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/pcd_header.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
 #include <pcl/features/integral_image_normal.h>
-#include <pcl/io/pcd_io.h>
 #include <pcl/segmentation/euclidean_cluster_comparator.h>
 #include <pcl/segmentation/organized_connected_component_segmentation.h>
 #include <pcl/segmentation/organized_multi_plane_segmentation.h>
@@ -83,12 +83,11 @@ double matched_share(const std::vector<std::uint8_t>& a, const std::vector<std::
 
 pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path) {
   pcl::PCLPointCloud2 blob;
-  pcl::PCDReader reader;
-  if (reader.read(path, blob) < 0) throw IoError("cannot read labelled cloud '" + path + "'");
-  if (!has_field(blob, "x") || !has_field(blob, "y") || !has_field(blob, "z"))
-    throw FormatError("'" + path + "' has no x/y/z fields");
+  read_pcd_file(path, blob);
+  for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
   if (!has_field(blob, "label"))
     throw FormatError("'" + path + "' has no 'label' field: ground-truth evaluation needs labelled points");
+  require_pcd_field(blob, path, "label", pcl::PCLPointField::UINT32);
   if (blob.height <= 1)
     throw InvalidInput("'" + path + "' is not organized (height 1): the evaluation needs an organized cloud");
   pcl::PointCloud<pcl::PointXYZRGBL> cloud;

@@ -145,6 +145,7 @@ Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c)
       if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
+  if (!(in >> std::ws).eof()) throw FormatError("pose file '" + path + "' holds more than a 4x4 matrix");
   if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
     throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
   // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
@@ -197,7 +198,9 @@ DepthSequence scan_tum(const fs::path& directory) {
     for (const auto& [t, rest] : timestamped_lines(directory / "groundtruth.txt")) {
       std::istringstream fields(rest);
       double tx, ty, tz, qx, qy, qz, qw;
-      if (!(fields >> tx >> ty >> tz >> qx >> qy >> qz >> qw))
+      // A zero quaternion would normalise to NaN and carry NaN into every point.
+      if (!(fields >> tx >> ty >> tz >> qx >> qy >> qz >> qw) || !Eigen::Vector3d(tx, ty, tz).allFinite() ||
+          !(Eigen::Vector4d(qx, qy, qz, qw).norm() > 1e-6) || !Eigen::Vector4d(qx, qy, qz, qw).allFinite())
         throw FormatError("'" + (directory / "groundtruth.txt").string() + "': bad pose line at t = " + std::to_string(t));
       Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
       pose.linear() = Eigen::Quaterniond(qw, qx, qy, qz).normalized().toRotationMatrix();

@@ -1,8 +1,7 @@
 #include "occ_improve/pcl/tool_options.hpp"
 
-#include <cstdio>
-
 #include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/segmentation_eval.hpp"
 
 #include <pcl/console/parse.h>
@@ -10,8 +9,12 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
+#include <new>
 #include <sstream>
 
 namespace occ_improve {
@@ -197,6 +200,8 @@ bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
 }  // namespace
 
 ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
+  throw_if_interrupted();
+  const InputScope scope(source.path);
   ToolFrame frame;
   std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
   frame.camera_source = options.intrinsics ? options.intrinsics_flag : source.intrinsics ? "the dataset's camera-intrinsics.txt" : "";
@@ -204,6 +209,7 @@ ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source)
     throw InvalidParameter("'" + source.path + "' is a depth image and no intrinsics were found for it: give "
                            "-intrinsics FX,FY,CX,CY[,W,H] or -intrinsics_file PATH");
   LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
+  require_valid_points(span_of(loaded.cloud), source.path);
   frame.name = source.path;
   if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
   if (!camera && options.preset_needs_camera()) {
@@ -231,7 +237,8 @@ ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source)
 
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
   std::vector<ToolFrame> frames;
-  for (const std::string& input : options.inputs)
+  for (const std::string& input : options.inputs) {
+    const InputScope scope(input);
     for (const FrameSource& source : expand_input(input)) {
       frames.push_back(read_tool_frame(options, source));
       const ToolFrame &first = frames.front(), &last = frames.back();
@@ -240,6 +247,7 @@ std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
                            "' (" + describe_camera({last}) + " against " + describe_camera({first}) +
                            "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
     }
+  }
   return frames;
 }
 
@@ -324,12 +332,35 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
     }
   }
 
+  try {
+    require_within_memory_cap(t.preset.geometry, t.grid.memory_cap_bytes);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov)");
+  }
+
   t.top_k = spec.default_top_k;
   if (const auto text = value_of(argc, argv, "-k")) {
     t.top_k = to_int("-k", *text);
     if (t.top_k <= 0) bad_flag("-k", *text, "> 0");
   }
   return t;
+}
+
+OutputFolder open_output_folder(int argc, const char* const* argv, const std::string& tool,
+                                const std::string& fallback) {
+  std::string folder = fallback;
+  pcl::console::parse_argument(argc, argv, "-o", folder);
+  if (folder.empty()) throw InvalidParameter("-o needs a folder name");
+  return OutputFolder(folder, tool, pcl::console::find_switch(argc, argv, "-overwrite"));
+}
+
+std::string usage_output_folder(const std::string& fallback) {
+  return "  -o OUTDIR                 output folder" + (fallback.empty() ? std::string(" (required)") : " (default " + fallback + ")") +
+         "; written in a staging folder\n"
+         "                            and moved into place at the end. A folder that holds files this tool did\n"
+         "                            not write (marker " + kOutputMarkerName + ") is refused\n"
+         "  -overwrite                write into such a folder anyway: files of the same names are replaced,\n"
+         "                            nothing else is touched\n";
 }
 
 std::string usage_common() {
@@ -361,16 +392,77 @@ Inputs (positional, fused in order, all from the same viewpoint):
 )";
 }
 
+namespace {
+
+volatile std::sig_atomic_t g_stop_signal = 0;
+extern "C" void record_stop_signal(int signal) { g_stop_signal = signal; }
+
+void install_stop_signals() {
+  struct sigaction action {};
+  action.sa_handler = record_stop_signal;
+  action.sa_flags = SA_RESETHAND;  // a second Ctrl-C kills at once; the next run removes what is left
+  sigemptyset(&action.sa_mask);
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+std::string& current_input() {
+  static std::string input;
+  return input;
+}
+// The innermost input whose scope an exception left: recorded while unwinding, read by run_tool.
+std::string& failed_input() {
+  static std::string input;
+  return input;
+}
+
+// One line on stderr: the message, and the input being worked on when the message does not name it.
+int report_failure(const std::string& message) {
+  std::string line = message;
+  std::replace(line.begin(), line.end(), '\n', ' ');
+  const std::string& input = failed_input();
+  if (!input.empty() && line.find(input) == std::string::npos) line += " (input '" + input + "')";
+  std::fprintf(stderr, "error: %s\n", line.c_str());
+  return 1;
+}
+
+}  // namespace
+
+InputScope::InputScope(const std::string& input) : previous_(current_input()), uncaught_(std::uncaught_exceptions()) {
+  current_input() = input;
+}
+
+InputScope::~InputScope() {
+  if (std::uncaught_exceptions() > uncaught_ && failed_input().empty()) failed_input() = current_input();
+  current_input() = previous_;
+}
+
+Interrupted::Interrupted(int signal)
+    : std::runtime_error(std::string("interrupted by ") + (signal == SIGTERM ? "SIGTERM" : "SIGINT")), signal_(signal) {}
+
+int stop_signal_received() { return static_cast<int>(g_stop_signal); }
+
+void throw_if_interrupted() {
+  if (const int signal = stop_signal_received()) throw Interrupted(signal);
+}
+
 int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv)) {
   if (help_requested(argc, argv)) {
     print_usage(argv[0]);
     return 0;
   }
+  install_stop_signals();
   try {
     return run(argc, argv);
+  } catch (const Interrupted& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 128 + e.signal();
+  } catch (const std::bad_alloc&) {
+    return report_failure("out of memory (std::bad_alloc)");
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
-    return 1;
+    return report_failure(e.what());
+  } catch (...) {
+    return report_failure("unknown exception");
   }
 }
 

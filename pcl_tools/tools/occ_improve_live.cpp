@@ -13,9 +13,7 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <mutex>
 #include <thread>
@@ -26,9 +24,6 @@ namespace {
 
 using namespace occ_improve;
 using Pipeline = GrabberPipeline<pcl::PointXYZ>;
-
-volatile std::sig_atomic_t g_interrupted = 0;
-extern "C" void on_sigint(int) { g_interrupted = 1; }
 
 void print_usage(const char* program) {
   std::cout << "Usage: " << program << " <source> [options]\n"
@@ -44,7 +39,7 @@ void print_usage(const char* program) {
             << "With poses, every frame is moved into the FIRST frame's sensor frame (the grid has one\n"
             << "viewpoint).\n\n"
             << "Pipeline:\n"
-            << "  -o DIR                    output folder for depth.png, occupancy.png, improvement.png (default .)\n"
+            << usage_output_folder("occ_improve_live_out")
             << "  -save_every N             also write the maps every N processed frames (default 0: at the end)\n"
             << "  -load MAP.occmap          continue a saved grid from the same viewpoint (it carries its own\n"
             << "                            preset; preset flags are ignored; poses are relative to this run's first frame)\n"
@@ -77,10 +72,13 @@ std::optional<std::string> take_device_flag(std::vector<const char*>& args) {
   return std::nullopt;
 }
 
-void write_maps(const Mapper& mapper, const std::string& dir, double depth_max_m) {
-  write_png(dir + "/depth.png", render_depth(mapper.surface(), depth_max_m));
-  write_png(dir + "/occupancy.png", render_occupancy(mapper.surface()));
-  write_png(dir + "/improvement.png", render_improvement(mapper.improvement()));
+// Every write publishes the whole set, so the folder always holds one consistent state of the map.
+void write_maps(const Mapper& mapper, OutputFolder& out, double depth_max_m) {
+  write_png(out.file("depth.png"), render_depth(mapper.surface(), depth_max_m));
+  write_png(out.file("occupancy.png"), render_occupancy(mapper.surface()));
+  write_png(out.file("improvement.png"), render_improvement(mapper.improvement()));
+  write_png(out.file("improvement_legend.png"), render_improvement_legend());
+  out.commit();
 }
 
 template <typename T>
@@ -102,16 +100,15 @@ int run(int argc, const char* const* argv_in) {
   spec.default_preset = "kinect_v1";
   spec.value_flags = {"-oni",     "-pcd_dir",    "-depth_dir", "-o",   "-save_every",
                       "-fps",     "-threads",    "-max_frames", "-load", "-save"};
-  spec.switches = {"-drop", "-no_poses", "-stop_on_signal"};
+  spec.switches = {"-drop", "-no_poses", "-stop_on_signal", "-overwrite"};
   const ToolOptions options = parse_tool_options(n, argv, spec);
 
-  std::string oni, pcd_dir, depth_dir, out_dir = ".", load_path, save_path;
+  std::string oni, pcd_dir, depth_dir, load_path, save_path;
   pcl::console::parse_argument(n, argv, "-load", load_path);
   pcl::console::parse_argument(n, argv, "-save", save_path);
   pcl::console::parse_argument(n, argv, "-oni", oni);
   pcl::console::parse_argument(n, argv, "-pcd_dir", pcd_dir);
   pcl::console::parse_argument(n, argv, "-depth_dir", depth_dir);
-  pcl::console::parse_argument(n, argv, "-o", out_dir);
   const int save_every = parse_number(n, argv, "-save_every", 0, 0);
   const float fps = parse_number(n, argv, "-fps", 0.0f, 0.0f);
   const int threads = parse_number(n, argv, "-threads", 0, 0);
@@ -122,9 +119,7 @@ int run(int argc, const char* const* argv_in) {
   const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() + !options.inputs.empty();
   if (sources != 1)
     throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir or PCD files); see -h");
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw IoError("cannot create output folder '" + out_dir + "': " + ec.message());
+  OutputFolder out = open_output_folder(n, argv, "occ_improve_live", "occ_improve_live_out");
 
   // The source, and the sensor preset that fits it.
   std::shared_ptr<pcl::Grabber> grabber;
@@ -163,11 +158,15 @@ int run(int argc, const char* const* argv_in) {
     preset = options.preset_for_camera(first.camera);
     camera_text = describe_camera({first});
     auto source = std::make_shared<PcdSequenceGrabber>(files, fps);
-    source_text = (pcd_dir.empty() ? std::string("PCD files") : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
+    const std::string files_text = files.empty() ? std::string("no PCD file")
+                                   : files.size() == 1 ? files.front()
+                                                       : files.front() + " and " + std::to_string(files.size() - 1) + " more";
+    source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
     file_source = source.get();
     grabber = source;
   }
 
+  const InputScope scope(source_text);
   PipelineOptions pipeline_options;
   pipeline_options.insertion.threads = threads;
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
@@ -175,7 +174,7 @@ int run(int argc, const char* const* argv_in) {
   // A saved map fixes the geometry and the model; the source's frames must fit it.
   std::shared_ptr<Mapper> mapper;
   if (!load_path.empty()) {
-    LoadedMap loaded = load_map(load_path);
+    LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
     mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
     preset.name = "loaded from " + load_path;
     preset.geometry = mapper->geometry().params();
@@ -203,7 +202,7 @@ int run(int argc, const char* const* argv_in) {
     }
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
-      write_maps(pipeline.mapper(), out_dir, depth_max_m);
+      write_maps(pipeline.mapper(), out, depth_max_m);
       save_grid();
       ++maps_written;
     }
@@ -217,7 +216,6 @@ int run(int argc, const char* const* argv_in) {
   pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source_text.c_str(),
                            preset.name.c_str(), preset.geometry.azimuth_bins, preset.geometry.elevation_bins,
                            preset.geometry.depth_bins, depth_max_m);
-  std::signal(SIGINT, on_sigint);
   pipeline.start();
   const char* stop_reason = "source finished";
   // On a terminal the progress line rewrites itself; in a log, one line every 5 s.
@@ -231,15 +229,18 @@ int run(int argc, const char* const* argv_in) {
                    terminal ? "\r" : "", static_cast<unsigned long long>(s.received),
                    static_cast<unsigned long long>(s.processed), static_cast<unsigned long long>(s.dropped),
                    static_cast<unsigned long long>(s.rejected), s.processed_per_second(), terminal ? "" : "\n");
-    if (g_interrupted) { stop_reason = "interrupted (Ctrl-C)"; break; }
+    if (stop_signal_received()) { stop_reason = "interrupted"; break; }
     if (stop_on_signal && stop_signalled) { stop_reason = "stop signal"; break; }
     if (max_frames > 0 && s.processed >= static_cast<std::uint64_t>(max_frames)) { stop_reason = "-max_frames reached"; break; }
     if (file_source && !file_source->isRunning() && s.in_flight == 0) break;
   }
   pipeline.stop();
   if (terminal) std::fprintf(stderr, "\n");
-  write_maps(pipeline.mapper(), out_dir, depth_max_m);
-  write_png(out_dir + "/improvement_legend.png", render_improvement_legend());
+  if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !stop_signal_received())
+    throw InvalidInput("no frame of " + source_text + " was used (" + std::to_string(s.rejected) +
+                       " rejected: empty, all NaN or all zero, or of the wrong size; " +
+                       std::to_string(s.grabber_errors) + " unreadable)");
+  write_maps(pipeline.mapper(), out, depth_max_m);
   save_grid();
   if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
 
@@ -264,8 +265,10 @@ int run(int argc, const char* const* argv_in) {
     }
   }
   pcl::console::print_info("Wrote %s/{depth,occupancy,improvement,improvement_legend}.png (%d intermediate writes)\n",
-                           out_dir.c_str(), maps_written.load());
-  return s.processed > 0 ? 0 : 1;
+                           out.path().c_str(), maps_written.load());
+  // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.
+  if (const int signal = stop_signal_received()) throw Interrupted(signal);
+  return 0;
 }
 
 }  // namespace

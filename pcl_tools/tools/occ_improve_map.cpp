@@ -17,14 +17,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
-namespace fs = std::filesystem;
 using namespace occ_improve;
 
 namespace {
@@ -34,7 +31,8 @@ constexpr double kRadToDeg = 57.29577951308232;
 void print_usage(const char* program) {
   std::cout << "Usage: " << program << " [options] INPUT... -o OUTDIR\n"
             << "       " << program << " -sample -o OUTDIR\n\n"
-            << "Fuses the input frames (one viewpoint, in order) into a spherical occupancy grid and writes the\n"
+            << "Fuses the input frames (one viewpoint, in order) into an occupancy grid along the sensor's rays\n"
+            << "and writes the\n"
             << "improvement map (where one more measurement would change the map most) to OUTDIR:\n"
             << "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
             << "                pixel-aligned with the input depth image; grey = columns no pixel can see)\n"
@@ -43,7 +41,7 @@ void print_usage(const char* program) {
             << "  regions.csv   the K best connected regions, ranked by summed improvement\n"
             << "  rays.csv      the K best single rays\n\n"
             << "Tool options:\n"
-            << "  -o OUTDIR                 output folder (default occ_improve_out); replaced as a whole at the end\n"
+            << usage_output_folder("occ_improve_out")
             << "  -sample                   use the built-in generated Kinect-like frame instead of input files\n"
             << "  -load MAP.occmap          start from a saved grid (same viewpoint); it carries its own preset,\n"
             << "                            so preset flags are ignored; input frames are fused on top of it\n"
@@ -58,53 +56,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-// A folder that is removed unless committed: outputs are written there and renamed into place at the
-// end, so a failure never leaves files that look complete.
-class StagingFolder {
-public:
-  explicit StagingFolder(const fs::path& target) : target_(target) {
-    const fs::path parent = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    std::error_code ec;
-    if (!fs::is_directory(parent, ec))
-      throw IoError("cannot write output folder '" + target.string() + "': '" + parent.string() +
-                    (fs::exists(parent, ec) ? "' is not a folder" : "' does not exist"));
-    staging_ = parent / ("." + target.filename().string() + ".tmp-" + std::to_string(::getpid()));
-    if (!fs::create_directory(staging_, ec) || ec)
-      throw IoError("cannot write output folder '" + target.string() + "': cannot create '" + staging_.string() +
-                    "'" + (ec ? ": " + ec.message() : ""));
-  }
-  StagingFolder(const StagingFolder&) = delete;
-  StagingFolder& operator=(const StagingFolder&) = delete;
-  ~StagingFolder() {
-    std::error_code ec;
-    if (!committed_) fs::remove_all(staging_, ec);
-  }
-  std::string file(const std::string& name) const { return (staging_ / name).string(); }
-
-  /// Replaces the target by the staged folder (an existing target is moved aside first, then removed).
-  void commit() {
-    std::error_code ec;
-    fs::path old;
-    if (fs::exists(target_, ec)) {
-      if (!fs::is_directory(target_, ec)) throw IoError("output '" + target_.string() + "' exists and is not a folder");
-      old = staging_;
-      old += ".old";
-      fs::rename(target_, old, ec);
-      if (ec) throw IoError("cannot replace output folder '" + target_.string() + "': " + ec.message());
-    }
-    fs::rename(staging_, target_, ec);
-    if (ec) {
-      if (!old.empty()) fs::rename(old, target_, ec);
-      throw IoError("cannot move the outputs into '" + target_.string() + "'");
-    }
-    committed_ = true;
-    if (!old.empty()) fs::remove_all(old, ec);
-  }
-
-private:
-  fs::path target_, staging_;
-  bool committed_ = false;
-};
 
 void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
   std::ofstream out(path);
@@ -138,15 +89,58 @@ void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, 
   if (!out.flush()) throw IoError("cannot write '" + path + "'");
 }
 
+void print_points(const InsertionReport& in) {
+  std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
+              "%zu used beyond the depth range (free space only)\n",
+              in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
+              in.beyond_depth_range);
+}
+
+std::vector<ToolFrame> sample_frames() {
+  const sample::SampleFrame scene = sample::generate_scene();
+  std::vector<ToolFrame> frames;
+  frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
+                    scene.intrinsics, "the built-in sample's camera", std::nullopt});
+  return frames;
+}
+
+// Every frame of the inputs, in order (read_tool_frames: cameras never assumed, frames without a valid
+// point refused before any work).
+std::vector<ToolFrame> read_frames(const ToolOptions& options) {
+  try {
+    return read_tool_frames(options);
+  } catch (const Interrupted&) {
+    std::printf("interrupted while reading the inputs; nothing written\n");
+    throw;
+  }
+}
+
+MapperReport insert_frames(Mapper& mapper, const std::vector<ToolFrame>& frames, const InsertionOptions& insertion) {
+  MapperReport total;
+  std::size_t inserted = 0;
+  try {
+    for (const ToolFrame& frame : frames) {
+      throw_if_interrupted();
+      InputScope scope(frame.name);
+      const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
+      total.insertion += r.insertion;
+      total.improvement_seconds += r.improvement_seconds;
+      ++inserted;
+    }
+  } catch (const Interrupted&) {
+    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n", inserted, frames.size());
+    print_points(total.insertion);
+    throw;
+  }
+  return total;
+}
+
 int run(int argc, char** argv) {
   ToolSpec spec;
   spec.value_flags = {"-o", "-threads", "-min_improvement", "-load", "-save"};
-  spec.switches = {"-sample"};
+  spec.switches = {"-sample", "-overwrite"};
   const ToolOptions options = parse_tool_options(argc, argv, spec);
   const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
-  std::string out_dir = "occ_improve_out";
-  pcl::console::parse_argument(argc, argv, "-o", out_dir);
-  if (out_dir.empty()) throw InvalidParameter("-o needs a folder name");
   std::string load_path, save_path;
   pcl::console::parse_argument(argc, argv, "-load", load_path);
   pcl::console::parse_argument(argc, argv, "-save", save_path);
@@ -170,25 +164,18 @@ int run(int argc, char** argv) {
   if (!use_sample && options.inputs.empty() && load_path.empty())
     throw InvalidParameter("no input: give PCD / depth image files or a dataset folder, -sample or -load (see -h)");
 
-  // Fail on an unwritable output folder before any work.
-  StagingFolder staging{fs::path(out_dir)};
+  // Fail on an unwritable or foreign output folder before any work.
+  OutputFolder staging = open_output_folder(argc, argv, "occ_improve_map", "occ_improve_out");
 
   // Read.
   auto start = std::chrono::steady_clock::now();
-  std::vector<ToolFrame> frames;
-  if (use_sample) {
-    const sample::SampleFrame scene = sample::generate_scene();
-    frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
-                      scene.intrinsics, "the built-in sample's camera"});
-  } else {
-    frames = read_tool_frames(options);
-  }
+  const std::vector<ToolFrame> frames = use_sample ? sample_frames() : read_frames(options);
   const double read_seconds = seconds_since(start);
 
   SensorPreset preset = options.preset_for_camera(frames.empty() ? std::nullopt : frames.front().camera);
   Mapper mapper = [&] {
     if (load_path.empty()) return Mapper(preset, options.grid);
-    LoadedMap loaded = load_map(load_path);
+    LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
     preset.name = "loaded from " + load_path;
     preset.geometry = loaded.grid.geometry().params();
     preset.model = loaded.model;
@@ -196,15 +183,7 @@ int run(int argc, char** argv) {
   }();
 
   // Insert (insertion with the surface kept current, then the incremental improvement; timed by the mapper).
-  MapperReport total;
-  for (const ToolFrame& frame : frames) {
-    const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
-    if (r.insertion.points_received == r.insertion.skipped_invalid)
-      throw InvalidInput("'" + frame.name + "' holds no valid points (" + std::to_string(r.insertion.points_received) +
-                         " points, all NaN or at the origin)");
-    total.insertion += r.insertion;
-    total.improvement_seconds += r.improvement_seconds;
-  }
+  const MapperReport total = insert_frames(mapper, frames, insertion);
   if (!frames.empty() && total.insertion.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
 
@@ -235,6 +214,7 @@ int run(int argc, char** argv) {
                          to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
   write_regions_csv(staging.file("regions.csv"), regions);
   write_rays_csv(staging.file("rays.csv"), mapper.geometry(), rays);
+  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
   if (!save_path.empty()) save_map(save_path, mapper.grid(), mapper.model().params());
   const double write_seconds = seconds_since(start);
@@ -247,10 +227,7 @@ int run(int argc, char** argv) {
               options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
   std::printf("%s\n", describe_camera(frames).c_str());
   for (const ToolFrame& f : frames) std::printf("read %s: %zu points\n", f.name.c_str(), f.cloud.size());
-  std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
-              "%zu used beyond the depth range (free space only)\n",
-              in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
-              in.beyond_depth_range);
+  print_points(in);
   std::printf("time [s]: read %.3f, insert+surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
               read_seconds, in.seconds, total.improvement_seconds, ranking_seconds,
               write_seconds);
@@ -269,7 +246,7 @@ int run(int argc, char** argv) {
                 static_cast<double>(rays.front().depth_m));
   std::printf("stop: %s (%s)\n", stop.stop ? "yes" : "no", stop.reason.c_str());
   std::printf("wrote %s/: depth.png occupancy.png improvement.png legend.png%s surface.pcd regions.csv rays.csv\n",
-              out_dir.c_str(), overlay ? " overlay.png" : "");
+              staging.path().c_str(), overlay ? " overlay.png" : "");
   return 0;
 }
 

@@ -2,6 +2,7 @@
 // closing remark) and writes a labelled cloud, label and contour images and a per-segment table.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
@@ -10,7 +11,6 @@
 #include <pcl/io/pcd_io.h>
 
 #include <cstdio>
-#include <filesystem>
 #include <fstream>
 #include <iostream>
 
@@ -24,7 +24,7 @@ void print_usage(const char* program) {
             << "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png, contours.png,\n"
             << "segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n\n"
             << "Segmentation options:\n"
-            << "  -o OUTDIR                 output folder (created if needed)\n"
+            << usage_output_folder("")
             << "  -contour V                contour rays have improvement < V (default per preset: -0.02)\n"
             << "  -min_segment N            smaller regions are attached to a neighbour (default 200 rays)\n"
             << "  -plane                    take out the dominant plane first (table, floor), as PCL does\n"
@@ -36,24 +36,21 @@ int run(int argc, char** argv) {
   ToolSpec spec;
   spec.default_preset = "kinect_v1";
   spec.value_flags = {"-o", "-contour", "-min_segment"};
-  spec.switches = {"-plane"};
+  spec.switches = {"-plane", "-overwrite"};
   const ToolOptions options = parse_tool_options(argc, argv, spec);
-  std::string out_dir;
-  pcl::console::parse_argument(argc, argv, "-o", out_dir);
-  if (out_dir.empty()) throw InvalidParameter("-o OUTDIR is required");
   if (options.inputs.size() != 1) throw InvalidParameter("give exactly one input frame (see -h)");
+  // Fail on an unwritable or foreign output folder before any work.
+  OutputFolder out = open_output_folder(argc, argv, "occ_segment", "");
 
   const std::vector<ToolFrame> frames = read_tool_frames(options);
-  if (frames.size() != 1) throw InvalidParameter("give exactly one input frame (a folder holds " + std::to_string(frames.size()) + ")");
+  if (frames.size() != 1)
+    throw InvalidParameter("give exactly one input frame (" + options.inputs.front() + " holds " +
+                           std::to_string(frames.size()) + ")");
   const ToolFrame& frame = frames.front();
+  const InputScope scope(frame.name);
   if (frame.cloud.height <= 1)
     throw InvalidInput("'" + frame.name + "' is not organized (height 1): the segmentation needs a range image");
-  const std::size_t valid = static_cast<std::size_t>(std::count_if(
-      frame.cloud.begin(), frame.cloud.end(), [](const pcl::PointXYZ& p) { return std::isfinite(p.z) && p.z > 0; }));
-  if (valid == 0) {
-    std::printf("'%s' holds no valid point: no segments\n", frame.name.c_str());
-    return 0;
-  }
+  throw_if_interrupted();
   const SensorPreset preset = options.preset_for_camera(frame.camera);
   std::printf("%s\n", describe_camera(frames).c_str());
   SegmentationParams params = segmentation_defaults(preset);
@@ -65,10 +62,8 @@ int run(int argc, char** argv) {
   params.remove_dominant_plane = pcl::console::find_switch(argc, argv, "-plane");
 
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
+  throw_if_interrupted();
 
-  std::error_code ec;
-  std::filesystem::create_directories(out_dir, ec);
-  if (ec) throw IoError("cannot create output folder '" + out_dir + "': " + ec.message());
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
   labelled.width = frame.cloud.width;
   labelled.height = frame.cloud.height;
@@ -88,17 +83,21 @@ int run(int argc, char** argv) {
     q.g = rgb[1];
     q.b = rgb[2];
   }
-  const std::string cloud_path = out_dir + "/labels.pcd";
+  const std::string cloud_path = out.file("labels.pcd");
   if (pcl::io::savePCDFileBinary(cloud_path, labelled) < 0) throw IoError("cannot write '" + cloud_path + "'");
-  write_png(out_dir + "/labels.png", render_segmentation(result.segmentation));
-  write_png(out_dir + "/contours.png", render_contours(result.segmentation));
-  std::ofstream csv(out_dir + "/segments.csv");
-  if (!csv) throw IoError("cannot write '" + out_dir + "/segments.csv'");
+  write_png(out.file("labels.png"), render_segmentation(result.segmentation));
+  write_png(out.file("contours.png"), render_contours(result.segmentation));
+  const std::string csv_path = out.file("segments.csv");
+  std::ofstream csv(csv_path);
+  if (!csv) throw IoError("cannot write '" + csv_path + "'");
   csv << "label,rays,points,centroid_x_m,centroid_y_m,centroid_z_m,mean_depth_m,plane\n";
   for (const Segment& s : result.segmentation.segments)
     csv << s.label << ',' << s.columns << ',' << points_per_label[s.label] << ',' << s.centroid_m.x() << ','
         << s.centroid_m.y() << ',' << s.centroid_m.z() << ',' << s.mean_depth_m << ',' << (s.plane ? 1 : 0) << '\n';
-  if (!csv) throw IoError("cannot write '" + out_dir + "/segments.csv'");
+  csv.close();
+  if (!csv) throw IoError("cannot write '" + csv_path + "'");
+  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
+  out.commit();
 
   const Segmentation& seg = result.segmentation;
   std::printf("preset %s, contour < %.3f, min segment %zu rays, dominant plane %s\n", preset.name.c_str(),
@@ -109,7 +108,7 @@ int run(int argc, char** argv) {
               result.points_outside_grid);
   std::printf("time [ms]: map %.1f, segmentation %.1f, labelling %.1f, total %.1f\n", 1e3 * result.mapping_seconds,
               1e3 * result.segmentation_seconds, 1e3 * result.labelling_seconds, 1e3 * result.total_seconds());
-  std::printf("wrote %s/: labels.pcd labels.png contours.png segments.csv\n", out_dir.c_str());
+  std::printf("wrote %s/: labels.pcd labels.png contours.png segments.csv\n", out.path().c_str());
   return 0;
 }
 

@@ -2,7 +2,9 @@
 // side by side: the negative-improvement segmentation (ours) and PCL's organized segmentation recipe.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/segmentation_eval.hpp"
+#include "occ_improve/pcl/tool_options.hpp"
 
 #include <pcl/common/io.h>
 #include <pcl/console/parse.h>
@@ -28,7 +30,7 @@ void print_usage(const char* program) {
       "  -preset NAME             ours: kinect_v1 (default), kinect_v1_spherical or kinect_v1_paper\n"
       "  -contour V               ours: contour rays have improvement < V (default -0.02)\n"
       "  -min_segment N           ours: smallest segment in rays (default 200)\n"
-      "  -plane_distance D        ours: plane inlier band in m (default 0.01)\n"
+      "  -plane_distance D        ours: plane inlier band in m (default 0.006 pixel-native, 0.01 spherical)\n"
       "  -pcl_min_inliers N       PCL: OrganizedMultiPlaneSegmentation min inliers (default 3000)\n"
       "  -pcl_distance D          PCL: EuclideanClusterComparator threshold in m (default 0.005)\n"
       "  -pcl_min_cluster N       PCL: smallest cluster kept (default 500)\n"
@@ -63,66 +65,78 @@ void print_mean(const char* method, const Totals& t) {
               t.under, t.boundary_precision / n, t.boundary_recall / n, t.ms / n);
 }
 
-}  // namespace
+// One labelled cloud: both segmentations scored, one row each.
+void evaluate_cloud(const std::string& path, const std::string& preset_name, const SegmentationParams& ours,
+                    const PclSegmentationParams& pcl_params, Totals& ours_total, Totals& pcl_total) {
+  const InputScope scope(path);
+  const std::string name = path.substr(path.find_last_of('/') + 1);
+  const auto cloud = load_labelled_cloud(path);
+  require_valid_points(span_of(cloud), path);
+  if (ours_total.clouds == 0)  // the header only once a cloud has loaded, so an error stands alone
+    std::printf("%-14s %-5s %6s %8s %5s %6s %7s %7s %9s\n", "cloud", "meth", "F", "F>=.75", "over", "under",
+                "bnd P", "bnd R", "ms/frame");
+  std::vector<std::uint32_t> truth(cloud.size());
+  for (std::size_t i = 0; i < cloud.size(); ++i) truth[i] = cloud[i].label;
+  const int width = static_cast<int>(cloud.width), height = static_cast<int>(cloud.height);
 
-int main(int argc, char** argv) {
-  if (argc < 2 || pcl::console::find_switch(argc, argv, "-h") || pcl::console::find_switch(argc, argv, "--help")) {
+  const auto our_result = segment_cloud(cloud, preset_by_name(preset_name, estimate_intrinsics(cloud)), ours);
+  const auto our_score = evaluate_segmentation(truth, our_result.point_labels, width, height);
+  print_row(name, "ours", our_score, our_result.total_seconds());
+  ours_total.add(our_score, our_result.total_seconds());
+
+  pcl::PointCloud<pcl::PointXYZ> xyz;
+  pcl::copyPointCloud(cloud, xyz);
+  const auto pcl_result = pcl_organized_segmentation(xyz, pcl_params);
+  const auto pcl_score = evaluate_segmentation(truth, pcl_result.labels, width, height);
+  print_row(name, "pcl", pcl_score, pcl_result.total_seconds());
+  pcl_total.add(pcl_score, pcl_result.total_seconds());
+}
+
+int run(int argc, char** argv) {
+  if (argc < 2) {
     print_usage(argv[0]);
-    return argc < 2 ? 1 : 0;
-  }
-  pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
-  try {
-    PclSegmentationParams pcl_params;
-    pcl::console::parse_argument(argc, argv, "-pcl_min_inliers", pcl_params.min_plane_inliers);
-    pcl::console::parse_argument(argc, argv, "-pcl_distance", pcl_params.cluster_distance_m);
-    int min_cluster = static_cast<int>(pcl_params.min_cluster_points);
-    pcl::console::parse_argument(argc, argv, "-pcl_min_cluster", min_cluster);
-    pcl_params.min_cluster_points = static_cast<std::size_t>(std::max(1, min_cluster));
-    std::string preset_name = "kinect_v1";
-    pcl::console::parse_argument(argc, argv, "-preset", preset_name);
-    SegmentationParams ours = segmentation_defaults(preset_by_name(preset_name));
-    pcl::console::parse_argument(argc, argv, "-contour", ours.contour_improvement_below);
-    int min_segment = static_cast<int>(ours.min_segment_columns);
-    pcl::console::parse_argument(argc, argv, "-min_segment", min_segment);
-    ours.min_segment_columns = static_cast<std::size_t>(std::max(1, min_segment));
-    ours.remove_dominant_plane = !pcl::console::find_switch(argc, argv, "-no_plane");
-    pcl::console::parse_argument(argc, argv, "-plane_distance", ours.plane_distance_m);
-    ours.validate();
-    pcl_params.validate();
-    const std::vector<int> files = pcl::console::parse_file_extension_argument(argc, argv, ".pcd");
-    if (files.empty()) throw InvalidParameter("no labelled .pcd file given (see -h)");
-
-    std::printf("ours: %s dominant-plane removal; PCL: dominant plane left out\n",
-                ours.remove_dominant_plane ? "with" : "without");
-    Totals ours_total, pcl_total;
-    for (int index : files) {
-      const std::string path = argv[index];
-      const std::string name = path.substr(path.find_last_of('/') + 1);
-      const auto cloud = load_labelled_cloud(path);
-      if (ours_total.clouds == 0)  // the header only once a cloud has loaded, so an error stands alone
-        std::printf("%-14s %-5s %6s %8s %5s %6s %7s %7s %9s\n", "cloud", "meth", "F", "F>=.75", "over", "under",
-                    "bnd P", "bnd R", "ms/frame");
-      std::vector<std::uint32_t> truth(cloud.size());
-      for (std::size_t i = 0; i < cloud.size(); ++i) truth[i] = cloud[i].label;
-      const int width = static_cast<int>(cloud.width), height = static_cast<int>(cloud.height);
-
-      const auto our_result = segment_cloud(cloud, preset_by_name(preset_name, estimate_intrinsics(cloud)), ours);
-      const auto our_score = evaluate_segmentation(truth, our_result.point_labels, width, height);
-      print_row(name, "ours", our_score, our_result.total_seconds());
-      ours_total.add(our_score, our_result.total_seconds());
-
-      pcl::PointCloud<pcl::PointXYZ> xyz;
-      pcl::copyPointCloud(cloud, xyz);
-      const auto pcl_result = pcl_organized_segmentation(xyz, pcl_params);
-      const auto pcl_score = evaluate_segmentation(truth, pcl_result.labels, width, height);
-      print_row(name, "pcl", pcl_score, pcl_result.total_seconds());
-      pcl_total.add(pcl_score, pcl_result.total_seconds());
-    }
-    print_mean("ours", ours_total);
-    print_mean("pcl", pcl_total);
-  } catch (const Error& e) {
-    std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
   }
+  pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
+  PclSegmentationParams pcl_params;
+  pcl::console::parse_argument(argc, argv, "-pcl_min_inliers", pcl_params.min_plane_inliers);
+  pcl::console::parse_argument(argc, argv, "-pcl_distance", pcl_params.cluster_distance_m);
+  int min_cluster = static_cast<int>(pcl_params.min_cluster_points);
+  pcl::console::parse_argument(argc, argv, "-pcl_min_cluster", min_cluster);
+  pcl_params.min_cluster_points = static_cast<std::size_t>(std::max(1, min_cluster));
+  std::string preset_name = "kinect_v1";
+  pcl::console::parse_argument(argc, argv, "-preset", preset_name);
+  SegmentationParams ours = segmentation_defaults(preset_by_name(preset_name));
+  pcl::console::parse_argument(argc, argv, "-contour", ours.contour_improvement_below);
+  int min_segment = static_cast<int>(ours.min_segment_columns);
+  pcl::console::parse_argument(argc, argv, "-min_segment", min_segment);
+  ours.min_segment_columns = static_cast<std::size_t>(std::max(1, min_segment));
+  ours.remove_dominant_plane = !pcl::console::find_switch(argc, argv, "-no_plane");
+  pcl::console::parse_argument(argc, argv, "-plane_distance", ours.plane_distance_m);
+  ours.validate();
+  pcl_params.validate();
+  const std::vector<int> files = pcl::console::parse_file_extension_argument(argc, argv, ".pcd");
+  if (files.empty()) throw InvalidParameter("no labelled .pcd file given (see -h)");
+
+  std::printf("ours: %s dominant-plane removal; PCL: dominant plane left out\n",
+              ours.remove_dominant_plane ? "with" : "without");
+  Totals ours_total, pcl_total;
+  try {
+    for (int index : files) {
+      throw_if_interrupted();
+      evaluate_cloud(argv[index], preset_name, ours, pcl_params, ours_total, pcl_total);
+    }
+  } catch (const Interrupted&) {
+    std::printf("interrupted after %zu of %zu clouds; means so far:\n", ours_total.clouds, files.size());
+    print_mean("ours", ours_total);
+    print_mean("pcl", pcl_total);
+    throw;
+  }
+  print_mean("ours", ours_total);
+  print_mean("pcl", pcl_total);
   return 0;
 }
+
+}  // namespace
+
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }

@@ -104,7 +104,7 @@ Source build_from_frames(const ToolOptions& options, bool use_sample) {
   if (use_sample) {
     const sample::SampleFrame scene = sample::generate_scene();
     frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
-                      scene.intrinsics, "the built-in sample's camera"});
+                      scene.intrinsics, "the built-in sample's camera", std::nullopt});
     source.description = "built-in sample frame";
   } else {
     frames = read_tool_frames(options);
@@ -158,7 +158,9 @@ int run(int argc, char** argv) {
   auto start = std::chrono::steady_clock::now();
   std::vector<Source> grids;
   for (const std::string& path : load_paths) {
-    LoadedMap loaded = load_map(path);
+    throw_if_interrupted();
+    const InputScope scope(path);
+    LoadedMap loaded = load_map(path, options.grid.memory_cap_bytes);
     Source source;
     source.grid.emplace(std::move(loaded.grid));
     source.model = loaded.model;
@@ -185,6 +187,7 @@ int run(int argc, char** argv) {
     report.left_unknown += r.left_unknown;
     report.seconds += r.seconds;
   }
+  throw_if_interrupted();  // before the output is written: an interrupted run leaves nothing behind
   start = std::chrono::steady_clock::now();
   write_octree(*tree, output);
   const double write_seconds = seconds_since(start);

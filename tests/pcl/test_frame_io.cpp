@@ -6,6 +6,7 @@
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -191,6 +192,48 @@ TEST_F(FrameIoFiles, AllZeroDepthImageLoadsAsAFrameWithNoValidPoint) {
   const LoadedFrame f = load_frame(write("zeros.pgm", pgm), k, DepthEncoding::millimetres);
   EXPECT_EQ(f.cloud.size(), 12u);
   EXPECT_EQ(stats_of(f.cloud).valid_fraction, 0.0);
+}
+
+// One PNG chunk: length, type, data, CRC (which libpng checks).
+std::string png_chunk(const std::string& type, const std::string& data) {
+  std::string out;
+  auto put32 = [&](std::uint32_t v) {
+    for (int shift = 24; shift >= 0; shift -= 8) out += static_cast<char>((v >> shift) & 0xff);
+  };
+  put32(static_cast<std::uint32_t>(data.size()));
+  const std::string body = type + data;
+  out += body;
+  put32(static_cast<std::uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(body.data()), static_cast<uInt>(body.size()))));
+  return out;
+}
+
+// A PNG claiming width x height 16-bit grey pixels, with a token of image data.
+std::string png_header(std::uint32_t width, std::uint32_t height) {
+  std::string ihdr;
+  for (std::uint32_t v : {width, height})
+    for (int shift = 24; shift >= 0; shift -= 8) ihdr += static_cast<char>((v >> shift) & 0xff);
+  ihdr += std::string("\x10\x00\x00\x00\x00", 5);  // 16 bit, grey, deflate, filter 0, no interlace
+  return std::string("\x89PNG\r\n\x1a\n", 8) + png_chunk("IHDR", ihdr) + png_chunk("IDAT", "x") + png_chunk("IEND", "");
+}
+
+// 23 bytes of PGM or 477 of PNG claiming 100000 x 100000 pixels took 14 GB before anything was refused.
+TEST_F(FrameIoFiles, ImageDimensionsAreCheckedBeforeAnyPixelBuffer) {
+  auto message_of = [&](const std::string& name, const std::string& bytes) -> std::string {
+    try {
+      read_depth_image16(write(name, bytes));
+    } catch (const FormatError& e) {
+      return e.what();
+    }
+    return "no FormatError";
+  };
+  const std::string pgm_bomb = "P5 100000 100000 65535\n";
+  EXPECT_NE(message_of("bomb.pgm", pgm_bomb).find("100000 x 100000 exceeds the cap"), std::string::npos);
+  const std::string pgm_short = "P5 4000 4000 65535\n" + std::string(100, '\0');
+  EXPECT_NE(message_of("short.pgm", pgm_short).find("more than the file can hold"), std::string::npos);
+  EXPECT_NE(message_of("bomb.png", png_header(100000, 100000)).find("exceeds the cap"), std::string::npos);
+  EXPECT_NE(message_of("short.png", png_header(8000, 8000)).find("more than the file can hold"), std::string::npos);
+  // Small enough and consistent: the truncated data is libpng's to refuse.
+  EXPECT_NE(message_of("cut.png", png_header(4, 4)).find("corrupt or truncated"), std::string::npos);
 }
 
 TEST_F(FrameIoFiles, FolderWithoutFramesIsInvalidInput) {

@@ -4,9 +4,11 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -96,6 +98,67 @@ TEST_F(OccImproveMapTool, BadInputFailsCleanlyWithoutOutput) {
   // An output folder that cannot be created.
   const ToolRun r = run_tool("-sample -o /proc/occ_improve_out");
   EXPECT_EQ(r.exit_code, 1) << r.output;
+}
+
+std::string contents(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A small organized frame: a wall 2 m in front of the sensor.
+void write_wall_pcd(const fs::path& path) {
+  pcl::PointCloud<pcl::PointXYZ> cloud(64, 48);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u) cloud.at(u, v) = pcl::PointXYZ((u - 32) * 0.01f, (v - 24) * 0.01f, 2.0f);
+  ASSERT_EQ(pcl::io::savePCDFileBinary(path.string(), cloud), 0);
+}
+
+// The data loss: `-o` naming a dataset folder erased its frames, poses and intrinsics.
+TEST_F(OccImproveMapTool, DatasetFolderAsOutputIsRefusedAndKept) {
+  const fs::path ds = dir_ / "ds";
+  fs::create_directories(ds / "seq-01");
+  std::ofstream(ds / "camera-intrinsics.txt") << "585 0 320\n0 585 240\n0 0 1\n";
+  std::ofstream(ds / "seq-01" / "frame-000000.pose.txt") << "1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n";
+  const ToolRun r = run_tool("-sample -o " + ds.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("-overwrite"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << "one line: " << r.output;
+  EXPECT_EQ(contents(ds / "camera-intrinsics.txt"), "585 0 320\n0 585 240\n0 0 1\n");
+  EXPECT_TRUE(fs::is_regular_file(ds / "seq-01" / "frame-000000.pose.txt"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(dir_), fs::directory_iterator()), 1) << "no staging folder left";
+  // With -overwrite the outputs join the dataset's files; nothing of the dataset is removed.
+  const ToolRun forced = run_tool("-sample -overwrite -o " + ds.string());
+  ASSERT_EQ(forced.exit_code, 0) << forced.output;
+  EXPECT_TRUE(fs::is_regular_file(ds / "improvement.png"));
+  EXPECT_EQ(contents(ds / "camera-intrinsics.txt"), "585 0 320\n0 585 240\n0 0 1\n");
+  EXPECT_TRUE(fs::is_regular_file(ds / "seq-01" / "frame-000000.pose.txt"));
+}
+
+// `dot/office1.pcd -o dot` erased its own input.
+TEST_F(OccImproveMapTool, InputsFolderAsOutputIsRefusedAndTheInputKept) {
+  const fs::path dot = dir_ / "dot", input = dot / "office1.pcd";
+  fs::create_directories(dot);
+  write_wall_pcd(input);
+  const std::string before = contents(input);
+  const ToolRun r = run_tool(input.string() + " -o " + dot.string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("-overwrite"), std::string::npos) << r.output;
+  EXPECT_EQ(contents(input), before);
+  EXPECT_EQ(std::distance(fs::directory_iterator(dot), fs::directory_iterator()), 1);
+}
+
+TEST_F(OccImproveMapTool, RerunIntoItsOwnOutputReplacesIt) {
+  const fs::path out = dir_ / "out", input = dir_ / "wall.pcd";
+  write_wall_pcd(input);
+  ASSERT_EQ(run_tool(input.string() + " -o " + out.string()).exit_code, 0);
+  const ToolRun again = run_tool(input.string() + " -o " + out.string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_TRUE(fs::is_regular_file(out / ".occ_improve_output"));
+  EXPECT_EQ(contents(out / ".occ_improve_output").rfind("occ_improve_map\n", 0), 0u);
+  // A file of the user's own in it makes it a folder the tool did not write.
+  std::ofstream(out / "notes.txt") << "mine";
+  EXPECT_EQ(run_tool(input.string() + " -o " + out.string()).exit_code, 1);
+  EXPECT_EQ(contents(out / "notes.txt"), "mine");
 }
 
 }  // namespace

@@ -206,5 +206,16 @@ TEST(ToolFrames, IntrinsicsAreNeverAssumed) {
   EXPECT_FALSE(read_tool_frames(parse({"-preset", "kinect_v1_paper", capture})).front().camera);
 }
 
+// -depth_bins 100000000 took 3.1 GB before the cap error: now refused while parsing, before any grid exists.
+TEST(ToolOptions, AGridAboveTheMemoryCapIsRefusedWhileParsing) {
+  try {
+    parse({"-depth_bins", "100000000"});
+    FAIL() << "640 x 480 x 1e8 bins must exceed the cap";
+  } catch (const ResourceLimit& e) {
+    EXPECT_NE(std::string(e.what()).find("-depth_bins"), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(parse({"-depth_bins", "4096"}));
+}
+
 }  // namespace
 }  // namespace occ_improve

@@ -1,10 +1,15 @@
 #pragma once
-// Writing a file so that a crash or failure never leaves a half-written file under its real name: the
-// content goes to a temporary beside the target (same folder, hence same file system) and is renamed
-// over the target only once complete (rename is atomic on POSIX file systems).
+// Writing files and output folders so that a crash or failure never leaves a half-written file under its
+// real name, and so that nothing a user owns is overwritten or deleted.
+//  - A file's content goes to a temporary beside the target (same folder, hence same file system) and is
+//    renamed over the target only once complete (rename is atomic on POSIX file systems).
+//  - A tool's output folder is filled in a staging folder beside it and moved into place at the end; a
+//    folder that already holds files the tool did not write is refused unless the user says -overwrite.
+#include <filesystem>
 #include <functional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace occ_improve {
 
@@ -14,5 +19,52 @@ namespace occ_improve {
 /// an existing file at `path` is left as it was.
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write);
+
+/// Removes the entries of `folder` named "<prefix><pid>..." that a writer killed mid-write left behind:
+/// those whose PID is not running, or is running a process that started after the entry was last
+/// modified (the PID was reused). A live writer's entries are kept. Called before each write to the same
+/// place (write_file_atomically: "<name>.partial-", OutputFolder: ".<name>.tmp-").
+void remove_stale_leftovers(const std::string& folder, const std::string& prefix);
+
+/// The file by which an output folder says which tool wrote it: the tool's name on the first line, then
+/// one line per file the tool wrote there.
+inline constexpr const char* kOutputMarkerName = ".occ_improve_output";
+
+/// A tool's output folder. Files are written into a staging folder beside the target (file()), and
+/// commit() moves them into place:
+///  - a target that does not exist, is empty, or holds only what an earlier run of the same tool wrote
+///    there (by its marker) is replaced as a whole (atomic rename) and gets a new marker;
+///  - any other non-empty folder is refused (IoError naming -overwrite) unless `overwrite` is set; then
+///    the staged files are renamed into it one by one, replacing only files of the same names, and no
+///    marker is written (the folder still is not the tool's own).
+/// The staging folder is removed on destruction unless committed. commit() may be called again after
+/// more files are written (a tool that publishes intermediate results); each call replaces the last.
+class OutputFolder {
+public:
+  /// Throws IoError when the parent folder does not exist, `target` is not a folder, the staging folder
+  /// cannot be created, or the folder is not the tool's own and `overwrite` is false.
+  OutputFolder(const std::string& target, const std::string& tool, bool overwrite);
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder();
+
+  /// The staged path of output file `name` (a plain file name); commit() moves it into the target.
+  std::string file(const std::string& name);
+  /// Moves the staged files into the target (see the class comment). Throws IoError on failure, leaving
+  /// the target as it was.
+  void commit();
+  /// The target as the user named it.
+  const std::string& path() const { return shown_; }
+
+private:
+  bool target_is_own() const;
+  void replace_whole();
+  void move_files_in();
+
+  std::filesystem::path target_, staging_;
+  std::string shown_, tool_;
+  bool overwrite_;
+  std::vector<std::string> files_;
+};
 
 }  // namespace occ_improve

@@ -34,6 +34,14 @@ struct GridOptions {
   static GridOptions octomap_clamping();
 };
 
+/// The most memory a grid of geometry `g` may need: every voxel stored as a float, plus the depth axis's
+/// tables (two doubles per bin). Computed from the parameters, before anything is allocated.
+double grid_worst_case_bytes(const GeometryParams& g);
+
+/// Throws ResourceLimit naming the bins and the cap when grid_worst_case_bytes(g) > memory_cap_bytes.
+/// Called before a geometry is built, since building it allocates the depth axis.
+void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_bytes);
+
 /// One ray's voxels: a uniform run, a dense window, an untouched tail.
 struct ColumnData {
   std::int32_t uniform_end = 0;  ///< bins [0, uniform_end) hold uniform_value

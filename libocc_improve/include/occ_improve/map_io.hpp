@@ -31,7 +31,10 @@ struct LoadedMap {
 };
 
 /// Reads a map written by save_map. Throws IoError (cannot open/read) or FormatError (not a map,
-/// truncated, corrupt, other version, other byte order, inconsistent contents).
-LoadedMap load_map(const std::string& path);
+/// truncated, corrupt, other version, other byte order, inconsistent contents), ResourceLimit when the
+/// file or the grid its geometry describes may exceed `memory_cap_bytes` (checked before allocating).
+/// The loaded grid gets `memory_cap_bytes` as its cap: the cap stored in the file is not trusted, since
+/// a forged file (the checksum is easy to recompute) would raise its own.
+LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes = GridOptions{}.memory_cap_bytes);
 
 }  // namespace occ_improve

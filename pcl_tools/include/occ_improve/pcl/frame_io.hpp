@@ -31,6 +31,11 @@ struct DepthImage16 {
   int width = 0, height = 0;
   std::vector<std::uint16_t> values;
 };
+/// The largest depth image read: 2^26 pixels (128 MiB of 16-bit values; a 4K depth map is 8.3 Mpx).
+inline constexpr std::uint64_t kMaxDepthImagePixels = std::uint64_t{1} << 26;
+
+/// Reads a 16-bit PNG or PGM. Its size is checked against kMaxDepthImagePixels and against what the file
+/// can hold before any pixel buffer is allocated (FormatError naming the file and its width x height).
 DepthImage16 read_depth_image16(const std::string& path);
 
 /// The encoding a 16-bit depth image most likely uses, for when the user did not say:

@@ -2,11 +2,13 @@
 // The command-line flags every occ_improve tool shares (sensor preset and its overrides, update mode,
 // camera intrinsics, depth encoding, input files), parsed once in the style of PCL's tools
 // (pcl::console::parse_argument / find_switch). Every bad flag throws InvalidParameter naming the flag.
+#include "occ_improve/atomic_file.hpp"
 #include "occ_improve/grid.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
 
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -61,7 +63,9 @@ struct ToolFrame {
 /// a depth image is back-projected through -intrinsics/-intrinsics_file or its dataset's intrinsics
 /// file, and refused without either; a PCD's camera, when the preset needs one and none was given, is
 /// fitted to its organized points (estimate_intrinsics; refused when unorganized or a poor fit, naming
-/// -intrinsics). Frames seen through different cameras are refused: one viewpoint, one camera.
+/// -intrinsics). A frame without a valid point is refused (require_valid_points), frames seen through
+/// different cameras too: one viewpoint, one camera. Checks for a stop signal between frames and names
+/// the input being read for run_tool's error line (InputScope).
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
 /// One frame by the same rules.
 ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source);
@@ -72,9 +76,43 @@ std::string describe_camera(const std::vector<ToolFrame>& frames);
 /// True when -h or --help is among the arguments.
 bool help_requested(int argc, const char* const* argv);
 
-/// The shared main() of the command-line tools: prints usage on -h/--help (exit 0), otherwise runs
-/// `run` and turns any exception into a one-line "error: ..." on stderr and exit code 1.
+/// The shared main() of the command-line tools: prints usage on -h/--help (exit 0), otherwise installs
+/// the stop-signal handlers and runs `run`. Any exception, std::bad_alloc and non-standard ones included,
+/// becomes ONE line "error: ..." on stderr naming the input being worked on (InputScope) and exit code 1;
+/// Interrupted becomes "interrupted by SIG..." and exit code 128 + the signal number.
 int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv));
+
+/// Names the input a tool is working on while it lives, so that run_tool's error line names it even for
+/// a failure whose message does not (std::bad_alloc). Nested scopes name the innermost input.
+class InputScope {
+public:
+  explicit InputScope(const std::string& input);
+  InputScope(const InputScope&) = delete;
+  InputScope& operator=(const InputScope&) = delete;
+  ~InputScope();
+
+private:
+  std::string previous_;
+  int uncaught_;
+};
+
+/// A tool stopped by SIGINT or SIGTERM. Not an occ_improve::Error: nothing is wrong with the input.
+class Interrupted : public std::runtime_error {
+public:
+  explicit Interrupted(int signal);
+  int signal() const { return signal_; }
+
+private:
+  int signal_;
+};
+
+/// The first SIGINT/SIGTERM received since run_tool installed its handlers, or 0. The handlers only
+/// record the signal (so that the tool can stop between steps, remove its staging files and print what
+/// it did); they reset themselves, so a second signal ends the process at once.
+int stop_signal_received();
+
+/// Throws Interrupted when a stop signal was received; tools call it between steps (frames, files).
+void throw_if_interrupted();
 
 /// Parses the common flags. Throws InvalidParameter naming the flag on any bad value or unknown flag,
 /// IoError/FormatError for an unreadable -intrinsics_file.
@@ -82,6 +120,15 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
 
 /// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
 SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
+
+/// The output folder named by -o (else `fallback`) for `tool`, refused when it already holds files the
+/// tool did not write unless -overwrite is among the arguments (see OutputFolder). The tool lists "-o" in
+/// its value flags and "-overwrite" in its switches.
+OutputFolder open_output_folder(int argc, const char* const* argv, const std::string& tool,
+                                const std::string& fallback);
+
+/// Usage text of -o and -overwrite, for a tool's -h.
+std::string usage_output_folder(const std::string& fallback);
 
 /// Usage text of the common flags, for a tool's -h.
 std::string usage_common();

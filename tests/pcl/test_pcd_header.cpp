@@ -1,0 +1,144 @@
+// validate_pcd_file (pcd_header.hpp): the header values that crash, spin or bloat PCL 1.13's reader are
+// refused with a FormatError naming the file and the field, and PCL's own files still read.
+#include "occ_improve/pcl/pcd_header.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "support/temp_folder.hpp"
+
+#include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <string>
+
+namespace occ_improve {
+namespace {
+
+// A header with the given lines replaced; fields x y z, 2 x 1 points.
+std::string header(const std::string& width = "2", const std::string& height = "1", const std::string& points = "2",
+                   const std::string& size = "4 4 4", const std::string& count = "1 1 1",
+                   const std::string& data = "ascii") {
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE " + size + "\nTYPE F F F\nCOUNT " + count + "\nWIDTH " + width +
+         "\nHEIGHT " + height + "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + points + "\nDATA " + data + "\n";
+}
+
+class PcdHeaderTest : public test::TempFolderTest {
+protected:
+  std::string write(const std::string& bytes) {
+    const std::string path = file("cloud.pcd");
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path;
+  }
+  // The FormatError's message for `bytes` ("" when none was thrown).
+  std::string refusal(const std::string& bytes) {
+    try {
+      validate_pcd_file(write(bytes));
+    } catch (const FormatError& e) {
+      return e.what();
+    }
+    return "";
+  }
+  void expect_refused_naming(const std::string& bytes, const std::string& field) {
+    const std::string message = refusal(bytes);
+    EXPECT_NE(message.find(field), std::string::npos) << "'" << message << "' should name " << field;
+    EXPECT_NE(message.find("cloud.pcd"), std::string::npos) << message;
+  }
+};
+
+TEST_F(PcdHeaderTest, PclWrittenFilesOfEveryEncodingPass) {
+  pcl::PointCloud<pcl::PointXYZRGBL> cloud(4, 3);
+  for (std::size_t i = 0; i < cloud.size(); ++i) cloud[i].x = cloud[i].y = cloud[i].z = static_cast<float>(i);
+  pcl::PCDWriter writer;
+  for (int mode = 0; mode < 3; ++mode) {
+    const std::string path = file("cloud" + std::to_string(mode) + ".pcd");
+    if (mode == 0) writer.writeASCII(path, cloud);
+    if (mode == 1) writer.writeBinary(path, cloud);
+    if (mode == 2) writer.writeBinaryCompressed(path, cloud);
+    const PcdHeader h = validate_pcd_file(path);
+    EXPECT_EQ(h.points, 12u);
+    EXPECT_EQ(h.width, 4u);
+    EXPECT_EQ(h.height, 3u);
+    pcl::PCLPointCloud2 blob;
+    read_pcd_file(path, blob);
+    EXPECT_EQ(blob.width * blob.height, 12u) << "mode " << mode;
+  }
+}
+
+TEST_F(PcdHeaderTest, WidthTimesHeightMustEqualPointsWithoutWrapping) {
+  // 65536 x 65536 is 0 in 32 bits: it "equalled" POINTS 0 and crashed fromPCLPointCloud2.
+  expect_refused_naming(header("65536", "65536", "0"), "WIDTH x HEIGHT");
+  expect_refused_naming(header("3", "1", "2") + "1 2 3\n4 5 6\n", "WIDTH x HEIGHT");
+  expect_refused_naming(header("-1", "1", "2"), "WIDTH");
+  expect_refused_naming(header("4294967296", "1", "2"), "WIDTH");
+}
+
+TEST_F(PcdHeaderTest, CountAndSizeOfMinusOneOrHugeAreRefused) {
+  for (const std::string count : {"-1 1 1", "4294967295 1 1", "0 1 1", "1 1"})
+    expect_refused_naming(header("2", "1", "2", "4 4 4", count), "COUNT");
+  for (const std::string size : {"-1 4 4", "4294967295 4 4", "3 4 4", "2 4 4"})
+    expect_refused_naming(header("2", "1", "2", size), size == "2 4 4" ? "TYPE F" : "SIZE");
+}
+
+TEST_F(PcdHeaderTest, MalformedLinesAreRefused) {
+  expect_refused_naming("", "empty");
+  expect_refused_naming(std::string("\x89PNG\r\n\x1a\n\0\0", 10), "not a PCD file");
+  expect_refused_naming(header(), "DATA ascii declares");  // no data: fewer values than declared
+  expect_refused_naming(header("2", "1", "2", "4 4 4", "1 1 1", "lzma"), "DATA");
+  std::string twice = header();
+  twice.insert(twice.find("WIDTH"), "WIDTH 2\n");
+  expect_refused_naming(twice, "twice");
+  std::string unknown = header();
+  unknown.insert(unknown.find("WIDTH"), "COLOUR 3\n");
+  expect_refused_naming(unknown, "unknown header line");
+  std::string no_height = header();
+  no_height.erase(no_height.find("HEIGHT"), 9);
+  expect_refused_naming(no_height, "no HEIGHT");
+}
+
+// Found by the fuzzer: PCL goes on reading header lines after DATA, so a second header (here claiming a
+// 4 GiB binary_compressed body) replaced the checked one and PCL allocated gigabytes.
+TEST_F(PcdHeaderTest, AHeaderAfterTheDataLineIsRefused) {
+  const std::string second = header("2", "1", "2", "4 4 4", "1 1 1", "binary_compressed");
+  expect_refused_naming(header() + "\n" + second, "follows the DATA line");
+  expect_refused_naming(header() + "# a comment\n" + second, "follows the DATA line");
+  EXPECT_EQ(refusal(header() + "1 2 3\n4 5 6\n"), "") << "numbers after DATA are data";
+}
+
+TEST_F(PcdHeaderTest, DeclaredDataMustFitTheFile) {
+  expect_refused_naming(header("640", "480", "307200", "4 4 4", "1 1 1", "binary") + std::string(100, '\0'),
+                        "DATA binary declares");
+  // 10^8 points in a file of a few bytes.
+  expect_refused_naming(header("100000000", "1", "100000000") + "1 2 3\n", "DATA ascii declares");
+  try {
+    validate_pcd_file(write(header("4294967295", "1", "4294967295", "8 8 8", "1 1 1", "binary")));
+    FAIL() << "2^32 points of 24 bytes must exceed the cap";
+  } catch (const ResourceLimit& e) {
+    EXPECT_NE(std::string(e.what()).find("POINTS"), std::string::npos) << e.what();
+  }
+}
+
+// binary_compressed: [compressed size][uncompressed size][LZF data].
+std::string compressed_body(std::uint32_t compressed, std::uint32_t uncompressed, const std::string& data) {
+  std::string body(8, '\0');
+  std::memcpy(&body[0], &compressed, 4);
+  std::memcpy(&body[4], &uncompressed, 4);
+  return body + data;
+}
+
+TEST_F(PcdHeaderTest, CompressedSizesMustAgreeWithTheHeaderAndTheFile) {
+  const std::string h = header("2", "1", "2", "4 4 4", "1 1 1", "binary_compressed");
+  expect_refused_naming(h + "\x01", "no size fields");
+  expect_refused_naming(h + compressed_body(1000, 24, "xx"), "compressed size 1000");
+  // 0xFFFFFFFF made PCL allocate 8.4 GB.
+  expect_refused_naming(h + compressed_body(2, 0xFFFFFFFFu, "xx"), "uncompressed size 4294967295");
+  // The right sizes, but data that does not expand to 24 bytes.
+  expect_refused_naming(h + compressed_body(2, 24, "\x01x"), "does not expand");
+  const std::string bomb = header("65536", "2048", "134217728", "4 4 4", "1 1 1", "binary_compressed");
+  expect_refused_naming(bomb + compressed_body(4, 134217728u * 12u, "xxxx"), "times the compressed size");
+}
+
+}  // namespace
+}  // namespace occ_improve

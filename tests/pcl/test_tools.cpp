@@ -1,0 +1,146 @@
+// Every command-line tool, run as a user runs it: the same outcome for the same bad input (exit code 1
+// and one error line naming the file), no crash on malformed files, and a clean stop on SIGINT/SIGTERM.
+#include "support/temp_folder.hpp"
+
+#include <gtest/gtest.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace occ_improve {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ToolRun {
+  int exit_code;
+  std::string out, err;
+};
+
+std::string contents(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+class Tools : public test::TempFolderTest {
+protected:
+  ToolRun run(const std::string& executable, const std::string& arguments) {
+    const std::string command = "cd " + folder_.string() + " && " + executable + " " + arguments + " > stdout.log 2> stderr.log";
+    const int status = std::system(command.c_str());
+    ToolRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, contents(folder_ / "stdout.log"),
+              contents(folder_ / "stderr.log")};
+    fs::remove(folder_ / "stdout.log");
+    fs::remove(folder_ / "stderr.log");
+    return r;
+  }
+  // An organized 64 x 48 labelled cloud whose every point is `value` (NaN, 0, or a wall at 2 m when 0 < value).
+  std::string write_cloud(const std::string& name, float value) {
+    pcl::PointCloud<pcl::PointXYZRGBL> cloud(64, 48);
+    for (int v = 0; v < 48; ++v)
+      for (int u = 0; u < 64; ++u) {
+        auto& p = cloud.at(u, v);
+        const bool wall = value > 0;
+        p.x = wall ? (u - 32) * 0.01f : value;
+        p.y = wall ? (v - 24) * 0.01f : value;
+        p.z = value;
+        p.label = 1;
+      }
+    const std::string path = file(name);
+    EXPECT_EQ(pcl::io::savePCDFileBinary(path, cloud), 0);
+    return path;
+  }
+  // Exactly one "error: " line, naming `name`, as the last line on stderr; the only line at all for the
+  // batch tools (occ_improve_live also reports rejected frames and progress there).
+  static void expect_one_error_line_naming(const ToolRun& r, const std::string& name, const std::string& what,
+                                           bool only_line) {
+    EXPECT_EQ(r.exit_code, 1) << what << ": " << r.out << r.err;
+    const std::size_t last_line = r.err.rfind('\n', r.err.size() >= 2 ? r.err.size() - 2 : 0);
+    const std::string error = r.err.substr(last_line == std::string::npos ? 0 : last_line + 1);
+    EXPECT_EQ(error.rfind("error: ", 0), 0u) << what << ": " << r.err;
+    EXPECT_NE(error.find(name), std::string::npos) << what << ": " << r.err;
+    EXPECT_EQ(std::count(error.begin(), error.end(), '\n'), 1) << what << ": " << r.err;
+    if (only_line) {
+      EXPECT_EQ(error, r.err) << what;
+    }
+  }
+};
+
+// How each tool is given one input frame, writing its outputs (if any) into "out".
+std::vector<std::pair<std::string, std::string>> tools_on(const std::string& input) {
+  return {{OCC_IMPROVE_MAP_EXECUTABLE, input + " -o out"},
+          {OCC_SEGMENT_EXECUTABLE, input + " -o out"},
+          {OCC_TO_OCTOMAP_EXECUTABLE, input + " -o out.bt"},
+          {OCC_IMPROVE_LIVE_EXECUTABLE, input + " -o out"},
+          {OCC_SEGMENT_EVAL_EXECUTABLE, input}};
+}
+
+// occ_improve_map refused all-NaN input while occ_segment and occ_improve_live wrote maps of "no data".
+TEST_F(Tools, EveryToolRefusesAFrameWithoutAValidPoint) {
+  for (const auto& [name, value] : {std::pair<std::string, float>{"nan.pcd", NAN}, {"zero.pcd", 0.0f}}) {
+    const std::string path = write_cloud(name, value);
+    for (const auto& [tool, args] : tools_on(path)) {
+      const ToolRun r = run(tool, args);
+      expect_one_error_line_naming(r, name, tool + " on " + name, tool != OCC_IMPROVE_LIVE_EXECUTABLE);
+      if (tool != OCC_IMPROVE_LIVE_EXECUTABLE) {
+        EXPECT_NE(r.err.find("no valid point"), std::string::npos) << r.err;
+      }
+      EXPECT_FALSE(fs::exists(folder_ / "out")) << tool;
+      EXPECT_FALSE(fs::exists(folder_ / "out.bt")) << tool;
+    }
+  }
+  // The same frame with valid points passes every tool but the evaluation's ground-truth check.
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  EXPECT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out").exit_code, 0);
+}
+
+// occ_segment_eval crashed (SIGSEGV) on an empty or random .pcd and aborted on a header claiming 2^31-1 points.
+TEST_F(Tools, MalformedPcdFilesGiveOneErrorLineInEveryTool) {
+  std::ofstream(file("empty.pcd")).close();
+  std::string random_bytes(4096, '\0');
+  for (std::size_t i = 0; i < random_bytes.size(); ++i) random_bytes[i] = static_cast<char>((i * 2654435761u) >> 13);
+  std::ofstream(file("random.pcd"), std::ios::binary) << random_bytes;
+  std::ofstream(file("huge.pcd"), std::ios::binary)
+      << "VERSION 0.7\nFIELDS x y z label\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 2147483647\nHEIGHT 1\n"
+         "POINTS 2147483647\nDATA binary\n"
+      << std::string(64, '\0');
+  for (const std::string name : {"empty.pcd", "random.pcd", "huge.pcd"})
+    for (const auto& [tool, args] : tools_on(file(name)))
+      expect_one_error_line_naming(run(tool, args), name, tool + " on " + name, tool != OCC_IMPROVE_LIVE_EXECUTABLE);
+}
+
+// Ctrl-C on occ_improve_live left an empty staging folder and lost the summary.
+TEST_F(Tools, SigtermStopsCleanlyWithTheSummaryAndAnExitCodeOfTheSignal) {
+  fs::create_directory(folder_ / "frames");
+  for (int i = 0; i < 40; ++i) fs::copy_file(write_cloud("wall.pcd", 2.0f), folder_ / "frames" / ("f" + std::to_string(100 + i) + ".pcd"));
+  // A shell in the background runs the tool and records its exit code once it ends.
+  const std::string command = std::string("cd ") + folder_.string() + " && (" + OCC_IMPROVE_LIVE_EXECUTABLE +
+                              " -pcd_dir frames -fps 4 -o out > stdout.log 2> stderr.log & echo $! > pid; wait $!;"
+                              " echo $? > rc.tmp; mv rc.tmp rc) > /dev/null 2>&1 &";
+  ASSERT_EQ(std::system(command.c_str()), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+  const pid_t pid = static_cast<pid_t>(std::stol(contents(folder_ / "pid")));
+  ASSERT_EQ(::kill(pid, SIGTERM), 0);
+  for (int i = 0; i < 100 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  ASSERT_TRUE(fs::exists(folder_ / "rc")) << "still running 10 s after SIGTERM";
+  EXPECT_EQ(std::stoi(contents(folder_ / "rc")), 128 + SIGTERM);
+  const std::string out = contents(folder_ / "stdout.log") + contents(folder_ / "stderr.log");
+  EXPECT_NE(out.find("Stopped: interrupted"), std::string::npos) << out;
+  EXPECT_NE(out.find("interrupted by SIGTERM"), std::string::npos) << out;
+  EXPECT_NE(out.find("Frames: "), std::string::npos) << "the summary so far: " << out;
+  for (const auto& entry : fs::directory_iterator(folder_))
+    EXPECT_EQ(entry.path().filename().string().find(".out.tmp-"), std::string::npos) << "staging left: " << entry.path();
+  EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / "improvement.png")) << "the map so far is published";
+}
+
+}  // namespace
+}  // namespace occ_improve
