@@ -1,0 +1,57 @@
+#pragma once
+// Which rays return data. Rays on dark or specular surfaces, in a projector's shadow or out of range
+// never return, yet keep the no-data improvement forever and would top every plan. The record counts,
+// per column, the shots that asked for the ray and the shots that got a return; the return model turns
+// that into a return probability that discounts the ray's expected improvement (planner.hpp).
+//
+// Return probability of column j (Beta-Bernoulli, docs/SELECTIVE.md "Return model"):
+//   r_f = (R + 1) / (A + 1)                      the record's return rate (R returns of A asks over all
+//                                                columns; one optimistic pseudo-return, so an empty record
+//                                                gives 1 and nothing is discounted before the first shot)
+//   m_j = (R_n + r_f) / (A_n + 1)                prior mean from the 8 neighbours (R_n of A_n asks), shrunk
+//                                                towards r_f by one pseudo-ask: silent neighbourhoods (a dark
+//                                                poster, a shadow band) lower the prior of rays not yet asked
+//   p_j = (s m_j + R_j) / (s + A_j)              posterior mean with s = prior_strength_shots pseudo-shots
+// so a ray asked twice without a return falls from ~r_f to ~r_f / 2 (s = 2), one that returned stays ~1.
+#include "occ_improve/geometry.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace occ_improve {
+
+struct ReturnRecord {
+  int width = 0, height = 0;
+  std::vector<std::uint32_t> asked;     ///< per column: shots that asked for the ray
+  std::vector<std::uint32_t> returned;  ///< per column: of those, shots that got a return
+  std::uint64_t total_asked = 0, total_returned = 0;
+
+  /// An empty record for a grid of width x height columns (InvalidParameter when not positive).
+  static ReturnRecord for_grid(int width, int height);
+  std::size_t size() const { return asked.size(); }
+  bool empty() const { return total_asked == 0; }
+  /// Throws InvalidInput naming both sizes when the record is not one of a grid_width x grid_height grid.
+  void check_matches(int grid_width, int grid_height) const;
+  /// Throws InvalidInput naming the column when a column has more returns than asks, or when the totals
+  /// differ from the columns' sums (a record read from a file).
+  void check_counts() const;
+};
+
+struct ReturnModelParams {
+  double prior_strength_shots = 2.0;  ///< s: weight of the neighbourhood prior, in shots
+  void validate() const;              ///< s finite and > 0, else InvalidParameter
+};
+
+/// Adds one shot: got_return[i] says whether the ray columns[i] returned. A column may appear more than
+/// once (each is one ask). Everything is checked before anything is counted (nothing half-updated):
+/// InvalidInput when the sizes differ, InvalidParameter naming a column outside the record.
+void record_shot(ReturnRecord& record, const std::vector<ColumnIndex>& columns,
+                 const std::vector<std::uint8_t>& got_return);
+
+/// r_f above.
+double record_return_rate(const ReturnRecord& record);
+
+/// p_j above, for every column (row-major, like the improvement map).
+std::vector<float> return_probability_map(const ReturnRecord& record, const ReturnModelParams& params = {});
+
+}  // namespace occ_improve
