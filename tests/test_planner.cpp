@@ -56,7 +56,7 @@ TEST(Planner, SilentRaysFallBehindWithTheReturnModel) {
     all.push_back(c);
     got.push_back(c % 16 >= 8 ? 1 : 0);
   }
-  record_shot(record, all, got);
+  record.record_shot(all, got);
   PlanRequest r;
   r.budget_rays = 100;
   const Shot s = plan_next_shot(m, record, r);

@@ -17,9 +17,9 @@ TEST(ReturnModel, EmptyRecordDiscountsNothing) {
 TEST(ReturnModel, PosteriorFollowsTheDocumentedFormula) {
   ReturnRecord r = ReturnRecord::for_grid(5, 5);
   const ColumnIndex centre = 12, right = 13, far = 0;
-  record_shot(r, {centre, centre, right}, {0, 0, 1});
-  EXPECT_EQ(r.asked[centre], 2u);
-  EXPECT_EQ(r.returned[right], 1u);
+  r.record_shot({centre, centre, right}, {0, 0, 1});
+  EXPECT_EQ(r.asked()[centre], 2u);
+  EXPECT_EQ(r.returned()[right], 1u);
   const double rate = (1.0 + 1.0) / (3.0 + 1.0);
   EXPECT_DOUBLE_EQ(record_return_rate(r), rate);
   const auto p = return_probability_map(r);  // s = 2
@@ -33,18 +33,19 @@ TEST(ReturnModel, PosteriorFollowsTheDocumentedFormula) {
 
 TEST(ReturnModel, BadShotsChangeNothing) {
   ReturnRecord r = ReturnRecord::for_grid(4, 4);
-  record_shot(r, {1, 2}, {1, 1});
+  r.record_shot({1, 2}, {1, 1});
   const ReturnRecord before = r;
   try {
-    record_shot(r, {3, 16}, {1, 0});
+    r.record_shot({3, 16}, {1, 0});
     FAIL() << "no throw";
   } catch (const InvalidParameter& e) {
     EXPECT_NE(std::string(e.what()).find("shot column = 16"), std::string::npos);
   }
-  EXPECT_THROW(record_shot(r, {3}, {1, 0}), InvalidInput);
-  EXPECT_EQ(r.asked, before.asked);
-  EXPECT_EQ(r.returned, before.returned);
-  EXPECT_EQ(r.total_asked, before.total_asked);
+  EXPECT_THROW(r.record_shot({3}, {1, 0}), InvalidInput);
+  EXPECT_EQ(r.asked(), before.asked());
+  EXPECT_EQ(r.returned(), before.returned());
+  EXPECT_EQ(r.asked_nearby(), before.asked_nearby());
+  EXPECT_EQ(r.total_asked(), before.total_asked());
   EXPECT_THROW(ReturnRecord::for_grid(0, 4), InvalidParameter);
   ReturnModelParams bad;
   bad.prior_strength_shots = 0;
@@ -55,13 +56,26 @@ TEST(ReturnModel, MismatchedAndInconsistentRecordsAreNamed) {
   ReturnRecord r = ReturnRecord::for_grid(4, 4);
   EXPECT_NO_THROW(r.check_matches(4, 4));
   EXPECT_THROW(r.check_matches(4, 5), InvalidInput);
-  r.returned[3] = 1;
+  std::vector<std::uint32_t> asked(16, 0), returned(16, 0);
+  returned[3] = 1;
   try {
-    r.check_counts();
+    ReturnRecord::from_counts(4, 4, asked, returned);
     FAIL() << "no throw";
   } catch (const InvalidInput& e) {
     EXPECT_NE(std::string(e.what()).find("column 3"), std::string::npos);
   }
+  EXPECT_THROW(ReturnRecord::from_counts(4, 4, std::vector<std::uint32_t>(15, 0), returned), InvalidInput);
+}
+
+TEST(ReturnModel, FromCountsEqualsTheShotsThatMadeThem) {
+  ReturnRecord shots = ReturnRecord::for_grid(6, 5);
+  shots.record_shot({0, 7, 7, 29, 14}, {1, 0, 1, 0, 0});
+  shots.record_shot({7, 8, 29}, {0, 1, 0});
+  const ReturnRecord loaded = ReturnRecord::from_counts(6, 5, shots.asked(), shots.returned());
+  EXPECT_EQ(loaded.asked_nearby(), shots.asked_nearby());
+  EXPECT_EQ(loaded.returned_nearby(), shots.returned_nearby());
+  EXPECT_EQ(loaded.total_returned(), shots.total_returned());
+  EXPECT_EQ(return_probability_map(loaded), return_probability_map(shots));
 }
 
 }  // namespace

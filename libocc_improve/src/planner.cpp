@@ -32,21 +32,22 @@ struct Ranked {
   ColumnIndex column;
 };
 
-/// The k eligible columns of largest value (ties by spread rank), best first. A histogram of the top 16
-/// key bits finds a bound below which no winner lies, so only the few candidates above it are sorted.
-std::vector<ColumnIndex> take_best(const std::vector<float>& value, const std::vector<std::uint8_t>& eligible,
-                                   std::size_t k) {
+/// The k columns of largest value (ties by spread rank) among the eligible ones (nullptr: all), best
+/// first. A histogram of the top 16 key bits finds a bound below which no winner lies, so only the few
+/// candidates above it are sorted.
+std::vector<ColumnIndex> take_best(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k) {
+  const std::size_t n = value.size();
   std::vector<std::uint32_t> histogram(1u << 16, 0);
-  for (std::size_t c = 0; c < value.size(); ++c)
-    if (eligible[c]) ++histogram[ordered_bits(value[c]) >> 16];
+  for (std::size_t c = 0; c < n; ++c)
+    if (!eligible || eligible[c]) ++histogram[ordered_bits(value[c]) >> 16];
   std::size_t above = 0;
   std::uint32_t bound = 1u << 16;
   while (bound > 0 && above < k) above += histogram[--bound];
   std::vector<Ranked> candidates;
   candidates.reserve(above);
-  for (std::size_t c = 0; c < value.size(); ++c) {
+  for (std::size_t c = 0; c < n; ++c) {
     const std::uint32_t bits = ordered_bits(value[c]);
-    if (eligible[c] && (bits >> 16) >= bound) {
+    if ((bits >> 16) >= bound && (!eligible || eligible[c])) {
       const auto col = static_cast<ColumnIndex>(c);
       candidates.push_back({(std::uint64_t{bits} << 32) | ~spread_rank(col), col});
     }
@@ -61,23 +62,24 @@ std::vector<ColumnIndex> take_best(const std::vector<float>& value, const std::v
 }
 
 Shot rays_shot(const std::vector<float>& score, const PlanRequest& request) {
-  std::vector<std::uint8_t> eligible =
-      request.candidates.empty() ? std::vector<std::uint8_t>(score.size(), 1) : request.candidates;
-  const auto budget = static_cast<std::size_t>(request.budget_rays);
   const auto negative_budget = static_cast<std::size_t>(std::floor(request.negative_share * request.budget_rays));
+  const std::uint8_t* mask = request.candidates.empty() ? nullptr : request.candidates.data();
   std::vector<ColumnIndex> negative;
+  std::vector<std::uint8_t> rest;  // the mask without the negative rays taken, when there are any
   if (negative_budget > 0) {
     std::vector<float> flipped(score.size());
     std::vector<std::uint8_t> is_negative(score.size());
     for (std::size_t c = 0; c < score.size(); ++c) {
       flipped[c] = -score[c];
-      is_negative[c] = eligible[c] && score[c] < 0;
+      is_negative[c] = (!mask || mask[c]) && score[c] < 0;
     }
-    negative = take_best(flipped, is_negative, negative_budget);
-    for (ColumnIndex c : negative) eligible[c] = 0;
+    negative = take_best(flipped, is_negative.data(), negative_budget);
+    rest = mask ? request.candidates : std::vector<std::uint8_t>(score.size(), 1);
+    for (ColumnIndex c : negative) rest[c] = 0;
+    mask = rest.data();
   }
   Shot shot;
-  shot.columns = take_best(score, eligible, budget - negative.size());
+  shot.columns = take_best(score, mask, static_cast<std::size_t>(request.budget_rays) - negative.size());
   shot.ranked_rays = shot.columns.size();
   for (ColumnIndex c : shot.columns) shot.expected_gain += score[c];
   shot.columns.insert(shot.columns.end(), negative.begin(), negative.end());

@@ -7,65 +7,69 @@
 #include <string>
 
 namespace occ_improve {
-namespace {
-
-/// out[c] = sum of in over the 3 x 3 neighbourhood of c clipped to the grid, minus in[c] itself
-/// (separable: row sums, then column sums of those).
-std::vector<float> neighbour_sums(const std::vector<std::uint32_t>& in, int width, int height) {
-  const auto w = static_cast<std::size_t>(width);
-  std::vector<float> rows(in.size()), out(in.size());
-  for (std::size_t y = 0; y < static_cast<std::size_t>(height); ++y) {
-    const std::uint32_t* r = &in[y * w];
-    for (std::size_t x = 0; x < w; ++x)
-      rows[y * w + x] = static_cast<float>(r[x]) + (x > 0 ? static_cast<float>(r[x - 1]) : 0.0f) +
-                        (x + 1 < w ? static_cast<float>(r[x + 1]) : 0.0f);
-  }
-  for (std::size_t y = 0; y < static_cast<std::size_t>(height); ++y)
-    for (std::size_t x = 0; x < w; ++x) {
-      const std::size_t c = y * w + x;
-      out[c] = rows[c] + (y > 0 ? rows[c - w] : 0.0f) + (y + 1 < static_cast<std::size_t>(height) ? rows[c + w] : 0.0f) -
-               static_cast<float>(in[c]);
-    }
-  return out;
-}
-
-}  // namespace
 
 ReturnRecord ReturnRecord::for_grid(int width, int height) {
   detail::require_parameter(width > 0, "width", width, "> 0");
   detail::require_parameter(height > 0, "height", height, "> 0");
   ReturnRecord r;
-  r.width = width;
-  r.height = height;
-  r.asked.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
-  r.returned = r.asked;
+  r.width_ = width;
+  r.height_ = height;
+  r.asked_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  r.returned_ = r.asked_nearby_ = r.returned_nearby_ = r.asked_;
+  return r;
+}
+
+ReturnRecord ReturnRecord::from_counts(int width, int height, std::vector<std::uint32_t> asked,
+                                       std::vector<std::uint32_t> returned) {
+  ReturnRecord r = for_grid(width, height);
+  if (asked.size() != r.size() || returned.size() != r.size()) {
+    std::ostringstream m;
+    m << "return record holds " << asked.size() << " / " << returned.size() << " counts for " << width << " x "
+      << height << " columns";
+    throw InvalidInput(m.str());
+  }
+  for (std::size_t c = 0; c < r.size(); ++c)
+    if (returned[c] > asked[c]) {
+      std::ostringstream m;
+      m << "return record column " << c << " has " << returned[c] << " returns of " << asked[c] << " asks";
+      throw InvalidInput(m.str());
+    }
+  for (std::size_t c = 0; c < r.size(); ++c) {
+    for (std::uint32_t i = 0; i < asked[c]; ++i) r.count(static_cast<ColumnIndex>(c), i < returned[c]);
+  }
   return r;
 }
 
 void ReturnRecord::check_matches(int grid_width, int grid_height) const {
+  if (width_ == grid_width && height_ == grid_height) return;
   std::ostringstream m;
-  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  if (width != grid_width || height != grid_height)
-    m << "return record of " << width << " x " << height << " columns does not match the grid's " << grid_width
-      << " x " << grid_height;
-  else if (asked.size() != n || returned.size() != n)
-    m << "return record holds " << asked.size() << " / " << returned.size() << " counts for " << n << " columns";
-  if (m.tellp() != 0) throw InvalidInput(m.str());
+  m << "return record of " << width_ << " x " << height_ << " columns does not match the grid's " << grid_width
+    << " x " << grid_height;
+  throw InvalidInput(m.str());
 }
 
-void ReturnRecord::check_counts() const {
-  std::ostringstream m;
-  std::uint64_t a = 0, r = 0;
-  for (std::size_t c = 0; c < asked.size() && m.tellp() == 0; ++c) {
-    if (returned[c] > asked[c])
-      m << "return record column " << c << " has " << returned[c] << " returns of " << asked[c] << " asks";
-    a += asked[c];
-    r += returned[c];
-  }
-  if (m.tellp() == 0 && (a != total_asked || r != total_returned))
-    m << "return record totals " << total_asked << " / " << total_returned << " differ from the columns' sums " << a
-      << " / " << r;
-  if (m.tellp() != 0) throw InvalidInput(m.str());
+void ReturnRecord::count(ColumnIndex column, bool got_return) {
+  ++asked_[column];
+  returned_[column] += got_return ? 1 : 0;
+  const int x = static_cast<int>(column % static_cast<ColumnIndex>(width_));
+  const int y = static_cast<int>(column / static_cast<ColumnIndex>(width_));
+  for (int yy = std::max(0, y - 1); yy <= std::min(height_ - 1, y + 1); ++yy)
+    for (int xx = std::max(0, x - 1); xx <= std::min(width_ - 1, x + 1); ++xx) {
+      if (xx == x && yy == y) continue;
+      const std::size_t n = static_cast<std::size_t>(yy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(xx);
+      ++asked_nearby_[n];
+      returned_nearby_[n] += got_return ? 1 : 0;
+    }
+  ++total_asked_;
+  total_returned_ += got_return ? 1 : 0;
+}
+
+void ReturnRecord::record_shot(const std::vector<ColumnIndex>& columns, const std::vector<std::uint8_t>& got_return) {
+  if (columns.size() != got_return.size())
+    throw InvalidInput("record_shot: " + std::to_string(columns.size()) + " columns but " +
+                       std::to_string(got_return.size()) + " return flags");
+  for (ColumnIndex c : columns) detail::require_parameter(c < size(), "shot column", c, "inside the return record's grid");
+  for (std::size_t i = 0; i < columns.size(); ++i) count(columns[i], got_return[i] != 0);
 }
 
 void ReturnModelParams::validate() const {
@@ -73,37 +77,21 @@ void ReturnModelParams::validate() const {
                             prior_strength_shots, "finite and > 0");
 }
 
-void record_shot(ReturnRecord& record, const std::vector<ColumnIndex>& columns,
-                 const std::vector<std::uint8_t>& got_return) {
-  if (columns.size() != got_return.size())
-    throw InvalidInput("record_shot: " + std::to_string(columns.size()) + " columns but " +
-                       std::to_string(got_return.size()) + " return flags");
-  for (ColumnIndex c : columns)
-    detail::require_parameter(c < record.size(), "shot column", c, "inside the return record's grid");
-  for (std::size_t i = 0; i < columns.size(); ++i) {
-    ++record.asked[columns[i]];
-    if (got_return[i]) ++record.returned[columns[i]];
-    record.total_returned += got_return[i] ? 1 : 0;
-  }
-  record.total_asked += columns.size();
-}
-
 double record_return_rate(const ReturnRecord& record) {
-  return (static_cast<double>(record.total_returned) + 1.0) / (static_cast<double>(record.total_asked) + 1.0);
+  return (static_cast<double>(record.total_returned()) + 1.0) / (static_cast<double>(record.total_asked()) + 1.0);
 }
 
 std::vector<float> return_probability_map(const ReturnRecord& record, const ReturnModelParams& params) {
   params.validate();
-  record.check_matches(record.width, record.height);  // sizes only: the map is computed every round
   const auto rate = static_cast<float>(record_return_rate(record));
-  if (record.empty()) return std::vector<float>(record.size(), rate);
+  std::vector<float> p(record.size(), rate);
+  if (record.empty()) return p;
   const auto s = static_cast<float>(params.prior_strength_shots);
-  const std::vector<float> asked_n = neighbour_sums(record.asked, record.width, record.height);
-  const std::vector<float> returned_n = neighbour_sums(record.returned, record.width, record.height);
-  std::vector<float> p(record.size());
+  const std::uint32_t *asked = record.asked().data(), *returned = record.returned().data();
+  const std::uint32_t *asked_n = record.asked_nearby().data(), *returned_n = record.returned_nearby().data();
   for (std::size_t c = 0; c < p.size(); ++c) {
-    const float prior = (returned_n[c] + rate) / (asked_n[c] + 1.0f);
-    p[c] = (s * prior + static_cast<float>(record.returned[c])) / (s + static_cast<float>(record.asked[c]));
+    const float prior = (static_cast<float>(returned_n[c]) + rate) / (static_cast<float>(asked_n[c]) + 1.0f);
+    p[c] = (s * prior + static_cast<float>(returned[c])) / (s + static_cast<float>(asked[c]));
   }
   return p;
 }

@@ -43,7 +43,7 @@ void BM_SelectRound(benchmark::State& state) {
     for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
     const auto start = std::chrono::steady_clock::now();
     const MapperReport report = mapper.insert(PointSpan::from(points), two_threads);
-    record_shot(returns, shot.columns, got);
+    returns.record_shot(shot.columns, got);
     const auto planned = std::chrono::steady_clock::now();
     shot = plan_next_shot(mapper.improvement(), returns, request);
     plan_ms += ms_since(planned);
@@ -57,6 +57,32 @@ void BM_SelectRound(benchmark::State& state) {
   state.counters["plan_ms"] = plan_ms / n;
 }
 BENCHMARK(BM_SelectRound)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
+
+/// The plan alone, on the map after one frame and a record of a few shots: its share of the round.
+void BM_Plan(benchmark::State& state) {
+  Mapper mapper(kinect_v1());
+  const auto first = sample::generate_scene().points();
+  mapper.insert(PointSpan::from(first));
+  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  PlanRequest request;
+  request.budget_rays = 4096;
+  for (int i = 0; i < 5; ++i) {
+    const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+    returns.record_shot(shot.columns, std::vector<std::uint8_t>(shot.columns.size(), i % 2));
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(plan_next_shot(mapper.improvement(), returns, request));
+}
+BENCHMARK(BM_Plan)->Unit(benchmark::kMillisecond);
+
+void BM_ShotScores(benchmark::State& state) {
+  Mapper mapper(kinect_v1());
+  const auto first = sample::generate_scene().points();
+  mapper.insert(PointSpan::from(first));
+  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  returns.record_shot({1, 2, 3}, {1, 0, 1});
+  for (auto _ : state) benchmark::DoNotOptimize(shot_scores(mapper.improvement(), returns));
+}
+BENCHMARK(BM_ShotScores)->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

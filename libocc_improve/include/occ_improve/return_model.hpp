@@ -20,33 +20,48 @@
 
 namespace occ_improve {
 
-struct ReturnRecord {
-  int width = 0, height = 0;
-  std::vector<std::uint32_t> asked;     ///< per column: shots that asked for the ray
-  std::vector<std::uint32_t> returned;  ///< per column: of those, shots that got a return
-  std::uint64_t total_asked = 0, total_returned = 0;
-
+/// Per column: the shots that asked for the ray and those that got a return, with the sums over each
+/// column's 8 neighbours kept as shots are added (so the probability map is one pass, whatever the record).
+class ReturnRecord {
+public:
+  ReturnRecord() = default;
   /// An empty record for a grid of width x height columns (InvalidParameter when not positive).
   static ReturnRecord for_grid(int width, int height);
-  std::size_t size() const { return asked.size(); }
-  bool empty() const { return total_asked == 0; }
+  /// A record from saved counts (map_io). Throws InvalidInput naming the value when the arrays do not hold
+  /// width x height counts or a column has more returns than asks.
+  static ReturnRecord from_counts(int width, int height, std::vector<std::uint32_t> asked,
+                                  std::vector<std::uint32_t> returned);
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  std::size_t size() const { return asked_.size(); }
+  bool empty() const { return total_asked_ == 0; }
+  const std::vector<std::uint32_t>& asked() const { return asked_; }
+  const std::vector<std::uint32_t>& returned() const { return returned_; }
+  const std::vector<std::uint32_t>& asked_nearby() const { return asked_nearby_; }  ///< over the 8 neighbours
+  const std::vector<std::uint32_t>& returned_nearby() const { return returned_nearby_; }
+  std::uint64_t total_asked() const { return total_asked_; }
+  std::uint64_t total_returned() const { return total_returned_; }
+
   /// Throws InvalidInput naming both sizes when the record is not one of a grid_width x grid_height grid.
   void check_matches(int grid_width, int grid_height) const;
-  /// Throws InvalidInput naming the column when a column has more returns than asks, or when the totals
-  /// differ from the columns' sums (a record read from a file).
-  void check_counts() const;
+
+  /// Adds one shot: got_return[i] says whether the ray columns[i] returned. A column may appear more
+  /// than once (each is one ask). Everything is checked before anything is counted (nothing
+  /// half-updated): InvalidInput when the sizes differ, InvalidParameter naming a column outside the grid.
+  void record_shot(const std::vector<ColumnIndex>& columns, const std::vector<std::uint8_t>& got_return);
+
+private:
+  void count(ColumnIndex column, bool got_return);
+  int width_ = 0, height_ = 0;
+  std::vector<std::uint32_t> asked_, returned_, asked_nearby_, returned_nearby_;
+  std::uint64_t total_asked_ = 0, total_returned_ = 0;
 };
 
 struct ReturnModelParams {
   double prior_strength_shots = 2.0;  ///< s: weight of the neighbourhood prior, in shots
   void validate() const;              ///< s finite and > 0, else InvalidParameter
 };
-
-/// Adds one shot: got_return[i] says whether the ray columns[i] returned. A column may appear more than
-/// once (each is one ask). Everything is checked before anything is counted (nothing half-updated):
-/// InvalidInput when the sizes differ, InvalidParameter naming a column outside the record.
-void record_shot(ReturnRecord& record, const std::vector<ColumnIndex>& columns,
-                 const std::vector<std::uint8_t>& got_return);
 
 /// r_f above.
 double record_return_rate(const ReturnRecord& record);
