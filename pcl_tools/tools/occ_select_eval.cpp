@@ -256,7 +256,7 @@ private:
     if (strategy_ == guided_returns || strategy_ == guided_reacquire) {
       std::vector<std::uint8_t> got(depth.size());
       for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
-      record_shot(returns_, columns, got);
+      returns_.record_shot(columns, got);
     }
     seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     rays_asked_ += columns.size();
