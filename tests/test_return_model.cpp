@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 namespace occ_improve {
 namespace {
 
@@ -23,7 +25,7 @@ TEST(ReturnModel, PosteriorFollowsTheDocumentedFormula) {
   const double rate = (1.0 + 1.0) / (3.0 + 1.0);
   EXPECT_DOUBLE_EQ(record_return_rate(r), rate);
   const auto p = return_probability_map(r);  // s = 2
-  const double prior_centre = (1.0 + rate) / (1.0 + 1.0);  // neighbour `right`: 1 return of 1 ask
+  const double prior_centre = std::min(rate, (1.0 + rate) / (1.0 + 1.0));  // `right`: 1 return of 1 ask -> rate
   EXPECT_NEAR(p[centre], 2.0 * prior_centre / (2.0 + 2.0), 1e-6);
   const double prior_right = (0.0 + rate) / (2.0 + 1.0);  // neighbour `centre`: 0 of 2
   EXPECT_NEAR(p[right], (2.0 * prior_right + 1.0) / (2.0 + 1.0), 1e-6);

@@ -38,8 +38,10 @@ struct Ranked {
 std::vector<ColumnIndex> take_best(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k) {
   const std::size_t n = value.size();
   std::vector<std::uint32_t> histogram(1u << 16, 0);
+  // NaN (a column the sensor cannot observe) is never taken.
+  const auto takes = [&](std::size_t c) { return (!eligible || eligible[c]) && value[c] == value[c]; };
   for (std::size_t c = 0; c < n; ++c)
-    if (!eligible || eligible[c]) ++histogram[ordered_bits(value[c]) >> 16];
+    if (takes(c)) ++histogram[ordered_bits(value[c]) >> 16];
   std::size_t above = 0;
   std::uint32_t bound = 1u << 16;
   while (bound > 0 && above < k) above += histogram[--bound];
@@ -47,7 +49,7 @@ std::vector<ColumnIndex> take_best(const std::vector<float>& value, const std::u
   candidates.reserve(above);
   for (std::size_t c = 0; c < n; ++c) {
     const std::uint32_t bits = ordered_bits(value[c]);
-    if ((bits >> 16) >= bound && (!eligible || eligible[c])) {
+    if ((bits >> 16) >= bound && takes(c)) {
       const auto col = static_cast<ColumnIndex>(c);
       candidates.push_back({(std::uint64_t{bits} << 32) | ~spread_rank(col), col});
     }
@@ -93,8 +95,8 @@ Shot window_shot(const std::vector<float>& score, int width, int height, const P
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x) {
       const std::size_t i = (static_cast<std::size_t>(y) + 1) * w1 + static_cast<std::size_t>(x) + 1;
-      integral[i] = score[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)] +
-                    integral[i - 1] + integral[i - w1] - integral[i - w1 - 1];
+      const float v = score[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
+      integral[i] = (v == v ? v : 0.0) + integral[i - 1] + integral[i - w1] - integral[i - w1 - 1];  // NaN: adds nothing
     }
   const auto sum_at = [&](int x, int y) {
     const auto at = [&](int xx, int yy) { return integral[static_cast<std::size_t>(yy) * w1 + static_cast<std::size_t>(xx)]; };
@@ -121,9 +123,10 @@ Shot decimation_shot(const std::vector<float>& score, int width, int height, con
   const int step = decimation_step(width, height, request.budget_rays);
   std::vector<double> sums(static_cast<std::size_t>(step) * static_cast<std::size_t>(step), 0.0);
   for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      sums[static_cast<std::size_t>((y % step) * step + x % step)] +=
-          score[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
+    for (int x = 0; x < width; ++x) {
+      const float v = score[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
+      sums[static_cast<std::size_t>((y % step) * step + x % step)] += v == v ? v : 0.0;  // NaN: adds nothing
+    }
   // Row-major order of offsets: the first maximum is the lowest (row, column) offset.
   const auto best = static_cast<int>(std::max_element(sums.begin(), sums.end()) - sums.begin());
   Shot shot;

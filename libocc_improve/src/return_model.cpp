@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -90,7 +91,8 @@ std::vector<float> return_probability_map(const ReturnRecord& record, const Retu
   const std::uint32_t *asked = record.asked().data(), *returned = record.returned().data();
   const std::uint32_t *asked_n = record.asked_nearby().data(), *returned_n = record.returned_nearby().data();
   for (std::size_t c = 0; c < p.size(); ++c) {
-    const float prior = (static_cast<float>(returned_n[c]) + rate) / (static_cast<float>(asked_n[c]) + 1.0f);
+    const float nearby = (static_cast<float>(returned_n[c]) + rate) / (static_cast<float>(asked_n[c]) + 1.0f);
+    const float prior = nearby < rate ? nearby : rate;
     p[c] = (s * prior + static_cast<float>(returned[c])) / (s + static_cast<float>(asked[c]));
   }
   return p;

@@ -92,33 +92,28 @@ struct Quality {
   std::size_t good = 0;
 };
 
-/// How the grid's columns meet the scene's pixels: the column holding each pixel's centre ray, the pixel
-/// holding each column's centre ray (-1 where none: a column no pixel sees is not observable), and
-/// z / range along each pixel's ray. With one column per pixel (pixel-native binning) both maps are the
-/// identity.
+/// How the grid's columns meet the scene's pixels: the column holding each pixel's centre ray and the
+/// pixel holding each column's centre ray (-1 where none: a column no pixel sees is not observable).
+/// With the pixel-native kinect_v1 both are the identity.
 struct PixelColumns {
   std::vector<std::int64_t> column_of_pixel, pixel_of_column;
-  std::vector<float> z_per_range;
-  std::vector<std::uint8_t> observable;  ///< per column: pixel_of_column >= 0
+  std::vector<std::uint8_t> observable;  ///< per column: observable by the grid and by a pixel
 };
 
 PixelColumns pixel_columns(const SphericalGeometry& g, const PinholeIntrinsics& k) {
   PixelColumns m;
   const auto pixels = static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height);
   m.column_of_pixel.assign(pixels, -1);
-  m.z_per_range.assign(pixels, 0.0f);
   for (std::size_t p = 0; p < pixels; ++p) {
-    const Eigen::Vector3d ray((static_cast<double>(p % k.width) - k.cx) / k.fx, (static_cast<double>(p / k.width) - k.cy) / k.fy, 1.0);
-    const SphericalPoint s = to_spherical(ray.x(), ray.y(), ray.z());
-    int a, e;
-    if (g.locate(s.azimuth, s.elevation, a, e)) m.column_of_pixel[p] = g.column(a, e);
-    m.z_per_range[p] = static_cast<float>(1.0 / ray.norm());
+    ColumnIndex c;
+    const double u = static_cast<double>(p % static_cast<std::size_t>(k.width)), v = static_cast<double>(p / static_cast<std::size_t>(k.width));
+    if (g.column_of((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0, c)) m.column_of_pixel[p] = c;
   }
   m.pixel_of_column.assign(g.column_count(), -1);
   m.observable.assign(g.column_count(), 0);
   for (ColumnIndex c = 0; c < g.column_count(); ++c) {
     const Eigen::Vector3d d = g.direction(g.azimuth_bin_of(c), g.elevation_bin_of(c));
-    if (d.z() <= 0) continue;
+    if (d.z() <= 0 || !g.observable(c)) continue;
     const long u = std::lround(k.fx * d.x() / d.z() + k.cx), v = std::lround(k.fy * d.y() / d.z() + k.cy);
     if (u < 0 || v < 0 || u >= k.width || v >= k.height) continue;
     m.pixel_of_column[c] = v * k.width + u;
@@ -133,6 +128,7 @@ Quality map_quality(const Mapper& mapper, const Scene& scene, const PixelColumns
   DepthPredictionParams params;
   params.radius_columns = radius;
   const PredictedDepth predicted = predict_depth(mapper.surface(), params);
+  const SphericalGeometry& g = mapper.geometry();
   Quality q;
   std::size_t returns = 0, covered = 0;
   double abs_error = 0;
@@ -143,7 +139,10 @@ Quality map_quality(const Mapper& mapper, const Scene& scene, const PixelColumns
     const std::int64_t c = map.column_of_pixel[p];
     if (c < 0 || predicted.distance[static_cast<std::size_t>(c)] < 0) continue;
     ++covered;
-    const double error = std::abs(predicted.depth_m[static_cast<std::size_t>(c)] * map.z_per_range[p] - z);
+    const auto column = static_cast<ColumnIndex>(c);
+    const double predicted_z =  // the depth axis is z (pinhole) or the range (spherical)
+        g.point(g.azimuth_bin_of(column), g.elevation_bin_of(column), predicted.depth_m[column]).z();
+    const double error = std::abs(predicted_z - z);
     abs_error += error;
     q.good += error <= 2 * 1.425e-3 * z * z ? 1 : 0;
   }

@@ -3,7 +3,9 @@
 // whether acquiring more is still worth it (docs/SELECTIVE.md).
 //
 // A ray's score is its improvement (eqs. 3-4, the ImprovementMap) times its return probability
-// (return_model.hpp; an empty record gives 1: no discount). A shot's expected gain is the sum of the
+// (return_model.hpp; an empty record gives 1: no discount). Columns the sensor cannot observe hold NaN
+// improvement (improvement.hpp): a rays shot never takes them, and they add nothing to a window's or a
+// pattern's sum. A shot's expected gain is the sum of the
 // scores of the rays it takes by rank. That sum assumes the rays' gains add up; rays closer than the
 // improvement window (3 x 3 columns) share surface voxels, so it overstates a dense shot's gain a little.
 //

@@ -8,9 +8,12 @@
 //   r_f = (R + 1) / (A + 1)                      the record's return rate (R returns of A asks over all
 //                                                columns; one optimistic pseudo-return, so an empty record
 //                                                gives 1 and nothing is discounted before the first shot)
-//   m_j = (R_n + r_f) / (A_n + 1)                prior mean from the 8 neighbours (R_n of A_n asks), shrunk
+//   m_j = min(r_f, (R_n + r_f) / (A_n + 1))      prior mean from the 8 neighbours (R_n of A_n asks), shrunk
 //                                                towards r_f by one pseudo-ask: silent neighbourhoods (a dark
-//                                                poster, a shadow band) lower the prior of rays not yet asked
+//                                                poster, a shadow band) lower the prior of rays not yet asked.
+//                                                Neighbours only lower it: were returning neighbours to raise
+//                                                it above r_f, a plan would prefer unseen rays next to seen
+//                                                ones and bunch its rays instead of spreading them
 //   p_j = (s m_j + R_j) / (s + A_j)              posterior mean with s = prior_strength_shots pseudo-shots
 // so a ray asked twice without a return falls from ~r_f to ~r_f / 2 (s = 2), one that returned stays ~1.
 #include "occ_improve/geometry.hpp"
