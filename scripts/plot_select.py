@@ -1,7 +1,12 @@
 #!/usr/bin/python3
-"""Plots of make select-eval: one PNG per scene CSV written by occ_select_eval, quality (share of scene
-rays whose predicted depth lies within 2 sigma of the scene's) against points acquired, one panel per
-budget, one curve per strategy, with (a)'s full frames as markers and each guided run's stop point.
+"""Plots and the target table of make select-eval, from the per-scene CSVs occ_select_eval writes.
+
+- OUT_DIR/<scene>.png: quality (share of scene rays whose predicted depth lies within 2 sigma of the
+  scene's) against points acquired, one panel per budget, one curve per strategy, (a)'s full frames as
+  squares, the first shot whose plan said stop as a triangle;
+- OUT_DIR/targets.md: per scene and budget, the points (in full frames) each strategy needs to reach 95%
+  of the quality of 5 full frames, the best of (d)-(f) against half of (b)'s, its smallest margin over
+  (b) at equal points, and its stop point against the knee (the first point within 99% of its best).
 
 Usage: /usr/bin/python3 scripts/plot_select.py OUT_DIR   (reads OUT_DIR/*.csv except summary.csv)
 """
@@ -65,6 +70,52 @@ def plot_scene(path):
     return out
 
 
+def first_reaching(rows, target, frame_rays):
+    for r in rows:
+        if float(r["quality"]) >= target:
+            return int(r["rays_asked"]) / frame_rays
+    return None
+
+
+def target_rows(path):
+    """One markdown row per budget of a scene."""
+    runs = read_runs(path)
+    scene = os.path.splitext(os.path.basename(path))[0]
+    full = next(rows for (s, _), rows in runs.items() if s == "a_full")
+    frame_rays = int(full[0]["budget_rays"])
+    target = 0.95 * float(full[-1]["quality"])
+    fmt = lambda v: "-" if v is None else f"{v:.2f}"
+    out = []
+    for budget in sorted({b for (s, b) in runs if s != "a_full"}):
+        need = {s: first_reaching(runs.get((s, budget), []), target, frame_rays) for s in STYLE}
+        guided = {s: need[s] for s in ("d_guided", "e_returns", "f_reacquire") if need[s] is not None}
+        best = min(guided, key=guided.get) if guided else "e_returns"
+        uniform = {int(r["rays_asked"]): float(r["quality"]) for r in runs[("b_uniform", budget)]}
+        margin = min(float(r["quality"]) - uniform[int(r["rays_asked"])] for r in runs[(best, budget)]
+                     if int(r["rays_asked"]) in uniform)
+        rows = runs[(best, budget)]
+        stop = next((int(r["rays_asked"]) / frame_rays for r in rows if r["plan_stop"] == "1"), None)
+        top = max(float(r["quality"]) for r in rows)
+        knee = first_reaching(rows, 0.99 * top, frame_rays)
+        met = need[best] is not None and need["b_uniform"] is not None and need[best] <= 0.5 * need["b_uniform"]
+        stop_ok = stop is not None and knee is not None and abs(stop - knee) <= 0.1 * knee
+        out.append(f"| {scene} | {100 * budget / frame_rays:.0f}% | {target:.3f} | "
+                   + " | ".join(fmt(need[s]) for s in STYLE)
+                   + f" | {best[0]} | {'yes' if met else 'no'} | {margin:+.3f} | {fmt(stop)} / {fmt(knee)} | "
+                   + f"{'yes' if stop_ok else 'no'} |")
+    return out
+
+
+def write_targets(paths, out_dir):
+    header = ["| scene | budget | 95% of 5 frames | (b) | (c) | (d) | (e) | (f) | best | <= half of (b) | "
+              "min margin over (b) | stop / knee [frames] | stop within 10% |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---|"]
+    lines = header + [row for p in paths for row in target_rows(p)]
+    with open(os.path.join(out_dir, "targets.md"), "w") as f:
+        f.write("\n".join(lines) + "\n")
+    print("wrote", os.path.join(out_dir, "targets.md"))
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit(__doc__)
@@ -73,6 +124,7 @@ def main():
         sys.exit(f"plot_select: no scene CSV in {sys.argv[1]}")
     for p in paths:
         print("wrote", plot_scene(p))
+    write_targets(paths, sys.argv[1])
 
 
 if __name__ == "__main__":

@@ -113,8 +113,9 @@ Source map_from_file(const std::string& path) {
   LoadedMap loaded = load_map(path);
   Source source;
   source.mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
-  source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
-  source.description = "map " + path;
+  source.returns = std::move(loaded.returns);
+  source.description = "map " + path + " (return record: " + std::to_string(source.returns.total_asked()) +
+                       " rays asked, " + std::to_string(source.returns.total_returned()) + " returned)";
   return source;
 }
 
