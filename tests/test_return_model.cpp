@@ -4,7 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 
 namespace occ_improve {
 namespace {
@@ -22,15 +21,16 @@ TEST(ReturnModel, PosteriorFollowsTheDocumentedFormula) {
   r.record_shot({centre, centre, right}, {0, 0, 1});
   EXPECT_EQ(r.asked()[centre], 2u);
   EXPECT_EQ(r.returned()[right], 1u);
-  const double rate = (1.0 + 1.0) / (3.0 + 1.0);
-  EXPECT_DOUBLE_EQ(record_return_rate(r), rate);
+  EXPECT_DOUBLE_EQ(record_return_rate(r), 1.0 / 3.0);
   const auto p = return_probability_map(r);  // s = 2
-  const double prior_centre = std::min(rate, (1.0 + rate) / (1.0 + 1.0));  // `right`: 1 return of 1 ask -> rate
+  const double prior_centre = (1.0 + 1.0) / (1.0 + 1.0);  // neighbour `right`: 1 return of 1 ask
   EXPECT_NEAR(p[centre], 2.0 * prior_centre / (2.0 + 2.0), 1e-6);
-  const double prior_right = (0.0 + rate) / (2.0 + 1.0);  // neighbour `centre`: 0 of 2
+  const double prior_right = (0.0 + 1.0) / (2.0 + 1.0);  // neighbour `centre`: 0 of 2
   EXPECT_NEAR(p[right], (2.0 * prior_right + 1.0) / (2.0 + 1.0), 1e-6);
-  EXPECT_NEAR(p[far], rate, 1e-6);  // nothing asked around it
-  EXPECT_LT(p[centre], p[far]);
+  EXPECT_FLOAT_EQ(p[far], 1.0f);                           // nothing asked around it
+  const ColumnIndex beside_centre = 11;                    // neighbours: centre (0 of 2)
+  EXPECT_NEAR(p[beside_centre], 1.0 / 3.0, 1e-6);          // unasked, silent neighbourhood
+  EXPECT_LT(p[centre], p[right]);
 }
 
 TEST(ReturnModel, BadShotsChangeNothing) {

@@ -2,7 +2,6 @@
 
 #include "occ_improve/errors.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <string>
@@ -79,20 +78,18 @@ void ReturnModelParams::validate() const {
 }
 
 double record_return_rate(const ReturnRecord& record) {
-  return (static_cast<double>(record.total_returned()) + 1.0) / (static_cast<double>(record.total_asked()) + 1.0);
+  return record.empty() ? 1.0 : static_cast<double>(record.total_returned()) / static_cast<double>(record.total_asked());
 }
 
 std::vector<float> return_probability_map(const ReturnRecord& record, const ReturnModelParams& params) {
   params.validate();
-  const auto rate = static_cast<float>(record_return_rate(record));
-  std::vector<float> p(record.size(), rate);
+  std::vector<float> p(record.size(), 1.0f);
   if (record.empty()) return p;
   const auto s = static_cast<float>(params.prior_strength_shots);
   const std::uint32_t *asked = record.asked().data(), *returned = record.returned().data();
   const std::uint32_t *asked_n = record.asked_nearby().data(), *returned_n = record.returned_nearby().data();
   for (std::size_t c = 0; c < p.size(); ++c) {
-    const float nearby = (static_cast<float>(returned_n[c]) + rate) / (static_cast<float>(asked_n[c]) + 1.0f);
-    const float prior = nearby < rate ? nearby : rate;
+    const float prior = (static_cast<float>(returned_n[c]) + 1.0f) / (static_cast<float>(asked_n[c]) + 1.0f);
     p[c] = (s * prior + static_cast<float>(returned[c])) / (s + static_cast<float>(asked[c]));
   }
   return p;

@@ -43,7 +43,7 @@ void print_usage(const char* program) {
             << "  -shape rays|window|decimation   shot shape (default rays)\n"
             << "  -window WxH               window shape in columns (default 64x64; its area <= the budget)\n"
             << "  -negative_share S         rays shape: share of the shot re-acquiring negative rays (default 0)\n"
-            << "  -stop_gain G              stop below G expected gain per ray (default 0.2)\n\n"
+            << "  -stop_gain G              stop below G expected gain per ray (default 0.1)\n\n"
             << usage_common();
 }
 

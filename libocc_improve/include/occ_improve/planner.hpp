@@ -22,7 +22,7 @@
 // Re-acquisition (the paper: "regions of negative improvement can be re-acquired"): negative_share of a
 // rays shot goes to the rays of most negative score (depth transitions); they do not count in the gain.
 // Stop: the plan says stop when the expected gain is below stop_gain_per_ray_below x the rays taken by
-// rank, i.e. when the best rays left are worth less than a ray already seen about once.
+// rank, i.e. when the best rays left are worth less than a ray seen once.
 #include "occ_improve/improvement.hpp"
 #include "occ_improve/return_model.hpp"
 
@@ -39,10 +39,11 @@ struct PlanRequest {
   ShotShape shape = ShotShape::rays;
   int window_width_columns = 64, window_height_columns = 64;  ///< window shape; its area <= budget_rays
   double negative_share = 0.0;  ///< rays shape: share of the budget for negative rays, in [0, 1)
-  /// Default 0.2: between the seen-once level of the pixel-native kinect_v1 (0.138) and the no-data level
-  /// (0.324): the plan stops once the best rays left are seen ones (or silent ones the return model
-  /// discounted below it). Must be finite and >= 0.
-  double stop_gain_per_ray_below = 0.2;
+  /// Default 0.1: below the level of a ray seen once with the pixel-native kinect_v1 (0.138; no data:
+  /// 0.324), so the plan stops once every ray that returns has been measured at least twice (or is silent
+  /// and discounted by the return model). Why twice: a second measurement is what settles a ray's depth
+  /// between two disparity levels (docs/SELECTIVE.md). Must be finite and >= 0.
+  double stop_gain_per_ray_below = 0.1;
   /// rays shape: optional mask over the columns (row-major, 1 = the sensor may take the ray), e.g. the
   /// observable columns. Empty: every column.
   std::vector<std::uint8_t> candidates;

@@ -5,17 +5,18 @@
 // that into a return probability that discounts the ray's expected improvement (planner.hpp).
 //
 // Return probability of column j (Beta-Bernoulli, docs/SELECTIVE.md "Return model"):
-//   r_f = (R + 1) / (A + 1)                      the record's return rate (R returns of A asks over all
-//                                                columns; one optimistic pseudo-return, so an empty record
-//                                                gives 1 and nothing is discounted before the first shot)
-//   m_j = min(r_f, (R_n + r_f) / (A_n + 1))      prior mean from the 8 neighbours (R_n of A_n asks), shrunk
-//                                                towards r_f by one pseudo-ask: silent neighbourhoods (a dark
-//                                                poster, a shadow band) lower the prior of rays not yet asked.
-//                                                Neighbours only lower it: were returning neighbours to raise
-//                                                it above r_f, a plan would prefer unseen rays next to seen
-//                                                ones and bunch its rays instead of spreading them
-//   p_j = (s m_j + R_j) / (s + A_j)              posterior mean with s = prior_strength_shots pseudo-shots
-// so a ray asked twice without a return falls from ~r_f to ~r_f / 2 (s = 2), one that returned stays ~1.
+//   m_j = (R_n + 1) / (A_n + 1)     prior mean from the 8 neighbours (R_n returns of A_n asks) with one
+//                                   optimistic pseudo-return: 1 where nothing nearby was asked or all of it
+//                                   returned, falling fast in a silent neighbourhood (a dark poster, a
+//                                   shadow band, a cropped or out-of-range background)
+//   p_j = (s m_j + R_j) / (s + A_j) posterior mean with s = prior_strength_shots pseudo-shots (R_j returns
+//                                   of A_j asks of the ray itself)
+// so a ray asked once without a return in a silent neighbourhood falls to ~0.1, one that returned stays 1,
+// and a ray that returned every time stays 1. The prior is from the neighbours only, not from the view's
+// overall return rate: a view with a large silent background (mOSD's cropped walls, five_people's far
+// room) would otherwise discount every unseen ray, also those on the returning objects. Neighbours never
+// raise the prior above 1 - the value of a ray nothing is known about - so a plan does not prefer unseen
+// rays next to seen ones and bunch its rays instead of spreading them.
 #include "occ_improve/geometry.hpp"
 
 #include <cstdint>
@@ -66,7 +67,7 @@ struct ReturnModelParams {
   void validate() const;              ///< s finite and > 0, else InvalidParameter
 };
 
-/// r_f above.
+/// The record's overall return rate, returns / asks (1 for an empty record): for reports.
 double record_return_rate(const ReturnRecord& record);
 
 /// p_j above, for every column (row-major, like the improvement map).
