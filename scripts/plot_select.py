@@ -6,7 +6,8 @@
   squares, the first shot whose plan said stop as a triangle;
 - OUT_DIR/targets.md: per scene and budget, the points (in full frames) each strategy needs to reach 95%
   of the quality of 5 full frames, the best of (d)-(f) against half of (b)'s, its smallest margin over
-  (b) at equal points, and its stop point against the knee (the first point within 99% of its best).
+  (b) at equal points, its stop point against the knee (the first point within 99% of its best), and
+  the points (b) and the best need to reach the quality of 5 full frames itself.
 
 Usage: /usr/bin/python3 scripts/plot_select.py OUT_DIR   (reads OUT_DIR/*.csv except summary.csv)
 """
@@ -97,19 +98,21 @@ def target_rows(path):
         stop = next((int(r["rays_asked"]) / frame_rays for r in rows if r["plan_stop"] == "1"), None)
         top = max(float(r["quality"]) for r in rows)
         knee = first_reaching(rows, 0.99 * top, frame_rays)
+        full_quality = float(full[-1]["quality"])
+        match = {s: first_reaching(runs.get((s, budget), []), full_quality, frame_rays) for s in ("b_uniform", best)}
         met = need[best] is not None and need["b_uniform"] is not None and need[best] <= 0.5 * need["b_uniform"]
         stop_ok = stop is not None and knee is not None and abs(stop - knee) <= 0.1 * knee
         out.append(f"| {scene} | {100 * budget / frame_rays:.0f}% | {target:.3f} | "
                    + " | ".join(fmt(need[s]) for s in STYLE)
                    + f" | {best[0]} | {'yes' if met else 'no'} | {margin:+.3f} | {fmt(stop)} / {fmt(knee)} | "
-                   + f"{'yes' if stop_ok else 'no'} |")
+                   + f"{'yes' if stop_ok else 'no'} | {fmt(match['b_uniform'])} / {fmt(match[best])} |")
     return out
 
 
 def write_targets(paths, out_dir):
     header = ["| scene | budget | 95% of 5 frames | (b) | (c) | (d) | (e) | (f) | best | <= half of (b) | "
-              "min margin over (b) | stop / knee [frames] | stop within 10% |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---|"]
+              "min margin over (b) | stop / knee [frames] | stop within 10% | 100% of 5 frames: (b) / best |",
+              "|---|---:|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---|---:|"]
     lines = header + [row for p in paths for row in target_rows(p)]
     with open(os.path.join(out_dir, "targets.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
