@@ -82,30 +82,29 @@ struct Source {
 };
 
 Source map_from_frames(const ToolOptions& options, bool use_sample) {
-  std::vector<pcl::PointCloud<pcl::PointXYZ>> clouds;
-  std::optional<PinholeIntrinsics> camera;
+  std::vector<ToolFrame> frames;
   if (use_sample) {
     const sample::SampleFrame scene = sample::generate_scene();
-    clouds.push_back(organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height));
-    camera = scene.intrinsics;
+    ToolFrame frame;
+    frame.name = "built-in sample";
+    frame.cloud = organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height);
+    frame.camera = scene.intrinsics;
+    frame.camera_source = "the sample's own";
+    frames.push_back(std::move(frame));
+  } else {
+    frames = read_tool_frames(options);  // intrinsics from flags, the dataset or fitted; never assumed
   }
-  for (const std::string& input : options.inputs)
-    for (const FrameSource& frame : expand_input(input)) {
-      LoadedFrame loaded =
-          load_frame(frame.path, options.intrinsics ? options.intrinsics : frame.intrinsics, options.depth_encoding);
-      if (!camera && loaded.intrinsics) camera = loaded.intrinsics;
-      clouds.push_back(std::move(loaded.cloud));
-    }
-  const SensorPreset preset = options.preset_for_camera(camera);
+  const SensorPreset preset = options.preset_for_camera(frames.front().camera);
   Source source;
   source.mapper.emplace(preset, options.grid);
   InsertionReport report;
-  for (const auto& cloud : clouds) report += source.mapper->insert(span_of(cloud)).insertion;
+  for (const ToolFrame& frame : frames) report += source.mapper->insert(span_of(frame.cloud)).insertion;
   if (report.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
   source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
-  source.description = (use_sample ? std::string("built-in sample") : std::to_string(clouds.size()) + " frame(s)") +
-                       ", preset " + preset.name + ", " + std::to_string(report.points_inserted) + " points";
+  source.description = (use_sample ? std::string("built-in sample") : std::to_string(frames.size()) + " frame(s)") +
+                       ", preset " + preset.name + ", " + describe_camera(frames) + ", " +
+                       std::to_string(report.points_inserted) + " points";
   return source;
 }
 
