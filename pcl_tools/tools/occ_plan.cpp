@@ -113,8 +113,11 @@ Source map_from_file(const std::string& path) {
   Source source;
   source.mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
   source.returns = std::move(loaded.returns);
-  source.description = "map " + path + " (return record: " + std::to_string(source.returns.total_asked()) +
-                       " rays asked, " + std::to_string(source.returns.total_returned()) + " returned)";
+  char record[128];
+  std::snprintf(record, sizeof record, " (return record: %llu rays asked, %llu returned, rate %.3f)",
+                static_cast<unsigned long long>(source.returns.total_asked()),
+                static_cast<unsigned long long>(source.returns.total_returned()), record_return_rate(source.returns));
+  source.description = "map " + path + record;
   return source;
 }
 

@@ -38,12 +38,7 @@ public:
   /// The returns of a shot as points in the sensor frame (pixels without a return are left out).
   std::vector<Eigen::Vector3f> points(const std::vector<std::uint32_t>& pixels, const std::vector<float>& depth_m) const;
 
-  const std::vector<float>& scene_depth_m() const { return scene_; }
-  const PinholeIntrinsics& intrinsics() const { return intrinsics_; }
-  std::size_t pixel_count() const { return scene_.size(); }
   std::uint64_t shots_taken() const { return shots_; }
-  /// True where the scene has a return.
-  bool scene_returns(std::uint32_t pixel) const { return scene_[pixel] > 0; }
 
 private:
   std::vector<float> scene_;
