@@ -11,7 +11,7 @@ PYTHON ?= $(shell test -x /usr/bin/python3 && echo /usr/bin/python3 || command -
 CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
             -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
 
-.PHONY: all deps configure build test demo bench segment-eval map-eval consumer-test install clean \
+.PHONY: all deps configure build test demo bench segment-eval map-eval select-eval consumer-test install clean \
         python-wheel-test python-bench python-sample fuzz test-sanitize
 
 all: build
@@ -45,6 +45,16 @@ segment-eval: build
 # repeated frames, grid end (tests/pcl/test_map_quality.cpp prints the table and checks the targets).
 map-eval: build
 	OCC_IMPROVE_DATA_DIR=$(DATA_DIR) $(BUILD_DIR)/tests/test_map_quality
+
+# Selective acquisition: strategies (a)-(f) on real frames and the sample (docs/SELECTIVE.md).
+SELECT_SCENES = sample $(DATA_DIR)/kinect/pcl_tutorials/pairwise/capture0001.pcd \
+  $(DATA_DIR)/kinect/pcl_test/office1.pcd $(DATA_DIR)/kinect/pcl_test/five_people.pcd \
+  $(DATA_DIR)/segmentation/mosd_learn/learn0.pcd $(DATA_DIR)/kinect/pcl_test/milk_cartoon_all_small_clorox.pcd \
+  $(DATA_DIR)/sequences/7scenes_redkitchen/frames/frame-000150.depth.png
+SELECT_OUT ?= out/select
+select-eval: build
+	$(BUILD_DIR)/pcl_tools/occ_select_eval $(SELECT_SCENES) -o $(SELECT_OUT) -frames 3
+	$(PYTHON) scripts/plot_select.py $(SELECT_OUT)
 
 install: build
 	cmake --install $(BUILD_DIR) --prefix $(INSTALL_DIR) >/dev/null

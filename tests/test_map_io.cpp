@@ -229,9 +229,21 @@ constexpr std::size_t kMarkerOffset = 8, kVersionOffset = 12, kAzimuthBinsOffset
 // geometry 64 + binning and camera 48, model 64, options 28, column count 8.
 constexpr std::size_t kFirstColumnOffset = 16 + 64 + 48 + 64 + 28 + 8;
 
+// The same map (saved without a return record) in format version 2: without the return record's
+// flag (the 4 bytes before the checksum).
+std::vector<char> as_version_2(const std::vector<char>& v3) {
+  std::vector<char> v2(v3.begin(), v3.end() - 12);
+  v2.insert(v2.end(), v3.end() - 8, v3.end());
+  const std::uint32_t version = 2;
+  std::memcpy(v2.data() + kVersionOffset, &version, 4);
+  reseal(v2);
+  return v2;
+}
+
 // The same map in format version 1: without the binning and camera (offsets 80-127) and the pixel
 // sigmas (176-191), as docs/MAP_FORMAT.md describes it.
-std::vector<char> as_version_1(const std::vector<char>& v2) {
+std::vector<char> as_version_1(const std::vector<char>& v3) {
+  const std::vector<char> v2 = as_version_2(v3);
   std::vector<char> v1(v2.begin(), v2.begin() + 80);
   v1.insert(v1.end(), v2.begin() + 128, v2.begin() + 176);
   v1.insert(v1.end(), v2.begin() + 192, v2.end());
@@ -249,6 +261,15 @@ TEST_F(BadMapFile, VersionOneMapsStillLoad) {
   EXPECT_FALSE(old.grid.geometry().params().camera.has_value());
   EXPECT_EQ(old.grid.touched_column_count(), touched_);
   expect_same_maps(old.grid, current.grid, current.model);
+}
+
+TEST_F(BadMapFile, VersionTwoMapsLoadWithAnEmptyReturnRecord) {
+  write_bytes(file("v2.occmap"), as_version_2(good_));
+  const LoadedMap old = load_map(file("v2.occmap"));
+  EXPECT_TRUE(old.returns.empty());
+  EXPECT_EQ(old.returns.width(), 80);
+  EXPECT_EQ(old.returns.height(), 60);
+  expect_same_maps(old.grid, load_map(file("good.occmap")).grid, old.model);
 }
 
 TEST_F(BadMapFile, IntactFileLoads) { EXPECT_NO_THROW(load_map(file("good.occmap"))); }
@@ -342,6 +363,38 @@ TEST_F(BadMapFile, SizesAreCheckedAgainstTheCallersCapBeforeAllocating) {
   EXPECT_THROW(load_map(file("good.occmap"), 1 << 20), ResourceLimit);
   const std::size_t cap = std::size_t{64} << 20;
   EXPECT_EQ(load_map(file("good.occmap"), cap).grid.options().memory_cap_bytes, cap);
+}
+
+TEST_F(MapIo, ReturnRecordRoundTripsAndABadOneIsRefused) {
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.azimuth_bins = 40;
+  preset.geometry.elevation_bins = 30;
+  preset.geometry.depth_bins = 64;
+  const SphericalGrid grid = sample_grid(preset, {});
+  ReturnRecord returns = ReturnRecord::for_grid(40, 30);
+  returns.record_shot({3, 3, 500, 1199}, {0, 1, 1, 0});
+  save_map(file("returns.occmap"), grid, preset.model, returns);
+  const LoadedMap loaded = load_map(file("returns.occmap"));
+  EXPECT_EQ(loaded.returns.asked(), returns.asked());
+  EXPECT_EQ(loaded.returns.returned(), returns.returned());
+  EXPECT_EQ(loaded.returns.asked_nearby(), returns.asked_nearby());
+  EXPECT_EQ(loaded.returns.total_returned(), 2u);
+  // A record of another grid is refused before anything is written.
+  EXPECT_THROW(save_map(file("other.occmap"), grid, preset.model, ReturnRecord::for_grid(40, 31)), InvalidInput);
+  EXPECT_FALSE(fs::exists(file("other.occmap")));
+  // More returns than asks (a consistent checksum over an inconsistent record): a FormatError naming it.
+  auto bytes = read_bytes(file("returns.occmap"));
+  const std::size_t last_returned = bytes.size() - 8 - 4;  // column 1199: 1 ask, 0 returns
+  const std::uint32_t two = 2;
+  std::memcpy(bytes.data() + last_returned, &two, 4);
+  reseal(bytes);
+  write_bytes(file("bad.occmap"), bytes);
+  try {
+    load_map(file("bad.occmap"));
+    FAIL() << "no throw";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("column 1199"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(MapIo, MissingFileOrFolderIsAnIoError) {

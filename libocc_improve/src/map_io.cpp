@@ -250,13 +250,52 @@ void read_columns(Reader& r, SphericalGrid& grid) {
     for (float v : column.window)
       if (!value_ok(v)) r.fail(where + ": window value out of range");
   }
-  if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the last column");
+}
+
+// Since version 3: a flag, then the columns ever asked for (ascending) with their asks and returns.
+void write_returns(Writer& w, const ReturnRecord& returns) {
+  w.put<std::uint32_t>(returns.size() ? 1u : 0u);
+  if (!returns.size()) return;
+  std::uint64_t asked_columns = 0;
+  for (std::uint32_t a : returns.asked()) asked_columns += a ? 1 : 0;
+  w.put<std::uint64_t>(asked_columns);
+  for (std::size_t c = 0; c < returns.size(); ++c)
+    if (returns.asked()[c]) {
+      w.put<std::uint32_t>(static_cast<std::uint32_t>(c));
+      w.put<std::uint32_t>(returns.asked()[c]);
+      w.put<std::uint32_t>(returns.returned()[c]);
+    }
+}
+
+ReturnRecord read_returns(Reader& r, const SphericalGeometry& g, std::uint32_t version) {
+  const std::size_t columns = g.column_count();
+  if (version < 3 || r.get<std::uint32_t>("return record") == 0) return ReturnRecord::for_grid(g.width(), g.height());
+  const auto count = r.get<std::uint64_t>("return record");
+  if (count > columns) r.fail("return record claims " + std::to_string(count) + " columns, the grid has " +
+                              std::to_string(columns));
+  std::vector<std::uint32_t> asked(columns, 0), returned(columns, 0);
+  std::int64_t previous = -1;
+  for (std::uint64_t n = 0; n < count; ++n) {
+    const auto c = r.get<std::uint32_t>("return record");
+    if (c >= columns || static_cast<std::int64_t>(c) <= previous)
+      r.fail("return record column " + std::to_string(c) + " is outside the grid or out of order");
+    previous = c;
+    asked[c] = r.get<std::uint32_t>("return record");
+    returned[c] = r.get<std::uint32_t>("return record");
+  }
+  try {
+    return ReturnRecord::from_counts(g.width(), g.height(), std::move(asked), std::move(returned));
+  } catch (const InvalidInput& e) {
+    r.fail(std::string("invalid return record: ") + e.what());
+  }
 }
 
 }  // namespace
 
-void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model) {
+void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
+              const ReturnRecord& returns) {
   const SphericalGeometry& geometry = grid.geometry();
+  if (returns.size()) returns.check_matches(geometry.width(), geometry.height());
   Writer w;
   w.reserve(256 + grid.stored_voxel_count() * sizeof(float) + grid.touched_column_count() * 16);
   for (char c : kMagic) w.put<char>(c);
@@ -280,6 +319,7 @@ void save_map(const std::string& path, const SphericalGrid& grid, const SensorMo
     w.put<std::uint32_t>(static_cast<std::uint32_t>(column.window.size()));
     w.put_floats(column.window);
   }
+  write_returns(w, returns);
   std::vector<char>& bytes = w.bytes();
   w.put<std::uint64_t>(checksum(bytes.data(), bytes.size()));
 
@@ -321,8 +361,10 @@ LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
   } catch (const ResourceLimit& e) {
     throw ResourceLimit("map '" + path + "': geometry: " + e.what());
   }
-  LoadedMap loaded{SphericalGrid(SphericalGeometry(geometry), options), model};
+  LoadedMap loaded{SphericalGrid(SphericalGeometry(geometry), options), model, {}};
   read_columns(r, loaded.grid);
+  loaded.returns = read_returns(r, loaded.grid.geometry(), version);
+  if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the last record");
   return loaded;
 }
 

@@ -9,6 +9,7 @@
 // (naming what is wrong) and IoError for a file that cannot be opened or read. Round trips are exact:
 // every voxel's log-odds comes back bit for bit.
 #include "occ_improve/grid.hpp"
+#include "occ_improve/return_model.hpp"
 #include "occ_improve/sensor_model.hpp"
 
 #include <cstdint>
@@ -16,18 +17,23 @@
 
 namespace occ_improve {
 
-/// The format version this build writes. Version 2 added the angular binning and the camera; version 1
-/// maps (spherical, no camera) still load.
-constexpr std::uint32_t kMapFormatVersion = 2;
+/// The format version this build writes. Version 2 added the angular binning and the camera, version 3
+/// the return record; version 1 maps (spherical, no camera) and version 1-2 maps (no return record) still
+/// load.
+constexpr std::uint32_t kMapFormatVersion = 3;
 constexpr std::uint32_t kOldestMapFormatVersion = 1;
 
-/// Writes `grid` and the sensor model it was built with to `path` (atomically: temp file + rename).
-/// Throws IoError when the folder is not writable or the write fails (the target is then untouched).
-void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model);
+/// Writes `grid`, the sensor model it was built with and the return record of a selective sensor
+/// (return_model.hpp; a default-constructed record: none) to `path` (atomically: temp file + rename).
+/// Throws IoError when the folder is not writable or the write fails (the target is then untouched),
+/// InvalidInput when the record is not one of the grid's size (nothing is written).
+void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
+              const ReturnRecord& returns = ReturnRecord());
 
 struct LoadedMap {
   SphericalGrid grid;
   SensorModelParams model;
+  ReturnRecord returns;  ///< the saved record; an empty one of the grid's size when none was saved
 };
 
 /// Reads a map written by save_map. Throws IoError (cannot open/read) or FormatError (not a map,

@@ -1,0 +1,181 @@
+// occ_plan: the next shot of a selective sensor from a saved map or from input frames: which rays to
+// acquire (a mask image and a rays CSV), the gain they are expected to bring and whether to stop.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/map_io.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/planner.hpp"
+#include "occ_improve/render.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <pcl/console/parse.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <vector>
+
+using namespace occ_improve;
+
+namespace {
+
+void print_usage(const char* program) {
+  std::cout << "Usage: " << program << " -load MAP.occmap [plan options] -o OUT_DIR\n"
+            << "       " << program << " [options] INPUT... -o OUT_DIR\n"
+            << "       " << program << " -sample [options] -o OUT_DIR\n\n"
+            << "Plans the next shot (docs/SELECTIVE.md): rays ranked by improvement x return probability\n"
+            << "(the map's return record; none for frames), in one of three shapes. Writes\n"
+            << "  OUT_DIR/shot_mask.png   grey, one pixel per column (255 = in the shot); with the pixel-native\n"
+            << "                          kinect_v1 preset it is aligned with the depth image\n"
+            << "  OUT_DIR/shot_rays.csv   the shot's rays: rank, column, azimuth/elevation bin, improvement,\n"
+            << "                          return probability, score, surface depth\n"
+            << "  OUT_DIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n\n"
+            << "Plan options:\n"
+            << "  -o OUT_DIR                output folder (required; created)\n"
+            << "  -load MAP.occmap          a saved map (it carries its own preset and return record)\n"
+            << "  -sample                   the built-in generated frame instead of input files\n"
+            << "  -budget N                 rays per shot (default 4096)\n"
+            << "  -shape rays|window|decimation   shot shape (default rays)\n"
+            << "  -window WxH               window shape in columns (default 64x64; its area <= the budget)\n"
+            << "  -negative_share S         rays shape: share of the shot re-acquiring negative rays (default 0)\n"
+            << "  -stop_gain G              stop below G expected gain per ray (default 0.1)\n\n"
+            << usage_common();
+}
+
+ShotShape parse_shape(const std::string& text) {
+  if (text == "rays") return ShotShape::rays;
+  if (text == "window") return ShotShape::window;
+  if (text == "decimation") return ShotShape::decimation;
+  throw InvalidParameter("-shape " + text + " is invalid: must be rays, window or decimation");
+}
+
+PlanRequest parse_request(int argc, char** argv) {
+  PlanRequest request;
+  pcl::console::parse_argument(argc, argv, "-budget", request.budget_rays);
+  std::string shape = "rays", window;
+  pcl::console::parse_argument(argc, argv, "-shape", shape);
+  request.shape = parse_shape(shape);
+  if (pcl::console::parse_argument(argc, argv, "-window", window) >= 0) {
+    const auto x = window.find('x');
+    try {
+      if (x == std::string::npos) throw std::invalid_argument("no x");
+      request.window_width_columns = std::stoi(window.substr(0, x));
+      request.window_height_columns = std::stoi(window.substr(x + 1));
+    } catch (const std::logic_error&) {
+      throw InvalidParameter("-window " + window + " is invalid: must be WIDTHxHEIGHT in columns, e.g. 64x48");
+    }
+  }
+  pcl::console::parse_argument(argc, argv, "-negative_share", request.negative_share);
+  pcl::console::parse_argument(argc, argv, "-stop_gain", request.stop_gain_per_ray_below);
+  return request;
+}
+
+struct Source {
+  std::optional<Mapper> mapper;
+  ReturnRecord returns;
+  std::string description;
+};
+
+Source map_from_frames(const ToolOptions& options, bool use_sample) {
+  std::vector<ToolFrame> frames;
+  if (use_sample) {
+    const sample::SampleFrame scene = sample::generate_scene();
+    ToolFrame frame;
+    frame.name = "built-in sample";
+    frame.cloud = organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height);
+    frame.camera = scene.intrinsics;
+    frame.camera_source = "the sample's own";
+    frames.push_back(std::move(frame));
+  } else {
+    frames = read_tool_frames(options);  // intrinsics from flags, the dataset or fitted; never assumed
+  }
+  const SensorPreset preset = options.preset_for_camera(frames.front().camera);
+  Source source;
+  source.mapper.emplace(preset, options.grid);
+  InsertionReport report;
+  for (const ToolFrame& frame : frames) report += source.mapper->insert(span_of(frame.cloud)).insertion;
+  if (report.points_inserted == 0)
+    throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
+  source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
+  source.description = (use_sample ? std::string("built-in sample") : std::to_string(frames.size()) + " frame(s)") +
+                       ", preset " + preset.name + ", " + describe_camera(frames) + ", " +
+                       std::to_string(report.points_inserted) + " points";
+  return source;
+}
+
+Source map_from_file(const std::string& path) {
+  LoadedMap loaded = load_map(path);
+  Source source;
+  source.mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+  source.returns = std::move(loaded.returns);
+  char record[128];
+  std::snprintf(record, sizeof record, " (return record: %llu rays asked, %llu returned, rate %.3f)",
+                static_cast<unsigned long long>(source.returns.total_asked()),
+                static_cast<unsigned long long>(source.returns.total_returned()), record_return_rate(source.returns));
+  source.description = "map " + path + record;
+  return source;
+}
+
+void write_mask(const std::string& path, const SphericalGeometry& geometry, const Shot& shot) {
+  Image mask{geometry.width(), geometry.height(), 1, std::vector<std::uint8_t>(geometry.column_count(), 0)};
+  for (ColumnIndex c : shot.columns) mask.pixels[c] = 255;
+  write_png(path, mask);
+}
+
+void write_rays(const std::string& path, const Mapper& mapper, const ReturnRecord& returns, const Shot& shot,
+                const ReturnModelParams& model) {
+  const std::vector<float> p = return_probability_map(returns, model);
+  std::ofstream out(path);
+  out << "rank,column,azimuth_bin,elevation_bin,improvement,return_probability,score,depth_m,reacquisition\n";
+  const SphericalGeometry& g = mapper.geometry();
+  for (std::size_t i = 0; i < shot.columns.size(); ++i) {
+    const ColumnIndex c = shot.columns[i];
+    const float imp = mapper.improvement().value[c];
+    out << i + 1 << ',' << c << ',' << g.azimuth_bin_of(c) << ',' << g.elevation_bin_of(c) << ',' << imp << ',' << p[c]
+        << ',' << imp * p[c] << ',' << mapper.surface().depth_m[c] << ',' << (i >= shot.ranked_rays ? 1 : 0) << '\n';
+  }
+  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+int run(int argc, char** argv) {
+  ToolSpec spec;
+  spec.default_preset = "kinect_v1";
+  spec.value_flags = {"-o", "-load", "-budget", "-shape", "-window", "-negative_share", "-stop_gain"};
+  spec.switches = {"-sample"};
+  const ToolOptions options = parse_tool_options(argc, argv, spec);
+  std::string out_dir, load_path;
+  pcl::console::parse_argument(argc, argv, "-o", out_dir);
+  pcl::console::parse_argument(argc, argv, "-load", load_path);
+  const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
+  if (out_dir.empty()) throw InvalidParameter("-o OUT_DIR is required (see -h)");
+  const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
+  if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
+  const PlanRequest request = parse_request(argc, argv);
+
+  const auto start = std::chrono::steady_clock::now();
+  const Source source = load_path.empty() ? map_from_frames(options, use_sample) : map_from_file(load_path);
+  const auto planned = std::chrono::steady_clock::now();
+  const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
+  const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
+
+  std::filesystem::create_directories(out_dir);
+  write_mask(out_dir + "/shot_mask.png", source.mapper->geometry(), shot);
+  write_rays(out_dir + "/shot_rays.csv", *source.mapper, source.returns, shot, request.return_model);
+  char summary[512];
+  std::snprintf(summary, sizeof summary, "expected_gain %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n",
+                shot.expected_gain, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
+  std::ofstream(out_dir + "/plan.txt") << summary;
+  std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt\n",
+              source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,
+              out_dir.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return run_tool(argc, argv, print_usage, run); }

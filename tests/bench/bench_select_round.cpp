@@ -1,0 +1,89 @@
+// One closed-loop round of selective acquisition with the real-use preset (kinect_v1) on 2 threads:
+// insert the returns of a 4096-ray shot (surface kept current), update the improvement incrementally,
+// plan the next shot (improvement x return model, highest first). The map starts from one full frame of
+// the built-in sample; the virtual sensor looks at the noise-free sample.
+// Run: cmake --build <build> --target bench_select_round && <build>/tests/bench_select_round
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/planner.hpp"
+#include "occ_improve/sample_scene.hpp"
+#include "occ_improve/virtual_sensor.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+
+namespace {
+
+using namespace occ_improve;
+
+double ms_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+void BM_SelectRound(benchmark::State& state) {
+  const sample::SampleFrame noisy = sample::generate_scene();
+  sample::SceneOptions clean_options;
+  clean_options.noise = clean_options.quantise = false;
+  const sample::SampleFrame clean = sample::generate_scene(clean_options);
+  Mapper mapper(kinect_v1(noisy.intrinsics));
+  InsertionOptions two_threads;
+  two_threads.threads = 2;
+  const auto first = noisy.points();
+  mapper.insert(PointSpan::from(first), two_threads);
+  VirtualSensor sensor(clean.depth_m, clean.intrinsics);
+  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  PlanRequest request;
+  request.budget_rays = 4096;
+  Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+  double insert_ms = 0, improvement_ms = 0, plan_ms = 0;
+  for (auto _ : state) {
+    const std::vector<float> depth = sensor.shoot(shot.columns);  // the sensor's time is not the library's
+    const std::vector<Eigen::Vector3f> points = sensor.points(shot.columns, depth);
+    std::vector<std::uint8_t> got(depth.size());
+    for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
+    const auto start = std::chrono::steady_clock::now();
+    const MapperReport report = mapper.insert(PointSpan::from(points), two_threads);
+    returns.record_shot(shot.columns, got);
+    const auto planned = std::chrono::steady_clock::now();
+    shot = plan_next_shot(mapper.improvement(), returns, request);
+    plan_ms += ms_since(planned);
+    insert_ms += 1e3 * report.insertion.seconds;
+    improvement_ms += 1e3 * report.improvement_seconds;
+    state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
+  const double n = static_cast<double>(state.iterations());
+  state.counters["insert_ms"] = insert_ms / n;
+  state.counters["improvement_ms"] = improvement_ms / n;
+  state.counters["plan_ms"] = plan_ms / n;
+}
+BENCHMARK(BM_SelectRound)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
+
+/// The plan alone, on the map after one frame and a record of a few shots: its share of the round.
+void BM_Plan(benchmark::State& state) {
+  Mapper mapper(kinect_v1());
+  const auto first = sample::generate_scene().points();
+  mapper.insert(PointSpan::from(first));
+  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  PlanRequest request;
+  request.budget_rays = 4096;
+  for (int i = 0; i < 5; ++i) {
+    const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+    returns.record_shot(shot.columns, std::vector<std::uint8_t>(shot.columns.size(), i % 2));
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(plan_next_shot(mapper.improvement(), returns, request));
+}
+BENCHMARK(BM_Plan)->Unit(benchmark::kMillisecond);
+
+void BM_ShotScores(benchmark::State& state) {
+  Mapper mapper(kinect_v1());
+  const auto first = sample::generate_scene().points();
+  mapper.insert(PointSpan::from(first));
+  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  returns.record_shot({1, 2, 3}, {1, 0, 1});
+  for (auto _ : state) benchmark::DoNotOptimize(shot_scores(mapper.improvement(), returns));
+}
+BENCHMARK(BM_ShotScores)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();

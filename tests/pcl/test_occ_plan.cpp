@@ -1,0 +1,90 @@
+// occ_plan end to end: the next shot from the sample and from a saved map with its return record, and
+// bad requests giving a one-line error naming the value and a non-zero exit.
+#include "occ_improve/map_io.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct ToolRun {
+  int exit_code;
+  std::string output;
+};
+
+class OccPlanTool : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("occ_plan_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  ToolRun run(const std::string& arguments) const {
+    const fs::path log = dir_ / "run.log";
+    const std::string command = std::string(OCC_PLAN_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
+    const int status = std::system(command.c_str());
+    std::ifstream in(log);
+    std::stringstream text;
+    text << in.rdbuf();
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+  }
+  static std::size_t lines(const fs::path& file) {
+    std::ifstream in(file);
+    std::size_t n = 0;
+    for (std::string line; std::getline(in, line);) ++n;
+    return n;
+  }
+  fs::path dir_;
+};
+
+TEST_F(OccPlanTool, SampleShotIsWritten) {
+  const ToolRun r = run("-sample -budget 500 -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / "shot_mask.png"));
+  EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 501u);
+  EXPECT_NE(r.output.find("stop no"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("expected_gain"), std::string::npos) << r.output;
+}
+
+TEST_F(OccPlanTool, SavedMapBringsItsReturnRecord) {
+  occ_improve::Mapper mapper(occ_improve::kinect_v1());
+  const auto points = occ_improve::sample::generate_scene().points();
+  mapper.insert(occ_improve::PointSpan::from(points));
+  auto returns = occ_improve::ReturnRecord::for_grid(640, 480);
+  returns.record_shot({10, 11, 12}, {1, 0, 0});
+  occ_improve::save_map((dir_ / "map.occmap").string(), mapper.grid(), mapper.model().params(), returns);
+  const ToolRun r = run("-load " + (dir_ / "map.occmap").string() + " -shape window -window 8x4 -budget 32 -o " +
+                        (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("3 rays asked, 1 returned"), std::string::npos) << r.output;
+  EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 33u);
+}
+
+TEST_F(OccPlanTool, BadRequestsNameTheValue) {
+  const std::string out = " -o " + (dir_ / "out").string();
+  ToolRun r = run("-sample -budget 0" + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("budget_rays = 0"), std::string::npos) << r.output;
+  r = run("-sample -budget 400000" + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("budget_rays = 400000"), std::string::npos) << r.output;
+  r = run("-sample -shape spiral" + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("-shape spiral"), std::string::npos) << r.output;
+  r = run("-sample -shape window -window 64x64 -budget 100" + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("<= budget_rays"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out"));
+}
+
+}  // namespace
