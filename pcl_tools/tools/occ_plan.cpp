@@ -36,7 +36,7 @@ void print_usage(const char* program) {
             << "                          return probability, score, surface depth\n"
             << "  OUT_DIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n\n"
             << "Plan options:\n"
-            << "  -o OUT_DIR                output folder (required; created)\n"
+            << usage_output_folder("")
             << "  -load MAP.occmap          a saved map (it carries its own preset and return record)\n"
             << "  -sample                   the built-in generated frame instead of input files\n"
             << "  -budget N                 rays per shot (default 4096)\n"
@@ -146,16 +146,16 @@ int run(int argc, char** argv) {
   ToolSpec spec;
   spec.default_preset = "kinect_v1";
   spec.value_flags = {"-o", "-load", "-budget", "-shape", "-window", "-negative_share", "-stop_gain"};
-  spec.switches = {"-sample"};
+  spec.switches = {"-sample", "-overwrite"};
   const ToolOptions options = parse_tool_options(argc, argv, spec);
-  std::string out_dir, load_path;
-  pcl::console::parse_argument(argc, argv, "-o", out_dir);
+  std::string load_path;
   pcl::console::parse_argument(argc, argv, "-load", load_path);
   const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
-  if (out_dir.empty()) throw InvalidParameter("-o OUT_DIR is required (see -h)");
   const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
   const PlanRequest request = parse_request(argc, argv);
+  // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
+  OutputFolder out = open_output_folder(argc, argv, "occ_plan", "");
 
   const auto start = std::chrono::steady_clock::now();
   const Source source = load_path.empty() ? map_from_frames(options, use_sample) : map_from_file(load_path);
@@ -163,16 +163,19 @@ int run(int argc, char** argv) {
   const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
   const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
 
-  std::filesystem::create_directories(out_dir);
-  write_mask(out_dir + "/shot_mask.png", source.mapper->geometry(), shot);
-  write_rays(out_dir + "/shot_rays.csv", *source.mapper, source.returns, shot, request.return_model);
+  write_mask(out.file("shot_mask.png"), source.mapper->geometry(), shot);
+  write_rays(out.file("shot_rays.csv"), *source.mapper, source.returns, shot, request.return_model);
   char summary[512];
   std::snprintf(summary, sizeof summary, "expected_gain %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n",
                 shot.expected_gain, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
-  std::ofstream(out_dir + "/plan.txt") << summary;
+  std::ofstream plan(out.file("plan.txt"));
+  if (!(plan << summary) || !plan.flush()) throw IoError("cannot write '" + out.file("plan.txt") + "'");
+  plan.close();
+  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
+  out.commit();
   std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt\n",
               source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,
-              out_dir.c_str());
+              out.path().c_str());
   return 0;
 }
 

@@ -56,6 +56,25 @@ TEST_F(OccPlanTool, SampleShotIsWritten) {
   EXPECT_NE(r.output.find("expected_gain"), std::string::npos) << r.output;
 }
 
+// -o never overwrites what the tool did not write: a folder with a user's file is refused (naming
+// -overwrite) and the file is intact; the tool's own previous output is replaced.
+TEST_F(OccPlanTool, AForeignOutputFolderIsRefusedAndItsOwnIsReplaced) {
+  const fs::path user = dir_ / "user";
+  fs::create_directories(user);
+  std::ofstream(user / "shot_mask.png") << "mine";
+  const ToolRun refused = run("-sample -budget 100 -o " + user.string());
+  EXPECT_EQ(refused.exit_code, 1) << refused.output;
+  EXPECT_NE(refused.output.find("-overwrite"), std::string::npos) << refused.output;
+  std::ifstream in(user / "shot_mask.png");
+  std::string content;
+  in >> content;
+  EXPECT_EQ(content, "mine");
+  ASSERT_EQ(run("-sample -budget 100 -o " + (dir_ / "out").string()).exit_code, 0);
+  const ToolRun again = run("-sample -budget 200 -o " + (dir_ / "out").string());
+  ASSERT_EQ(again.exit_code, 0) << again.output;
+  EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 201u);
+}
+
 TEST_F(OccPlanTool, SavedMapBringsItsReturnRecord) {
   occ_improve::Mapper mapper(occ_improve::kinect_v1());
   const auto points = occ_improve::sample::generate_scene().points();
