@@ -71,14 +71,20 @@ void expect_agreement(const test::Agreement& a) {
   EXPECT_GE(a.fraction(), 0.99) << a.agreed << " / " << a.compared << " (" << a.near_boundary << " near boundaries)";
 }
 
+// The grid exported from some_pose(), with the report's counts checked.
+std::unique_ptr<octomap::OcTree> exported(const SphericalGrid& grid, const OctomapExportOptions& options) {
+  OctomapExportReport report;
+  auto tree = to_octree(grid, some_pose(), kResolution, options, &report);
+  EXPECT_GT(report.free_written, 100000u);
+  EXPECT_GT(report.occupied_written, 1000u);
+  return tree;
+}
+
 TEST_F(OctomapExport, FilesReadBackAgreeWithTheGrid) {
   const SphericalGrid& grid = sample_grid(UpdateMode::clamped);
   const Eigen::Isometry3d pose = some_pose();
   const OctomapExportOptions options;
-  OctomapExportReport report;
-  const auto tree = to_octree(grid, pose, kResolution, options, &report);
-  EXPECT_GT(report.free_written, 100000u);
-  EXPECT_GT(report.occupied_written, 1000u);
+  const auto tree = exported(grid, options);
   // OctoMap keeps its thresholds as float log-odds: equal to float precision.
   EXPECT_NEAR(tree->getClampingThresMin(), grid.options().probability_min, 1e-7);
   EXPECT_NEAR(tree->getClampingThresMax(), grid.options().probability_max, 1e-7);
@@ -102,13 +108,8 @@ TEST_F(OctomapExport, PixelNativeGridAgreesToo) {
   const SensorPreset preset = kinect_v1(sample::generate_scene().intrinsics);
   SphericalGrid grid(SphericalGeometry(preset.geometry));
   insert_points(grid, SensorModel(preset.model), PointSpan::from(sample::generate_scene().points()));
-  const Eigen::Isometry3d pose = some_pose();
   const OctomapExportOptions options;
-  OctomapExportReport report;
-  const auto tree = to_octree(grid, pose, kResolution, options, &report);
-  EXPECT_GT(report.free_written, 100000u);
-  EXPECT_GT(report.occupied_written, 1000u);
-  expect_agreement(test::compare_occupancy(grid, pose, *tree, options, 20000));
+  expect_agreement(test::compare_occupancy(grid, some_pose(), *exported(grid, options), options, 20000));
 }
 
 TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBounds) {

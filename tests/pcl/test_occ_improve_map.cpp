@@ -1,5 +1,7 @@
 // occ_improve_map end to end, as a user runs it: outputs on the built-in sample, and bad input giving a
 // one-line error, a non-zero exit and no output folder.
+#include "support/tool_run.hpp"
+
 #include <gtest/gtest.h>
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/io/pcd_io.h>
@@ -16,19 +18,11 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct ToolRun {
-  int exit_code;
-  std::string output;
-};
+using occ_improve::test::ToolRun;
 
 ToolRun run_tool(const std::string& arguments) {
-  const fs::path log = fs::temp_directory_path() / "occ_improve_map_test.log";
-  const std::string command = std::string(OCC_IMPROVE_MAP_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
-  const int status = std::system(command.c_str());
-  std::ifstream in(log);
-  std::stringstream text;
-  text << in.rdbuf();
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+  return occ_improve::test::run_tool_command(OCC_IMPROVE_MAP_EXECUTABLE, arguments,
+                                             fs::temp_directory_path() / "occ_improve_map_test.log");
 }
 
 class OccImproveMapTool : public ::testing::Test {

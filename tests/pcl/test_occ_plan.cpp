@@ -4,6 +4,8 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/sample_scene.hpp"
 
+#include "support/tool_run.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -16,10 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct ToolRun {
-  int exit_code;
-  std::string output;
-};
+using occ_improve::test::ToolRun;
 
 class OccPlanTool : public ::testing::Test {
 protected:
@@ -30,13 +29,7 @@ protected:
   }
   void TearDown() override { fs::remove_all(dir_); }
   ToolRun run(const std::string& arguments) const {
-    const fs::path log = dir_ / "run.log";
-    const std::string command = std::string(OCC_PLAN_EXECUTABLE) + " " + arguments + " > " + log.string() + " 2>&1";
-    const int status = std::system(command.c_str());
-    std::ifstream in(log);
-    std::stringstream text;
-    text << in.rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+    return occ_improve::test::run_tool_command(OCC_PLAN_EXECUTABLE, arguments, dir_ / "run.log");
   }
   static std::size_t lines(const fs::path& file) {
     std::ifstream in(file);
