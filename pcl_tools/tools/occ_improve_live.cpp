@@ -1,5 +1,5 @@
 // occ_improve_live: fuse a stream of range frames (OpenNI2 device, .oni recording, PCD folder or
-// depth-image sequence) into the spherical occupancy grid as they arrive, and keep the depth,
+// depth-image sequence) into the occupancy grid (along the sensor's rays) as they arrive, and keep the depth,
 // occupancy and improvement maps written to a folder.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/map_io.hpp"
@@ -27,7 +27,7 @@ using Pipeline = GrabberPipeline<pcl::PointXYZ>;
 
 void print_usage(const char* program) {
   std::cout << "Usage: " << program << " <source> [options]\n"
-            << "Fuses a stream of range frames into the spherical occupancy grid and writes the maps.\n\n"
+            << "Fuses a stream of range frames into the occupancy grid and writes the maps.\n\n"
             << "Source (exactly one):\n"
             << "  -device [URI]             live OpenNI2 device (first one found, or its URI)\n"
             << "  -oni FILE                 OpenNI2 recording\n"

@@ -1,4 +1,4 @@
-// occ_improve_map: fuse one or more range frames taken from one viewpoint into the spherical occupancy
+// occ_improve_map: fuse one or more range frames taken from one viewpoint into the occupancy
 // grid and write where one more measurement would teach the most: depth, occupancy and improvement
 // images, the per-ray results as an organized PCD, and the ranked regions worth re-acquiring.
 #include "occ_improve/errors.hpp"

@@ -1,4 +1,4 @@
-// occ_to_octomap: convert a spherical occupancy grid, saved by save_map or built from range frames, into
+// occ_to_octomap: convert an occupancy grid, saved by save_map or built from range frames, into
 // an OctoMap file (.bt maximum likelihood, .ot full log-odds) at a chosen resolution, seen from a pose.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate.hpp"
@@ -30,7 +30,7 @@ void print_usage(const char* program) {
   std::cout << "Usage: " << program << " -load MAP.occmap [-pose P] [-load MAP2 -pose P2 ...] [options] -o OUT.bt|OUT.ot\n"
             << "       " << program << " [options] INPUT... -o OUT.bt|OUT.ot\n"
             << "       " << program << " -sample [options] -o OUT.bt|OUT.ot\n\n"
-            << "Writes the spherical occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of\n"
+            << "Writes the occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of\n"
             << "view and depth range takes the log-odds of the spherical voxel holding its centre; unknown voxels\n"
             << "stay unknown; the grid's clamping thresholds are carried over. .bt = maximum likelihood,\n"
             << ".ot = full log-odds (both with OctoMap's own writers).\n\n"
