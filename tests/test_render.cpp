@@ -249,5 +249,23 @@ TEST(Render, OverlayBlendsTheColoursOverTheImage) {
   EXPECT_THROW(render_overlay(map, colour, 1.5), InvalidParameter);
 }
 
+TEST(Render, CurveRunsFromTheFirstPointToTheLastInsideItsFrame) {
+  const Image im = render_curve({0, 1, 2}, {10, 5, 0}, 100, 50);
+  ASSERT_EQ(im.channels, 3);
+  const auto pixel = [&](int x, int y) {
+    const std::size_t i = (static_cast<std::size_t>(y) * 100 + static_cast<std::size_t>(x)) * 3;
+    return std::array<std::uint8_t, 3>{im.pixels[i], im.pixels[i + 1], im.pixels[i + 2]};
+  };
+  const std::array<std::uint8_t, 3> blue{0, 64, 255};
+  EXPECT_EQ(pixel(4, 4), blue);     // highest y at the first x: top left inside the margin
+  EXPECT_EQ(pixel(95, 45), blue);   // lowest y at the last x: bottom right
+  EXPECT_EQ(pixel(50, 25), blue);   // a straight line through the middle
+  EXPECT_EQ(pixel(0, 0), (std::array<std::uint8_t, 3>{0, 0, 0}));  // the frame
+  EXPECT_EQ(pixel(90, 5), (std::array<std::uint8_t, 3>{255, 255, 255}));
+  EXPECT_THROW(render_curve({0}, {0}), InvalidInput);
+  EXPECT_THROW(render_curve({0, 1}, {0}), InvalidInput);
+  EXPECT_THROW(render_curve({0, 1}, {0, 1}, 8, 8), InvalidParameter);
+}
+
 }  // namespace
 }  // namespace occ_improve

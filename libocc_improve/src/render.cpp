@@ -270,4 +270,36 @@ Image render_overlay(const ImprovementMap& map, const Image& colour, double impr
   return out;
 }
 
+Image render_curve(const std::vector<double>& x, const std::vector<double>& y, int width, int height) {
+  detail::require_parameter(width >= 16 && height >= 16, "width x height", width * 1.0 * height, ">= 16 x 16");
+  if (x.size() != y.size() || x.size() < 2)
+    throw InvalidInput("render_curve: " + std::to_string(x.size()) + " x values and " + std::to_string(y.size()) +
+                       " y values (need the same number, at least 2)");
+  Image im;
+  im.width = width;
+  im.height = height;
+  im.channels = 3;
+  im.pixels.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3, 255);
+  const auto set = [&](int px, int py, std::uint8_t r, std::uint8_t g, std::uint8_t b) {
+    const std::size_t i = (static_cast<std::size_t>(py) * static_cast<std::size_t>(width) + static_cast<std::size_t>(px)) * 3;
+    im.pixels[i] = r, im.pixels[i + 1] = g, im.pixels[i + 2] = b;
+  };
+  for (int px = 0; px < width; ++px) set(px, 0, 0, 0, 0), set(px, height - 1, 0, 0, 0);
+  for (int py = 0; py < height; ++py) set(0, py, 0, 0, 0), set(width - 1, py, 0, 0, 0);
+  const auto [x_lo, x_hi] = std::minmax_element(x.begin(), x.end());
+  const auto [y_lo, y_hi] = std::minmax_element(y.begin(), y.end());
+  // A margin of 4 pixels inside the frame; a constant series sits in the middle.
+  const auto to_px = [&](double v) { return *x_hi > *x_lo ? 4 + (v - *x_lo) / (*x_hi - *x_lo) * (width - 9) : width / 2.0; };
+  const auto to_py = [&](double v) { return *y_hi > *y_lo ? height - 5 - (v - *y_lo) / (*y_hi - *y_lo) * (height - 9) : height / 2.0; };
+  for (std::size_t i = 0; i + 1 < x.size(); ++i) {
+    const double x0 = to_px(x[i]), y0 = to_py(y[i]), x1 = to_px(x[i + 1]), y1 = to_py(y[i + 1]);
+    const int steps = std::max(1, static_cast<int>(std::ceil(std::max(std::abs(x1 - x0), std::abs(y1 - y0)))));
+    for (int k = 0; k <= steps; ++k) {
+      const double t = static_cast<double>(k) / steps;
+      set(static_cast<int>(std::lround(x0 + t * (x1 - x0))), static_cast<int>(std::lround(y0 + t * (y1 - y0))), 0, 64, 255);
+    }
+  }
+  return im;
+}
+
 }  // namespace occ_improve

@@ -3,17 +3,24 @@
 // occupancy and improvement maps written to a folder.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/map_io.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/planner.hpp"
 #include "occ_improve/render.hpp"
+#include "occ_improve/return_model.hpp"
+#include "occ_improve/virtual_sensor.hpp"
 
 #include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 
 #include <atomic>
+#include <cmath>
+#include <csignal>
 #include <chrono>
 #include <cstdio>
+#include <fstream>
 #include <iostream>
 #include <mutex>
 #include <thread>
@@ -36,6 +43,14 @@ void print_usage(const char* program) {
             << "                            camera-intrinsics.txt), TUM RGB-D (depth.txt, groundtruth.txt) or\n"
             << "                            a folder of 16-bit PNG/PGM; needs intrinsics unless the folder has them\n"
             << "  FILE.pcd ...              positional PCD files, in order\n"
+            << "  -simulate FRAME           the closed loop of docs/SELECTIVE.md against a virtual Kinect v1 over\n"
+            << "                            one real frame (organized PCD or depth image): plan a shot, acquire its\n"
+            << "                            rays (axial noise, disparity quantisation, no return where the frame\n"
+            << "                            has none), insert, learn which rays never return, until the plan says\n"
+            << "                            stop; writes shots.csv and gain.png (expected gain per shot against\n"
+            << "                            rays asked) with the maps. Pixel-native presets only.\n"
+            << "  -budget N                 -simulate: rays per shot (default 4096)\n"
+            << "  -max_shots N              -simulate: stop after N shots at the latest (default 1000)\n"
             << "With poses, every frame is moved into the FIRST frame's sensor frame (the grid has one\n"
             << "viewpoint).\n\n"
             << "Pipeline:\n"
@@ -90,6 +105,98 @@ T parse_number(int argc, const char* const* argv, const char* flag, T fallback, 
   return value;
 }
 
+// ---- -simulate FRAME: the selective-acquisition loop against a virtual sensor over a real frame.
+
+struct SimulatedShot {
+  std::size_t rays_asked, returns;  ///< this shot's
+  std::size_t rays_asked_total;
+  double expected_gain;
+};
+
+// The frame's z per pixel (0 = no return): the virtual sensor's scene.
+std::vector<float> scene_depth(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
+  std::vector<float> depth(cloud.size(), 0.0f);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (std::isfinite(cloud[i].z) && cloud[i].z > 0) depth[i] = cloud[i].z;
+  return depth;
+}
+
+void write_shots_csv(const std::string& path, const std::vector<SimulatedShot>& shots) {
+  std::ofstream csv(path);
+  csv << "shot,rays_asked,returns,rays_asked_total,expected_gain\n";
+  for (std::size_t i = 0; i < shots.size(); ++i)
+    csv << i + 1 << ',' << shots[i].rays_asked << ',' << shots[i].returns << ',' << shots[i].rays_asked_total << ','
+        << shots[i].expected_gain << '\n';
+  if (!csv.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+// One planned shot acquired and inserted; the return record learns which rays stayed silent.
+SimulatedShot acquire(const Shot& shot, VirtualSensor& sensor, Mapper& mapper, ReturnRecord& returns,
+                      std::size_t asked_before) {
+  const std::vector<float> depth = sensor.shoot(shot.columns);  // pixel-native: column index = pixel index
+  mapper.insert(PointSpan::from(sensor.points(shot.columns, depth)));
+  std::vector<std::uint8_t> got(depth.size());
+  std::size_t returned = 0;
+  for (std::size_t i = 0; i < depth.size(); ++i) returned += got[i] = depth[i] > 0.0f;
+  returns.record_shot(shot.columns, got);
+  return {shot.columns.size(), returned, asked_before + shot.columns.size(), shot.expected_gain};
+}
+
+int run_simulation(const ToolOptions& options, const std::string& frame_path, int budget, int max_shots,
+                   OutputFolder& out) {
+  const ToolFrame frame = read_tool_frame(options, FrameSource{frame_path, std::nullopt});
+  const SensorPreset preset = options.preset_for_camera(frame.camera);
+  if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
+    throw InvalidParameter("-simulate " + frame_path + " needs an organized frame and a pixel-native preset "
+                           "(kinect_v1): the plan's rays are the sensor's pixels");
+  std::printf("%s\npreset %s, %d rays per shot\n", describe_camera({frame}).c_str(), preset.name.c_str(), budget);
+  VirtualSensor sensor(scene_depth(frame.cloud), *frame.camera);
+  Mapper mapper(preset, options.grid);
+  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  PlanRequest request;
+  request.budget_rays = budget;
+  std::vector<SimulatedShot> shots;
+  std::string why = "reached -max_shots " + std::to_string(max_shots);
+  const bool terminal = isatty(fileno(stdout)) != 0;
+  const auto start = std::chrono::steady_clock::now();
+  try {
+    while (static_cast<int>(shots.size()) < max_shots) {
+      throw_if_interrupted();
+      const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+      if (shot.stop) {
+        why = "the plan says stop: " + shot.reason;
+        break;
+      }
+      shots.push_back(acquire(shot, sensor, mapper, returns, shots.empty() ? 0 : shots.back().rays_asked_total));
+      if (terminal)
+        std::printf("\rshot %zu: %zu rays asked (%.2f frames), expected gain %.1f   ", shots.size(),
+                    shots.back().rays_asked_total,
+                    static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),
+                    shots.back().expected_gain),
+            std::fflush(stdout);
+    }
+  } catch (const Interrupted&) {
+    why = "interrupted";  // what was acquired is still written, as a live run's map is
+  }
+  if (terminal) std::printf("\n");
+  write_shots_csv(out.file("shots.csv"), shots);
+  std::vector<double> asked, gain;
+  for (const SimulatedShot& s : shots) {
+    asked.push_back(static_cast<double>(s.rays_asked_total));
+    gain.push_back(s.expected_gain);
+  }
+  if (shots.size() >= 2) write_png(out.file("gain.png"), render_curve(asked, gain));
+  write_maps(mapper, out, preset.geometry.depth_max_m);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::printf("%zu shots, %zu rays asked (%.2f frames), %zu returned, in %.2f s; stopped: %s\n", shots.size(),
+              shots.empty() ? 0 : shots.back().rays_asked_total,
+              shots.empty() ? 0.0 : static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),
+              returns.total_returned(), seconds, why.c_str());
+  std::printf("wrote %s/: shots.csv%s depth.png occupancy.png improvement.png improvement_legend.png\n",
+              out.path().c_str(), shots.size() >= 2 ? " gain.png" : "");
+  return why == "interrupted" ? 128 + SIGINT : 0;
+}
+
 int run(int argc, const char* const* argv_in) {
   std::vector<const char*> args(argv_in, argv_in + argc);
   const std::optional<std::string> device = take_device_flag(args);
@@ -99,7 +206,8 @@ int run(int argc, const char* const* argv_in) {
   ToolSpec spec;
   spec.default_preset = "kinect_v1";
   spec.value_flags = {"-oni",     "-pcd_dir",    "-depth_dir", "-o",   "-save_every",
-                      "-fps",     "-threads",    "-max_frames", "-load", "-save"};
+                      "-fps",     "-threads",    "-max_frames", "-load", "-save",
+                      "-simulate", "-budget",    "-max_shots"};
   spec.switches = {"-drop", "-no_poses", "-stop_on_signal", "-overwrite"};
   const ToolOptions options = parse_tool_options(n, argv, spec);
 
@@ -116,10 +224,16 @@ int run(int argc, const char* const* argv_in) {
   const bool drop = pcl::console::find_switch(n, argv, "-drop");
   const bool stop_on_signal = pcl::console::find_switch(n, argv, "-stop_on_signal");
 
-  const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() + !options.inputs.empty();
+  std::string simulate;
+  pcl::console::parse_argument(n, argv, "-simulate", simulate);
+  const int budget = parse_number(n, argv, "-budget", 4096, 1);
+  const int max_shots = parse_number(n, argv, "-max_shots", 1000, 1);
+  const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() +
+                      !options.inputs.empty() + !simulate.empty();
   if (sources != 1)
-    throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir or PCD files); see -h");
+    throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, PCD files or -simulate); see -h");
   OutputFolder out = open_output_folder(n, argv, "occ_improve_live", "occ_improve_live_out");
+  if (!simulate.empty()) return run_simulation(options, simulate, budget, max_shots, out);
 
   // The source, and the sensor preset that fits it.
   std::shared_ptr<pcl::Grabber> grabber;

@@ -1,5 +1,7 @@
 // Every command-line tool, run as a user runs it: the same outcome for the same bad input (exit code 1
 // and one error line naming the file), no crash on malformed files, and a clean stop on SIGINT/SIGTERM.
+#include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/sample_scene.hpp"
 #include "support/temp_folder.hpp"
 
 #include <gtest/gtest.h>
@@ -13,6 +15,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -140,6 +143,41 @@ TEST_F(Tools, SigtermStopsCleanlyWithTheSummaryAndAnExitCodeOfTheSignal) {
   for (const auto& entry : fs::directory_iterator(folder_))
     EXPECT_EQ(entry.path().filename().string().find(".out.tmp-"), std::string::npos) << "staging left: " << entry.path();
   EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / "improvement.png")) << "the map so far is published";
+}
+
+// occ_improve_live -simulate: the closed loop against the virtual sensor over a frame, until the plan
+// says stop, with its record of shots and its plot.
+TEST_F(Tools, SimulateRunsTheSelectiveLoopUntilThePlanSaysStop) {
+  const sample::SampleFrame scene = sample::generate_scene();
+  ASSERT_EQ(pcl::io::savePCDFileBinary(file("sample.pcd"),
+                                       organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)),
+            0);
+  const ToolRun r = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 30000 -o sim");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("the plan says stop"), std::string::npos) << r.out;
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder_ / "sim" / "gain.png"));
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder_ / "sim" / "improvement.png"));
+  std::ifstream csv(folder_ / "sim" / "shots.csv");
+  std::string line;
+  std::getline(csv, line);
+  std::vector<double> asked, gain;
+  while (std::getline(csv, line)) {
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream fields(line);
+    double shot, rays, returns, total, expected;
+    fields >> shot >> rays >> returns >> total >> expected;
+    EXPECT_LE(returns, rays);
+    asked.push_back(total);
+    gain.push_back(expected);
+  }
+  ASSERT_GE(asked.size(), 3u);
+  EXPECT_TRUE(std::is_sorted(asked.begin(), asked.end()));
+  EXPECT_LT(gain.back(), 0.5 * gain.front());  // what one more shot is expected to bring falls
+  // Refused: a spherical grid (the plan's rays must be the sensor's pixels) and a budget of 0.
+  const ToolRun spherical = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -preset kinect_v1_paper -o sim2");
+  EXPECT_EQ(spherical.exit_code, 1);
+  EXPECT_NE(spherical.err.find("pixel-native"), std::string::npos) << spherical.err;
+  EXPECT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 0 -o sim3").exit_code, 1);
 }
 
 }  // namespace
