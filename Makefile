@@ -60,6 +60,7 @@ select-eval: build
 # the posed 7-Scenes sequence, scored against the map from all points (docs/SELECTIVE.md).
 FILTER_OUT ?= out/filter
 filter-eval: build
+	mkdir -p $(dir $(FILTER_OUT))  # the tool creates its own folder, not its parents
 	$(BUILD_DIR)/pcl_tools/occ_filter_eval $(DATA_DIR)/sequences/7scenes_redkitchen/frames -o $(FILTER_OUT) -overwrite
 	$(PYTHON) scripts/plot_filter.py $(FILTER_OUT)
 

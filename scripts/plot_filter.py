@@ -4,7 +4,8 @@
 - OUT_DIR/filter_<pct>pct.png per kept fraction: quality (share of the all-points map's surface columns
   whose predicted depth lies within 2 sigma(z)) against points kept so far, one curve per strategy;
 - OUT_DIR/table.md: per fraction and strategy, the quality after frames 1, 10, 25 and 50 (or the last),
-  the points kept, the largest deviation of a frame's kept count from the asked one, and VoxelGrid's leaf.
+  the points kept, the largest deviation of a frame's kept count from the asked one, the distinct rays
+  per kept point over the run (1: every kept point on its own ray), and VoxelGrid's leaf.
 
 Usage: /usr/bin/python3 scripts/plot_filter.py OUT_DIR
 """
@@ -56,15 +57,16 @@ def plot(runs, fraction, out_dir):
 
 def table(runs):
     lines = ["| fraction | strategy | " + " | ".join(f"quality after {f}" for f in CHECKPOINTS) +
-             " | points kept | max kept vs asked | voxel leaf [mm] |",
-             "|---:|---|" + "---:|" * (len(CHECKPOINTS) + 3)]
+             " | points kept | max kept vs asked | rays per point | voxel leaf [mm] |",
+             "|---:|---|" + "---:|" * (len(CHECKPOINTS) + 4)]
     for (fraction, strategy), rows in sorted(runs.items(), key=lambda kv: (kv[0][0], list(STYLE).index(kv[0][1]))):
         at = [rows[min(f, len(rows)) - 1] for f in CHECKPOINTS]
         deviation = max(abs(int(r["kept"]) - int(r["asked"])) / max(1, int(r["asked"])) for r in rows)
+        spread = sum(int(r["columns"]) for r in rows) / max(1, sum(int(r["kept"]) for r in rows))
         leaves = [float(r["leaf_m"]) * 1e3 for r in rows]
         leaf = f"{min(leaves):.1f}-{max(leaves):.1f}" if max(leaves) > 0 else "-"
         lines.append(f"| {fraction:.0%} | {strategy} | " + " | ".join(f"{float(r['quality']):.3f}" for r in at) +
-                     f" | {int(rows[-1]['points']):,} | {deviation:.1%} | {leaf} |")
+                     f" | {int(rows[-1]['points']):,} | {deviation:.1%} | {spread:.3f} | {leaf} |")
     return "\n".join(lines) + "\n"
 
 

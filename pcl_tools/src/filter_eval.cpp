@@ -126,6 +126,16 @@ FrameCloud::ConstPtr shuffled(const FrameCloud& frame, std::uint32_t seed) {
   return out;
 }
 
+std::size_t distinct_columns(const FrameCloud& cloud, const SphericalGeometry& geometry) {
+  std::vector<ColumnIndex> columns;
+  columns.reserve(cloud.size());
+  ColumnIndex column;
+  for (const auto& p : cloud.points)
+    if (geometry.column_of(p.x, p.y, p.z, column)) columns.push_back(column);
+  std::sort(columns.begin(), columns.end());
+  return static_cast<std::size_t>(std::unique(columns.begin(), columns.end()) - columns.begin());
+}
+
 /// The points `strategy` keeps of `frame` (about `count`), chosen against `mapper` as it is.
 FrameCloud keep_points(KeepStrategy strategy, const FrameCloud::ConstPtr& frame, std::size_t count, double fraction,
                        const std::shared_ptr<Mapper>& mapper, std::uint32_t seed, float& leaf_m) {
@@ -168,6 +178,7 @@ std::vector<FilterStep> run_keep_strategy(KeepStrategy strategy, double fraction
                                         options.seed + static_cast<std::uint32_t>(i), step.leaf_m);
     if (!kept.empty()) mapper->insert(span_of(kept));
     step.kept = kept.size();
+    step.columns = distinct_columns(kept, mapper->geometry());
     step.points = points += kept.size();
     step.quality = quality_against(*mapper, reference, options.radius_columns);
     steps.push_back(step);

@@ -28,8 +28,8 @@ void print_usage(const char* program) {
             << "order (improvement_shuffled: ties go to random points, not the top rows), pcl::RandomSample (as\n"
             << "many points, seeded) and pcl::VoxelGrid (leaf bisected to about as many). After each frame:\n"
             << "points kept so far and the quality = share of the reference's surface columns whose predicted\n"
-            << "depth lies within 2 sigma(z).\n"
-            << "Writes OUT/filter.csv (strategy,fraction,frame,asked,kept,points,leaf_m,quality).\n\n"
+            << "depth lies within 2 sigma(z); columns = distinct rays a frame's kept points fall in.\n"
+            << "Writes OUT/filter.csv (strategy,fraction,frame,asked,kept,columns,points,leaf_m,quality).\n\n"
             << usage_output_folder("out/filter")
             << "  -fractions LIST   shares of each frame to keep (default 0.05,0.2)\n"
             << "  -frames N         the first N frames only (default 0: all)\n"
@@ -75,7 +75,7 @@ EvalSetup setup(const ToolOptions& options) {
 void write_steps(std::ostream& csv, KeepStrategy strategy, double fraction, const std::vector<FilterStep>& steps) {
   for (const FilterStep& s : steps)
     csv << keep_strategy_name(strategy) << ',' << fraction << ',' << s.frame << ',' << s.asked << ',' << s.kept << ','
-        << s.points << ',' << s.leaf_m << ',' << s.quality << '\n';
+        << s.columns << ',' << s.points << ',' << s.leaf_m << ',' << s.quality << '\n';
 }
 
 int run(int argc, char** argv) {
@@ -102,7 +102,7 @@ int run(int argc, char** argv) {
   std::fprintf(stderr, "%s: %zu frames, preset %s; reference: all points\n", s.folder.c_str(), frames.size(),
                s.preset.name.c_str());
   std::ofstream csv(out.file("filter.csv"));
-  csv << "strategy,fraction,frame,asked,kept,points,leaf_m,quality\n";
+  csv << "strategy,fraction,frame,asked,kept,columns,points,leaf_m,quality\n";
   for (double fraction : fractions)
     for (KeepStrategy strategy : {KeepStrategy::improvement, KeepStrategy::improvement_shuffled, KeepStrategy::random_sample,
                                   KeepStrategy::voxel_grid}) {

@@ -45,6 +45,8 @@ TEST(FilterEval, EveryStrategyKeepsTheAskedCountAndQualitiesAreShares) {
         EXPECT_NEAR(static_cast<double>(step.asked), fraction * static_cast<double>(s.frames[step.frame]->size()), 0.5);
         EXPECT_LE(std::abs(static_cast<double>(step.kept) - static_cast<double>(step.asked)), 0.05 * step.asked);
         EXPECT_EQ(step.points, points += step.kept);
+        EXPECT_GT(step.columns, 0u);
+        EXPECT_LE(step.columns, step.kept);
         EXPECT_GT(step.quality, 0.0);
         EXPECT_LE(step.quality, 1.0);
       }

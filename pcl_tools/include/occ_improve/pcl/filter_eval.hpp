@@ -52,6 +52,7 @@ struct FilterStep {
   std::size_t asked = 0;   ///< round(fraction x the frame's points)
   std::size_t kept = 0;    ///< what the strategy kept of this frame
   std::size_t points = 0;  ///< kept so far, this frame included
+  std::size_t columns = 0; ///< distinct columns (rays) this frame's kept points fall in: how spread they are
   float leaf_m = 0;        ///< voxel_grid only
   double quality = 0;      ///< depth_agreement share against the reference
 };
