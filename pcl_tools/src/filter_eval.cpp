@@ -81,6 +81,7 @@ std::size_t voxel_count(const FrameCloud::ConstPtr& frame, float leaf, FrameClou
 }  // namespace
 
 VoxelKeep voxel_grid_keeping(const FrameCloud::ConstPtr& frame, std::size_t count) {
+  if (frame->empty() || count == 0) return {};  // getMinMax3D has no extent to give for an empty cloud
   pcl::PointXYZ min_p, max_p;
   pcl::getMinMax3D(*frame, min_p, max_p);
   const double volume = std::max(1e-9, double(max_p.x - min_p.x) * (max_p.y - min_p.y) * (max_p.z - min_p.z));

@@ -34,7 +34,8 @@ const char* keep_strategy_name(KeepStrategy strategy);
 Frames read_posed_frames(DepthSequence sequence, const PinholeIntrinsics& intrinsics, const SphericalGeometry& geometry,
                          std::size_t max_frames);
 
-/// pcl::VoxelGrid with the leaf size (found by bisection) whose output is closest to `count` points.
+/// pcl::VoxelGrid with the leaf size in [smallest without index overflow, 1 m], found by bisection, whose
+/// output is closest to `count` points (within 0.5 % stops the search). Empty for an empty frame or count 0.
 struct VoxelKeep {
   FrameCloud cloud;
   float leaf_m = 0;
