@@ -87,6 +87,7 @@ TEST(FilterEval, VoxelBisectionReachesTheAskedCountOnAPlane) {
     EXPECT_LE(std::abs(static_cast<double>(kept.cloud.size()) - static_cast<double>(count)), 0.05 * count) << count;
     EXPECT_GT(kept.leaf_m, 0.0f);
   }
+  EXPECT_TRUE(voxel_grid_keeping(FrameCloud::Ptr(new FrameCloud), 10).cloud.empty());
 }
 
 }  // namespace
