@@ -11,7 +11,7 @@ PYTHON ?= $(shell test -x /usr/bin/python3 && echo /usr/bin/python3 || command -
 CONFIGURE = cmake -S . -B $(BUILD_DIR) -DCMAKE_BUILD_TYPE=$(BUILD_TYPE) -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE \
             -DCMAKE_INSTALL_PREFIX=$(INSTALL_DIR) -DPython_EXECUTABLE=$(PYTHON) $(CMAKE_FLAGS)
 
-.PHONY: all deps configure build test demo bench segment-eval map-eval select-eval consumer-test install clean \
+.PHONY: all deps configure build test demo bench segment-eval map-eval select-eval filter-eval consumer-test install clean \
         python-wheel-test python-bench python-sample fuzz test-sanitize
 
 all: build
@@ -55,6 +55,14 @@ SELECT_OUT ?= out/select
 select-eval: build
 	$(BUILD_DIR)/pcl_tools/occ_select_eval $(SELECT_SCENES) -o $(SELECT_OUT) -frames 3
 	$(PYTHON) scripts/plot_select.py $(SELECT_OUT)
+
+# The same question in a PCL pipeline: ImprovementFilter against pcl::RandomSample and pcl::VoxelGrid over
+# the posed 7-Scenes sequence, scored against the map from all points (docs/SELECTIVE.md).
+FILTER_OUT ?= out/filter
+filter-eval: build
+	mkdir -p $(dir $(FILTER_OUT))  # the tool creates its own folder, not its parents
+	$(BUILD_DIR)/pcl_tools/occ_filter_eval $(DATA_DIR)/sequences/7scenes_redkitchen/frames -o $(FILTER_OUT) -overwrite
+	$(PYTHON) scripts/plot_filter.py $(FILTER_OUT)
 
 install: build
 	cmake --install $(BUILD_DIR) --prefix $(INSTALL_DIR) >/dev/null

@@ -57,5 +57,35 @@ TEST(DepthPrediction, BadInputThrows) {
   for (float z : none.depth_m) EXPECT_EQ(z, 0.0f);
 }
 
+// Quadratic sigma only (Kinect): sigma(2 m) = 1.425e-3 x 4 = 5.7 mm, so 2 sigma = 11.4 mm.
+SensorModel kinect_noise() {
+  SensorModelParams p;
+  p.sigma_depth_m = 0.0;
+  p.sigma_depth_per_m2 = 1.425e-3;
+  return SensorModel(p);
+}
+
+TEST(DepthAgreement, CountsReferenceSamplesWithinTwoSigma) {
+  SurfaceMap reference = unknown_surface(4, 1);
+  for (int x = 0; x < 3; ++x) measure(reference, x, 0, 2.0f);  // column 3 unknown: not counted
+  SurfaceMap map = unknown_surface(4, 1);
+  measure(map, 0, 0, 2.011f);  // 11 mm off: within
+  measure(map, 1, 0, 2.012f);  // 12 mm off: outside
+  DepthPredictionParams p;
+  p.radius_columns = 0;        // column 2 gets no prediction: disagrees
+  const DepthAgreement a = depth_agreement(reference, predict_depth(map, p), kinect_noise());
+  EXPECT_EQ(a.reference_samples, 3u);
+  EXPECT_EQ(a.within, 1u);
+  EXPECT_DOUBLE_EQ(a.share(), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(depth_agreement(reference, predict_depth(reference), kinect_noise()).share(), 1.0);
+}
+
+TEST(DepthAgreement, BadInputThrows) {
+  const SurfaceMap reference = unknown_surface(4, 1);
+  EXPECT_THROW(depth_agreement(reference, predict_depth(reference), kinect_noise(), 0.0), InvalidParameter);
+  EXPECT_THROW(depth_agreement(reference, predict_depth(unknown_surface(2, 2)), kinect_noise()), InvalidInput);
+  EXPECT_EQ(depth_agreement(reference, predict_depth(reference), kinect_noise()).share(), 0.0);
+}
+
 }  // namespace
 }  // namespace occ_improve

@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 
+#include <cmath>
 #include <string>
 
 namespace occ_improve {
@@ -43,6 +44,25 @@ PredictedDepth predict_depth(const SurfaceMap& surface, const DepthPredictionPar
       }
   }
   return out;
+}
+
+DepthAgreement depth_agreement(const SurfaceMap& reference, const PredictedDepth& predicted, const SensorModel& model,
+                               double sigmas) {
+  detail::require_parameter(sigmas > 0, "sigmas", sigmas, "> 0");
+  const std::size_t n = static_cast<std::size_t>(reference.width) * static_cast<std::size_t>(reference.height);
+  if (predicted.width != reference.width || predicted.height != reference.height || predicted.depth_m.size() != n ||
+      predicted.distance.size() != n || reference.depth_m.size() != n)
+    throw InvalidInput("depth_agreement: prediction of " + std::to_string(predicted.width) + " x " +
+                       std::to_string(predicted.height) + " columns against a reference of " +
+                       std::to_string(reference.width) + " x " + std::to_string(reference.height));
+  DepthAgreement a;
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!is_depth_sample(reference, c)) continue;
+    ++a.reference_samples;
+    const double z = reference.depth_m[c];
+    if (predicted.distance[c] >= 0 && std::abs(predicted.depth_m[c] - z) <= sigmas * model.sigma_depth_at(z)) ++a.within;
+  }
+  return a;
 }
 
 }  // namespace occ_improve

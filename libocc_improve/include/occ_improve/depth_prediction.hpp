@@ -10,8 +10,10 @@
 //  - of several samples at the same distance the first reached wins: a breadth-first search from all
 //    samples at once, seeded in ascending column order, visiting neighbours in a fixed order.
 // Depths are in the surface's own convention (SurfaceMap::depth_m).
+#include "occ_improve/sensor_model.hpp"
 #include "occ_improve/surface.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -36,5 +38,20 @@ inline bool is_depth_sample(const SurfaceMap& surface, std::size_t c) {
 /// The rule above over the whole surface. Throws InvalidParameter for a bad radius, InvalidInput when the
 /// surface's arrays do not hold width x height values.
 PredictedDepth predict_depth(const SurfaceMap& surface, const DepthPredictionParams& params = {});
+
+/// How far a map's predicted depth agrees with a reference map (e.g. the map from all points): counted over
+/// the reference's samples (is_depth_sample), a column agrees when its predicted depth lies within
+/// `sigmas` x model.sigma_depth_at(reference depth) of the reference's surface depth; a column without a
+/// prediction disagrees.
+struct DepthAgreement {
+  std::size_t reference_samples = 0, within = 0;
+  /// within / reference_samples (0 when the reference has no sample).
+  double share() const { return reference_samples ? static_cast<double>(within) / static_cast<double>(reference_samples) : 0.0; }
+};
+
+/// Throws InvalidParameter for sigmas <= 0 (or NaN), InvalidInput when the prediction's size is not the
+/// reference surface's (both named).
+DepthAgreement depth_agreement(const SurfaceMap& reference, const PredictedDepth& predicted, const SensorModel& model,
+                               double sigmas = 2.0);
 
 }  // namespace occ_improve
