@@ -20,6 +20,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 namespace occ_improve {
 namespace {
 
@@ -200,7 +202,9 @@ protected:
     preset.geometry.depth_bins = 128;
     const SphericalGrid grid = sample_grid(preset, {});
     touched_ = grid.touched_column_count();
-    const std::string path = (fs::temp_directory_path() / "occ_map_io_good_suite.occmap").string();
+    // One file per process: ctest runs the tests of this suite in parallel processes.
+    const std::string path =
+        (fs::temp_directory_path() / ("occ_map_io_good_suite_" + std::to_string(::getpid()) + ".occmap")).string();
     save_map(path, grid, preset.model);
     good_ = read_bytes(path);
     fs::remove(path);

@@ -14,21 +14,29 @@
 #include <sstream>
 #include <string>
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
 namespace {
 
 using occ_improve::test::ToolRun;
 
+// The log lives outside the test's folder (whose entries the tests count), one per process: ctest runs
+// the tests of this file in parallel.
 ToolRun run_tool(const std::string& arguments) {
-  return occ_improve::test::run_tool_command(OCC_IMPROVE_MAP_EXECUTABLE, arguments,
-                                             fs::temp_directory_path() / "occ_improve_map_test.log");
+  return occ_improve::test::run_tool_command(
+      OCC_IMPROVE_MAP_EXECUTABLE, arguments,
+      fs::temp_directory_path() / ("occ_improve_map_test_" + std::to_string(::getpid()) + ".log"));
 }
 
 class OccImproveMapTool : public ::testing::Test {
 protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("occ_improve_map_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    // Named after the test and the process: ctest runs the tests of this file in parallel.
+    dir_ = fs::temp_directory_path() / (std::string("occ_improve_map_test_") +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                                        std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }

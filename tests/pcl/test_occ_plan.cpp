@@ -14,6 +14,8 @@
 #include <sstream>
 #include <string>
 
+#include <unistd.h>
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -23,7 +25,10 @@ using occ_improve::test::ToolRun;
 class OccPlanTool : public ::testing::Test {
 protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("occ_plan_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()));
+    // Named after the test and the process: ctest runs the tests of this file in parallel.
+    dir_ = fs::temp_directory_path() / (std::string("occ_plan_test_") +
+                                        ::testing::UnitTest::GetInstance()->current_test_info()->name() + "_" +
+                                        std::to_string(::getpid()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
