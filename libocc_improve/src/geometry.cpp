@@ -201,7 +201,7 @@ Eigen::Vector3d SphericalGeometry::point_at(double horizontal, double vertical, 
 }
 
 bool SphericalGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || (x == 0 && y == 0 && z == 0)) return false;
+  if (!is_valid_point(x, y, z)) return false;
   RayPosition r;
   if (!project(x, y, z, r)) return false;
   c = column(r.horizontal_bin, r.vertical_bin);

@@ -232,6 +232,7 @@ std::vector<std::uint8_t> affected_rays(const SphericalGeometry& g, const Window
 
 // Columns the sensor cannot observe hold NaN: "no value", never ranked (ranking.hpp).
 void mask_unobservable(const SphericalGeometry& g, int e, float* row) {
+  if (g.all_observable()) return;
   const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(g.width());
   for (int a = 0; a < g.width(); ++a)
     if (!g.observable(static_cast<ColumnIndex>(row_start + static_cast<std::size_t>(a))))

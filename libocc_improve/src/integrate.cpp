@@ -318,7 +318,7 @@ private:
 bool to_measurement(const float* p, const SphericalGeometry& g, const SensorModel& model, Measurement& m,
                     InsertionReport& report) {
   const double x = p[0], y = p[1], z = p[2];
-  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || (x == 0 && y == 0 && z == 0)) {
+  if (!is_valid_point(x, y, z)) {
     ++report.skipped_invalid;
     return false;
   }

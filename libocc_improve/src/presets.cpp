@@ -59,14 +59,15 @@ SensorPreset preset_from_pinhole(const PinholeIntrinsics& k, const PinholePreset
   set_depth_and_noise(o, p);
   p.geometry.validate();
   // Angular noise: the quantisation of one pixel, width/sqrt(12), as the paper derives 1.88e-7 rad^2:
-  // 1/sqrt(12) px for the pixel-native binning (the default of sigma_u_px), its angle for the spherical.
-  p.model.sigma_azimuth_rad = std::atan(1.0 / k.fx) / std::sqrt(12.0);
-  p.model.sigma_elevation_rad = std::atan(1.0 / k.fy) / std::sqrt(12.0);
-  if (o.angular_binning == AngularBinning::spherical) {
-    p.model.sigma_azimuth_rad = (p.geometry.azimuth_max_rad - p.geometry.azimuth_min_rad) / k.width / std::sqrt(12.0);
-    p.model.sigma_elevation_rad =
-        (p.geometry.elevation_max_rad - p.geometry.elevation_min_rad) / k.height / std::sqrt(12.0);
-  }
+  // 1/sqrt(12) px for the pixel-native binning (sigma_u_px's default), in radians the angle of one pixel
+  // (its spherical bin's width, or at the image centre).
+  const bool spherical = o.angular_binning == AngularBinning::spherical;
+  const double azimuth_pixel_rad = spherical ? (p.geometry.azimuth_max_rad - p.geometry.azimuth_min_rad) / k.width
+                                             : std::atan(1.0 / k.fx);
+  const double elevation_pixel_rad =
+      spherical ? (p.geometry.elevation_max_rad - p.geometry.elevation_min_rad) / k.height : std::atan(1.0 / k.fy);
+  p.model.sigma_azimuth_rad = azimuth_pixel_rad / std::sqrt(12.0);
+  p.model.sigma_elevation_rad = elevation_pixel_rad / std::sqrt(12.0);
   p.model.validate();
   return p;
 }

@@ -286,11 +286,13 @@ Image render_curve(const std::vector<double>& x, const std::vector<double>& y, i
   };
   for (int px = 0; px < width; ++px) set(px, 0, 0, 0, 0), set(px, height - 1, 0, 0, 0);
   for (int py = 0; py < height; ++py) set(0, py, 0, 0, 0), set(width - 1, py, 0, 0, 0);
-  const auto [x_lo, x_hi] = std::minmax_element(x.begin(), x.end());
-  const auto [y_lo, y_hi] = std::minmax_element(y.begin(), y.end());
+  // Plain values, not structured bindings: lambdas may not capture those before C++20 (clang refuses).
+  const auto x_range = std::minmax_element(x.begin(), x.end());
+  const auto y_range = std::minmax_element(y.begin(), y.end());
+  const double x_lo = *x_range.first, x_hi = *x_range.second, y_lo = *y_range.first, y_hi = *y_range.second;
   // A margin of 4 pixels inside the frame; a constant series sits in the middle.
-  const auto to_px = [&](double v) { return *x_hi > *x_lo ? 4 + (v - *x_lo) / (*x_hi - *x_lo) * (width - 9) : width / 2.0; };
-  const auto to_py = [&](double v) { return *y_hi > *y_lo ? height - 5 - (v - *y_lo) / (*y_hi - *y_lo) * (height - 9) : height / 2.0; };
+  const auto to_px = [&](double v) { return x_hi > x_lo ? 4 + (v - x_lo) / (x_hi - x_lo) * (width - 9) : width / 2.0; };
+  const auto to_py = [&](double v) { return y_hi > y_lo ? height - 5 - (v - y_lo) / (y_hi - y_lo) * (height - 9) : height / 2.0; };
   for (std::size_t i = 0; i + 1 < x.size(); ++i) {
     const double x0 = to_px(x[i]), y0 = to_py(y[i]), x1 = to_px(x[i + 1]), y1 = to_py(y[i + 1]);
     const int steps = std::max(1, static_cast<int>(std::ceil(std::max(std::abs(x1 - x0), std::abs(y1 - y0)))));

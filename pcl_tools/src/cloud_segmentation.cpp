@@ -23,7 +23,7 @@ std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& clou
   outside = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const PointT& p = cloud[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || (p.x == 0 && p.y == 0 && p.z == 0))
+    if (!is_valid_point(p.x, p.y, p.z))
       continue;
     ColumnIndex column = 0;
     if (!geometry.column_of(p.x, p.y, p.z, column)) {

@@ -34,4 +34,13 @@ pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f
   return cloud;
 }
 
+std::vector<float> depth_of_organized(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
+  if (!cloud.isOrganized() || cloud.height <= 1)
+    throw InvalidInput("depth_of_organized: the cloud is not organized (height " + std::to_string(cloud.height) + ")");
+  std::vector<float> depth(cloud.size(), 0.0f);
+  for (std::size_t i = 0; i < cloud.size(); ++i)
+    if (std::isfinite(cloud[i].z) && cloud[i].z > 0) depth[i] = cloud[i].z;
+  return depth;
+}
+
 }  // namespace occ_improve

@@ -95,36 +95,25 @@ pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path) 
   return cloud;
 }
 
-namespace {
-
-// The fit over an organized cloud's points, which PCL lays out row-major at a float stride.
-template <typename PointT, typename Fit>
-IntrinsicsFit fit_cloud(const pcl::PointCloud<PointT>& cloud, Fit fit) {
+template <typename PointT>
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud, double max_rms_px) {
   if (!cloud.isOrganized() || cloud.height <= 1)
     throw InvalidInput("intrinsics can only be estimated from an organized cloud (height > 1)");
+  // PCL lays an organized cloud's points out row-major at a float stride.
   static_assert(sizeof(PointT) % sizeof(float) == 0, "PCL points are float-aligned");
-  return fit(&cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height),
-             sizeof(PointT) / sizeof(float));
-}
-
-}  // namespace
-
-template <typename PointT>
-IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud) {
-  return fit_cloud(cloud, [](const float* xyz, int w, int h, std::size_t stride) { return fit_intrinsics(xyz, w, h, stride); });
+  return fit_intrinsics_checked(&cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height),
+                                sizeof(PointT) / sizeof(float), max_rms_px);
 }
 
 template <typename PointT>
 PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud) {
-  return fit_cloud(cloud, [](const float* xyz, int w, int h, std::size_t stride) {
-           return fit_intrinsics_checked(xyz, w, h, stride);
-         }).intrinsics;
+  return estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
 }
 
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZ>&);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBL>&);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBA>&);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGB>&);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZ>&, double);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBL>&, double);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBA>&, double);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGB>&, double);
 template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZ>&);
 template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBL>&);
 template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBA>&);

@@ -216,13 +216,7 @@ ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source)
     if (loaded.cloud.height <= 1)
       throw InvalidInput("'" + source.path + "' is not organized, so its camera cannot be fitted; preset " +
                          options.preset_name + " needs one: give -intrinsics (or -preset kinect_v1_paper)");
-    const IntrinsicsFit fit = estimate_intrinsics_fit(loaded.cloud);
-    if (!(fit.rms_residual_px <= kMaxIntrinsicsFitResidualPx)) {
-      std::ostringstream m;
-      m << "'" << source.path << "': " << "intrinsics fitted to its points miss their pixels by " << fit.rms_residual_px
-        << " px RMS (at most " << kMaxIntrinsicsFitResidualPx << " accepted): not a pinhole range image; give -intrinsics";
-      throw InvalidInput(m.str());
-    }
+    const IntrinsicsFit fit = estimate_intrinsics_fit(loaded.cloud, kMaxIntrinsicsFitResidualPx);
     camera = fit.intrinsics;
     std::ostringstream why;
     why << "fitted to " << source.path << ", RMS residual " << fit.rms_residual_px << " px over " << fit.points_used

@@ -113,14 +113,6 @@ struct SimulatedShot {
   double expected_gain;
 };
 
-// The frame's z per pixel (0 = no return): the virtual sensor's scene.
-std::vector<float> scene_depth(const pcl::PointCloud<pcl::PointXYZ>& cloud) {
-  std::vector<float> depth(cloud.size(), 0.0f);
-  for (std::size_t i = 0; i < cloud.size(); ++i)
-    if (std::isfinite(cloud[i].z) && cloud[i].z > 0) depth[i] = cloud[i].z;
-  return depth;
-}
-
 void write_shots_csv(const std::string& path, const std::vector<SimulatedShot>& shots) {
   std::ofstream csv(path);
   csv << "shot,rays_asked,returns,rays_asked_total,expected_gain\n";
@@ -150,7 +142,7 @@ int run_simulation(const ToolOptions& options, const std::string& frame_path, in
     throw InvalidParameter("-simulate " + frame_path + " needs an organized frame and a pixel-native preset "
                            "(kinect_v1): the plan's rays are the sensor's pixels");
   std::printf("%s\npreset %s, %d rays per shot\n", describe_camera({frame}).c_str(), preset.name.c_str(), budget);
-  VirtualSensor sensor(scene_depth(frame.cloud), *frame.camera);
+  VirtualSensor sensor(depth_of_organized(frame.cloud), *frame.camera);
   Mapper mapper(preset, options.grid);
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
   PlanRequest request;

@@ -204,11 +204,8 @@ int run(int argc, char** argv) {
   write_png(staging.file("occupancy.png"), render_occupancy(mapper.surface()));
   write_png(staging.file("improvement.png"), render_improvement(mapper.improvement()));
   write_png(staging.file("legend.png"), render_improvement_legend());
-  // With a pixel-native grid the map is pixel-aligned with the frame's registered colour.
-  const bool overlay = !frames.empty() && frames.front().colour &&
-                       mapper.geometry().binning() == AngularBinning::pinhole &&
-                       frames.front().colour->width == mapper.geometry().width() &&
-                       frames.front().colour->height == mapper.geometry().height();
+  // With a pixel-native grid (whose size is the frame's) the map is pixel-aligned with the registered colour.
+  const bool overlay = !frames.empty() && frames.front().colour && mapper.geometry().binning() == AngularBinning::pinhole;
   if (overlay) write_png(staging.file("overlay.png"), render_overlay(mapper.improvement(), *frames.front().colour));
   save_improvement_cloud(staging.file("surface.pcd"),
                          to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));

@@ -4,6 +4,7 @@
 #include "occ_improve/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
@@ -68,8 +69,7 @@ Scene load_scene(const std::string& input) {
   const LoadedFrame frame = pcd ? load_pcd_frame(source.path) : load_depth_frame(source.path, source.intrinsics.value());
   if (!frame.cloud.isOrganized() || frame.cloud.height <= 1) throw InvalidInput(input + ": not an organized frame");
   s.intrinsics = pcd ? estimate_intrinsics(frame.cloud) : *source.intrinsics;
-  s.depth_m.reserve(frame.cloud.size());
-  for (const auto& p : frame.cloud.points) s.depth_m.push_back(std::isfinite(p.z) && p.z > 0 ? p.z : 0.0f);
+  s.depth_m = depth_of_organized(frame.cloud);
   if (s.name.find('.') != std::string::npos) s.name = s.name.substr(0, s.name.find('.'));
   return s;
 }

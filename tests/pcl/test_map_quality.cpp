@@ -16,6 +16,7 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
@@ -142,9 +143,7 @@ LoadedFrame load_with_camera(const RealFrame& f, const std::string& path) {
   if (!f.intrinsics_file.empty())
     return load_depth_frame(path, read_intrinsics_file(test::data_file(f.intrinsics_file)), DepthEncoding::millimetres);
   LoadedFrame frame = load_pcd_frame(path);
-  frame.intrinsics = fit_intrinsics_checked(&frame.cloud.points[0].x, static_cast<int>(frame.cloud.width),
-                                            static_cast<int>(frame.cloud.height), 4)
-                         .intrinsics;
+  frame.intrinsics = estimate_intrinsics(frame.cloud);
   return frame;
 }
 
@@ -205,10 +204,7 @@ TEST(MapQuality, RepeatedFramesOfOneViewLowerTheKnownRaysOnly) {
   std::vector<pcl::PointCloud<pcl::PointXYZ>> frames;
   for (const auto& file : files) frames.push_back(load_pcd_frame(file).cloud);
   ASSERT_EQ(frames.size(), 3u);
-  const auto& c = frames.front();
-  const PinholeIntrinsics k =
-      fit_intrinsics_checked(&c.points[0].x, static_cast<int>(c.width), static_cast<int>(c.height), 4).intrinsics;
-  expect_falls_with_observations("grabber_sequences", kinect_v1(k), frames);
+  expect_falls_with_observations("grabber_sequences", kinect_v1(estimate_intrinsics(frames.front())), frames);
 }
 
 // The README's colour guide as numbers: rays whose return lies at the grid's far end (within 3 sigma of
@@ -236,7 +232,9 @@ TEST(MapQuality, GridEndAndBeyondForTheColourGuide) {
     for (const auto& [label, v] : {std::pair{"at grid end", at_end}, std::pair{"beyond", beyond}}) {
       std::printf("%-16s %-10s %7zu %7.3f %7.3f %7.3f\n", preset.name.c_str(), label, v.size(), percentile(v, 0.5),
                   percentile(v, 0.99), v.empty() ? 0.0f : *std::max_element(v.begin(), v.end()));
-      if (preset.name == "kinect_v1" && !v.empty()) EXPECT_LT(*std::max_element(v.begin(), v.end()), kNoDataBand) << label;
+      if (preset.name == "kinect_v1" && !v.empty()) {
+        EXPECT_LT(*std::max_element(v.begin(), v.end()), kNoDataBand) << label;
+      }
     }
   }
 }

@@ -18,6 +18,7 @@
 // Frame: the sensor's optical frame (x right, y down, z forward). Units: metres; radians or pixels.
 #include <Eigen/Core>
 #include <cstddef>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -143,6 +144,11 @@ private:
 
 using ColumnIndex = std::uint32_t;
 
+/// SPEC 1: a point is valid when every coordinate is finite and it is not the origin (no return).
+inline bool is_valid_point(double x, double y, double z) {
+  return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && !(x == 0 && y == 0 && z == 0);
+}
+
 /// Where a point falls in the grid: continuous angular position (the binning's unit), the columns'
 /// bins containing it, and its coordinate on the depth axis (range or z).
 struct RayPosition {
@@ -171,6 +177,7 @@ public:
   bool column_of(double x, double y, double z, ColumnIndex& column) const;
   /// Columns a camera can observe (every column, unless a spherical grid was given a camera).
   bool observable(ColumnIndex c) const { return observable_.empty() || observable_[c] != 0; }
+  bool all_observable() const { return observable_.empty(); }
   std::size_t observable_count() const;
   int width() const { return azimuth_.bins(); }    ///< columns per elevation row (image width)
   int height() const { return elevation_.bins(); }  ///< elevation rows (image height)

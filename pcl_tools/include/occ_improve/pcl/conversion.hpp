@@ -30,4 +30,8 @@ void require_valid_points(PointSpan points, const std::string& name);
 /// return (sample::SampleFrame::points(), depth_image_to_points()). Throws InvalidInput on a size mismatch.
 pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f>& points, int width, int height);
 
+/// The other way: an organized cloud's z per pixel, row-major, 0 where it has no return (the depth image a
+/// VirtualSensor takes as its scene). Throws InvalidInput for a cloud that is not organized.
+std::vector<float> depth_of_organized(const pcl::PointCloud<pcl::PointXYZ>& cloud);
+
 }  // namespace occ_improve

@@ -20,6 +20,7 @@
 #include <pcl/point_types.h>
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -30,13 +31,14 @@ namespace occ_improve {
 pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path);
 
 /// Pinhole intrinsics of an organized cloud from a pinhole camera, fitted by least squares to
-/// u = fx x/z + cx and v = fy y/z + cy over its valid points (fit_intrinsics), with the fit's residual.
-/// Throws InvalidInput when the cloud is not organized or has fewer than 100 valid points.
+/// u = fx x/z + cx and v = fy y/z + cy over its valid points (fit_intrinsics_checked), with the fit's
+/// residual. Throws InvalidInput when the cloud is not organized, has fewer than 100 valid points, or fits
+/// worse than max_rms_px (the message names the residual and -intrinsics).
 template <typename PointT>
-IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud);
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud,
+                                      double max_rms_px = std::numeric_limits<double>::infinity());
 
-/// The intrinsics alone; also refuses a poor fit (RMS residual above kMaxIntrinsicsFitResidualPx) with
-/// InvalidInput naming the residual and -intrinsics.
+/// The intrinsics alone, refusing a fit worse than kMaxIntrinsicsFitResidualPx.
 template <typename PointT>
 PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud);
 
