@@ -194,10 +194,11 @@ Eigen::Vector3d SphericalGeometry::direction(int azimuth_bin, int elevation_bin)
 }
 
 Eigen::Vector3d SphericalGeometry::point_at(double horizontal, double vertical, double depth) const {
-  const Eigen::Vector3d d = direction_at(horizontal, vertical);
-  // Pinhole columns' depth axis is z: scale the direction to unit z.
-  return params_.angular_binning == AngularBinning::pinhole ? Eigen::Vector3d(d * (depth / d.z()))
-                                                            : Eigen::Vector3d(d * depth);
+  if (params_.angular_binning == AngularBinning::pinhole) {  // depth is z: back-project the pixel position
+    const PinholeIntrinsics& k = *params_.camera;
+    return {(horizontal - k.cx) / k.fx * depth, (vertical - k.cy) / k.fy * depth, depth};
+  }
+  return direction_at(horizontal, vertical) * depth;
 }
 
 bool SphericalGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
