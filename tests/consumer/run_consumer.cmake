@@ -1,7 +1,8 @@
 # ctest's consumer test: installs the build into a scratch prefix, then configures, builds and runs
 # tests/consumer against it twice: asking for the core alone with PCL and OctoMap made unfindable (a core
 # user needs neither), and asking for every component.
-#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... -P run_consumer.cmake
+#   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DLINKER_FLAGS=...] -P run_consumer.cmake
+# LINKER_FLAGS are the build's own (a sanitizer build's static libraries need its runtime to link).
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "run_consumer.cmake needs -D${var}=...")
@@ -27,7 +28,8 @@ foreach(case core all)
   else()
     set(options -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE)
   endif()
-  run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${build} -DCMAKE_PREFIX_PATH=${prefix} ${options})
+  run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${build} -DCMAKE_PREFIX_PATH=${prefix} ${options}
+      "-DCMAKE_EXE_LINKER_FLAGS=${LINKER_FLAGS}")
   run(${CMAKE_COMMAND} --build ${build})
   run(${build}/occ_improve_consumer)
 endforeach()
