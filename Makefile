@@ -53,7 +53,7 @@ SELECT_SCENES = sample $(DATA_DIR)/kinect/pcl_tutorials/pairwise/capture0001.pcd
   $(DATA_DIR)/sequences/7scenes_redkitchen/frames/frame-000150.depth.png
 SELECT_OUT ?= out/select
 select-eval: build
-	$(BUILD_DIR)/pcl_tools/occ_select_eval $(SELECT_SCENES) -o $(SELECT_OUT) -frames 3
+	$(BUILD_DIR)/pcl_tools/occ_select_eval $(SELECT_SCENES) -o $(SELECT_OUT) -overwrite -frames 3
 	$(PYTHON) scripts/plot_select.py $(SELECT_OUT)
 
 # The same question in a PCL pipeline: ImprovementFilter against pcl::RandomSample and pcl::VoxelGrid over

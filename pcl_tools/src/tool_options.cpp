@@ -4,10 +4,11 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/segmentation_eval.hpp"
 
-#include <pcl/console/parse.h>
+#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
+#include <chrono>
+#include <cstring>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -21,78 +22,14 @@ namespace occ_improve {
 
 namespace {
 
-const std::vector<std::string> kCommonValueFlags = {
-    "-preset", "-sigma_depth", "-sigma_depth_quadratic", "-sigma_angle", "-support_k", "-depth_bins",
-    "-depth_max", "-fov", "-k", "-mode", "-clamp", "-intrinsics", "-intrinsics_file", "-depth_encoding"};
-const std::vector<std::string> kCommonSwitches = {"-h", "--help"};
 constexpr double kPi = 3.14159265358979323846;
-
-bool contains(const std::vector<std::string>& list, const std::string& s) {
-  return std::find(list.begin(), list.end(), s) != list.end();
-}
 
 [[noreturn]] void bad_flag(const std::string& flag, const std::string& value, const std::string& requirement) {
   throw InvalidParameter(flag + " " + value + " is invalid: must be " + requirement);
 }
 
-// A negative number ("-0.5") is a value, not a flag.
-bool looks_like_flag(const std::string& arg) {
-  if (arg.size() < 2 || arg[0] != '-') return false;
-  char* end = nullptr;
-  std::strtod(arg.c_str(), &end);
-  return *end != '\0';
-}
-
-double to_double(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v)) bad_flag(flag, text, "a finite number");
-  return v;
-}
-
-int to_int(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  errno = 0;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || *end != '\0' || errno == ERANGE || v < -2147483647L || v > 2147483647L)
-    bad_flag(flag, text, "an integer");
-  return static_cast<int>(v);
-}
-
-std::vector<double> to_doubles(const std::string& flag, const std::string& text) {
-  std::vector<double> values;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) values.push_back(to_double(flag, item));
-  return values;
-}
-
-// The value of a flag given once; nullopt when absent.
-std::optional<std::string> value_of(int argc, const char* const* argv, const char* flag) {
-  std::string value;
-  if (pcl::console::parse_argument(argc, argv, flag, value) < 0) return std::nullopt;
-  return value;
-}
-
-std::optional<double> positive_double(int argc, const char* const* argv, const char* flag) {
-  const auto text = value_of(argc, argv, flag);
-  if (!text) return std::nullopt;
-  const double v = to_double(flag, *text);
-  if (!(v > 0)) bad_flag(flag, *text, "> 0");
-  return v;
-}
-
-std::optional<double> non_negative_double(int argc, const char* const* argv, const char* flag) {
-  const auto text = value_of(argc, argv, flag);
-  if (!text) return std::nullopt;
-  const double v = to_double(flag, *text);
-  if (v < 0) bad_flag(flag, *text, ">= 0");
-  return v;
-}
-
 PinholeIntrinsics intrinsics_from_list(const std::string& text) {
-  const std::vector<double> v = to_doubles("-intrinsics", text);
+  const std::vector<double> v = parse_number_list("-intrinsics", text);
   if (v.size() != 4 && v.size() != 6) bad_flag("-intrinsics", text, "fx,fy,cx,cy or fx,fy,cx,cy,width,height");
   PinholeIntrinsics k;
   k.fx = v[0];
@@ -113,29 +50,15 @@ PinholeIntrinsics intrinsics_from_list(const std::string& text) {
   return k;
 }
 
-void check_arguments(int argc, const char* const* argv, const ToolSpec& spec, std::vector<std::string>& inputs) {
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (!looks_like_flag(arg)) {
-      inputs.push_back(arg);
-      continue;
-    }
-    if (contains(kCommonValueFlags, arg) || contains(spec.value_flags, arg)) {
-      if (i + 1 >= argc) throw InvalidParameter(arg + " needs a value");
-      ++i;
-      continue;
-    }
-    if (contains(kCommonSwitches, arg) || contains(spec.switches, arg)) continue;
-    throw InvalidParameter("unknown option " + arg + " (see -h)");
-  }
+// The value of a flag when the tool declares it and it was given or has a default.
+std::optional<std::string> declared_text(const CommandLine& c, const std::string& flag) {
+  return c.declares(flag) ? c.text(flag) : std::nullopt;
+}
+std::optional<double> declared_number(const CommandLine& c, const std::string& flag) {
+  return c.declares(flag) ? c.number(flag) : std::nullopt;
 }
 
 }  // namespace
-
-bool help_requested(int argc, const char* const* argv) {
-  return pcl::console::find_switch(argc, argv, "-h") ||
-         pcl::console::find_switch(argc, argv, "--help");
-}
 
 SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
   if (o.sigma_depth_m) p.model.sigma_depth_m = *o.sigma_depth_m;
@@ -257,19 +180,13 @@ std::string describe_camera(const std::vector<ToolFrame>& frames) {
   return "no camera (the preset's grid does not depend on one)";
 }
 
-ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec& spec) {
+ToolOptions parse_tool_options(const CommandLine& c) {
   ToolOptions t;
-  check_arguments(argc, argv, spec, t.inputs);
+  t.inputs = c.positionals();
+  t.preset_name = declared_text(c, "-preset").value_or("kinect_v1");
 
-  t.preset_name = value_of(argc, argv, "-preset").value_or(spec.default_preset);
-  if (!contains(preset_names(), t.preset_name)) {
-    std::string known;
-    for (const auto& n : preset_names()) known += (known.empty() ? "" : ", ") + n;
-    bad_flag("-preset", t.preset_name, "one of " + known);
-  }
-
-  const auto intrinsics_list = value_of(argc, argv, "-intrinsics");
-  const auto intrinsics_file = value_of(argc, argv, "-intrinsics_file");
+  const auto intrinsics_list = declared_text(c, "-intrinsics");
+  const auto intrinsics_file = declared_text(c, "-intrinsics_file");
   if (intrinsics_list && intrinsics_file) throw InvalidParameter("give -intrinsics or -intrinsics_file, not both");
   if (intrinsics_list) {
     t.intrinsics = intrinsics_from_list(*intrinsics_list);
@@ -279,27 +196,17 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
     t.intrinsics = read_intrinsics_file(*intrinsics_file);
     t.intrinsics_flag = "-intrinsics_file " + *intrinsics_file;
   }
-
-  if (const auto e = value_of(argc, argv, "-depth_encoding")) {
-    try {
-      t.depth_encoding = parse_depth_encoding(*e);
-    } catch (const InvalidParameter&) {
-      bad_flag("-depth_encoding", *e, "one of mm, tum, sun, nyu");
-    }
-  }
+  if (const auto e = declared_text(c, "-depth_encoding")) t.depth_encoding = parse_depth_encoding(*e);
 
   PresetOverrides& o = t.overrides;
-  o.sigma_depth_m = non_negative_double(argc, argv, "-sigma_depth");
-  o.sigma_depth_per_m2 = non_negative_double(argc, argv, "-sigma_depth_quadratic");
-  o.sigma_angle_rad = positive_double(argc, argv, "-sigma_angle");
-  o.support_k = positive_double(argc, argv, "-support_k");
-  o.depth_max_m = positive_double(argc, argv, "-depth_max");
-  if (const auto text = value_of(argc, argv, "-depth_bins")) {
-    o.depth_bins = to_int("-depth_bins", *text);
-    if (*o.depth_bins < 1) bad_flag("-depth_bins", *text, ">= 1");
-  }
-  if (const auto text = value_of(argc, argv, "-fov")) {
-    const std::vector<double> fov = to_doubles("-fov", *text);
+  o.sigma_depth_m = declared_number(c, "-sigma_depth");
+  o.sigma_depth_per_m2 = declared_number(c, "-sigma_depth_quadratic");
+  o.sigma_angle_rad = declared_number(c, "-sigma_angle");
+  o.support_k = declared_number(c, "-support_k");
+  o.depth_max_m = declared_number(c, "-depth_max");
+  if (const auto bins = declared_number(c, "-depth_bins")) o.depth_bins = static_cast<int>(*bins);
+  if (const auto text = declared_text(c, "-fov")) {
+    const std::vector<double> fov = parse_number_list("-fov", *text);
     if (fov.size() != 2 || !(fov[0] > 0 && fov[0] < 360) || !(fov[1] > 0 && fov[1] < 180))
       bad_flag("-fov", *text, "h,v in degrees with 0 < h < 360 and 0 < v < 180");
     o.fov_horizontal_deg = fov[0];
@@ -308,22 +215,11 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
 
   t.preset = apply_overrides(t.intrinsics ? preset_by_name(t.preset_name, *t.intrinsics) : preset_by_name(t.preset_name), o);
 
-  if (const auto mode = value_of(argc, argv, "-mode")) {
-    if (*mode == "clamped")
-      t.grid.mode = UpdateMode::clamped;
-    else if (*mode == "exact")
-      t.grid.mode = UpdateMode::exact;
-    else
-      bad_flag("-mode", *mode, "clamped or exact");
-  }
-  if (const auto clamp = value_of(argc, argv, "-clamp")) {
-    if (*clamp == "octomap") {
-      const UpdateMode mode = t.grid.mode;
-      t.grid = GridOptions::octomap_clamping();
-      t.grid.mode = mode;
-    } else if (*clamp != "paper") {
-      bad_flag("-clamp", *clamp, "octomap or paper");
-    }
+  if (declared_text(c, "-mode") == std::string("exact")) t.grid.mode = UpdateMode::exact;
+  if (declared_text(c, "-clamp") == std::string("octomap")) {
+    const UpdateMode mode = t.grid.mode;
+    t.grid = GridOptions::octomap_clamping();
+    t.grid.mode = mode;
   }
 
   try {
@@ -331,58 +227,38 @@ ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec
   } catch (const ResourceLimit& e) {
     throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov)");
   }
-
-  t.top_k = spec.default_top_k;
-  if (const auto text = value_of(argc, argv, "-k")) {
-    t.top_k = to_int("-k", *text);
-    if (t.top_k <= 0) bad_flag("-k", *text, "> 0");
-  }
+  if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);
   return t;
 }
 
-OutputFolder open_output_folder(int argc, const char* const* argv, const std::string& tool,
-                                const std::string& fallback) {
-  std::string folder = fallback;
-  pcl::console::parse_argument(argc, argv, "-o", folder);
-  if (folder.empty()) throw InvalidParameter("-o needs a folder name");
-  return OutputFolder(folder, tool, pcl::console::find_switch(argc, argv, "-overwrite"));
+void create_parent_folders(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).lexically_normal().parent_path();
+  std::error_code ec;
+  if (!parent.empty() && !std::filesystem::exists(parent, ec)) std::filesystem::create_directories(parent, ec);
 }
 
-std::string usage_output_folder(const std::string& fallback) {
-  return "  -o OUTDIR                 output folder" + (fallback.empty() ? std::string(" (required)") : " (default " + fallback + ")") +
-         "; written in a staging folder\n"
-         "                            and moved into place at the end. A folder that holds files this tool did\n"
-         "                            not write (marker " + kOutputMarkerName + ") is refused\n"
-         "  -overwrite                write into such a folder anyway: files of the same names are replaced,\n"
-         "                            nothing else is touched\n";
+void apply_segmentation_flags(const CommandLine& c, SegmentationParams& params) {
+  if (c.declares("-contour") && c.has("-contour"))
+    params.contour_improvement_below = static_cast<float>(*c.number("-contour"));
+  if (c.declares("-min_segment")) params.min_segment_columns = static_cast<std::size_t>(*c.integer("-min_segment"));
+  if (c.declares("-plane_distance") && c.has("-plane_distance")) params.plane_distance_m = *c.number("-plane_distance");
+  params.validate();
 }
 
-std::string usage_common() {
-  return R"(Sensor and grid:
-  -preset NAME              kinect_v1 (default: one column per camera pixel, depth along z, 2048
-                            inverse-depth bins 0.5-8 m, sigma_z = 1.425e-3 z^2), kinect_v1_paper (the
-                            paper: 640x480x512 spherical bins, 57x43 deg, 0-5 m, constant sigmas) or
-                            kinect_v1_spherical (kinect_v1's depth model over spherical bins)
-  -sigma_depth M            constant depth sigma [m]
-  -sigma_depth_quadratic C  depth sigma term growing with rho^2 [1/m] (sigma = sigma_depth + C rho^2)
-  -sigma_angle RAD          angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre)
-  -support_k K              region of support in standard deviations (default 2)
-  -depth_bins N             number of depth bins
-  -depth_max M              far end of the depth range [m]
-  -fov H,V                  field of view centred on the optical axis [deg] (spherical grids only)
-  -mode clamped|exact       clamp the log-odds after each update (default) or sum them as eq. 2 does
-  -clamp paper|octomap      clamping thresholds: 0.001/0.999 (default) or OctoMap's 0.1192/0.971
-  -k K                      how many top rays/regions to report (K > 0)
-Inputs (positional, fused in order, all from the same viewpoint):
-  FILE.pcd                  any PCD with x y z fields, metres, optical frame; with a camera preset its
-                            intrinsics are fitted to its organized points unless -intrinsics is given
-  FILE.png / FILE.pgm       16-bit depth image, back-projected through -intrinsics or the dataset's file
-  FOLDER                    a 3DMatch/SUN3D/7-Scenes folder: its *.depth.png frames and camera-intrinsics.txt
-  -intrinsics FX,FY,CX,CY[,W,H]  depth camera intrinsics [pixels] (default size 640x480)
-  -intrinsics_file PATH     "fx fy cx cy [w h]" or a 3x3 matrix (camera-intrinsics.txt)
-  -depth_encoding E         mm (millimetres), tum (1/5000 m), sun (SUN RGB-D bit-rotated mm),
-                            nyu (raw Kinect disparity); default: guessed per file from its values
-  -h                        this help
+OutputFolder open_output_folder(const CommandLine& c) {
+  const auto folder = c.text("-o");
+  if (!folder) throw InvalidParameter("-o OUTDIR is required (see -h)");
+  create_parent_folders(*folder);  // the folder itself is staged and moved into place
+  return OutputFolder(*folder, c.tool().tool, c.has("-overwrite"));
+}
+
+std::string frame_inputs_help() {
+  return R"(  FILE.pcd / FILE.ply       a cloud with x y z in metres, optical frame (z forward, y down); with a
+                            camera preset its intrinsics are fitted to its organized points
+  FILE.png/.pgm/.tif/.tiff  16-bit depth image, back-projected through -intrinsics or its dataset's file
+  FOLDER                    a dataset folder: 7-Scenes/3DMatch/SUN3D (*.depth.png, camera-intrinsics.txt,
+                            *.pose.txt) or PCL's image-grabber layout (*_depth.tiff)
+  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame.
 )";
 }
 
@@ -440,14 +316,29 @@ void throw_if_interrupted() {
   if (const int signal = stop_signal_received()) throw Interrupted(signal);
 }
 
-int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv)) {
-  if (help_requested(argc, argv)) {
-    print_usage(argv[0]);
-    return 0;
+namespace {
+
+bool help_requested(int argc, const char* const* argv) {
+  for (int i = 1; i < argc; ++i)
+    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) return true;
+  return false;
+}
+
+double now_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+}  // namespace
+
+int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const CommandLine& command_line)) {
+  const std::string program = std::filesystem::path(argv[0]).filename().string();
+  if (help_requested(argc, argv) || argc < 2) {
+    std::fputs(usage_text(flags, program).c_str(), argc < 2 ? stderr : stdout);
+    return argc < 2 ? 1 : 0;
   }
   install_stop_signals();
   try {
-    return run(argc, argv);
+    return run(parse_command_line(flags, argc, argv));
   } catch (const Interrupted& e) {
     std::fprintf(stderr, "%s\n", e.what());
     return 128 + e.signal();
@@ -458,6 +349,45 @@ int run_tool(int argc, char** argv, void (*print_usage)(const char* program), in
   } catch (...) {
     return report_failure("unknown exception");
   }
+}
+
+ProgressLine::ProgressLine(const CommandLine& c, std::string unit)
+    : shown_(isatty(fileno(stderr)) != 0 && !(c.declares("-q") && c.has("-q"))),
+      unit_(std::move(unit)),
+      start_seconds_(now_seconds()) {}
+
+ProgressLine::~ProgressLine() { finish(); }
+
+void ProgressLine::show(const std::string& text) {
+  if (!shown_) return;
+  const double now = now_seconds();
+  if (last_draw_seconds_ >= 0 && now - last_draw_seconds_ < 0.1) return;
+  last_draw_seconds_ = now;
+  std::fprintf(stderr, "\r\033[K%s", text.c_str());  // erase to the end of the line, then draw
+  std::fflush(stderr);
+  drawn_ = true;
+}
+
+void ProgressLine::update(std::size_t done, std::size_t total, std::size_t points) {
+  if (!shown_) return;
+  const double elapsed = now_seconds() - start_seconds_;
+  const double rate = elapsed > 0 ? static_cast<double>(done) / elapsed : 0.0;
+  std::ostringstream line;
+  line.setf(std::ios::fixed);
+  line.precision(1);
+  line << unit_ << ' ' << done;
+  if (total) line << '/' << total;
+  if (points) line << ", " << static_cast<double>(points) / 1e6 << "M points";
+  if (done) line << ", " << rate << ' ' << unit_ << "s/s";
+  if (total && done && done < total) line << ", " << static_cast<double>(total - done) / rate << " s left";
+  show(line.str());
+}
+
+void ProgressLine::finish() {
+  if (!drawn_) return;
+  std::fprintf(stderr, "\r\033[K");
+  std::fflush(stderr);
+  drawn_ = false;
 }
 
 }  // namespace occ_improve

@@ -6,7 +6,6 @@
 #include "occ_improve/pcl/filter_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 
-#include <pcl/console/parse.h>
 
 #include <cstdio>
 #include <fstream>
@@ -19,39 +18,30 @@ using namespace occ_improve;
 
 namespace {
 
-void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " SEQUENCE_FOLDER [options]\n\n"
-            << "A posed depth sequence (7-Scenes or TUM RGB-D layout, see sequence_sources.hpp), every frame put\n"
-            << "in the first frame's view. Reference: the map from all points. For each fraction, four runs\n"
-            << "from an empty map keep that share of each frame: ImprovementFilter (top fraction, chosen against\n"
-            << "the run's map before the frame is inserted), the same on the frame's points in a seeded random\n"
-            << "order (improvement_shuffled: ties go to random points, not the top rows), pcl::RandomSample (as\n"
-            << "many points, seeded) and pcl::VoxelGrid (leaf bisected to about as many). After each frame:\n"
-            << "points kept so far and the quality = share of the reference's surface columns whose predicted\n"
-            << "depth lies within 2 sigma(z); columns = distinct rays a frame's kept points fall in.\n"
-            << "Writes OUT/filter.csv (strategy,fraction,frame,asked,kept,columns,points,leaf_m,quality).\n\n"
-            << usage_output_folder("out/filter")
-            << "  -fractions LIST   shares of each frame to keep (default 0.05,0.2)\n"
-            << "  -frames N         the first N frames only (default 0: all)\n"
-            << "  -radius R         predict_depth radius in columns (default 16)\n"
-            << "  -seed N           RandomSample's seed (default 1)\n\n"
-            << usage_common();
-}
+const ToolFlags kFlags{
+    "occ_filter_eval",
+    {"SEQUENCE_FOLDER [options]"},
+    "A posed depth sequence (7-Scenes or TUM RGB-D layout, see sequence_sources.hpp), every frame put in the\n"
+    "first frame's view. Reference: the map from all points. For each fraction, four runs from an empty\n"
+    "map keep that share of each frame: ImprovementFilter (top fraction, chosen against the run's map\n"
+    "before the frame is inserted), the same on the frame's points in a seeded random order\n"
+    "(improvement_shuffled: ties go to random points, not the top rows), pcl::RandomSample (as many\n"
+    "points, seeded) and pcl::VoxelGrid (leaf bisected to about as many). After each frame: points kept\n"
+    "so far and the quality = share of the reference's surface columns whose predicted depth lies within\n"
+    "2 sigma(z); columns = distinct rays a frame's kept points fall in.\n"
+    "Writes OUTDIR/filter.csv (strategy,fraction,frame,asked,kept,columns,points,leaf_m,quality).\n",
+    joined({output_folder_flag_names(), {"-fractions", "-max_frames", "-radius", "-seed"}, sensor_flag_names(),
+            camera_flag_names()}),
+    {{"-o", "out/filter"}},
+    {},
+    "  SEQUENCE_FOLDER           7-Scenes (frame-*.depth.png + .pose.txt) or TUM RGB-D (depth.txt,\n"
+    "                            groundtruth.txt) folder\n"};
 
-std::vector<double> parse_fractions(int argc, char** argv) {
-  std::string text = "0.05,0.2";
-  pcl::console::parse_argument(argc, argv, "-fractions", text);
-  std::vector<double> fractions;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) {
-    try {
-      fractions.push_back(std::stod(item));
-    } catch (const std::logic_error&) {
-      throw InvalidParameter("-fractions " + text + " is invalid: '" + item + "' is not a number");
-    }
-    detail::require_parameter(fractions.back() > 0 && fractions.back() <= 1, "-fractions", fractions.back(), "in (0, 1]");
-  }
-  if (fractions.empty()) throw InvalidParameter("-fractions is empty: give e.g. 0.05,0.2");
+std::vector<double> parse_fractions(const CommandLine& command_line) {
+  const std::string text = *command_line.text("-fractions");
+  const std::vector<double> fractions = parse_number_list("-fractions", text);
+  for (double f : fractions)
+    if (!(f > 0 && f <= 1)) throw InvalidParameter("-fractions " + text + " is invalid: every share must be in (0, 1]");
   return fractions;
 }
 
@@ -78,22 +68,14 @@ void write_steps(std::ostream& csv, KeepStrategy strategy, double fraction, cons
         << s.columns << ',' << s.points << ',' << s.leaf_m << ',' << s.quality << '\n';
 }
 
-int run(int argc, char** argv) {
-  ToolSpec spec;
-  spec.value_flags = {"-o", "-fractions", "-frames", "-radius", "-seed"};
-  spec.switches = {"-overwrite"};
-  const ToolOptions options = parse_tool_options(argc, argv, spec);
-  const std::vector<double> fractions = parse_fractions(argc, argv);
-  int max_frames = 0, seed = 1;
+int run(const CommandLine& command_line) {
+  const ToolOptions options = parse_tool_options(command_line);
+  const std::vector<double> fractions = parse_fractions(command_line);
+  const int max_frames = *command_line.integer("-max_frames");
   FilterEvalOptions eval;
-  pcl::console::parse_argument(argc, argv, "-frames", max_frames);
-  pcl::console::parse_argument(argc, argv, "-radius", eval.radius_columns);
-  pcl::console::parse_argument(argc, argv, "-seed", seed);
-  detail::require_parameter(max_frames >= 0, "-frames", max_frames, ">= 0");
-  detail::require_parameter(eval.radius_columns >= 0, "-radius", eval.radius_columns, ">= 0");
-  detail::require_parameter(seed >= 0, "-seed", seed, ">= 0");
-  eval.seed = static_cast<std::uint32_t>(seed);
-  OutputFolder out = open_output_folder(argc, argv, "occ_filter_eval", "out/filter");
+  eval.radius_columns = *command_line.integer("-radius");
+  eval.seed = static_cast<std::uint32_t>(*command_line.integer("-seed"));
+  OutputFolder out = open_output_folder(command_line);
 
   const EvalSetup s = setup(options);
   const Frames frames = read_posed_frames(s.sequence, s.intrinsics, Mapper(s.preset).geometry(),
@@ -121,4 +103,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return run_tool(argc, argv, kFlags, run); }

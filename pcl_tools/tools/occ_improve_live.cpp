@@ -5,6 +5,7 @@
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"
+#include "occ_improve/pcl/map_outputs.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 #include "occ_improve/planner.hpp"
@@ -12,7 +13,6 @@
 #include "occ_improve/return_model.hpp"
 #include "occ_improve/virtual_sensor.hpp"
 
-#include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 
 #include <atomic>
@@ -21,88 +21,38 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
-#include <iostream>
 #include <mutex>
 #include <thread>
 
-#include <unistd.h>
 
 namespace {
 
 using namespace occ_improve;
 using Pipeline = GrabberPipeline<pcl::PointXYZ>;
 
-void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " <source> [options]\n"
-            << "Fuses a stream of range frames into the occupancy grid and writes the maps.\n\n"
-            << "Source (exactly one):\n"
-            << "  -device [URI]             live OpenNI2 device (first one found, or its URI)\n"
-            << "  -oni FILE                 OpenNI2 recording\n"
-            << "  -pcd_dir DIR              the .pcd files of a folder, in name order\n"
-            << "  -depth_dir DIR            depth-image sequence: 7-Scenes (frame-*.depth.png, .pose.txt,\n"
-            << "                            camera-intrinsics.txt), TUM RGB-D (depth.txt, groundtruth.txt) or\n"
-            << "                            a folder of 16-bit PNG/PGM; needs intrinsics unless the folder has them\n"
-            << "  FILE.pcd ...              positional PCD files, in order\n"
-            << "  -simulate FRAME           the closed loop of docs/SELECTIVE.md against a virtual Kinect v1 over\n"
-            << "                            one real frame (organized PCD or depth image): plan a shot, acquire its\n"
-            << "                            rays (axial noise, disparity quantisation, no return where the frame\n"
-            << "                            has none), insert, learn which rays never return, until the plan says\n"
-            << "                            stop; writes shots.csv and gain.png (expected gain per shot against\n"
-            << "                            rays asked) with the maps. Pixel-native presets only.\n"
-            << "  -budget N                 -simulate: rays per shot (default 4096)\n"
-            << "  -max_shots N              -simulate: stop after N shots at the latest (default 1000)\n"
-            << "With poses, every frame is moved into the FIRST frame's sensor frame (the grid has one\n"
-            << "viewpoint).\n\n"
-            << "Pipeline:\n"
-            << usage_output_folder("occ_improve_live_out")
-            << "  -save_every N             also write the maps every N processed frames (default 0: at the end)\n"
-            << "  -load MAP.occmap          continue a saved grid from the same viewpoint (it carries its own\n"
-            << "                            preset; preset flags are ignored; poses are relative to this run's first frame)\n"
-            << "  -save MAP.occmap          save the grid at the end (and with the maps every -save_every frames)\n"
-            << "  -fps F                    file sources: frames per second (default 0: as fast as possible)\n"
-            << "  -threads N                insertion threads (default 0: all cores)\n"
-            << "  -drop                     file sources: newest frame wins like a live sensor (default: every\n"
-            << "                            frame is processed)\n"
-            << "  -no_poses                 ignore the sequence's poses\n"
-            << "  -stop_on_signal           stop once the improvement stop signal fires\n"
-            << "  -max_frames N             file sources: only the first N frames; live: stop after N processed\n"
-            << "Ctrl-C stops cleanly and still writes the maps.\n\n"
-            << usage_common();
-}
-
-/// The argument vector without "-device [URI]", which tool_options does not know; returns the URI
-/// (empty for the first device) when -device was given.
-std::optional<std::string> take_device_flag(std::vector<const char*>& args) {
-  for (std::size_t i = 1; i < args.size(); ++i) {
-    if (std::string(args[i]) != "-device") continue;
-    std::string uri;
-    std::size_t erase = 1;
-    if (i + 1 < args.size() && args[i + 1][0] != '-') {
-      uri = args[i + 1];
-      erase = 2;
-    }
-    args.erase(args.begin() + static_cast<std::ptrdiff_t>(i), args.begin() + static_cast<std::ptrdiff_t>(i + erase));
-    return uri;
-  }
-  return std::nullopt;
-}
+const ToolFlags kFlags{
+    "occ_improve_live",
+    {"SOURCE [options]"},
+    "Fuses a stream of range frames into the occupancy grid and writes the maps, the same files as\n"
+    "occ_improve_map (depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv),\n"
+    "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
+    "-simulate or positional PCD files. With poses, every frame is moved into the FIRST frame's sensor\n"
+    "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
+    "shot against rays asked). Ctrl-C stops cleanly and still writes the maps.\n",
+    joined({output_folder_flag_names(),
+            {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
+             "-stop_on_signal", "-simulate", "-budget", "-max_shots", "-load", "-save", "-threads", "-k",
+             "-min_improvement"},
+            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+    {{"-o", "occ_improve_live_out"}},
+    {},
+    "  FILE.pcd ...              PCD files, replayed in order\n"};
 
 // Every write publishes the whole set, so the folder always holds one consistent state of the map.
-void write_maps(const Mapper& mapper, OutputFolder& out, double depth_max_m) {
-  write_png(out.file("depth.png"), render_depth(mapper.surface(), depth_max_m));
-  write_png(out.file("occupancy.png"), render_occupancy(mapper.surface()));
-  write_png(out.file("improvement.png"), render_improvement(mapper.improvement()));
-  write_png(out.file("improvement_legend.png"), render_improvement_legend());
+std::vector<std::string> write_maps(const Mapper& mapper, OutputFolder& out, const RegionOptions& regions, int top_k) {
+  const std::vector<std::string> names = write_map_outputs(out, mapper, summarize_map(mapper, regions, top_k), std::nullopt);
   out.commit();
-}
-
-template <typename T>
-T parse_number(int argc, const char* const* argv, const char* flag, T fallback, T minimum) {
-  T value = fallback;
-  if (pcl::console::parse_argument(argc, argv, flag, value) >= 0 && value < minimum)
-    throw InvalidParameter(std::string(flag) + " " + std::to_string(value) + " is invalid: must be >= " +
-                           std::to_string(minimum));
-  return value;
+  return names;
 }
 
 // ---- -simulate FRAME: the selective-acquisition loop against a virtual sensor over a real frame.
@@ -134,8 +84,10 @@ SimulatedShot acquire(const Shot& shot, VirtualSensor& sensor, Mapper& mapper, R
   return {shot.columns.size(), returned, asked_before + shot.columns.size(), shot.expected_gain};
 }
 
-int run_simulation(const ToolOptions& options, const std::string& frame_path, int budget, int max_shots,
+int run_simulation(const CommandLine& command_line, const ToolOptions& options, const RegionOptions& regions,
                    OutputFolder& out) {
+  const std::string frame_path = *command_line.text("-simulate");
+  const int budget = *command_line.integer("-budget"), max_shots = *command_line.integer("-max_shots");
   const ToolFrame frame = read_tool_frame(options, FrameSource{frame_path, std::nullopt});
   const SensorPreset preset = options.preset_for_camera(frame.camera);
   if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
@@ -149,7 +101,7 @@ int run_simulation(const ToolOptions& options, const std::string& frame_path, in
   request.budget_rays = budget;
   std::vector<SimulatedShot> shots;
   std::string why = "reached -max_shots " + std::to_string(max_shots);
-  const bool terminal = isatty(fileno(stdout)) != 0;
+  ProgressLine progress(command_line, "shot");
   const auto start = std::chrono::steady_clock::now();
   try {
     while (static_cast<int>(shots.size()) < max_shots) {
@@ -160,17 +112,17 @@ int run_simulation(const ToolOptions& options, const std::string& frame_path, in
         break;
       }
       shots.push_back(acquire(shot, sensor, mapper, returns, shots.empty() ? 0 : shots.back().rays_asked_total));
-      if (terminal)
-        std::printf("\rshot %zu: %zu rays asked (%.2f frames), expected gain %.1f   ", shots.size(),
+      char line[160];
+      std::snprintf(line, sizeof line, "shot %zu: %zu rays asked (%.2f frames), expected gain %.1f", shots.size(),
                     shots.back().rays_asked_total,
                     static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),
-                    shots.back().expected_gain),
-            std::fflush(stdout);
+                    shots.back().expected_gain);
+      progress.show(line);
     }
   } catch (const Interrupted&) {
     why = "interrupted";  // what was acquired is still written, as a live run's map is
   }
-  if (terminal) std::printf("\n");
+  progress.finish();
   write_shots_csv(out.file("shots.csv"), shots);
   std::vector<double> asked, gain;
   for (const SimulatedShot& s : shots) {
@@ -178,54 +130,41 @@ int run_simulation(const ToolOptions& options, const std::string& frame_path, in
     gain.push_back(s.expected_gain);
   }
   if (shots.size() >= 2) write_png(out.file("gain.png"), render_curve(asked, gain));
-  write_maps(mapper, out, preset.geometry.depth_max_m);
+  const std::vector<std::string> names = write_maps(mapper, out, regions, options.top_k);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%zu shots, %zu rays asked (%.2f frames), %zu returned, in %.2f s; stopped: %s\n", shots.size(),
               shots.empty() ? 0 : shots.back().rays_asked_total,
               shots.empty() ? 0.0 : static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),
               returns.total_returned(), seconds, why.c_str());
-  std::printf("wrote %s/: shots.csv%s depth.png occupancy.png improvement.png improvement_legend.png\n",
-              out.path().c_str(), shots.size() >= 2 ? " gain.png" : "");
+  std::printf("wrote %s/: shots.csv%s %s\n", out.path().c_str(), shots.size() >= 2 ? " gain.png" : "",
+              join_names(names).c_str());
   return why == "interrupted" ? 128 + SIGINT : 0;
 }
 
-int run(int argc, const char* const* argv_in) {
-  std::vector<const char*> args(argv_in, argv_in + argc);
-  const std::optional<std::string> device = take_device_flag(args);
-  const int n = static_cast<int>(args.size());
-  const char* const* argv = args.data();
-
-  ToolSpec spec;
-  spec.default_preset = "kinect_v1";
-  spec.value_flags = {"-oni",     "-pcd_dir",    "-depth_dir", "-o",   "-save_every",
-                      "-fps",     "-threads",    "-max_frames", "-load", "-save",
-                      "-simulate", "-budget",    "-max_shots"};
-  spec.switches = {"-drop", "-no_poses", "-stop_on_signal", "-overwrite"};
-  const ToolOptions options = parse_tool_options(n, argv, spec);
-
-  std::string oni, pcd_dir, depth_dir, load_path, save_path;
-  pcl::console::parse_argument(n, argv, "-load", load_path);
-  pcl::console::parse_argument(n, argv, "-save", save_path);
-  pcl::console::parse_argument(n, argv, "-oni", oni);
-  pcl::console::parse_argument(n, argv, "-pcd_dir", pcd_dir);
-  pcl::console::parse_argument(n, argv, "-depth_dir", depth_dir);
-  const int save_every = parse_number(n, argv, "-save_every", 0, 0);
-  const float fps = parse_number(n, argv, "-fps", 0.0f, 0.0f);
-  const int threads = parse_number(n, argv, "-threads", 0, 0);
-  const int max_frames = parse_number(n, argv, "-max_frames", 0, 0);
-  const bool drop = pcl::console::find_switch(n, argv, "-drop");
-  const bool stop_on_signal = pcl::console::find_switch(n, argv, "-stop_on_signal");
-
-  std::string simulate;
-  pcl::console::parse_argument(n, argv, "-simulate", simulate);
-  const int budget = parse_number(n, argv, "-budget", 4096, 1);
-  const int max_shots = parse_number(n, argv, "-max_shots", 1000, 1);
+int run(const CommandLine& command_line) {
+  const ToolOptions options = parse_tool_options(command_line);
+  const std::optional<std::string> device = command_line.has("-device") ? command_line.text("-device").value_or("")
+                                                                        : std::optional<std::string>();
+  const std::string load_path = command_line.text("-load").value_or("");
+  const std::string save_path = command_line.text("-save").value_or("");
+  const std::string oni = command_line.text("-oni").value_or("");
+  const std::string pcd_dir = command_line.text("-pcd_dir").value_or("");
+  const std::string depth_dir = command_line.text("-depth_dir").value_or("");
+  const int save_every = *command_line.integer("-save_every");
+  const double fps = *command_line.number("-fps");
+  const int threads = *command_line.integer("-threads");
+  const int max_frames = *command_line.integer("-max_frames");
+  const bool drop = command_line.has("-drop");
+  const bool stop_on_signal = command_line.has("-stop_on_signal");
+  RegionOptions region_options;
+  region_options.min_improvement = static_cast<float>(*command_line.number("-min_improvement"));
+  const bool simulate = command_line.has("-simulate");
   const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() +
-                      !options.inputs.empty() + !simulate.empty();
+                      !options.inputs.empty() + simulate;
   if (sources != 1)
     throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, PCD files or -simulate); see -h");
-  OutputFolder out = open_output_folder(n, argv, "occ_improve_live", "occ_improve_live_out");
-  if (!simulate.empty()) return run_simulation(options, simulate, budget, max_shots, out);
+  OutputFolder out = open_output_folder(command_line);
+  if (simulate) return run_simulation(command_line, options, region_options, out);
 
   // The source, and the sensor preset that fits it.
   std::shared_ptr<pcl::Grabber> grabber;
@@ -246,8 +185,8 @@ int run(int argc, const char* const* argv_in) {
     if (!options.intrinsics) preset = options.preset_for_camera(camera);
     camera_text = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
     DepthSequenceOptions sequence_options;
-    sequence_options.fps = fps;
-    sequence_options.use_poses = !pcl::console::find_switch(n, argv, "-no_poses");
+    sequence_options.fps = static_cast<float>(fps);
+    sequence_options.use_poses = !command_line.has("-no_poses");
     sequence_options.encoding = options.depth_encoding;
     auto source = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
     source_text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
@@ -263,7 +202,7 @@ int run(int argc, const char* const* argv_in) {
     const ToolFrame first = read_tool_frame(options, FrameSource{files.front(), std::nullopt});
     preset = options.preset_for_camera(first.camera);
     camera_text = describe_camera({first});
-    auto source = std::make_shared<PcdSequenceGrabber>(files, fps);
+    auto source = std::make_shared<PcdSequenceGrabber>(files, static_cast<float>(fps));
     const std::string files_text = files.empty() ? std::string("no PCD file")
                                    : files.size() == 1 ? files.front()
                                                        : files.front() + " and " + std::to_string(files.size() - 1) + " more";
@@ -290,6 +229,7 @@ int run(int argc, const char* const* argv_in) {
   }
   Pipeline pipeline(mapper, with_camera(pipeline_options, preset));
   const double depth_max_m = preset.geometry.depth_max_m;
+  std::vector<std::string> written;
   const auto save_grid = [&] {
     if (!save_path.empty()) save_map(save_path, pipeline.mapper().grid(), pipeline.mapper().model().params());
   };
@@ -308,12 +248,16 @@ int run(int argc, const char* const* argv_in) {
     }
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
-      write_maps(pipeline.mapper(), out, depth_max_m);
+      write_maps(pipeline.mapper(), out, region_options, options.top_k);
       save_grid();
       ++maps_written;
     }
   });
-  pipeline.setEventCallback([](const PipelineEvent& e) { pcl::console::print_warn("\n%s\n", e.message.c_str()); });
+  ProgressLine progress(command_line, "frame");
+  pipeline.setEventCallback([&](const PipelineEvent& e) {
+    progress.finish();
+    pcl::console::print_warn("%s\n", e.message.c_str());
+  });
   if (file_source)
     file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
   pipeline.attach(*grabber);
@@ -324,29 +268,27 @@ int run(int argc, const char* const* argv_in) {
                            preset.geometry.depth_bins, depth_max_m);
   pipeline.start();
   const char* stop_reason = "source finished";
-  // On a terminal the progress line rewrites itself; in a log, one line every 5 s.
-  const bool terminal = isatty(fileno(stderr)) != 0;
-  const int ticks_per_line = terminal ? 1 : 25;
-  for (int tick = 1;; ++tick) {
+  for (;;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(200));
     const PipelineStatistics s = pipeline.statistics();
-    if (tick % ticks_per_line == 0)
-      std::fprintf(stderr, "%sframes %llu  processed %llu  dropped %llu  rejected %llu  %.1f fps   %s",
-                   terminal ? "\r" : "", static_cast<unsigned long long>(s.received),
-                   static_cast<unsigned long long>(s.processed), static_cast<unsigned long long>(s.dropped),
-                   static_cast<unsigned long long>(s.rejected), s.processed_per_second(), terminal ? "" : "\n");
+    char line[200];
+    std::snprintf(line, sizeof line, "frames %llu, processed %llu, dropped %llu, rejected %llu, %.1f frames/s",
+                  static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
+                  static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
+                  s.processed_per_second());
+    progress.show(line);
     if (stop_signal_received()) { stop_reason = "interrupted"; break; }
     if (stop_on_signal && stop_signalled) { stop_reason = "stop signal"; break; }
     if (max_frames > 0 && s.processed >= static_cast<std::uint64_t>(max_frames)) { stop_reason = "-max_frames reached"; break; }
     if (file_source && !file_source->isRunning() && s.in_flight == 0) break;
   }
   pipeline.stop();
-  if (terminal) std::fprintf(stderr, "\n");
+  progress.finish();
   if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !stop_signal_received())
     throw InvalidInput("no frame of " + source_text + " was used (" + std::to_string(s.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +
                        std::to_string(s.grabber_errors) + " unreadable)");
-  write_maps(pipeline.mapper(), out, depth_max_m);
+  written = write_maps(pipeline.mapper(), out, region_options, options.top_k);
   save_grid();
   if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
 
@@ -370,8 +312,8 @@ int run(int argc, const char* const* argv_in) {
                                r.centroid_elevation_rad * 180.0 / M_PI, r.mean_depth_m);
     }
   }
-  pcl::console::print_info("Wrote %s/{depth,occupancy,improvement,improvement_legend}.png (%d intermediate writes)\n",
-                           out.path().c_str(), maps_written.load());
+  pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
+                           maps_written.load());
   // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.
   if (const int signal = stop_signal_received()) throw Interrupted(signal);
   return 0;
@@ -379,6 +321,4 @@ int run(int argc, const char* const* argv_in) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  return occ_improve::run_tool(argc, argv, print_usage, [](int n, char** v) { return run(n, v); });
-}
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, kFlags, run); }

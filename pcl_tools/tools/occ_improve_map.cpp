@@ -6,18 +6,15 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/pcl/map_cloud.hpp"
+#include "occ_improve/pcl/map_outputs.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/render.hpp"
 #include "occ_improve/sample_scene.hpp"
 
-#include <pcl/console/parse.h>
-
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <iostream>
 #include <string>
 #include <vector>
@@ -28,65 +25,26 @@ namespace {
 
 constexpr double kRadToDeg = 57.29577951308232;
 
-void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " [options] INPUT... -o OUTDIR\n"
-            << "       " << program << " -sample -o OUTDIR\n\n"
-            << "Fuses the input frames (one viewpoint, in order) into an occupancy grid along the sensor's rays\n"
-            << "and writes the\n"
-            << "improvement map (where one more measurement would change the map most) to OUTDIR:\n"
-            << "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
-            << "                pixel-aligned with the input depth image; grey = columns no pixel can see)\n"
-            << "  overlay.png   the improvement colours over the frame's colour (PCDs with rgb/rgba)\n"
-            << "  surface.pcd   organized PointImprovement cloud (x y z surface_depth probability improvement)\n"
-            << "  regions.csv   the K best connected regions, ranked by summed improvement\n"
-            << "  rays.csv      the K best single rays\n\n"
-            << "Tool options:\n"
-            << usage_output_folder("occ_improve_out")
-            << "  -sample                   use the built-in generated Kinect-like frame instead of input files\n"
-            << "  -load MAP.occmap          start from a saved grid (same viewpoint); it carries its own preset,\n"
-            << "                            so preset flags are ignored; input frames are fused on top of it\n"
-            << "  -save MAP.occmap          save the resulting grid (written atomically)\n"
-            << "  -threads N                worker threads (default 0: all cores)\n"
-            << "  -min_improvement V        a region's rays have improvement >= V (default 0.2: above\n"
-            << "                            a ray seen once, below no data)\n\n"
-            << usage_common();
-}
+const ToolFlags kFlags{
+    "occ_improve_map",
+    {"[options] INPUT... -o OUTDIR", "-sample -o OUTDIR", "-load MAP.occmap [INPUT...] -o OUTDIR"},
+    "Fuses the input frames (one viewpoint, in order) into an occupancy grid along the sensor's rays and\n"
+    "writes the improvement map (where one more measurement would change the map most) to OUTDIR:\n"
+    "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
+    "                pixel-aligned with the input depth image; grey = columns no pixel can see)\n"
+    "  overlay.png   the improvement colours over the frame's colour (inputs with colour)\n"
+    "  surface.pcd   organized PointImprovement cloud (x y z surface_depth probability improvement)\n"
+    "  regions.csv   the K best connected regions, ranked by summed improvement\n"
+    "  rays.csv      the K best single rays\n"
+    "README.md \"Output files\" lists every column.\n",
+    joined({output_folder_flag_names(), {"-q", "-sample", "-load", "-save", "-threads", "-k", "-min_improvement"},
+            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+    {{"-o", "occ_improve_out"}},
+    {},
+    frame_inputs_help()};
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
-
-void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
-  std::ofstream out(path);
-  if (!out) throw IoError("cannot write '" + path + "'");
-  out << "rank,summed_improvement,area_columns,peak_improvement,centroid_azimuth_deg,centroid_elevation_deg,"
-         "direction_x,direction_y,direction_z,mean_depth_m\n";
-  char line[512];
-  for (std::size_t i = 0; i < regions.size(); ++i) {
-    const Region& r = regions[i];
-    std::snprintf(line, sizeof line, "%zu,%.6f,%zu,%.6f,%.4f,%.4f,%.6f,%.6f,%.6f,%.4f\n", i + 1,
-                  r.summed_improvement, r.area_columns, static_cast<double>(r.peak_improvement),
-                  r.centroid_azimuth_rad * kRadToDeg, r.centroid_elevation_rad * kRadToDeg, r.centroid_direction.x(),
-                  r.centroid_direction.y(), r.centroid_direction.z(), r.mean_depth_m);
-    out << line;
-  }
-  if (!out.flush()) throw IoError("cannot write '" + path + "'");
-}
-
-void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, const std::vector<RankedRay>& rays) {
-  std::ofstream out(path);
-  if (!out) throw IoError("cannot write '" + path + "'");
-  out << "rank,improvement,azimuth_bin,elevation_bin,azimuth_deg,elevation_deg,depth_m\n";
-  char line[256];
-  for (std::size_t i = 0; i < rays.size(); ++i) {
-    const RankedRay& r = rays[i];
-    std::snprintf(line, sizeof line, "%zu,%.6f,%d,%d,%.4f,%.4f,%.4f\n", i + 1, static_cast<double>(r.improvement),
-                  r.azimuth_bin, r.elevation_bin, geometry.azimuth().centre(r.azimuth_bin) * kRadToDeg,
-                  geometry.elevation().centre(r.elevation_bin) * kRadToDeg, static_cast<double>(r.depth_m));
-    out << line;
-  }
-  if (!out.flush()) throw IoError("cannot write '" + path + "'");
 }
 
 void print_points(const InsertionReport& in) {
@@ -115,7 +73,8 @@ std::vector<ToolFrame> read_frames(const ToolOptions& options) {
   }
 }
 
-MapperReport insert_frames(Mapper& mapper, const std::vector<ToolFrame>& frames, const InsertionOptions& insertion) {
+MapperReport insert_frames(Mapper& mapper, const std::vector<ToolFrame>& frames, const InsertionOptions& insertion,
+                           ProgressLine& progress) {
   MapperReport total;
   std::size_t inserted = 0;
   try {
@@ -125,47 +84,33 @@ MapperReport insert_frames(Mapper& mapper, const std::vector<ToolFrame>& frames,
       const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
       total.insertion += r.insertion;
       total.improvement_seconds += r.improvement_seconds;
-      ++inserted;
+      progress.update(++inserted, frames.size(), total.insertion.points_received);
     }
   } catch (const Interrupted&) {
+    progress.finish();
     std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n", inserted, frames.size());
     print_points(total.insertion);
     throw;
   }
+  progress.finish();
   return total;
 }
 
-int run(int argc, char** argv) {
-  ToolSpec spec;
-  spec.value_flags = {"-o", "-threads", "-min_improvement", "-load", "-save"};
-  spec.switches = {"-sample", "-overwrite"};
-  const ToolOptions options = parse_tool_options(argc, argv, spec);
-  const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
-  std::string load_path, save_path;
-  pcl::console::parse_argument(argc, argv, "-load", load_path);
-  pcl::console::parse_argument(argc, argv, "-save", save_path);
+int run(const CommandLine& command_line) {
+  const ToolOptions options = parse_tool_options(command_line);
+  const bool use_sample = command_line.has("-sample");
+  const std::string load_path = command_line.text("-load").value_or("");
+  const std::string save_path = command_line.text("-save").value_or("");
   InsertionOptions insertion;
-  if (std::string text; pcl::console::parse_argument(argc, argv, "-threads", text) >= 0) {
-    char* end = nullptr;
-    const long threads = std::strtol(text.c_str(), &end, 10);
-    if (text.empty() || *end != '\0' || threads < 0 || threads > 1024)
-      throw InvalidParameter("-threads " + text + " is invalid: must be an integer in [0, 1024]");
-    insertion.threads = static_cast<int>(threads);
-  }
+  insertion.threads = *command_line.integer("-threads");
   RegionOptions region_options;
-  if (std::string text; pcl::console::parse_argument(argc, argv, "-min_improvement", text) >= 0) {
-    char* end = nullptr;
-    const double v = std::strtod(text.c_str(), &end);
-    if (text.empty() || *end != '\0' || !std::isfinite(v))
-      throw InvalidParameter("-min_improvement " + text + " is invalid: must be a finite number");
-    region_options.min_improvement = static_cast<float>(v);
-  }
+  region_options.min_improvement = static_cast<float>(*command_line.number("-min_improvement"));
   if (use_sample && !options.inputs.empty()) throw InvalidParameter("give either input files or -sample, not both");
   if (!use_sample && options.inputs.empty() && load_path.empty())
     throw InvalidParameter("no input: give PCD / depth image files or a dataset folder, -sample or -load (see -h)");
 
   // Fail on an unwritable or foreign output folder before any work.
-  OutputFolder staging = open_output_folder(argc, argv, "occ_improve_map", "occ_improve_out");
+  OutputFolder staging = open_output_folder(command_line);
 
   // Read.
   auto start = std::chrono::steady_clock::now();
@@ -183,38 +128,26 @@ int run(int argc, char** argv) {
   }();
 
   // Insert (insertion with the surface kept current, then the incremental improvement; timed by the mapper).
-  const MapperReport total = insert_frames(mapper, frames, insertion);
+  ProgressLine progress(command_line, "frame");
+  const MapperReport total = insert_frames(mapper, frames, insertion, progress);
   if (!frames.empty() && total.insertion.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
 
   // Rank.
   start = std::chrono::steady_clock::now();
-  const std::vector<Region> all_regions =
-      find_regions(mapper.geometry(), mapper.improvement(), mapper.surface(), region_options);
-  const std::vector<RankedRay> rays = top_rays(mapper.improvement(), mapper.surface(), options.top_k);
-  const StopSignal stop = stop_signal(mapper.improvement(), all_regions);
-  const std::vector<Region> regions(
-      all_regions.begin(), all_regions.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(
-                                                     all_regions.size(), static_cast<std::size_t>(options.top_k))));
+  const MapSummary summary = summarize_map(mapper, region_options, options.top_k);
   const double ranking_seconds = seconds_since(start);
 
   // Write into the staging folder, then move it into place.
   start = std::chrono::steady_clock::now();
-  write_png(staging.file("depth.png"), render_depth(mapper.surface(), mapper.geometry().depth().max()));
-  write_png(staging.file("occupancy.png"), render_occupancy(mapper.surface()));
-  write_png(staging.file("improvement.png"), render_improvement(mapper.improvement()));
-  write_png(staging.file("legend.png"), render_improvement_legend());
-  // With a pixel-native grid (whose size is the frame's) the map is pixel-aligned with the registered colour.
-  const bool overlay = !frames.empty() && frames.front().colour && mapper.geometry().binning() == AngularBinning::pinhole;
-  if (overlay) write_png(staging.file("overlay.png"), render_overlay(mapper.improvement(), *frames.front().colour));
-  save_improvement_cloud(staging.file("surface.pcd"),
-                         to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
-  write_regions_csv(staging.file("regions.csv"), regions);
-  write_rays_csv(staging.file("rays.csv"), mapper.geometry(), rays);
+  const std::vector<std::string> written =
+      write_map_outputs(staging, mapper, summary, frames.empty() ? std::nullopt : frames.front().colour);
   throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
   if (!save_path.empty()) save_map(save_path, mapper.grid(), mapper.model().params());
   const double write_seconds = seconds_since(start);
+  const std::vector<Region>& regions = summary.regions;
+  const std::vector<RankedRay>& rays = summary.rays;
 
   // Summary.
   const InsertionReport& in = total.insertion;
@@ -228,7 +161,7 @@ int run(int argc, char** argv) {
   std::printf("time [s]: read %.3f, insert+surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
               read_seconds, in.seconds, total.improvement_seconds, ranking_seconds,
               write_seconds);
-  std::printf("top %zu of %zu regions (improvement >= %.3g, >= %zu rays):\n", regions.size(), all_regions.size(),
+  std::printf("top %zu of %zu regions (improvement >= %.3g, >= %zu rays):\n", regions.size(), summary.all_regions.size(),
               static_cast<double>(region_options.min_improvement), region_options.min_area_columns);
   std::printf("  rank  summed  area   peak  azimuth  elevation  depth\n");
   for (std::size_t i = 0; i < regions.size(); ++i) {
@@ -241,12 +174,11 @@ int run(int argc, char** argv) {
     std::printf("best ray: azimuth bin %d, elevation bin %d, improvement %.3f, surface depth %.2f m\n",
                 rays.front().azimuth_bin, rays.front().elevation_bin, static_cast<double>(rays.front().improvement),
                 static_cast<double>(rays.front().depth_m));
-  std::printf("stop: %s (%s)\n", stop.stop ? "yes" : "no", stop.reason.c_str());
-  std::printf("wrote %s/: depth.png occupancy.png improvement.png legend.png%s surface.pcd regions.csv rays.csv\n",
-              staging.path().c_str(), overlay ? " overlay.png" : "");
+  std::printf("stop: %s (%s)\n", summary.stop.stop ? "yes" : "no", summary.stop.reason.c_str());
+  std::printf("wrote %s/: %s\n", staging.path().c_str(), join_names(written).c_str());
   return 0;
 }
 
 }  // namespace
 
-int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, kFlags, run); }

@@ -10,7 +10,6 @@
 #include "occ_improve/render.hpp"
 #include "occ_improve/sample_scene.hpp"
 
-#include <pcl/console/parse.h>
 
 #include <chrono>
 #include <cstdio>
@@ -24,54 +23,43 @@ using namespace occ_improve;
 
 namespace {
 
-void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " -load MAP.occmap [plan options] -o OUT_DIR\n"
-            << "       " << program << " [options] INPUT... -o OUT_DIR\n"
-            << "       " << program << " -sample [options] -o OUT_DIR\n\n"
-            << "Plans the next shot (docs/SELECTIVE.md): rays ranked by improvement x return probability\n"
-            << "(the map's return record; none for frames), in one of three shapes. Writes\n"
-            << "  OUT_DIR/shot_mask.png   grey, one pixel per column (255 = in the shot); with the pixel-native\n"
-            << "                          kinect_v1 preset it is aligned with the depth image\n"
-            << "  OUT_DIR/shot_rays.csv   the shot's rays: rank, column, azimuth/elevation bin, improvement,\n"
-            << "                          return probability, score, surface depth\n"
-            << "  OUT_DIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n\n"
-            << "Plan options:\n"
-            << usage_output_folder("")
-            << "  -load MAP.occmap          a saved map (it carries its own preset and return record)\n"
-            << "  -sample                   the built-in generated frame instead of input files\n"
-            << "  -budget N                 rays per shot (default 4096)\n"
-            << "  -shape rays|window|decimation   shot shape (default rays)\n"
-            << "  -window WxH               window shape in columns (default 64x64; its area <= the budget)\n"
-            << "  -negative_share S         rays shape: share of the shot re-acquiring negative rays (default 0)\n"
-            << "  -stop_gain G              stop below G expected gain per ray (default 0.1)\n\n"
-            << usage_common();
-}
+const ToolFlags kFlags{
+    "occ_plan",
+    {"-load MAP.occmap [plan options] -o OUTDIR", "[options] INPUT... -o OUTDIR", "-sample [options] -o OUTDIR"},
+    "Plans the next shot (docs/SELECTIVE.md): rays ranked by improvement x return probability (the map's\n"
+    "return record; none for frames), in one of three shapes. Writes\n"
+    "  OUTDIR/shot_mask.png   grey, one pixel per column (255 = in the shot); with the pixel-native\n"
+    "                         kinect_v1 preset it is aligned with the depth image\n"
+    "  OUTDIR/shot_rays.csv   the shot's rays: rank, column, azimuth/elevation bin, improvement,\n"
+    "                         return probability, score, surface depth, reacquisition\n"
+    "  OUTDIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n",
+    joined({output_folder_flag_names(), {"-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
+                                         "-stop_gain"},
+            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+    {},
+    {},
+    frame_inputs_help()};
 
-ShotShape parse_shape(const std::string& text) {
-  if (text == "rays") return ShotShape::rays;
-  if (text == "window") return ShotShape::window;
-  if (text == "decimation") return ShotShape::decimation;
-  throw InvalidParameter("-shape " + text + " is invalid: must be rays, window or decimation");
-}
-
-PlanRequest parse_request(int argc, char** argv) {
+PlanRequest parse_request(const CommandLine& command_line) {
   PlanRequest request;
-  pcl::console::parse_argument(argc, argv, "-budget", request.budget_rays);
-  std::string shape = "rays", window;
-  pcl::console::parse_argument(argc, argv, "-shape", shape);
-  request.shape = parse_shape(shape);
-  if (pcl::console::parse_argument(argc, argv, "-window", window) >= 0) {
-    const auto x = window.find('x');
-    try {
-      if (x == std::string::npos) throw std::invalid_argument("no x");
-      request.window_width_columns = std::stoi(window.substr(0, x));
-      request.window_height_columns = std::stoi(window.substr(x + 1));
-    } catch (const std::logic_error&) {
-      throw InvalidParameter("-window " + window + " is invalid: must be WIDTHxHEIGHT in columns, e.g. 64x48");
-    }
+  request.budget_rays = *command_line.integer("-budget");
+  const std::string shape = *command_line.text("-shape");
+  request.shape = shape == "window" ? ShotShape::window : shape == "decimation" ? ShotShape::decimation : ShotShape::rays;
+  const std::string window = *command_line.text("-window");
+  const auto x = window.find('x');
+  try {
+    std::size_t used_w = 0, used_h = 0;
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    request.window_width_columns = std::stoi(window.substr(0, x), &used_w);
+    request.window_height_columns = std::stoi(window.substr(x + 1), &used_h);
+    if (used_w != x || used_h != window.size() - x - 1 || request.window_width_columns < 1 ||
+        request.window_height_columns < 1)
+      throw std::invalid_argument("not whole");
+  } catch (const std::logic_error&) {
+    throw InvalidParameter("-window " + window + " is invalid: must be WIDTHxHEIGHT in columns >= 1, e.g. 64x48");
   }
-  pcl::console::parse_argument(argc, argv, "-negative_share", request.negative_share);
-  pcl::console::parse_argument(argc, argv, "-stop_gain", request.stop_gain_per_ray_below);
+  request.negative_share = *command_line.number("-negative_share");
+  request.stop_gain_per_ray_below = *command_line.number("-stop_gain");
   return request;
 }
 
@@ -142,20 +130,15 @@ void write_rays(const std::string& path, const Mapper& mapper, const ReturnRecor
   if (!out.flush()) throw IoError("cannot write '" + path + "'");
 }
 
-int run(int argc, char** argv) {
-  ToolSpec spec;
-  spec.default_preset = "kinect_v1";
-  spec.value_flags = {"-o", "-load", "-budget", "-shape", "-window", "-negative_share", "-stop_gain"};
-  spec.switches = {"-sample", "-overwrite"};
-  const ToolOptions options = parse_tool_options(argc, argv, spec);
-  std::string load_path;
-  pcl::console::parse_argument(argc, argv, "-load", load_path);
-  const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
+int run(const CommandLine& command_line) {
+  const ToolOptions options = parse_tool_options(command_line);
+  const std::string load_path = command_line.text("-load").value_or("");
+  const bool use_sample = command_line.has("-sample");
   const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
-  const PlanRequest request = parse_request(argc, argv);
+  const PlanRequest request = parse_request(command_line);
   // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
-  OutputFolder out = open_output_folder(argc, argv, "occ_plan", "");
+  OutputFolder out = open_output_folder(command_line);
 
   const auto start = std::chrono::steady_clock::now();
   const Source source = load_path.empty() ? map_from_frames(options, use_sample) : map_from_file(load_path);
@@ -181,4 +164,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return run_tool(argc, argv, kFlags, run); }

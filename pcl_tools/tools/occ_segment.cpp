@@ -7,40 +7,32 @@
 #include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 
-#include <pcl/console/parse.h>
 #include <pcl/io/pcd_io.h>
 
 #include <cstdio>
 #include <fstream>
-#include <iostream>
 
 namespace {
 
 using namespace occ_improve;
 
-void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " INPUT -o OUTDIR [options]\n"
-            << "Segments one organized frame (organized PCD or depth image) along negative-improvement contours.\n"
-            << "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png, contours.png,\n"
-            << "segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n\n"
-            << "Segmentation options:\n"
-            << usage_output_folder("")
-            << "  -contour V                contour rays have improvement < V (default per preset: -0.02)\n"
-            << "  -min_segment N            smaller regions are attached to a neighbour (default 200 rays)\n"
-            << "  -plane                    take out the dominant plane first (table, floor), as PCL does\n"
-            << "Without -intrinsics, a PCD's intrinsics are estimated from its organized points.\n\n"
-            << usage_common();
-}
+const ToolFlags kFlags{
+    "occ_segment",
+    {"INPUT -o OUTDIR [options]"},
+    "Segments one organized frame along its negative-improvement contours (the paper's closing remark).\n"
+    "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png, contours.png,\n"
+    "segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
+    joined({output_folder_flag_names(), {"-contour", "-min_segment", "-plane"}, sensor_flag_names(),
+            camera_flag_names()}),
+    {},
+    {},
+    frame_inputs_help()};
 
-int run(int argc, char** argv) {
-  ToolSpec spec;
-  spec.default_preset = "kinect_v1";
-  spec.value_flags = {"-o", "-contour", "-min_segment"};
-  spec.switches = {"-plane", "-overwrite"};
-  const ToolOptions options = parse_tool_options(argc, argv, spec);
+int run(const CommandLine& command_line) {
+  const ToolOptions options = parse_tool_options(command_line);
   if (options.inputs.size() != 1) throw InvalidParameter("give exactly one input frame (see -h)");
   // Fail on an unwritable or foreign output folder before any work.
-  OutputFolder out = open_output_folder(argc, argv, "occ_segment", "");
+  OutputFolder out = open_output_folder(command_line);
 
   const std::vector<ToolFrame> frames = read_tool_frames(options);
   if (frames.size() != 1)
@@ -54,12 +46,8 @@ int run(int argc, char** argv) {
   const SensorPreset preset = options.preset_for_camera(frame.camera);
   std::printf("%s\n", describe_camera(frames).c_str());
   SegmentationParams params = segmentation_defaults(preset);
-  pcl::console::parse_argument(argc, argv, "-contour", params.contour_improvement_below);
-  int min_segment = static_cast<int>(params.min_segment_columns);
-  pcl::console::parse_argument(argc, argv, "-min_segment", min_segment);
-  if (min_segment < 1) throw InvalidParameter("-min_segment " + std::to_string(min_segment) + " must be >= 1");
-  params.min_segment_columns = static_cast<std::size_t>(min_segment);
-  params.remove_dominant_plane = pcl::console::find_switch(argc, argv, "-plane");
+  apply_segmentation_flags(command_line, params);
+  params.remove_dominant_plane = command_line.has("-plane");
 
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
   throw_if_interrupted();
@@ -114,4 +102,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, kFlags, run); }

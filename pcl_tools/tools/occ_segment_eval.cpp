@@ -7,7 +7,6 @@
 #include "occ_improve/pcl/tool_options.hpp"
 
 #include <pcl/common/io.h>
-#include <pcl/console/parse.h>
 #include <pcl/console/print.h>
 
 #include <algorithm>
@@ -19,24 +18,18 @@ namespace {
 
 using namespace occ_improve;
 
-void print_usage(const char* program) {
-  std::printf(
-      "Usage: %s <labelled.pcd> [more.pcd ...] [options]\n"
-      "Scores segmentations of organized clouds with a ground-truth `label` field (mOSD: 0 invalid,\n"
-      "1-9 table, 20+ objects): ours (negative-improvement contours, preset kinect_v1 from the cloud's\n"
-      "intrinsics) and PCL's OrganizedMultiPlaneSegmentation + OrganizedConnectedComponentSegmentation\n"
-      "with EuclideanClusterComparator, dominant plane left out in both unless said otherwise.\n"
-      "  -no_plane                ours without dominant-plane removal\n"
-      "  -preset NAME             ours: kinect_v1 (default), kinect_v1_spherical or kinect_v1_paper\n"
-      "  -contour V               ours: contour rays have improvement < V (default -0.02)\n"
-      "  -min_segment N           ours: smallest segment in rays (default 200)\n"
-      "  -plane_distance D        ours: plane inlier band in m (default 0.006 pixel-native, 0.01 spherical)\n"
-      "  -pcl_min_inliers N       PCL: OrganizedMultiPlaneSegmentation min inliers (default 3000)\n"
-      "  -pcl_distance D          PCL: EuclideanClusterComparator threshold in m (default 0.005)\n"
-      "  -pcl_min_cluster N       PCL: smallest cluster kept (default 500)\n"
-      "  -h                       this help\n",
-      program);
-}
+const ToolFlags kFlags{
+    "occ_segment_eval",
+    {"LABELLED.pcd... [options]"},
+    "Scores segmentations of organized clouds with a ground-truth `label` field (mOSD: 0 invalid, 1-9\n"
+    "table, 20+ objects): ours (negative-improvement contours, intrinsics fitted to the cloud) and PCL's\n"
+    "OrganizedMultiPlaneSegmentation + OrganizedConnectedComponentSegmentation with\n"
+    "EuclideanClusterComparator, the dominant plane left out in both unless -no_plane.\n",
+    {"-q", "-preset", "-contour", "-min_segment", "-no_plane", "-plane_distance", "-pcl_min_inliers", "-pcl_distance",
+     "-pcl_min_cluster"},
+    {},
+    {},
+    "  LABELLED.pcd              organized PCD with x y z and a uint32 `label` field\n"};
 
 struct Totals {
   double f = 0, well = 0, boundary_precision = 0, boundary_recall = 0, ms = 0;
@@ -67,11 +60,13 @@ void print_mean(const char* method, const Totals& t) {
 
 // One labelled cloud: both segmentations scored, one row each.
 void evaluate_cloud(const std::string& path, const std::string& preset_name, const SegmentationParams& ours,
-                    const PclSegmentationParams& pcl_params, Totals& ours_total, Totals& pcl_total) {
+                    const PclSegmentationParams& pcl_params, Totals& ours_total, Totals& pcl_total,
+                    ProgressLine& progress) {
   const InputScope scope(path);
   const std::string name = path.substr(path.find_last_of('/') + 1);
   const auto cloud = load_labelled_cloud(path);
   require_valid_points(span_of(cloud), path);
+  progress.finish();  // the rows below start on a clean line
   if (ours_total.clouds == 0)  // the header only once a cloud has loaded, so an error stands alone
     std::printf("%-14s %-5s %6s %8s %5s %6s %7s %7s %9s\n", "cloud", "meth", "F", "F>=.75", "over", "under",
                 "bnd P", "bnd R", "ms/frame");
@@ -92,41 +87,33 @@ void evaluate_cloud(const std::string& path, const std::string& preset_name, con
   pcl_total.add(pcl_score, pcl_result.total_seconds());
 }
 
-int run(int argc, char** argv) {
-  if (argc < 2) {
-    print_usage(argv[0]);
-    return 1;
-  }
+int run(const CommandLine& command_line) {
   pcl::console::setVerbosityLevel(pcl::console::L_ERROR);
   PclSegmentationParams pcl_params;
-  pcl::console::parse_argument(argc, argv, "-pcl_min_inliers", pcl_params.min_plane_inliers);
-  pcl::console::parse_argument(argc, argv, "-pcl_distance", pcl_params.cluster_distance_m);
-  int min_cluster = static_cast<int>(pcl_params.min_cluster_points);
-  pcl::console::parse_argument(argc, argv, "-pcl_min_cluster", min_cluster);
-  pcl_params.min_cluster_points = static_cast<std::size_t>(std::max(1, min_cluster));
-  std::string preset_name = "kinect_v1";
-  pcl::console::parse_argument(argc, argv, "-preset", preset_name);
+  pcl_params.min_plane_inliers = static_cast<unsigned>(*command_line.integer("-pcl_min_inliers"));
+  pcl_params.cluster_distance_m = static_cast<float>(*command_line.number("-pcl_distance"));
+  pcl_params.min_cluster_points = static_cast<std::size_t>(*command_line.integer("-pcl_min_cluster"));
+  const std::string preset_name = *command_line.text("-preset");
   SegmentationParams ours = segmentation_defaults(preset_by_name(preset_name));
-  pcl::console::parse_argument(argc, argv, "-contour", ours.contour_improvement_below);
-  int min_segment = static_cast<int>(ours.min_segment_columns);
-  pcl::console::parse_argument(argc, argv, "-min_segment", min_segment);
-  ours.min_segment_columns = static_cast<std::size_t>(std::max(1, min_segment));
-  ours.remove_dominant_plane = !pcl::console::find_switch(argc, argv, "-no_plane");
-  pcl::console::parse_argument(argc, argv, "-plane_distance", ours.plane_distance_m);
-  ours.validate();
+  apply_segmentation_flags(command_line, ours);
+  ours.remove_dominant_plane = !command_line.has("-no_plane");
   pcl_params.validate();
-  const std::vector<int> files = pcl::console::parse_file_extension_argument(argc, argv, ".pcd");
+  const std::vector<std::string>& files = command_line.positionals();
   if (files.empty()) throw InvalidParameter("no labelled .pcd file given (see -h)");
 
   std::printf("ours: %s dominant-plane removal; PCL: dominant plane left out\n",
               ours.remove_dominant_plane ? "with" : "without");
   Totals ours_total, pcl_total;
+  ProgressLine progress(command_line, "cloud");
   try {
-    for (int index : files) {
+    for (const std::string& file : files) {
       throw_if_interrupted();
-      evaluate_cloud(argv[index], preset_name, ours, pcl_params, ours_total, pcl_total);
+      evaluate_cloud(file, preset_name, ours, pcl_params, ours_total, pcl_total, progress);
+      progress.update(ours_total.clouds, files.size());
     }
+    progress.finish();
   } catch (const Interrupted&) {
+    progress.finish();
     std::printf("interrupted after %zu of %zu clouds; means so far:\n", ours_total.clouds, files.size());
     print_mean("ours", ours_total);
     print_mean("pcl", pcl_total);
@@ -139,4 +126,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, kFlags, run); }

@@ -12,7 +12,6 @@
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/virtual_sensor.hpp"
 
-#include <pcl/console/parse.h>
 
 #include <algorithm>
 #include <chrono>
@@ -29,24 +28,22 @@ namespace {
 
 using namespace occ_improve;
 
-void print_usage(const char* program) {
-  std::printf(
-      "Usage: %s <scene> [more scenes ...] [options]\n"
-      "A scene is `sample` (the built-in scene, noise-free), an organized PCD (intrinsics fitted to it) or a\n"
-      "16-bit depth PNG in mm with a camera-intrinsics.txt beside it. For each scene and budget, strategies\n"
-      "(a) full frames, (b) uniform random without replacement, (c) regular decimation, (d) improvement-\n"
-      "guided, (e) (d) + return model, (f) (e) + re-acquisition of negative rays acquire from a virtual\n"
-      "Kinect v1 (virtual_sensor.hpp); quality = share of scene-return rays whose predicted depth lies\n"
-      "within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's.\n"
-      "  -o DIR            output folder (default out/select): <scene>.csv, summary.csv, summary.md\n"
-      "  -budgets LIST     rays per shot as shares of the image (default 0.01,0.05,0.2)\n"
-      "  -frames N         points acquired per run, in full frames (default 5)\n"
-      "  -share S          (f): share of each shot for negative rays (default 0.1)\n"
-      "  -radius R         predict_depth radius in columns (default 16)\n"
-      "  -seed N           sensor noise and (b)'s order (default 1)\n"
-      "  -h                this help\n",
-      program);
-}
+const ToolFlags kFlags{
+    "occ_select_eval",
+    {"SCENE... [options]"},
+    "For each scene and budget, strategies (a) full frames, (b) uniform random without replacement,\n"
+    "(c) regular decimation, (d) improvement-guided, (e) (d) + return model, (f) (e) + re-acquisition of\n"
+    "negative rays acquire from a virtual Kinect v1 (virtual_sensor.hpp); quality = share of\n"
+    "scene-return rays whose predicted depth lies within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's.\n"
+    "Writes OUTDIR/<scene>.csv per scene and OUTDIR/summary.csv.\n",
+    joined({output_folder_flag_names(), {"-budgets", "-frames", "-negative_share", "-radius", "-seed"},
+            camera_flag_names()}),
+    {{"-o", "out/select"}, {"-negative_share", "0.1"}},
+    {},
+    "  sample                    the built-in scene, noise-free\n"
+    "  FILE.pcd / FILE.ply       an organized cloud (intrinsics fitted to it unless -intrinsics)\n"
+    "  depth image or FOLDER     16-bit depth with its dataset's camera-intrinsics.txt or -intrinsics; the\n"
+    "                            first frame of a folder\n"};
 
 struct Scene {
   std::string name;
@@ -54,7 +51,7 @@ struct Scene {
   PinholeIntrinsics intrinsics;
 };
 
-Scene load_scene(const std::string& input) {
+Scene load_scene(const std::string& input, const ToolOptions& options) {
   Scene s;
   s.name = std::filesystem::path(input).stem().string();
   if (input == "sample") {
@@ -63,20 +60,18 @@ Scene load_scene(const std::string& input) {
     const sample::SampleFrame f = sample::generate_scene(clean);
     return {"sample", f.depth_m, f.intrinsics};
   }
-  const std::vector<FrameSource> sources = expand_input(input);
-  const FrameSource& source = sources.front();
-  const bool pcd = std::filesystem::path(source.path).extension() == ".pcd";
-  const LoadedFrame frame = pcd ? load_pcd_frame(source.path) : load_depth_frame(source.path, source.intrinsics.value());
-  if (!frame.cloud.isOrganized() || frame.cloud.height <= 1) throw InvalidInput(input + ": not an organized frame");
-  s.intrinsics = pcd ? estimate_intrinsics(frame.cloud) : *source.intrinsics;
+  // The tools' frame rules: intrinsics from -intrinsics, the dataset or fitted to the cloud; never assumed.
+  const ToolFrame frame = read_tool_frame(options, expand_input(input).front());
+  if (!frame.cloud.isOrganized() || frame.cloud.height <= 1 || !frame.camera)
+    throw InvalidInput(input + ": not an organized frame");
+  s.intrinsics = *frame.camera;
   s.depth_m = depth_of_organized(frame.cloud);
   if (s.name.find('.') != std::string::npos) s.name = s.name.substr(0, s.name.find('.'));
   return s;
 }
 
 struct Options {
-  std::string out = "out/select";
-  std::vector<double> budgets = {0.01, 0.05, 0.2};
+  std::vector<double> budgets;
   double frames = 5, share = 0.1;
   int radius = 16;
   std::uint64_t seed = 1;
@@ -306,8 +301,8 @@ struct SummaryRow {
   double budget_share, final_quality, points_to_95, stop_points, knee_points, calibration_r, ms_per_shot;
 };
 
-std::vector<SummaryRow> evaluate_scene(const Scene& scene, const Options& options) {
-  const std::string path = options.out + "/" + scene.name + ".csv";
+std::vector<SummaryRow> evaluate_scene(const Scene& scene, const Options& options, OutputFolder& out) {
+  const std::string path = out.file(scene.name + ".csv");
   std::ofstream csv(path);
   if (!csv) throw IoError("cannot write " + path);
   csv << "scene,strategy,budget_rays,shot,rays_asked,returns,quality,coverage,mean_abs_error_m,expected_gain,"
@@ -336,57 +331,50 @@ std::vector<SummaryRow> evaluate_scene(const Scene& scene, const Options& option
   return rows;
 }
 
-void write_summary(const std::vector<SummaryRow>& rows, const std::string& out) {
-  std::ofstream csv(out + "/summary.csv");
+void write_summary(const std::vector<SummaryRow>& rows, const std::string& path) {
+  std::ofstream csv(path);
   csv << "scene,strategy,budget_share,final_quality,frames_to_95pct_of_5_full,stop_frames,knee_frames,"
          "calibration_r,ms_per_shot\n";
   for (const auto& r : rows)
     csv << r.scene << ',' << r.strategy << ',' << r.budget_share << ',' << r.final_quality << ',' << r.points_to_95 << ','
         << r.stop_points << ',' << r.knee_points << ',' << r.calibration_r << ',' << r.ms_per_shot << '\n';
-  if (!csv) throw IoError("cannot write " + out + "/summary.csv");
+  if (!csv.flush()) throw IoError("cannot write '" + path + "'");
 }
 
-int run(int argc, char** argv) {
+Options parse_options(const CommandLine& command_line) {
   Options o;
-  pcl::console::parse_argument(argc, argv, "-o", o.out);
-  std::string budgets;
-  if (pcl::console::parse_argument(argc, argv, "-budgets", budgets) >= 0) {
-    o.budgets.clear();
-    std::stringstream in(budgets);
-    for (std::string item; std::getline(in, item, ',');) o.budgets.push_back(std::stod(item));
-  }
-  pcl::console::parse_argument(argc, argv, "-frames", o.frames);
-  pcl::console::parse_argument(argc, argv, "-share", o.share);
-  pcl::console::parse_argument(argc, argv, "-radius", o.radius);
-  int seed = 1;
-  pcl::console::parse_argument(argc, argv, "-seed", seed);
-  o.seed = static_cast<std::uint64_t>(seed);
-  for (double b : o.budgets) detail::require_parameter(b > 0 && b <= 1, "-budgets", b, "in (0, 1]");
-  detail::require_parameter(o.frames > 0, "-frames", o.frames, "> 0");
-  std::vector<std::string> scenes;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a[0] == '-') {
-      ++i;  // every flag takes a value
-      continue;
-    }
-    scenes.push_back(a);
-  }
+  o.budgets = parse_number_list("-budgets", *command_line.text("-budgets"));
+  for (double b : o.budgets)
+    if (!(b > 0 && b <= 1)) throw InvalidParameter("-budgets " + *command_line.text("-budgets") + " is invalid: every share must be in (0, 1]");
+  o.frames = *command_line.number("-frames");
+  o.share = *command_line.number("-negative_share");
+  o.radius = *command_line.integer("-radius");
+  o.seed = static_cast<std::uint64_t>(*command_line.integer("-seed"));
+  return o;
+}
+
+int run(const CommandLine& command_line) {
+  const Options o = parse_options(command_line);
+  const ToolOptions frame_options = parse_tool_options(command_line);
+  const std::vector<std::string>& scenes = command_line.positionals();
   if (scenes.empty()) throw InvalidParameter("no scene given (see -h)");
-  std::filesystem::create_directories(o.out);
+  OutputFolder out = open_output_folder(command_line);
   std::vector<SummaryRow> all;
   for (const std::string& input : scenes) {
-    const Scene scene = load_scene(input);
+    throw_if_interrupted();
+    const InputScope scope(input);
+    const Scene scene = load_scene(input, frame_options);
     std::fprintf(stderr, "%s: %d x %d, fx %.1f\n", scene.name.c_str(), scene.intrinsics.width, scene.intrinsics.height,
                  scene.intrinsics.fx);
-    const std::vector<SummaryRow> rows = evaluate_scene(scene, o);
+    const std::vector<SummaryRow> rows = evaluate_scene(scene, o, out);
     all.insert(all.end(), rows.begin(), rows.end());
-    write_summary(all, o.out);
   }
-  std::printf("wrote %s/summary.csv and one CSV per scene\n", o.out.c_str());
+  write_summary(all, out.file("summary.csv"));
+  out.commit();
+  std::printf("wrote %s/summary.csv and one CSV per scene\n", out.path().c_str());
   return 0;
 }
 
 }  // namespace
 
-int main(int argc, char** argv) { return run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return run_tool(argc, argv, kFlags, run); }

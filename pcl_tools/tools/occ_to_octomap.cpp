@@ -9,8 +9,6 @@
 #include "occ_improve/pcl/tool_options.hpp"
 #include "occ_improve/sample_scene.hpp"
 
-#include <pcl/console/parse.h>
-
 #include <Eigen/Geometry>
 #include <chrono>
 #include <cmath>
@@ -18,7 +16,6 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -26,25 +23,29 @@ using namespace occ_improve;
 
 namespace {
 
-void print_usage(const char* program) {
-  std::cout << "Usage: " << program << " -load MAP.occmap [-pose P] [-load MAP2 -pose P2 ...] [options] -o OUT.bt|OUT.ot\n"
-            << "       " << program << " [options] INPUT... -o OUT.bt|OUT.ot\n"
-            << "       " << program << " -sample [options] -o OUT.bt|OUT.ot\n\n"
-            << "Writes the occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of\n"
-            << "view and depth range takes the log-odds of the spherical voxel holding its centre; unknown voxels\n"
-            << "stay unknown; the grid's clamping thresholds are carried over. .bt = maximum likelihood,\n"
-            << ".ot = full log-odds (both with OctoMap's own writers).\n\n"
-            << "Tool options:\n"
-            << "  -o OUT.bt|OUT.ot          output file (required)\n"
-            << "  -load MAP.occmap          a map saved by occ_improve (save_map); the map carries its own preset.\n"
-            << "                            Repeat -load (each with its own -pose, in order) to merge maps taken\n"
-            << "                            from several poses: log-odds are added, then clamped\n"
-            << "  -sample                   use the built-in generated Kinect-like frame instead of input files\n"
-            << "  -save MAP.occmap          also save the grid built from the input frames\n"
-            << "  -resolution R             OcTree leaf size in metres (default 0.02)\n"
-            << "  -pose x,y,z,qx,qy,qz,qw   sensor pose in the world (world <- sensor, unit quaternion);\n"
-            << "                            default: the sensor at the origin, optical frame = world frame\n\n"
-            << usage_common();
+const ToolFlags kFlags{
+    "occ_to_octomap",
+    {"-load MAP.occmap [-pose P] [-load MAP2 -pose P2 ...] [options] -o OUT.bt|OUT.ot",
+     "[options] INPUT... -o OUT.bt|OUT.ot", "-sample [options] -o OUT.bt|OUT.ot"},
+    "Writes the occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of view and\n"
+    "depth range takes the log-odds of the grid voxel holding its centre; unknown voxels stay unknown.\n"
+    ".bt = maximum likelihood, .ot = full log-odds (both with OctoMap's own writers). The tree is in a\n"
+    "world frame: the first frame's pose when the inputs have poses, else -pose, else -frame.\n"
+    "Neither format stores the clamping thresholds (the tree in memory has the grid's; a reader of the\n"
+    "file gets OctoMap's defaults) nor the sensor model; keep the .occmap (-save) for those.\n"
+    "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
+    "are added, then clamped.\n",
+    joined({{"-o", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame"}, sensor_flag_names(),
+            camera_flag_names(), {"-no_poses"}}),
+    {},
+    {"-load", "-pose"},
+    frame_inputs_help()};
+
+// world <- optical for -frame z_up: the optical z (forward) is world x, x (right) is -y, y (down) is -z.
+Eigen::Isometry3d z_up_from_optical() {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  return pose;
 }
 
 double seconds_since(std::chrono::steady_clock::time_point start) {
@@ -52,15 +53,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }
 
 Eigen::Isometry3d parse_pose(const std::string& text) {
-  std::vector<double> v;
-  std::stringstream in(text);
-  for (std::string item; std::getline(in, item, ',');) {
-    char* end = nullptr;
-    const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(x))
-      throw InvalidParameter("-pose " + text + " is invalid: '" + item + "' is not a finite number");
-    v.push_back(x);
-  }
+  const std::vector<double> v = parse_number_list("-pose", text);
   if (v.size() != 7) throw InvalidParameter("-pose " + text + " is invalid: needs 7 numbers x,y,z,qx,qy,qz,qw");
   Eigen::Quaterniond q(v[6], v[3], v[4], v[5]);
   if (std::abs(q.norm() - 1.0) > 1e-3)
@@ -71,24 +64,6 @@ Eigen::Isometry3d parse_pose(const std::string& text) {
   pose.translation() = Eigen::Vector3d(v[0], v[1], v[2]);
   pose.linear() = q.toRotationMatrix();
   return pose;
-}
-
-/// Every value of a repeatable flag, in command-line order.
-std::vector<std::string> all_values(int argc, char** argv, const std::string& flag) {
-  std::vector<std::string> values;
-  for (int i = 1; i + 1 < argc; ++i)
-    if (flag == argv[i]) values.emplace_back(argv[++i]);
-  return values;
-}
-
-double parse_resolution(int argc, char** argv) {
-  std::string text;
-  if (pcl::console::parse_argument(argc, argv, "-resolution", text) < 0) return 0.02;
-  char* end = nullptr;
-  const double r = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(r) || r <= 0)
-    throw InvalidParameter("-resolution " + text + " is invalid: must be a number > 0 (metres)");
-  return r;
 }
 
 struct Source {
@@ -121,20 +96,16 @@ Source build_from_frames(const ToolOptions& options, bool use_sample) {
   return source;
 }
 
-int run(int argc, char** argv) {
-  ToolSpec spec;
-  spec.value_flags = {"-o", "-load", "-save", "-resolution", "-pose"};
-  spec.switches = {"-sample"};
-  const ToolOptions options = parse_tool_options(argc, argv, spec);
-  std::string output, save_path;
-  pcl::console::parse_argument(argc, argv, "-o", output);
-  pcl::console::parse_argument(argc, argv, "-save", save_path);
-  const std::vector<std::string> load_paths = all_values(argc, argv, "-load");
-  const std::vector<std::string> pose_texts = all_values(argc, argv, "-pose");
-  const bool use_sample = pcl::console::find_switch(argc, argv, "-sample");
+int run(const CommandLine& command_line) {
+  const ToolOptions options = parse_tool_options(command_line);
+  const std::string output = command_line.text("-o").value_or("");
+  const std::string save_path = command_line.text("-save").value_or("");
+  const std::vector<std::string> load_paths = command_line.values("-load");
+  const std::vector<std::string> pose_texts = command_line.values("-pose");
+  const bool use_sample = command_line.has("-sample");
   if (output.empty()) throw InvalidParameter("-o OUT.bt|OUT.ot is required (see -h)");
   require_octomap_output_path(output);
-  const double resolution = parse_resolution(argc, argv);
+  const double resolution = *command_line.number("-resolution");
   const int sources = (load_paths.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
   if (!load_paths.empty() && !save_path.empty()) throw InvalidParameter("-save only applies to a grid built from frames");
@@ -145,14 +116,15 @@ int run(int argc, char** argv) {
   if (maps > 1 && pose_texts.empty())
     throw InvalidParameter("merging " + std::to_string(maps) + " maps needs one -pose per -load");
   const PresetOverrides& o = options.overrides;
-  const bool preset_flags = pcl::console::find_argument(argc, argv, "-preset") >= 0 || o.sigma_depth_m ||
+  const bool preset_flags = command_line.has("-preset") || o.sigma_depth_m ||
                             o.sigma_depth_per_m2 || o.sigma_angle_rad || o.support_k || o.depth_bins ||
                             o.depth_max_m || o.fov_horizontal_deg || o.fov_vertical_deg;
   if (!load_paths.empty() && preset_flags)
     std::cerr << "warning: preset flags are ignored with -load: a saved map carries its own geometry and model\n";
   std::vector<Eigen::Isometry3d> poses;
   for (const std::string& text : pose_texts) poses.push_back(parse_pose(text));
-  if (poses.empty()) poses.push_back(Eigen::Isometry3d::Identity());
+  const bool z_up = *command_line.text("-frame") == "z_up";
+  if (poses.empty()) poses.push_back(z_up ? z_up_from_optical() : Eigen::Isometry3d::Identity());
 
   // Every source is read before the first export, so a bad map fails before any work.
   auto start = std::chrono::steady_clock::now();
@@ -189,6 +161,7 @@ int run(int argc, char** argv) {
   }
   throw_if_interrupted();  // before the output is written: an interrupted run leaves nothing behind
   start = std::chrono::steady_clock::now();
+  create_parent_folders(output);
   write_octree(*tree, output);
   const double write_seconds = seconds_since(start);
 
@@ -215,4 +188,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, print_usage, run); }
+int main(int argc, char** argv) { return occ_improve::run_tool(argc, argv, kFlags, run); }

@@ -91,7 +91,7 @@ TEST_F(OccPlanTool, BadRequestsNameTheValue) {
   const std::string out = " -o " + (dir_ / "out").string();
   ToolRun r = run("-sample -budget 0" + out);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("budget_rays = 0"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("-budget 0 is invalid"), std::string::npos) << r.output;
   r = run("-sample -budget 400000" + out);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("budget_rays = 400000"), std::string::npos) << r.output;

@@ -26,15 +26,24 @@ struct Args {
   int argc() const { return static_cast<int>(argv.size()); }
 };
 
-ToolOptions parse(std::initializer_list<std::string> args, const ToolSpec& spec = {}) {
+// A tool taking the shared sensor, camera and output flags, -k and -sample, and frame inputs.
+const ToolFlags kTool{"tool",
+                      {"[options] INPUT..."},
+                      "",
+                      joined({sensor_flag_names(), camera_flag_names(), output_folder_flag_names(), {"-k", "-sample"}}),
+                      {},
+                      {},
+                      "  INPUT\n"};
+
+ToolOptions parse(std::initializer_list<std::string> args) {
   Args a(args);
-  return parse_tool_options(a.argc(), a.argv.data(), spec);
+  return parse_tool_options(parse_command_line(kTool, a.argc(), a.argv.data()));
 }
 
 // The message of the InvalidParameter the arguments raise ("" when none).
-std::string error_of(std::initializer_list<std::string> args, const ToolSpec& spec = {}) {
+std::string error_of(std::initializer_list<std::string> args) {
   try {
-    parse(args, spec);
+    parse(args);
   } catch (const InvalidParameter& e) {
     return e.what();
   }
@@ -53,14 +62,11 @@ TEST(ToolOptions, DefaultsAreThePixelNativePresetClampedWithNoInputs) {
   EXPECT_FALSE(t.intrinsics);
   EXPECT_FALSE(t.depth_encoding);
   EXPECT_TRUE(t.inputs.empty());
-  EXPECT_EQ(t.top_k, ToolSpec{}.default_top_k);
+  EXPECT_EQ(t.top_k, 10);
 }
 
 TEST(ToolOptions, InputsAreThePositionalArgumentsInOrderNotFlagValues) {
-  ToolSpec spec;
-  spec.value_flags = {"-o"};
-  spec.switches = {"-sample"};
-  const ToolOptions t = parse({"b.pcd", "-o", "out", "-sample", "a.png", "-k", "3", "c_folder"}, spec);
+  const ToolOptions t = parse({"b.pcd", "-o", "out", "-sample", "a.png", "-k", "3", "c_folder"});
   EXPECT_EQ(t.inputs, (std::vector<std::string>{"b.pcd", "a.png", "c_folder"}));
   EXPECT_EQ(t.top_k, 3);
 }
@@ -164,21 +170,27 @@ TEST(ToolOptions, BadValuesNameTheFlag) {
   EXPECT_NE(error_of({"-preset"}).find("-preset"), std::string::npos);  // value missing
 }
 
-TEST(ToolOptions, ToolFlagsAreAcceptedOnlyWhenDeclared) {
-  EXPECT_NE(error_of({"-o", "out"}).find("-o"), std::string::npos);
-  ToolSpec spec;
-  spec.value_flags = {"-o"};
-  EXPECT_EQ(error_of({"-o", "out"}, spec), "");
+TEST(ToolOptions, FlagsTheToolDoesNotDeclareAreUnknown) {
+  const ToolFlags without_k{"tool", {""}, "", sensor_flag_names(), {}, {}, "  INPUT\n"};
+  Args a({"-k", "3"});
+  try {
+    parse_command_line(without_k, a.argc(), a.argv.data());
+    FAIL() << "-k is not declared";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown option -k"), std::string::npos) << e.what();
+  }
 }
 
-TEST(ToolOptions, HelpAndUsage) {
-  Args with_help({"-h"}), without({"a.pcd"});
-  EXPECT_TRUE(help_requested(with_help.argc(), with_help.argv.data()));
-  EXPECT_FALSE(help_requested(without.argc(), without.argv.data()));
-  const std::string usage = usage_common();
+TEST(ToolOptions, UsageListsTheCommonFlagsWithTheirDefaults) {
+  std::string usage = usage_text(kTool, "tool");
+  // Wrapped lines joined, so that a default split over two lines is found.
+  for (std::size_t at; (at = usage.find("\n" + std::string(28, ' '))) != std::string::npos;) usage.replace(at, 29, " ");
   for (const char* flag : {"-preset", "-sigma_depth", "-sigma_angle", "-depth_bins", "-depth_max", "-fov", "-mode",
                            "-clamp", "-intrinsics", "-intrinsics_file", "-depth_encoding", "-k"})
-    EXPECT_NE(usage.find(flag), std::string::npos) << flag;
+    EXPECT_NE(usage.find(std::string("  ") + flag + " "), std::string::npos) << flag;
+  EXPECT_NE(usage.find("(default kinect_v1)"), std::string::npos);
+  EXPECT_NE(usage.find("(default clamped)"), std::string::npos);
+  EXPECT_EQ(usage.find("-threads"), std::string::npos);  // not this tool's
 }
 
 TEST(ToolFrames, IntrinsicsAreNeverAssumed) {

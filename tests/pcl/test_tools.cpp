@@ -1,6 +1,7 @@
 // Every command-line tool, run as a user runs it: the same outcome for the same bad input (exit code 1
 // and one error line naming the file), no crash on malformed files, and a clean stop on SIGINT/SIGTERM.
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/pcl/flags.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "support/temp_folder.hpp"
 
@@ -15,6 +16,8 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <set>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -119,6 +122,103 @@ TEST_F(Tools, MalformedPcdFilesGiveOneErrorLineInEveryTool) {
   for (const std::string name : {"empty.pcd", "random.pcd", "huge.pcd"})
     for (const auto& [tool, args] : tools_on(file(name)))
       expect_one_error_line_naming(run(tool, args), name, tool + " on " + name, tool != OCC_IMPROVE_LIVE_EXECUTABLE);
+}
+
+const std::vector<std::string> kAllTools = {OCC_IMPROVE_MAP_EXECUTABLE,  OCC_SEGMENT_EXECUTABLE,   OCC_TO_OCTOMAP_EXECUTABLE,
+                                             OCC_IMPROVE_LIVE_EXECUTABLE, OCC_SEGMENT_EVAL_EXECUTABLE, OCC_PLAN_EXECUTABLE,
+                                             OCC_SELECT_EVAL_EXECUTABLE,  OCC_FILTER_EVAL_EXECUTABLE};
+
+// -h's flag entries: flag -> its text without what a tool may vary: its default and whether it repeats.
+std::map<std::string, std::string> help_entries(const std::string& help) {
+  std::map<std::string, std::string> entries;
+  std::istringstream lines(help);
+  std::string current;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("  -", 0) == 0 && line.rfind("  -h, --help", 0) != 0) {
+      current = line.substr(2, line.find(' ', 2) - 2);
+      entries[current] = line;
+    } else if (!current.empty() && line.rfind(std::string(28, ' '), 0) == 0) {
+      entries[current] += " " + line.substr(28);
+    } else {
+      current.clear();
+    }
+  }
+  for (auto& [flag, text] : entries) {
+    (void)flag;
+    const std::size_t d = text.find(" (default");
+    if (d != std::string::npos) text.erase(d, text.find(')', d) - d + 1);
+    const std::size_t r = text.find("; may be repeated");
+    if (r != std::string::npos) text.erase(r);
+  }
+  return entries;
+}
+
+// Each tool listed its flags twice (parse and check) and accepted typos; -h and the parser now come from
+// one table: every flag -h lists is accepted, every other registry flag is refused as unknown, and a flag
+// reads the same in every tool's -h.
+TEST_F(Tools, EveryToolsHelpListsExactlyTheFlagsItAcceptsAndTheSameFlagReadsTheSame) {
+  std::map<std::string, std::string> first_entry;
+  for (const std::string& tool : kAllTools) {
+    const ToolRun help = run(tool, "-h");
+    ASSERT_EQ(help.exit_code, 0) << tool;
+    const std::map<std::string, std::string> entries = help_entries(help.out);
+    EXPECT_GE(entries.size(), 3u) << tool << help.out;
+    for (const FlagSpec& f : flag_registry()) {
+      if (f.name == "-h" || f.name == "--help") continue;
+      const bool listed = entries.count(f.name) != 0;
+      if (!listed) {
+        if (f.name.size() % 4 != 0) continue;  // a sample of the unlisted: each run costs a process start
+        const ToolRun r = run(tool, f.name + " 1");
+        EXPECT_NE(r.err.find("unknown option " + f.name), std::string::npos) << tool << " " << f.name << ": " << r.err;
+        continue;
+      }
+      // Declared: a value flag without its value is refused as such; a switch passes to the next refusal.
+      const ToolRun r = run(tool, f.name + " -zz_unknown");
+      const std::string expected = f.kind == FlagKind::switch_flag || f.optional_value ? "unknown option -zz_unknown"
+                                   : f.kind == FlagKind::integer || f.kind == FlagKind::number
+                                       ? f.name + " -zz_unknown is invalid"
+                                       : f.name + " needs a value";
+      EXPECT_NE(r.err.find(expected), std::string::npos) << tool << " " << f.name << ": " << r.err;
+      EXPECT_EQ(r.exit_code, 1) << tool << " " << f.name;
+      if (f.kind != FlagKind::switch_flag) {
+        EXPECT_NE(entries.at(f.name).find(f.value_name), std::string::npos) << tool << " " << f.name;
+      }
+      const auto [it, inserted] = first_entry.emplace(f.name, entries.at(f.name));
+      if (!inserted) {
+        EXPECT_EQ(entries.at(f.name), it->second) << f.name << " reads differently in " << tool;
+      }
+    }
+  }
+}
+
+std::set<std::string> files_in(const fs::path& folder) {
+  std::set<std::string> names;
+  for (const auto& entry : fs::directory_iterator(folder)) names.insert(entry.path().filename().string());
+  return names;
+}
+
+// The legend was legend.png in one tool and improvement_legend.png in another, occ_improve_live wrote no
+// regions.csv, and only some tools created the parents of -o.
+TEST_F(Tools, MapAndLiveWriteTheSameFilesAndCreateTheParentsOfTheOutput) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o new/parents/map").exit_code, 0);
+  const ToolRun live = run(OCC_IMPROVE_LIVE_EXECUTABLE, wall + " -o other/live");
+  ASSERT_EQ(live.exit_code, 0) << live.err;
+  std::set<std::string> map_files = files_in(folder_ / "new/parents/map");
+  EXPECT_EQ(map_files.erase("overlay.png"), 1u);  // the cloud has colour; a live stream's frames carry none
+  EXPECT_EQ(map_files, files_in(folder_ / "other/live"));
+  for (const char* name : {"legend.png", "regions.csv", "rays.csv", "surface.pcd", "improvement.png"})
+    EXPECT_EQ(map_files.count(name), 1u) << name;
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o trees/wall.bt").exit_code, 0);
+  EXPECT_TRUE(fs::exists(folder_ / "trees/wall.bt"));
+}
+
+TEST_F(Tools, NoArgumentsPrintsTheUsageAndFails) {
+  for (const std::string& tool : kAllTools) {
+    const ToolRun r = run(tool, "");
+    EXPECT_EQ(r.exit_code, 1) << tool;
+    EXPECT_EQ(r.err.rfind("Usage: ", 0), 0u) << tool << ": " << r.err;
+  }
 }
 
 // Ctrl-C on occ_improve_live left an empty staging folder and lost the summary.

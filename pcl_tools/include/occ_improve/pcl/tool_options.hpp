@@ -1,11 +1,13 @@
 #pragma once
-// The command-line flags every occ_improve tool shares (sensor preset and its overrides, update mode,
-// camera intrinsics, depth encoding, input files), parsed once in the style of PCL's tools
-// (pcl::console::parse_argument / find_switch). Every bad flag throws InvalidParameter naming the flag.
+// What the occ_improve tools share beyond their flag table (flags.hpp): the sensor preset and grid built
+// from the common flags, the frames read from the inputs, the output folder, the progress line, and the
+// main() that turns every failure into one error line.
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/grid.hpp"
+#include "occ_improve/pcl/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
+#include "occ_improve/segmentation.hpp"
 
 #include <optional>
 #include <stdexcept>
@@ -13,16 +15,6 @@
 #include <vector>
 
 namespace occ_improve {
-
-/// What a tool adds to the common flags.
-struct ToolSpec {
-  std::string default_preset = "kinect_v1";  ///< the real-use, pixel-native preset in every tool
-  int default_top_k = 10;
-  /// The tool's own flags that take a value (e.g. "-o"), so their values are not taken as inputs.
-  std::vector<std::string> value_flags;
-  /// The tool's own switches (e.g. "-sample"). Any other "-name" argument is an unknown flag (error).
-  std::vector<std::string> switches;
-};
 
 /// The overrides given on the command line, applied on top of a preset (unset = keep the preset's).
 struct PresetOverrides {
@@ -73,14 +65,41 @@ ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source)
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
 
-/// True when -h or --help is among the arguments.
-bool help_requested(int argc, const char* const* argv);
-
-/// The shared main() of the command-line tools: prints usage on -h/--help (exit 0), otherwise installs
-/// the stop-signal handlers and runs `run`. Any exception, std::bad_alloc and non-standard ones included,
+/// The shared main() of the command-line tools: prints usage_text on -h/--help (exit 0) and on no
+/// argument at all (exit 1), otherwise parses the command line against `flags`, installs the stop-signal
+/// handlers and runs `run`. Any exception, a refused flag, std::bad_alloc and non-standard ones included,
 /// becomes ONE line "error: ..." on stderr naming the input being worked on (InputScope) and exit code 1;
 /// Interrupted becomes "interrupted by SIG..." and exit code 128 + the signal number.
-int run_tool(int argc, char** argv, void (*print_usage)(const char* program), int (*run)(int argc, char** argv));
+int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const CommandLine& command_line));
+
+/// -h text of the positional frame inputs every frame-reading tool takes.
+std::string frame_inputs_help();
+
+/// A progress line on stderr for work that runs over about a second ("frame 12/50, 3.1M points,
+/// 4.2 frames/s, 9 s left"). Shown only when stderr is a terminal and -q was not given (silent in logs and
+/// pipes); redrawn at most ten times a second; erased by finish() or the destructor, so the summary that
+/// follows starts on a clean line.
+class ProgressLine {
+public:
+  /// `unit` names what is counted: "frame", "shot", "cloud".
+  ProgressLine(const CommandLine& command_line, std::string unit);
+  ProgressLine(const ProgressLine&) = delete;
+  ProgressLine& operator=(const ProgressLine&) = delete;
+  ~ProgressLine();
+
+  bool shown() const { return shown_; }
+  /// `done` of `total` units (total 0: unknown) and the points handled so far; rate and time left follow.
+  void update(std::size_t done, std::size_t total, std::size_t points = 0);
+  /// A line of the tool's own making (a live stream's counters).
+  void show(const std::string& text);
+  void finish();
+
+private:
+  bool shown_;
+  bool drawn_ = false;
+  std::string unit_;
+  double start_seconds_, last_draw_seconds_ = -1.0;
+};
 
 /// Names the input a tool is working on while it lives, so that run_tool's error line names it even for
 /// a failure whose message does not (std::bad_alloc). Nested scopes name the innermost input.
@@ -114,23 +133,26 @@ int stop_signal_received();
 /// Throws Interrupted when a stop signal was received; tools call it between steps (frames, files).
 void throw_if_interrupted();
 
-/// Parses the common flags. Throws InvalidParameter naming the flag on any bad value or unknown flag,
+/// The sensor preset, grid options, camera and inputs from a parsed command line (the flags of
+/// sensor_flag_names() and camera_flag_names() the tool declares; the others keep their defaults).
+/// Throws InvalidParameter naming the flag when flags conflict or the preset they build is invalid,
 /// IoError/FormatError for an unreadable -intrinsics_file.
-ToolOptions parse_tool_options(int argc, const char* const* argv, const ToolSpec& spec = {});
+ToolOptions parse_tool_options(const CommandLine& command_line);
 
 /// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
 SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
 
-/// The output folder named by -o (else `fallback`) for `tool`, refused when it already holds files the
-/// tool did not write unless -overwrite is among the arguments (see OutputFolder). The tool lists "-o" in
-/// its value flags and "-overwrite" in its switches.
-OutputFolder open_output_folder(int argc, const char* const* argv, const std::string& tool,
-                                const std::string& fallback);
+/// -contour, -min_segment and -plane_distance, those the tool declares and the user gave (or, for
+/// -min_segment, its table default), over a preset's segmentation defaults (segmentation_defaults).
+void apply_segmentation_flags(const CommandLine& command_line, SegmentationParams& params);
 
-/// Usage text of -o and -overwrite, for a tool's -h.
-std::string usage_output_folder(const std::string& fallback);
+/// Creates the missing folders above `path` (like mkdir -p of its parent); an output file or folder whose
+/// parent cannot be created then fails to write with the writer's own message naming it.
+void create_parent_folders(const std::string& path);
 
-/// Usage text of the common flags, for a tool's -h.
-std::string usage_common();
+/// The output folder named by -o (or the tool's default for it; InvalidParameter when it has none), its
+/// missing parents created; refused when it already holds files the tool did not write unless -overwrite
+/// was given (see OutputFolder).
+OutputFolder open_output_folder(const CommandLine& command_line);
 
 }  // namespace occ_improve

@@ -1,0 +1,35 @@
+#pragma once
+// The files a tool writes for an improvement map, with the same names and columns in every tool
+// (occ_improve_map, occ_improve_live): depth.png occupancy.png improvement.png legend.png [overlay.png]
+// surface.pcd regions.csv rays.csv. README "Output files" documents every column.
+#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/ranking.hpp"
+#include "occ_improve/render.hpp"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+
+/// What the map says: its regions (all, and the top K), its best rays and the stop signal.
+struct MapSummary {
+  std::vector<Region> all_regions;  ///< every region, best first
+  std::vector<Region> regions;      ///< the first K of them
+  std::vector<RankedRay> rays;      ///< the K best single rays
+  StopSignal stop{false, 0.0, 0.0, ""};
+};
+
+MapSummary summarize_map(const Mapper& mapper, const RegionOptions& regions, int top_k);
+
+/// Writes the map's files into `out` (staged: the caller commits). overlay.png only when `colour` is given
+/// and the grid is pixel-native (its columns are then the colour image's pixels). Returns the file names
+/// written, in order, for the tool's "wrote" line.
+std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapper, const MapSummary& summary,
+                                           const std::optional<Image>& colour);
+
+/// "a b c" for a list of file names.
+std::string join_names(const std::vector<std::string>& names);
+
+}  // namespace occ_improve

@@ -1,0 +1,496 @@
+#include "occ_improve/pcl/flags.hpp"
+
+#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/errors.hpp"
+#include "occ_improve/presets.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+
+namespace occ_improve {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+FlagSpec switch_flag(std::string name, std::string group, std::string help) {
+  FlagSpec f;
+  f.name = std::move(name);
+  f.group = std::move(group);
+  f.help = std::move(help);
+  return f;
+}
+
+FlagSpec value_flag(std::string name, FlagKind kind, std::string value_name, std::string group, std::string help,
+                    std::string default_value, std::string default_note = "") {
+  FlagSpec f = switch_flag(std::move(name), std::move(group), std::move(help));
+  f.kind = kind;
+  f.value_name = std::move(value_name);
+  f.default_value = std::move(default_value);
+  f.default_note = std::move(default_note);
+  return f;
+}
+
+FlagSpec bounded(FlagSpec f, double minimum, double maximum = kInf, bool minimum_exclusive = false,
+                 bool maximum_exclusive = false) {
+  f.minimum = minimum;
+  f.maximum = maximum;
+  f.minimum_exclusive = minimum_exclusive;
+  f.maximum_exclusive = maximum_exclusive;
+  return f;
+}
+
+FlagSpec with_note(FlagSpec f, std::string default_note) {
+  f.default_note = std::move(default_note);
+  return f;
+}
+
+FlagSpec choice(std::string name, std::vector<std::string> choices, std::string group, std::string help,
+                std::string default_value) {
+  std::string value_name;
+  for (const std::string& c : choices) value_name += (value_name.empty() ? "" : "|") + c;
+  FlagSpec f = value_flag(std::move(name), FlagKind::choice, value_name, std::move(group), std::move(help),
+                          std::move(default_value));
+  f.choices = std::move(choices);
+  return f;
+}
+
+const char* const kInput = "Input";
+const char* const kSensor = "Sensor and grid";
+const char* const kMap = "Map";
+const char* const kOutput = "Output";
+const char* const kStream = "Stream source";
+const char* const kPlan = "Shot planning";
+const char* const kOctomap = "OctoMap";
+const char* const kSegmentation = "Segmentation";
+const char* const kPcl = "PCL's segmentation (the comparison)";
+const char* const kEvaluation = "Evaluation";
+const char* const kGeneral = "General";
+
+std::vector<FlagSpec> input_flags() {
+  using K = FlagKind;
+  return {
+      value_flag("-intrinsics", K::text, "FX,FY,CX,CY[,W,H]", kInput,
+                 "depth camera intrinsics [pixels]; the size defaults to 640x480", "",
+                 "the dataset's camera-intrinsics.txt, else fitted to an organized cloud; never assumed"),
+      value_flag("-intrinsics_file", K::text, "PATH", kInput,
+                 "intrinsics from \"fx fy cx cy [w h]\" or a 3x3 matrix (camera-intrinsics.txt)", "",
+                 "as -intrinsics"),
+      with_note(choice("-depth_encoding", {"mm", "tum", "sun", "nyu"}, kInput,
+                       "16-bit depth units: millimetres, TUM's 1/5000 m, SUN RGB-D's bit-rotated mm, NYU's raw\n"
+                       "disparity", ""),
+                "guessed per file from its values"),
+      switch_flag("-no_poses", kInput,
+                  "ignore the frames' poses (.pose.txt, groundtruth.txt, a PCD's VIEWPOINT); by default every\n"
+                  "frame is moved into the first frame's sensor frame"),
+      switch_flag("-sample", kInput, "use the built-in generated Kinect-like frame instead of input files"),
+  };
+}
+
+std::vector<FlagSpec> sensor_flags() {
+  using K = FlagKind;
+  return {
+      choice("-preset", preset_names(), kSensor,
+             "kinect_v1: one column per camera pixel, depth along z, 2048 inverse-depth bins 0.5-8 m,\n"
+             "sigma_z = 1.425e-3 z^2; kinect_v1_paper: the paper's 640x480x512 spherical bins, 57x43 deg,\n"
+             "0-5 m, constant sigmas; kinect_v1_spherical: kinect_v1's depth model over spherical bins",
+             "kinect_v1"),
+      bounded(value_flag("-sigma_depth", K::number, "M", kSensor, "constant depth sigma [m]", "", "the preset's"), 0),
+      bounded(value_flag("-sigma_depth_quadratic", K::number, "C", kSensor,
+                         "depth sigma term growing with rho^2 [1/m] (sigma = sigma_depth + C rho^2)", "",
+                         "the preset's"),
+              0),
+      bounded(value_flag("-sigma_angle", K::number, "RAD", kSensor,
+                         "angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre)", "",
+                         "the preset's"),
+              0, kInf, true),
+      bounded(value_flag("-support_k", K::number, "K", kSensor, "region of support in standard deviations", "",
+                         "the preset's, 2"),
+              0, kInf, true),
+      bounded(value_flag("-depth_bins", K::integer, "N", kSensor, "number of depth bins", "", "the preset's"), 1),
+      bounded(value_flag("-depth_max", K::number, "M", kSensor, "far end of the depth range [m]", "", "the preset's"),
+              0, kInf, true),
+      value_flag("-fov", K::text, "H,V", kSensor, "field of view centred on the optical axis [deg], spherical grids only",
+                 "", "the preset's"),
+      choice("-mode", {"clamped", "exact"}, kSensor,
+             "clamp the log-odds after each update, or sum them as eq. 2 does", "clamped"),
+      choice("-clamp", {"paper", "octomap"}, kSensor,
+             "clamping thresholds: 0.001/0.999, or OctoMap's 0.1192/0.971", "paper"),
+  };
+}
+
+std::vector<FlagSpec> map_and_output_flags() {
+  using K = FlagKind;
+  return {
+      value_flag("-load", K::text, "MAP.occmap", kMap,
+                 "start from a saved grid (same viewpoint); it carries its own preset, so preset flags are\n"
+                 "ignored", "", "none: an empty grid"),
+      value_flag("-save", K::text, "MAP.occmap", kMap, "save the resulting grid (written atomically)", "", "not saved"),
+      bounded(value_flag("-threads", K::integer, "N", kMap, "insertion threads; 0: all cores", "0"), 0, 1024),
+      bounded(value_flag("-k", K::integer, "K", kMap, "how many top rays and regions to report", "10"), 1),
+      value_flag("-min_improvement", K::number, "V", kMap,
+                 "a region's rays have improvement >= V (0.2: above a ray seen once, below no data)", "0.2"),
+      value_flag("-o", K::text, "OUT", kOutput,
+                 "where the output goes: a folder, created with its parents (occ_to_octomap: a .bt/.ot\n"
+                 "file). Written in a staging folder and moved into place at the end; a folder holding files\n"
+                 "this tool did not write (marker " + std::string(kOutputMarkerName) + ") is refused",
+                 "", "required"),
+      switch_flag("-overwrite", kOutput,
+                  "write into such a folder anyway: files of the same names are replaced, nothing else is touched"),
+      switch_flag("-q", kOutput, "no progress line (it is only shown when stderr is a terminal)"),
+  };
+}
+
+std::vector<FlagSpec> stream_flags() {
+  using K = FlagKind;
+  FlagSpec device = value_flag("-device", K::text, "[URI]", kStream, "live OpenNI2 device: the first one found, or its URI",
+                               "", "none");
+  device.optional_value = true;
+  return {
+      device,
+      value_flag("-oni", K::text, "FILE", kStream, "OpenNI2 recording", "", "none"),
+      value_flag("-pcd_dir", K::text, "DIR", kStream, "the .pcd files of a folder, in name order", "", "none"),
+      value_flag("-depth_dir", K::text, "DIR", kStream,
+                 "depth-image sequence: 7-Scenes (frame-*.depth.png, .pose.txt, camera-intrinsics.txt),\n"
+                 "TUM RGB-D (depth.txt, groundtruth.txt) or a folder of 16-bit PNG/PGM", "", "none"),
+      bounded(value_flag("-fps", K::number, "F", kStream, "file sources: frames per second; 0: as fast as possible",
+                         "0"),
+              0),
+      switch_flag("-drop", kStream,
+                  "file sources: the newest frame wins, like a live sensor (default: every frame is processed)"),
+      bounded(value_flag("-max_frames", K::integer, "N", kStream,
+                         "only the first N frames (live: stop after N processed); 0: all", "0"),
+              0),
+      bounded(value_flag("-save_every", K::integer, "N", kStream, "also write the maps every N processed frames; 0: at the end",
+                         "0"),
+              0),
+      switch_flag("-stop_on_signal", kStream, "stop once the improvement stop signal fires"),
+      value_flag("-simulate", K::text, "FRAME", kStream,
+                 "the closed loop of docs/SELECTIVE.md against a virtual Kinect v1 over one real frame\n"
+                 "(organized PCD or depth image): plan a shot, acquire its rays, insert, learn which rays\n"
+                 "never return, until the plan says stop. Pixel-native presets only", "", "none"),
+      bounded(value_flag("-max_shots", K::integer, "N", kStream, "-simulate: stop after N shots at the latest", "1000"), 1),
+  };
+}
+
+std::vector<FlagSpec> plan_and_octomap_flags() {
+  using K = FlagKind;
+  return {
+      bounded(value_flag("-budget", K::integer, "N", kPlan, "rays per shot", "4096"), 1),
+      choice("-shape", {"rays", "window", "decimation"}, kPlan,
+             "shot shape: the best single rays, the best WxH window, or every n-th column and row", "rays"),
+      value_flag("-window", K::text, "WxH", kPlan, "window shape in columns; its area <= the budget", "64x64"),
+      bounded(value_flag("-negative_share", K::number, "S", kPlan, "share of a shot re-acquiring negative rays", "0"), 0,
+              1, false, true),
+      bounded(value_flag("-stop_gain", K::number, "G", kPlan, "stop below G expected gain per ray", "0.1"), 0),
+      bounded(value_flag("-resolution", K::number, "R", kOctomap, "OcTree leaf size [m]", "0.02"), 0, kInf, true),
+      value_flag("-pose", K::text, "x,y,z,qx,qy,qz,qw", kOctomap,
+                 "sensor pose in the world (world <- optical sensor frame, unit quaternion); one per -load", "",
+                 "the first frame's pose when the input has poses, else from -frame"),
+      choice("-frame", {"z_up", "optical"}, kOctomap,
+             "world frame without poses: z_up puts the sensor at the origin looking along x with z up\n"
+             "(ROS, octovis); optical keeps the camera's z forward, y down", "z_up"),
+  };
+}
+
+std::vector<FlagSpec> segmentation_and_evaluation_flags() {
+  using K = FlagKind;
+  return {
+      bounded(value_flag("-contour", K::number, "V", kSegmentation, "contour rays have improvement < V", "",
+                         "the preset's: -0.02, kinect_v1_paper -0.01"),
+              -kInf, 0, false, true),
+      bounded(value_flag("-min_segment", K::integer, "N", kSegmentation,
+                         "smaller regions are attached to a neighbour [rays]", "200"),
+              1),
+      switch_flag("-plane", kSegmentation, "take out the dominant plane first (table, floor), as PCL does"),
+      switch_flag("-no_plane", kSegmentation, "keep the dominant plane (occ_segment_eval removes it by default)"),
+      bounded(value_flag("-plane_distance", K::number, "D", kSegmentation, "plane inlier band [m]", "",
+                         "0.006 pixel-native, 0.01 spherical"),
+              0, kInf, true),
+      bounded(value_flag("-pcl_min_inliers", K::integer, "N", kPcl, "OrganizedMultiPlaneSegmentation min inliers", "3000"),
+              1),
+      bounded(value_flag("-pcl_distance", K::number, "D", kPcl, "EuclideanClusterComparator threshold [m]", "0.005"), 0,
+              kInf, true),
+      bounded(value_flag("-pcl_min_cluster", K::integer, "N", kPcl, "smallest cluster kept [points]", "500"), 1),
+      value_flag("-budgets", K::text, "LIST", kEvaluation, "rays per shot as shares of the image, in (0, 1]",
+                 "0.01,0.05,0.2"),
+      value_flag("-fractions", K::text, "LIST", kEvaluation, "shares of each frame to keep, in (0, 1]", "0.05,0.2"),
+      bounded(value_flag("-frames", K::number, "N", kEvaluation, "points acquired per run, in full frames", "5"), 0, kInf,
+              true),
+      bounded(value_flag("-radius", K::integer, "R", kEvaluation, "predict_depth radius [columns]", "16"), 0),
+      bounded(value_flag("-seed", K::integer, "N", kEvaluation, "seed of the run's random choices (noise, order)", "1"),
+              0),
+  };
+}
+
+std::vector<FlagSpec> build_registry() {
+  std::vector<FlagSpec> all;
+  for (auto part : {input_flags(), sensor_flags(), map_and_output_flags(), stream_flags(), plan_and_octomap_flags(),
+                    segmentation_and_evaluation_flags()})
+    all.insert(all.end(), part.begin(), part.end());
+  all.push_back(switch_flag("-h", kGeneral, "this help"));
+  all.push_back(switch_flag("--help", kGeneral, "this help"));
+  return all;
+}
+
+bool contains(const std::vector<std::string>& list, const std::string& s) {
+  return std::find(list.begin(), list.end(), s) != list.end();
+}
+
+// A negative number ("-0.5") is a value, not a flag.
+bool looks_like_flag(const std::string& arg) {
+  if (arg.size() < 2 || arg[0] != '-') return false;
+  char* end = nullptr;
+  std::strtod(arg.c_str(), &end);
+  return *end != '\0';
+}
+
+std::string format_bound(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+// "an integer >= 1", "a number in [0, 1]", "a number > 0".
+std::string requirement(const FlagSpec& f) {
+  std::string r = f.kind == FlagKind::integer ? "an integer" : "a finite number";
+  const bool low = std::isfinite(f.minimum), high = std::isfinite(f.maximum);
+  if (low && high)
+    r += std::string(" in ") + (f.minimum_exclusive ? "(" : "[") + format_bound(f.minimum) + ", " +
+         format_bound(f.maximum) + (f.maximum_exclusive ? ")" : "]");
+  else if (low)
+    r += (f.minimum_exclusive ? " > " : " >= ") + format_bound(f.minimum);
+  else if (high)
+    r += (f.maximum_exclusive ? " < " : " <= ") + format_bound(f.maximum);
+  return r;
+}
+
+[[noreturn]] void refuse(const FlagSpec& f, const std::string& value, const std::string& must) {
+  throw InvalidParameter(f.name + " " + value + " is invalid: must be " + must);
+}
+
+double checked_number(const FlagSpec& f, const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(text.c_str(), &end);
+  const bool whole = f.kind != FlagKind::integer || (v == std::floor(v) && std::abs(v) <= 2147483647.0);
+  if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v) || !whole) refuse(f, text, requirement(f));
+  const bool below = f.minimum_exclusive ? !(v > f.minimum) : v < f.minimum;
+  const bool above = f.maximum_exclusive ? !(v < f.maximum) : v > f.maximum;
+  if (below || above) refuse(f, text, requirement(f));
+  return v;
+}
+
+void check_value(const FlagSpec& f, const std::string& value) {
+  switch (f.kind) {
+    case FlagKind::integer:
+    case FlagKind::number:
+      checked_number(f, value);
+      break;
+    case FlagKind::choice:
+      if (!contains(f.choices, value)) {
+        std::string list;
+        for (const std::string& c : f.choices) list += (list.empty() ? "" : ", ") + c;
+        refuse(f, value, "one of " + list);
+      }
+      break;
+    case FlagKind::text:
+      if (value.empty()) refuse(f, "''", "a " + f.value_name);
+      break;
+    case FlagKind::switch_flag:
+      break;
+  }
+}
+
+constexpr std::size_t kHelpColumn = 28, kLineWidth = 108;
+
+// The help text's words in lines of at most kLineWidth columns, continuation lines indented to the help
+// column (the registry's own line breaks only keep its source lines short).
+std::string wrapped(const std::string& text) {
+  std::string out;
+  std::size_t column = kHelpColumn;
+  std::istringstream words(text);
+  for (std::string word; words >> word;) {
+    if (!out.empty() && column + 1 + word.size() > kLineWidth) {
+      out += "\n" + std::string(kHelpColumn, ' ');
+      column = kHelpColumn;
+    } else if (!out.empty()) {
+      out += ' ';
+      ++column;
+    }
+    out += word;
+    column += word.size();
+  }
+  return out;
+}
+
+// A one-line-per-flag -h entry: "  -name VALUE   help (default X)", continuation lines indented.
+std::string usage_entry(const FlagSpec& f, const ToolFlags& tool) {
+  const auto own = tool.defaults.find(f.name);
+  const std::string default_value = own != tool.defaults.end() ? own->second : f.default_value;
+  std::string help = f.help;
+  if (f.kind != FlagKind::switch_flag) {
+    if (!default_value.empty()) help += " (default " + default_value + ")";
+    else if (!f.default_note.empty()) help += " (default: " + f.default_note + ")";
+  }
+  if (contains(tool.repeatable, f.name)) help += "; may be repeated";
+  std::string head = "  " + f.name + (f.value_name.empty() ? "" : " " + f.value_name);
+  head += head.size() + 1 < kHelpColumn ? std::string(kHelpColumn - head.size(), ' ')
+                                        : "\n" + std::string(kHelpColumn, ' ');
+  return head + wrapped(help) + "\n";
+}
+
+}  // namespace
+
+const std::vector<FlagSpec>& flag_registry() {
+  static const std::vector<FlagSpec> registry = build_registry();
+  return registry;
+}
+
+const FlagSpec& flag_spec(const std::string& name) {
+  for (const FlagSpec& f : flag_registry())
+    if (f.name == name) return f;
+  throw std::logic_error("flag " + name + " is not in the flag registry");
+}
+
+std::vector<std::string> sensor_flag_names() {
+  return {"-preset", "-sigma_depth", "-sigma_depth_quadratic", "-sigma_angle", "-support_k",
+          "-depth_bins", "-depth_max", "-fov", "-mode", "-clamp"};
+}
+
+std::vector<std::string> camera_flag_names() { return {"-intrinsics", "-intrinsics_file", "-depth_encoding"}; }
+
+std::vector<std::string> output_folder_flag_names() { return {"-o", "-overwrite"}; }
+
+std::vector<std::string> joined(std::initializer_list<std::vector<std::string>> lists) {
+  std::vector<std::string> all;
+  for (const auto& list : lists) all.insert(all.end(), list.begin(), list.end());
+  return all;
+}
+
+double parse_number_value(const std::string& flag, const std::string& text) {
+  FlagSpec f;
+  f.name = flag;
+  f.kind = FlagKind::number;
+  return checked_number(f, text);
+}
+
+std::vector<double> parse_number_list(const std::string& flag, const std::string& text) {
+  std::vector<double> values;
+  std::stringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    char* end = nullptr;
+    const double v = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(v))
+      throw InvalidParameter(flag + " " + text + " is invalid: '" + item + "' is not a finite number");
+    values.push_back(v);
+  }
+  if (values.empty()) throw InvalidParameter(flag + " " + text + " is invalid: no number in it");
+  return values;
+}
+
+CommandLine::CommandLine(const ToolFlags& tool, std::map<std::string, std::vector<std::string>> given,
+                         std::vector<std::string> positionals)
+    : tool_(&tool), given_(std::move(given)), positionals_(std::move(positionals)) {}
+
+const FlagSpec& CommandLine::declared(const std::string& flag) const {
+  if (!contains(tool_->flags, flag)) throw std::logic_error(tool_->tool + " does not declare " + flag);
+  return flag_spec(flag);
+}
+
+bool CommandLine::declares(const std::string& flag) const { return contains(tool_->flags, flag); }
+
+bool CommandLine::has(const std::string& flag) const {
+  declared(flag);
+  return given_.count(flag) != 0;
+}
+
+std::optional<std::string> CommandLine::text(const std::string& flag) const {
+  const FlagSpec& f = declared(flag);
+  if (const auto it = given_.find(flag); it != given_.end()) return it->second.front();
+  if (const auto own = tool_->defaults.find(flag); own != tool_->defaults.end()) return own->second;
+  if (!f.default_value.empty()) return f.default_value;
+  return std::nullopt;
+}
+
+std::vector<std::string> CommandLine::values(const std::string& flag) const {
+  declared(flag);
+  const auto it = given_.find(flag);
+  return it == given_.end() ? std::vector<std::string>{} : it->second;
+}
+
+std::optional<double> CommandLine::number(const std::string& flag) const {
+  const FlagSpec& f = declared(flag);
+  if (f.kind != FlagKind::number && f.kind != FlagKind::integer) throw std::logic_error(flag + " is not a number flag");
+  const auto t = text(flag);
+  if (!t) return std::nullopt;
+  return checked_number(f, *t);
+}
+
+std::optional<int> CommandLine::integer(const std::string& flag) const {
+  if (declared(flag).kind != FlagKind::integer) throw std::logic_error(flag + " is not an integer flag");
+  const auto v = number(flag);
+  if (!v) return std::nullopt;
+  return static_cast<int>(*v);
+}
+
+CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* const* argv) {
+  std::map<std::string, std::vector<std::string>> given;
+  std::vector<std::string> positionals;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    if (!looks_like_flag(arg)) {
+      if (tool.positionals.empty())
+        throw InvalidParameter("unexpected argument '" + arg + "': " + tool.tool + " takes no input files (see -h)");
+      positionals.push_back(arg);
+      continue;
+    }
+    if (!contains(tool.flags, arg) && arg != "-h" && arg != "--help")
+      throw InvalidParameter("unknown option " + arg + " for " + tool.tool + " (see -h)");
+    const FlagSpec& f = flag_spec(arg);
+    std::vector<std::string>& values = given[arg];
+    if (!values.empty() && !contains(tool.repeatable, arg))
+      throw InvalidParameter(arg + " is given twice: give it once");
+    if (f.kind == FlagKind::switch_flag) {
+      values.emplace_back();
+      continue;
+    }
+    const bool value_follows = i + 1 < argc && (!looks_like_flag(argv[i + 1]) ||
+                                                f.kind == FlagKind::number || f.kind == FlagKind::integer);
+    if (!value_follows) {
+      if (f.optional_value) {
+        values.emplace_back();
+        continue;
+      }
+      throw InvalidParameter(arg + " needs a value (" + arg + " " + f.value_name + ", see -h)");
+    }
+    check_value(f, argv[i + 1]);
+    values.emplace_back(argv[++i]);
+  }
+  return CommandLine(tool, std::move(given), std::move(positionals));
+}
+
+std::string usage_text(const ToolFlags& tool, const std::string& program) {
+  std::string out;
+  for (std::size_t i = 0; i < tool.synopsis.size(); ++i)
+    out += (i == 0 ? "Usage: " : "       ") + program + " " + tool.synopsis[i] + "\n";
+  out += "\n" + tool.description;
+  if (!tool.description.empty() && tool.description.back() != '\n') out += "\n";
+  if (!tool.positionals.empty()) out += "\nInputs (positional):\n" + tool.positionals;
+  std::vector<std::string> groups;
+  for (const std::string& name : tool.flags)
+    if (!contains(groups, flag_spec(name).group)) groups.push_back(flag_spec(name).group);
+  for (const std::string& group : groups) {
+    out += "\n" + group + ":\n";
+    for (const std::string& name : tool.flags)
+      if (flag_spec(name).group == group) out += usage_entry(flag_spec(name), tool);
+  }
+  out += "  -h, --help                this help\n";
+  return out;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,86 @@
+#include "occ_improve/pcl/map_outputs.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/map_cloud.hpp"
+
+#include <cstdio>
+#include <fstream>
+
+namespace occ_improve {
+
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+
+void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
+  std::ofstream out(path);
+  if (!out) throw IoError("cannot write '" + path + "'");
+  out << "rank,summed_improvement,area_columns,peak_improvement,centroid_azimuth_deg,centroid_elevation_deg,"
+         "direction_x,direction_y,direction_z,mean_depth_m\n";
+  char line[512];
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const Region& r = regions[i];
+    std::snprintf(line, sizeof line, "%zu,%.6f,%zu,%.6f,%.4f,%.4f,%.6f,%.6f,%.6f,%.4f\n", i + 1,
+                  r.summed_improvement, r.area_columns, static_cast<double>(r.peak_improvement),
+                  r.centroid_azimuth_rad * kRadToDeg, r.centroid_elevation_rad * kRadToDeg, r.centroid_direction.x(),
+                  r.centroid_direction.y(), r.centroid_direction.z(), r.mean_depth_m);
+    out << line;
+  }
+  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, const std::vector<RankedRay>& rays) {
+  std::ofstream out(path);
+  if (!out) throw IoError("cannot write '" + path + "'");
+  out << "rank,improvement,azimuth_bin,elevation_bin,azimuth_deg,elevation_deg,depth_m\n";
+  char line[256];
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const RankedRay& r = rays[i];
+    std::snprintf(line, sizeof line, "%zu,%.6f,%d,%d,%.4f,%.4f,%.4f\n", i + 1, static_cast<double>(r.improvement),
+                  r.azimuth_bin, r.elevation_bin, geometry.azimuth().centre(r.azimuth_bin) * kRadToDeg,
+                  geometry.elevation().centre(r.elevation_bin) * kRadToDeg, static_cast<double>(r.depth_m));
+    out << line;
+  }
+  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+}  // namespace
+
+MapSummary summarize_map(const Mapper& mapper, const RegionOptions& region_options, int top_k) {
+  MapSummary s;
+  s.all_regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface(), region_options);
+  s.rays = top_rays(mapper.improvement(), mapper.surface(), top_k);
+  s.stop = stop_signal(mapper.improvement(), s.all_regions);
+  const std::size_t k = std::min(s.all_regions.size(), static_cast<std::size_t>(top_k));
+  s.regions.assign(s.all_regions.begin(), s.all_regions.begin() + static_cast<std::ptrdiff_t>(k));
+  return s;
+}
+
+std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapper, const MapSummary& summary,
+                                           const std::optional<Image>& colour) {
+  std::vector<std::string> names;
+  const auto png = [&](const std::string& name, const Image& image) {
+    write_png(out.file(name), image);
+    names.push_back(name);
+  };
+  png("depth.png", render_depth(mapper.surface(), mapper.geometry().depth().max()));
+  png("occupancy.png", render_occupancy(mapper.surface()));
+  png("improvement.png", render_improvement(mapper.improvement()));
+  png("legend.png", render_improvement_legend());
+  if (colour && mapper.geometry().binning() == AngularBinning::pinhole)
+    png("overlay.png", render_overlay(mapper.improvement(), *colour));
+  save_improvement_cloud(out.file("surface.pcd"),
+                         to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
+  write_regions_csv(out.file("regions.csv"), summary.regions);
+  write_rays_csv(out.file("rays.csv"), mapper.geometry(), summary.rays);
+  names.insert(names.end(), {"surface.pcd", "regions.csv", "rays.csv"});
+  return names;
+}
+
+std::string join_names(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
+  return text;
+}
+
+}  // namespace occ_improve
