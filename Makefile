@@ -67,8 +67,8 @@ filter-eval: build
 install: build
 	cmake --install $(BUILD_DIR) --prefix $(INSTALL_DIR) >/dev/null
 
-# Only the consumer test: tests/consumer against this build installed in a scratch prefix, once asking
-# for the core alone (PCL and OctoMap made unfindable) and once for every component.
+# Only the consumer test: tests/consumer against this build installed in a scratch prefix, asking once
+# for the core alone (PCL, OctoMap and libpng made unfindable), once for io and once for every component.
 consumer-test: build
 	cd $(BUILD_DIR) && ctest --output-on-failure -R Consumer
 

@@ -1,9 +1,12 @@
 include(CMakePackageConfigHelpers)
 set(occ_improve_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/occ_improve)
 
-# One export set per component, so that a user of occ_improve::core alone never needs PCL or OctoMap:
-# find_package(occ_improve CONFIG REQUIRED COMPONENTS core) loads only the core's targets.
+# One export set per component, so that a user of occ_improve::core alone never needs PCL, OctoMap or
+# libpng: find_package(occ_improve CONFIG REQUIRED COMPONENTS core) loads only the core's targets.
 set(occ_improve_components core)
+if(TARGET occ_improve_io)
+  list(APPEND occ_improve_components io)
+endif()
 if(TARGET occ_improve_octomap)
   list(APPEND occ_improve_components octomap)
 endif()

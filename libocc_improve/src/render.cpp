@@ -4,8 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <memory>
+#include <string>
 
 namespace occ_improve {
 namespace {
@@ -40,62 +39,6 @@ constexpr ColourStop kColourStops[] = {
     {-0.3f, 0, 0, 128},    {-0.1f, 0, 64, 255},    {0.0f, 0, 200, 0},    {0.1f, 255, 255, 0},
     {0.26f, 255, 160, 0},  {0.31f, 255, 100, 0},   {0.322f, 255, 0, 0},
 };
-
-// ---- PNG: CRC-32 (ISO 3309, as PNG specifies), Adler-32 (RFC 1950), stored deflate blocks (RFC 1951).
-std::uint32_t crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc = 0) {
-  static const auto table = [] {
-    std::array<std::uint32_t, 256> t{};
-    for (std::uint32_t i = 0; i < 256; ++i) {
-      std::uint32_t c = i;
-      for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xedb88320u ^ (c >> 1) : c >> 1;
-      t[i] = c;
-    }
-    return t;
-  }();
-  crc = ~crc;
-  for (std::size_t i = 0; i < n; ++i) crc = table[(crc ^ data[i]) & 0xffu] ^ (crc >> 8);
-  return ~crc;
-}
-
-std::uint32_t adler32(const std::vector<std::uint8_t>& data) {
-  std::uint32_t a = 1, b = 0;
-  for (const std::uint8_t byte : data) {
-    a = (a + byte) % 65521u;
-    b = (b + a) % 65521u;
-  }
-  return (b << 16) | a;
-}
-
-void put_be32(std::vector<std::uint8_t>& out, std::uint32_t v) {
-  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<std::uint8_t>(v >> shift));
-}
-
-void put_chunk(std::vector<std::uint8_t>& out, const char type[4], const std::vector<std::uint8_t>& data) {
-  put_be32(out, static_cast<std::uint32_t>(data.size()));
-  const std::size_t start = out.size();
-  out.insert(out.end(), type, type + 4);
-  out.insert(out.end(), data.begin(), data.end());
-  put_be32(out, crc32(out.data() + start, out.size() - start));
-}
-
-// zlib stream of stored (uncompressed) deflate blocks of at most 65535 bytes.
-std::vector<std::uint8_t> zlib_stored(const std::vector<std::uint8_t>& raw) {
-  std::vector<std::uint8_t> z = {0x78, 0x01};  // deflate, 32 KiB window, no dictionary, check bits
-  std::size_t pos = 0;
-  do {
-    const std::size_t len = std::min<std::size_t>(65535, raw.size() - pos);
-    const bool final_block = pos + len == raw.size();
-    z.push_back(final_block ? 1 : 0);  // BFINAL, BTYPE = 00 (stored)
-    z.push_back(static_cast<std::uint8_t>(len & 0xffu));
-    z.push_back(static_cast<std::uint8_t>(len >> 8));
-    z.push_back(static_cast<std::uint8_t>(~len & 0xffu));
-    z.push_back(static_cast<std::uint8_t>((~len >> 8) & 0xffu));
-    z.insert(z.end(), raw.begin() + static_cast<std::ptrdiff_t>(pos), raw.begin() + static_cast<std::ptrdiff_t>(pos + len));
-    pos += len;
-  } while (pos < raw.size());
-  put_be32(z, adler32(raw));
-  return z;
-}
 
 // ---- A 3 x 5 pixel font for the legend's labels.
 const char* glyph(char c) {
@@ -213,45 +156,6 @@ Image render_improvement_legend() {
     draw_text(im, label, x, kBarTop + kBarHeight + 6, kScale);
   }
   return im;
-}
-
-std::vector<std::uint8_t> encode_png(const Image& image) {
-  if (image.width <= 0 || image.height <= 0 || (image.channels != 1 && image.channels != 3) ||
-      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) *
-                                 static_cast<std::size_t>(image.channels))
-    throw InvalidInput("image of " + std::to_string(image.width) + " x " + std::to_string(image.height) + " x " +
-                       std::to_string(image.channels) + " holds " + std::to_string(image.pixels.size()) +
-                       " bytes (need width, height > 0 and 1 or 3 channels)");
-  std::vector<std::uint8_t> png = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  std::vector<std::uint8_t> ihdr;
-  put_be32(ihdr, static_cast<std::uint32_t>(image.width));
-  put_be32(ihdr, static_cast<std::uint32_t>(image.height));
-  ihdr.push_back(8);                                // bit depth
-  ihdr.push_back(image.channels == 1 ? 0 : 2);      // colour type: grey or RGB
-  ihdr.push_back(0);                                // compression: deflate
-  ihdr.push_back(0);                                // filter method 0
-  ihdr.push_back(0);                                // no interlace
-  put_chunk(png, "IHDR", ihdr);
-  const std::size_t row_bytes = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels);
-  std::vector<std::uint8_t> raw;
-  raw.reserve((row_bytes + 1) * static_cast<std::size_t>(image.height));
-  for (int y = 0; y < image.height; ++y) {
-    raw.push_back(0);  // filter type None
-    const auto row = image.pixels.begin() + static_cast<std::ptrdiff_t>(row_bytes * static_cast<std::size_t>(y));
-    raw.insert(raw.end(), row, row + static_cast<std::ptrdiff_t>(row_bytes));
-  }
-  put_chunk(png, "IDAT", zlib_stored(raw));
-  put_chunk(png, "IEND", {});
-  return png;
-}
-
-void write_png(const std::string& path, const Image& image) {
-  const std::vector<std::uint8_t> bytes = encode_png(image);
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) throw IoError("cannot open '" + path + "' for writing");
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size())
-    throw IoError("cannot write '" + path + "'");
-  if (std::fclose(file.release()) != 0) throw IoError("cannot write '" + path + "' (close failed)");
 }
 
 Image render_overlay(const ImprovementMap& map, const Image& colour, double improvement_weight) {

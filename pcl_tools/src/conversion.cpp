@@ -43,4 +43,28 @@ std::vector<float> depth_of_organized(const pcl::PointCloud<pcl::PointXYZ>& clou
   return depth;
 }
 
+template <typename PointT>
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud, double max_rms_px) {
+  if (!cloud.isOrganized() || cloud.height <= 1)
+    throw InvalidInput("intrinsics can only be estimated from an organized cloud (height > 1)");
+  // PCL lays an organized cloud's points out row-major at a float stride.
+  static_assert(sizeof(PointT) % sizeof(float) == 0, "PCL points are float-aligned");
+  return fit_intrinsics_checked(&cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height),
+                                sizeof(PointT) / sizeof(float), max_rms_px);
+}
+
+template <typename PointT>
+PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud) {
+  return estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
+}
+
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZ>&, double);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBL>&, double);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBA>&, double);
+template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGB>&, double);
+template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZ>&);
+template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBL>&);
+template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBA>&);
+template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGB>&);
+
 }  // namespace occ_improve

@@ -2,7 +2,6 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/pcl/segmentation_eval.hpp"
 
 #include <unistd.h>
 

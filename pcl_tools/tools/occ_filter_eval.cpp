@@ -3,7 +3,7 @@
 // pcl::RandomSample and pcl::VoxelGrid keeping as many points; each map is scored against the map from all
 // points (filter_eval.hpp, docs/SELECTIVE.md "The same question in a PCL pipeline").
 #include "occ_improve/errors.hpp"
-#include "occ_improve/pcl/filter_eval.hpp"
+#include "occ_improve/eval/filter_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 
 

@@ -2,6 +2,7 @@
 // depth-image sequence) into the occupancy grid (along the sensor's rays) as they arrive, and keep the depth,
 // occupancy and improvement maps written to a folder.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"

@@ -2,6 +2,7 @@
 // grid and write where one more measurement would teach the most: depth, occupancy and improvement
 // images, the per-ray results as an organized PCD, and the ranked regions worth re-acquiring.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"

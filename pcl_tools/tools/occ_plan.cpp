@@ -1,6 +1,7 @@
 // occ_plan: the next shot of a selective sensor from a saved map or from input frames: which rays to
 // acquire (a mask image and a rays CSV), the gain they are expected to bring and whether to stop.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"

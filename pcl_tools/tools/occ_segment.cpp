@@ -1,10 +1,10 @@
 // occ_segment: segments an organized range frame along its negative-improvement contours (the paper's
 // closing remark) and writes a labelled cloud, label and contour images and a per-segment table.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 
 #include <pcl/io/pcd_io.h>

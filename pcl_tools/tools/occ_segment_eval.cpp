@@ -1,9 +1,9 @@
 // occ_segment_eval: scores segmentations of labelled organized clouds (mOSD) against their ground truth,
 // side by side: the negative-improvement segmentation (ours) and PCL's organized segmentation recipe.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/eval/segmentation_eval.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/pcl/tool_options.hpp"
 
 #include <pcl/common/io.h>

@@ -1,6 +1,9 @@
 // A downstream program: uses the installed headers and libraries of every target it was given.
 #include <occ_improve/integrate.hpp>
 #include <occ_improve/surface.hpp>
+#ifdef HAVE_OCC_IO
+#include <occ_improve/io/png.hpp>
+#endif
 #ifdef HAVE_OCC_OCTOMAP
 #include <occ_improve/octomap/export.hpp>
 #endif
@@ -9,6 +12,7 @@
 #include <occ_improve/pcl/frame_io.hpp>
 #endif
 
+#include <cstdint>
 #include <cstdio>
 #include <vector>
 
@@ -26,6 +30,14 @@ int main() {
     return 1;
   }
   std::printf("consumer: occ_improve::core OK (%zu known columns)\n", s.known_count());
+#ifdef HAVE_OCC_IO
+  const std::vector<std::uint8_t> png = encode_png(render_occupancy(s));
+  if (png.size() < 8 || png[1] != 'P' || png[2] != 'N' || png[3] != 'G') {
+    std::fprintf(stderr, "consumer: no PNG from occ_improve::io\n");
+    return 1;
+  }
+  std::printf("consumer: occ_improve::io OK (%zu-byte PNG)\n", png.size());
+#endif
 #ifdef HAVE_OCC_OCTOMAP
   const auto tree = to_octree(grid, Eigen::Isometry3d::Identity(), 0.05);
   if (!tree || tree->size() == 0) {

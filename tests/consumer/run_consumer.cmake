@@ -1,6 +1,7 @@
 # ctest's consumer test: installs the build into a scratch prefix, then configures, builds and runs
-# tests/consumer against it twice: asking for the core alone with PCL and OctoMap made unfindable (a core
-# user needs neither), and asking for every component.
+# tests/consumer against it three times: asking for the core alone with PCL, OctoMap and libpng made
+# unfindable (a core user needs none of them), for io with PCL and OctoMap unfindable (libpng is found
+# through the config's find_dependency), and for every component.
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DLINKER_FLAGS=...] -P run_consumer.cmake
 # LINKER_FLAGS are the build's own (a sanitizer build's static libraries need its runtime to link).
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
@@ -20,11 +21,13 @@ endfunction()
 set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
-foreach(case core all)
+set(without_pcl_and_octomap -DCMAKE_DISABLE_FIND_PACKAGE_PCL=TRUE -DCMAKE_DISABLE_FIND_PACKAGE_octomap=TRUE)
+foreach(case core io all)
   set(build ${WORK_DIR}/${case})
   if(case STREQUAL "core")
-    set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=core -DCMAKE_DISABLE_FIND_PACKAGE_PCL=TRUE
-                -DCMAKE_DISABLE_FIND_PACKAGE_octomap=TRUE)
+    set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=core ${without_pcl_and_octomap} -DCMAKE_DISABLE_FIND_PACKAGE_PNG=TRUE)
+  elseif(case STREQUAL "io")
+    set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=io ${without_pcl_and_octomap})
   else()
     set(options -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE)
   endif()

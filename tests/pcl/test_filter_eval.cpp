@@ -2,7 +2,7 @@
 // strategy keeps the asked number of points, qualities are shares, and the reference scores 1 against
 // itself. The voxel bisection is also checked on a synthetic plane (no data needed).
 #include "occ_improve/errors.hpp"
-#include "occ_improve/pcl/filter_eval.hpp"
+#include "occ_improve/eval/filter_eval.hpp"
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>

@@ -16,7 +16,6 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/pcl/segmentation_eval.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"

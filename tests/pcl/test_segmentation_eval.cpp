@@ -1,7 +1,8 @@
 // The segmentation on real labelled clouds (mOSD) against ground truth and against PCL's recipe.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/eval/segmentation_eval.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
-#include "occ_improve/pcl/segmentation_eval.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>

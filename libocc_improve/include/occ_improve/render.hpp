@@ -1,5 +1,5 @@
 #pragma once
-// Images of the maps (SPEC 9) and a dependency-free PNG writer (stored deflate blocks, CRC-32, Adler-32).
+// Images of the maps (SPEC 9). Files of them: occ_improve::io (occ_improve/io/png.hpp), which needs libpng.
 //
 // Improvement colour map (docs/METHOD.md, "Rendering"), piecewise linear in RGB between breakpoints:
 //   <= -0.3 dark blue (0,0,128), -0.1 blue (0,64,255), 0 green (0,200,0), 0.1 yellow (255,255,0),
@@ -46,12 +46,5 @@ Image render_overlay(const ImprovementMap& map, const Image& colour, double impr
 /// InvalidInput when x and y differ in length or hold fewer than 2 points, InvalidParameter for a size
 /// under 16 x 16.
 Image render_curve(const std::vector<double>& x, const std::vector<double>& y, int width = 640, int height = 400);
-
-/// Writes an 8-bit grey or RGB PNG. Throws IoError when the file cannot be written, InvalidInput for an
-/// inconsistent image.
-void write_png(const std::string& path, const Image& image);
-
-/// The PNG file bytes (exposed for tests).
-std::vector<std::uint8_t> encode_png(const Image& image);
 
 }  // namespace occ_improve

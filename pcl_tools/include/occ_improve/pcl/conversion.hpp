@@ -1,11 +1,13 @@
 #pragma once
-// PCL clouds -> core point spans, without copying.
+// PCL clouds -> core point spans, without copying; organized clouds <-> depth images and intrinsics.
 #include "occ_improve/integrate.hpp"
+#include "occ_improve/intrinsics_fit.hpp"
 
 #include <Eigen/Core>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,5 +35,17 @@ pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f
 /// The other way: an organized cloud's z per pixel, row-major, 0 where it has no return (the depth image a
 /// VirtualSensor takes as its scene). Throws InvalidInput for a cloud that is not organized.
 std::vector<float> depth_of_organized(const pcl::PointCloud<pcl::PointXYZ>& cloud);
+
+/// Pinhole intrinsics of an organized cloud from a pinhole camera, fitted by least squares to
+/// u = fx x/z + cx and v = fy y/z + cy over its valid points (fit_intrinsics_checked), with the fit's
+/// residual. Throws InvalidInput when the cloud is not organized, has fewer than 100 valid points, or fits
+/// worse than max_rms_px (the message names the residual and -intrinsics).
+template <typename PointT>
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud,
+                                      double max_rms_px = std::numeric_limits<double>::infinity());
+
+/// The intrinsics alone, refusing a fit worse than kMaxIntrinsicsFitResidualPx.
+template <typename PointT>
+PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud);
 
 }  // namespace occ_improve

@@ -1,4 +1,4 @@
-#include "occ_improve/pcl/segmentation_eval.hpp"
+#include "occ_improve/eval/segmentation_eval.hpp"
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <map>
 #include <set>
@@ -94,30 +95,6 @@ pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path) 
   pcl::fromPCLPointCloud2(blob, cloud);
   return cloud;
 }
-
-template <typename PointT>
-IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud, double max_rms_px) {
-  if (!cloud.isOrganized() || cloud.height <= 1)
-    throw InvalidInput("intrinsics can only be estimated from an organized cloud (height > 1)");
-  // PCL lays an organized cloud's points out row-major at a float stride.
-  static_assert(sizeof(PointT) % sizeof(float) == 0, "PCL points are float-aligned");
-  return fit_intrinsics_checked(&cloud.points[0].x, static_cast<int>(cloud.width), static_cast<int>(cloud.height),
-                                sizeof(PointT) / sizeof(float), max_rms_px);
-}
-
-template <typename PointT>
-PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud) {
-  return estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
-}
-
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZ>&, double);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBL>&, double);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBA>&, double);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGB>&, double);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZ>&);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBL>&);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBA>&);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGB>&);
 
 void EvaluationOptions::validate() const {
   require_parameter(first_object_label >= 2, "first_object_label", first_object_label, ">= 2");

@@ -13,14 +13,11 @@
 //  - boundary precision / recall: boundary pixels (a 4-neighbour with another label, both valid) of the
 //    prediction within boundary_tolerance_px (Chebyshev) of a ground-truth boundary pixel, and back.
 // Only points valid in the ground truth (label != 0) count; a predicted label 0 means "no segment".
-#include "occ_improve/intrinsics_fit.hpp"
-#include "occ_improve/presets.hpp"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
 #include <cstdint>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -29,18 +26,6 @@ namespace occ_improve {
 /// An organized labelled cloud: x y z and the ground-truth label in `label`.
 /// Throws IoError (unreadable), FormatError (no x/y/z or no `label` field), InvalidInput (not organized).
 pcl::PointCloud<pcl::PointXYZRGBL> load_labelled_cloud(const std::string& path);
-
-/// Pinhole intrinsics of an organized cloud from a pinhole camera, fitted by least squares to
-/// u = fx x/z + cx and v = fy y/z + cy over its valid points (fit_intrinsics_checked), with the fit's
-/// residual. Throws InvalidInput when the cloud is not organized, has fewer than 100 valid points, or fits
-/// worse than max_rms_px (the message names the residual and -intrinsics).
-template <typename PointT>
-IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud,
-                                      double max_rms_px = std::numeric_limits<double>::infinity());
-
-/// The intrinsics alone, refusing a fit worse than kMaxIntrinsicsFitResidualPx.
-template <typename PointT>
-PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud);
 
 struct EvaluationOptions {
   std::uint32_t first_object_label = 20;  ///< labels in [1, first_object_label) are the table

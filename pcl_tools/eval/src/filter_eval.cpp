@@ -1,4 +1,4 @@
-#include "occ_improve/pcl/filter_eval.hpp"
+#include "occ_improve/eval/filter_eval.hpp"
 
 #include "occ_improve/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"

@@ -1,0 +1,123 @@
+// The PNG writer of occ_improve::io: what it encodes is decoded here through libpng's own reader (the
+// simplified png_image API, a path the writer does not use) and compared pixel for pixel.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <gtest/gtest.h>
+#include <png.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace occ_improve {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The image as libpng reads it back, in the file's own format, which must be 8-bit grey or RGB as written.
+Image decode(const std::vector<std::uint8_t>& png) {
+  png_image file{};
+  file.version = PNG_IMAGE_VERSION;
+  Image im;
+  if (!png_image_begin_read_from_memory(&file, png.data(), png.size())) {
+    ADD_FAILURE() << "libpng cannot read the PNG: " << file.message;
+    return im;
+  }
+  EXPECT_TRUE(file.format == PNG_FORMAT_GRAY || file.format == PNG_FORMAT_RGB) << "format " << file.format;
+  im.width = static_cast<int>(file.width);
+  im.height = static_cast<int>(file.height);
+  im.channels = static_cast<int>(PNG_IMAGE_PIXEL_CHANNELS(file.format));
+  im.pixels.resize(PNG_IMAGE_SIZE(file));
+  EXPECT_TRUE(png_image_finish_read(&file, nullptr, im.pixels.data(), 0, nullptr)) << file.message;
+  png_image_free(&file);
+  return im;
+}
+
+Image pattern(int width, int height, int channels) {
+  Image im;
+  im.width = width;
+  im.height = height;
+  im.channels = channels;
+  for (int i = 0; i < width * height * channels; ++i) im.pixels.push_back(static_cast<std::uint8_t>(i * 7 + i / 13));
+  return im;
+}
+
+// The size of the PNG the core wrote before libpng: one stored (uncompressed) deflate block per 65535
+// bytes of filter-byte-prefixed rows. Signature 8 + IHDR 25 + IDAT (12 + zlib header 2 + 5 per block +
+// data + Adler-32 4) + IEND 12.
+std::size_t stored_png_size(const Image& im) {
+  const std::size_t raw = static_cast<std::size_t>(im.height) *
+                          (static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.channels) + 1);
+  const std::size_t blocks = (raw + 65534) / 65535;
+  return 8 + 25 + 12 + 2 + 5 * blocks + raw + 4 + 12;
+}
+
+std::vector<std::uint8_t> read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+TEST(Png, GreyAndRgbRoundTripExactlyAtEveryLevel) {
+  for (const int channels : {1, 3})
+    for (const int level : {0, 6, 9}) {
+      const Image im = pattern(301, 97, channels);
+      const Image back = decode(encode_png(im, level));
+      EXPECT_EQ(back.width, im.width);
+      EXPECT_EQ(back.height, im.height);
+      EXPECT_EQ(back.channels, channels);
+      EXPECT_EQ(back.pixels, im.pixels) << channels << " channels, level " << level;
+    }
+}
+
+TEST(Png, RefusesInconsistentImagesAndLevels) {
+  Image im = pattern(2, 2, 1);
+  EXPECT_THROW(encode_png(im, -1), InvalidParameter);
+  EXPECT_THROW(encode_png(im, 10), InvalidParameter);
+  im.pixels.pop_back();
+  EXPECT_THROW(encode_png(im), InvalidInput);
+  im = pattern(2, 2, 2);  // grey + alpha is not written
+  EXPECT_THROW(encode_png(im), InvalidInput);
+  im = pattern(0, 2, 3);
+  EXPECT_THROW(encode_png(im), InvalidInput);
+}
+
+TEST(Png, WritePngWritesTheEncodedBytesAtomicallyAndReportsErrors) {
+  const fs::path folder = fs::temp_directory_path() / ("occ_png_test_" + std::to_string(::getpid()));
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  const std::string path = (folder / "x.png").string();
+  const Image im = pattern(2, 2, 1);
+  write_png(path, im);
+  EXPECT_EQ(read_bytes(path), encode_png(im));
+  Image bad = im;
+  bad.pixels.pop_back();
+  EXPECT_THROW(write_png(path, bad), InvalidInput);
+  EXPECT_EQ(read_bytes(path), encode_png(im));  // the earlier file is left as it was
+  EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator()), 1);  // no temporary left
+  fs::remove_all(folder);
+  EXPECT_THROW(write_png("/nonexistent-dir/x.png", im), IoError);
+}
+
+// The target: a 640 x 480 improvement image at most a third of the stored encoding's size.
+TEST(Png, ImprovementImageOfTheSampleSceneIsAtMostAThirdOfTheStoredSize) {
+  const sample::SampleFrame frame = sample::generate_scene();
+  Mapper mapper(kinect_v1(frame.intrinsics));
+  mapper.insert(PointSpan::from(frame.points()));
+  const Image im = render_improvement(mapper.improvement());
+  ASSERT_EQ(im.width, 640);
+  ASSERT_EQ(im.height, 480);
+  const std::size_t stored = stored_png_size(im), compressed = encode_png(im).size();
+  std::printf("640 x 480 improvement image of the sample scene: %zu bytes stored (before libpng), %zu bytes at "
+              "zlib level 6 (%.1f %%)\n", stored, compressed, 100.0 * compressed / stored);
+  EXPECT_LE(compressed, stored / 3);
+}
+
+}  // namespace
+}  // namespace occ_improve
