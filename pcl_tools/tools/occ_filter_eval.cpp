@@ -4,7 +4,7 @@
 // points (filter_eval.hpp, docs/SELECTIVE.md "The same question in a PCL pipeline").
 #include "occ_improve/errors.hpp"
 #include "occ_improve/eval/filter_eval.hpp"
-#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/tools/tool_options.hpp"
 
 
 #include <cstdio>

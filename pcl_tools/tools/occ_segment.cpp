@@ -5,7 +5,7 @@
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/tools/tool_options.hpp"
 
 #include <pcl/io/pcd_io.h>
 

@@ -4,7 +4,7 @@
 #include "occ_improve/eval/segmentation_eval.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/tools/tool_options.hpp"
 
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>

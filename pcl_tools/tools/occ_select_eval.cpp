@@ -6,7 +6,7 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planner.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/virtual_sensor.hpp"

@@ -1,4 +1,4 @@
-#include "occ_improve/pcl/tool_options.hpp"
+#include "occ_improve/tools/tool_options.hpp"
 
 #include "occ_improve/errors.hpp"
 #include "support/test_data.hpp"

@@ -1,7 +1,7 @@
 // Every command-line tool, run as a user runs it: the same outcome for the same bad input (exit code 1
 // and one error line naming the file), no crash on malformed files, and a clean stop on SIGINT/SIGTERM.
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/pcl/flags.hpp"
+#include "occ_improve/tools/flags.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "support/temp_folder.hpp"
 

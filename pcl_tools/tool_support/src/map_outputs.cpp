@@ -1,6 +1,7 @@
-#include "occ_improve/pcl/map_outputs.hpp"
+#include "occ_improve/tools/map_outputs.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/map_cloud.hpp"
 
 #include <cstdio>

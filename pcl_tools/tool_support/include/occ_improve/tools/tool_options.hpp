@@ -4,7 +4,7 @@
 // main() that turns every failure into one error line.
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/grid.hpp"
-#include "occ_improve/pcl/flags.hpp"
+#include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/segmentation.hpp"

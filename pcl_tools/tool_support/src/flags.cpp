@@ -1,4 +1,4 @@
-#include "occ_improve/pcl/flags.hpp"
+#include "occ_improve/tools/flags.hpp"
 
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
