@@ -5,7 +5,9 @@
 #include "occ_improve/sample_scene.hpp"
 #include "support/temp_folder.hpp"
 
+#include <Eigen/Core>
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
 
@@ -211,6 +213,34 @@ TEST_F(Tools, MapAndLiveWriteTheSameFilesAndCreateTheParentsOfTheOutput) {
     EXPECT_EQ(map_files.count(name), 1u) << name;
   ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o trees/wall.bt").exit_code, 0);
   EXPECT_TRUE(fs::exists(folder_ / "trees/wall.bt"));
+}
+
+// The mean centre of a tree's occupied leaves.
+Eigen::Vector3d occupied_centre(const std::string& path) {
+  octomap::OcTree tree(path);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  std::size_t n = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
+    if (tree.isNodeOccupied(*it)) {
+      sum += Eigen::Vector3d(it.getX(), it.getY(), it.getZ());
+      ++n;
+    }
+  EXPECT_GT(n, 0u) << path;
+  return sum / static_cast<double>(std::max<std::size_t>(n, 1));
+}
+
+// occ_to_octomap wrote the tree in the camera's optical frame (z forward, y down) whatever the user's world.
+TEST_F(Tools, OctomapExportIsInAZUpWorldFrameUnlessAskedForTheOpticalOne) {
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-sample -resolution 0.05 -o z_up.bt").exit_code, 0);
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-sample -resolution 0.05 -frame optical -o optical.bt").exit_code, 0);
+  const Eigen::Vector3d z_up = occupied_centre(file("z_up.bt")), optical = occupied_centre(file("optical.bt"));
+  // The sample scene lies 1-4 m ahead of the camera: forward is x in z_up, z in the optical frame.
+  EXPECT_GT(z_up.x(), 1.0) << z_up.transpose();
+  EXPECT_GT(optical.z(), 1.0) << optical.transpose();
+  // The same scene: optical z forward is x, x right is -y, y down is -z (leaves re-sampled: a voxel apart).
+  EXPECT_NEAR(z_up.x(), optical.z(), 0.05);
+  EXPECT_NEAR(z_up.y(), -optical.x(), 0.05);
+  EXPECT_NEAR(z_up.z(), -optical.y(), 0.05);
 }
 
 TEST_F(Tools, NoArgumentsPrintsTheUsageAndFails) {
