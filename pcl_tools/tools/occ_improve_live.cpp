@@ -8,6 +8,7 @@
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
+#include "occ_improve/tools/tool_frame_grabber.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planner.hpp"
 #include "occ_improve/render.hpp"
@@ -47,7 +48,7 @@ const ToolFlags kFlags{
             sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
     {{"-o", "occ_improve_live_out"}},
     {},
-    "  FILE.pcd ...              PCD files, replayed in order\n"};
+    frame_inputs_help()};
 
 // Every write publishes the whole set, so the folder always holds one consistent state of the map.
 std::vector<std::string> write_maps(const Mapper& mapper, OutputFolder& out, const RegionOptions& regions, int top_k) {
@@ -195,18 +196,23 @@ int run(const CommandLine& command_line) {
     file_source = source.get();
     grabber = source;
   } else {
-    std::vector<std::string> files = pcd_dir.empty() ? options.inputs : PcdSequenceGrabber(pcd_dir).files();
-    if (max_frames > 0 && files.size() > static_cast<std::size_t>(max_frames))
-      files.resize(static_cast<std::size_t>(max_frames));
-    if (files.empty()) throw InvalidInput("no PCD files to replay");
+    // -pcd_dir's PCD files, or the positional inputs of any kind (expand_input, as every tool reads them).
+    std::vector<FrameSource> frames;
+    if (!pcd_dir.empty()) {
+      const PcdSequenceGrabber listing(pcd_dir);
+      for (const std::string& file : listing.files()) frames.push_back(FrameSource{file, std::nullopt});
+    }
+    for (const std::string& input : options.inputs)
+      for (FrameSource& frame : expand_input(input)) frames.push_back(std::move(frame));
+    if (max_frames > 0 && frames.size() > static_cast<std::size_t>(max_frames))
+      frames.resize(static_cast<std::size_t>(max_frames));
     // The first frame's camera (fitted to its organized points unless -intrinsics is given).
-    const ToolFrame first = read_tool_frame(options, FrameSource{files.front(), std::nullopt});
+    const ToolFrame first = read_tool_frame(options, frames.front());
     preset = options.preset_for_camera(first.camera);
     camera_text = describe_camera({first});
-    auto source = std::make_shared<PcdSequenceGrabber>(files, static_cast<float>(fps));
-    const std::string files_text = files.empty() ? std::string("no PCD file")
-                                   : files.size() == 1 ? files.front()
-                                                       : files.front() + " and " + std::to_string(files.size() - 1) + " more";
+    const std::string files_text = frames.size() == 1 ? frames.front().path
+                                                      : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
+    auto source = std::make_shared<ToolFrameGrabber>(options, std::move(frames), static_cast<float>(fps));
     source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
     file_source = source.get();
     grabber = source;

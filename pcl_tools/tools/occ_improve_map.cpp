@@ -11,7 +11,6 @@
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/render.hpp"
-#include "occ_improve/sample_scene.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -48,55 +47,6 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-void print_points(const InsertionReport& in) {
-  std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
-              "%zu used beyond the depth range (free space only)\n",
-              in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
-              in.beyond_depth_range);
-}
-
-std::vector<ToolFrame> sample_frames() {
-  const sample::SampleFrame scene = sample::generate_scene();
-  std::vector<ToolFrame> frames;
-  frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
-                    scene.intrinsics, "the built-in sample's camera", std::nullopt});
-  return frames;
-}
-
-// Every frame of the inputs, in order (read_tool_frames: cameras never assumed, frames without a valid
-// point refused before any work).
-std::vector<ToolFrame> read_frames(const ToolOptions& options) {
-  try {
-    return read_tool_frames(options);
-  } catch (const Interrupted&) {
-    std::printf("interrupted while reading the inputs; nothing written\n");
-    throw;
-  }
-}
-
-MapperReport insert_frames(Mapper& mapper, const std::vector<ToolFrame>& frames, const InsertionOptions& insertion,
-                           ProgressLine& progress) {
-  MapperReport total;
-  std::size_t inserted = 0;
-  try {
-    for (const ToolFrame& frame : frames) {
-      throw_if_interrupted();
-      InputScope scope(frame.name);
-      const MapperReport r = mapper.insert(span_of(frame.cloud), insertion);
-      total.insertion += r.insertion;
-      total.improvement_seconds += r.improvement_seconds;
-      progress.update(++inserted, frames.size(), total.insertion.points_received);
-    }
-  } catch (const Interrupted&) {
-    progress.finish();
-    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n", inserted, frames.size());
-    print_points(total.insertion);
-    throw;
-  }
-  progress.finish();
-  return total;
-}
-
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   const bool use_sample = command_line.has("-sample");
@@ -106,61 +56,63 @@ int run(const CommandLine& command_line) {
   insertion.threads = *command_line.integer("-threads");
   RegionOptions region_options;
   region_options.min_improvement = static_cast<float>(*command_line.number("-min_improvement"));
-  if (use_sample && !options.inputs.empty()) throw InvalidParameter("give either input files or -sample, not both");
   if (!use_sample && options.inputs.empty() && load_path.empty())
     throw InvalidParameter("no input: give PCD / depth image files or a dataset folder, -sample or -load (see -h)");
 
   // Fail on an unwritable or foreign output folder before any work.
   OutputFolder staging = open_output_folder(command_line);
 
-  // Read.
-  auto start = std::chrono::steady_clock::now();
-  const std::vector<ToolFrame> frames = use_sample ? sample_frames() : read_frames(options);
-  const double read_seconds = seconds_since(start);
-
-  SensorPreset preset = options.preset_for_camera(frames.empty() ? std::nullopt : frames.front().camera);
-  Mapper mapper = [&] {
-    if (load_path.empty()) return Mapper(preset, options.grid);
-    LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
-    preset.name = "loaded from " + load_path;
-    preset.geometry = loaded.grid.geometry().params();
-    preset.model = loaded.model;
-    return Mapper(std::move(loaded.grid), SensorModel(loaded.model));
-  }();
-
-  // Insert (insertion with the surface kept current, then the incremental improvement; timed by the mapper).
+  // The first frame sets the camera, so the grid; the others are read and inserted one by one (insertion
+  // with the surface kept current, then the incremental improvement; timed by the mapper).
+  ToolFrameReader frames(options, use_sample);
   ProgressLine progress(command_line, "frame");
-  const MapperReport total = insert_frames(mapper, frames, insertion, progress);
-  if (!frames.empty() && total.insertion.points_inserted == 0)
-    throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
+  SensorPreset preset;
+  std::optional<Mapper> mapper;
+  double improvement_seconds = 0;
+  const FusedFrames fused = fuse_tool_frames(
+      frames, progress,
+      [&](const std::optional<ToolFrame>& first) {
+        preset = options.preset_for_camera(first ? first->camera : std::nullopt);
+        if (load_path.empty()) return void(mapper.emplace(preset, options.grid));
+        LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
+        preset.name = "loaded from " + load_path;
+        preset.geometry = loaded.grid.geometry().params();
+        preset.model = loaded.model;
+        mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+      },
+      [&](const ToolFrame& frame) {
+        const MapperReport r = mapper->insert(span_of(frame.cloud), insertion);
+        improvement_seconds += r.improvement_seconds;
+        return r.insertion;
+      });
 
   // Rank.
-  start = std::chrono::steady_clock::now();
-  const MapSummary summary = summarize_map(mapper, region_options, options.top_k);
+  auto start = std::chrono::steady_clock::now();
+  const MapSummary summary = summarize_map(*mapper, region_options, options.top_k);
   const double ranking_seconds = seconds_since(start);
 
   // Write into the staging folder, then move it into place.
   start = std::chrono::steady_clock::now();
   const std::vector<std::string> written =
-      write_map_outputs(staging, mapper, summary, frames.empty() ? std::nullopt : frames.front().colour);
+      write_map_outputs(staging, *mapper, summary, fused.colour);
   throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
-  if (!save_path.empty()) save_map(save_path, mapper.grid(), mapper.model().params());
+  if (!save_path.empty()) save_map(save_path, mapper->grid(), mapper->model().params());
   const double write_seconds = seconds_since(start);
   const std::vector<Region>& regions = summary.regions;
   const std::vector<RankedRay>& rays = summary.rays;
 
   // Summary.
-  const InsertionReport& in = total.insertion;
+  const InsertionReport& in = fused.insertion;
   const GeometryParams& g = preset.geometry;
   std::printf("preset %s: %s binning, %d x %d x %d bins, depth %.2f-%.2f m, %s mode\n", preset.name.c_str(),
               to_string(g.angular_binning), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_min_m, g.depth_max_m,
               options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
-  std::printf("%s\n", describe_camera(frames).c_str());
-  for (const ToolFrame& f : frames) std::printf("read %s: %zu points\n", f.name.c_str(), f.cloud.size());
-  print_points(in);
+  std::printf("%s\n", fused.frames ? fused.camera.c_str() : "no frame (the loaded map only)");
+  for (const std::string& line : fused.frame_lines) std::printf("%s\n", line.c_str());
+  std::printf("%s\n", describe_points(in).c_str());
   std::printf("time [s]: read %.3f, insert+surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
-              read_seconds, in.seconds, total.improvement_seconds, ranking_seconds,
+              frames.read_seconds(), in.seconds, improvement_seconds, ranking_seconds,
               write_seconds);
   std::printf("top %zu of %zu regions (improvement >= %.3g, >= %zu rays):\n", regions.size(), summary.all_regions.size(),
               static_cast<double>(region_options.min_improvement), region_options.min_area_columns);

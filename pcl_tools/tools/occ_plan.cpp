@@ -9,7 +9,6 @@
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planner.hpp"
 #include "occ_improve/render.hpp"
-#include "occ_improve/sample_scene.hpp"
 
 
 #include <chrono>
@@ -34,7 +33,7 @@ const ToolFlags kFlags{
     "  OUTDIR/shot_rays.csv   the shot's rays: rank, column, azimuth/elevation bin, improvement,\n"
     "                         return probability, score, surface depth, reacquisition\n"
     "  OUTDIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n",
-    joined({output_folder_flag_names(), {"-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
+    joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
                                          "-stop_gain"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
     {},
@@ -70,30 +69,21 @@ struct Source {
   std::string description;
 };
 
-Source map_from_frames(const ToolOptions& options, bool use_sample) {
-  std::vector<ToolFrame> frames;
-  if (use_sample) {
-    const sample::SampleFrame scene = sample::generate_scene();
-    ToolFrame frame;
-    frame.name = "built-in sample";
-    frame.cloud = organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height);
-    frame.camera = scene.intrinsics;
-    frame.camera_source = "the sample's own";
-    frames.push_back(std::move(frame));
-  } else {
-    frames = read_tool_frames(options);  // intrinsics from flags, the dataset or fitted; never assumed
-  }
-  const SensorPreset preset = options.preset_for_camera(frames.front().camera);
+Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine& progress) {
+  ToolFrameReader frames(options, use_sample);  // intrinsics from flags, the dataset or fitted; never assumed
   Source source;
-  source.mapper.emplace(preset, options.grid);
-  InsertionReport report;
-  for (const ToolFrame& frame : frames) report += source.mapper->insert(span_of(frame.cloud)).insertion;
-  if (report.points_inserted == 0)
-    throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
+  SensorPreset preset;
+  const FusedFrames fused = fuse_tool_frames(
+      frames, progress,
+      [&](const std::optional<ToolFrame>& first) {
+        preset = options.preset_for_camera(first ? first->camera : std::nullopt);
+        source.mapper.emplace(preset, options.grid);
+      },
+      [&](const ToolFrame& frame) { return source.mapper->insert(span_of(frame.cloud)).insertion; });
   source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
-  source.description = (use_sample ? std::string("built-in sample") : std::to_string(frames.size()) + " frame(s)") +
-                       ", preset " + preset.name + ", " + describe_camera(frames) + ", " +
-                       std::to_string(report.points_inserted) + " points";
+  source.description = (use_sample ? std::string("built-in sample") : std::to_string(fused.frames) + " frame(s)") +
+                       ", preset " + preset.name + ", " + fused.camera + ", " +
+                       std::to_string(fused.insertion.points_inserted) + " points";
   return source;
 }
 
@@ -142,7 +132,8 @@ int run(const CommandLine& command_line) {
   OutputFolder out = open_output_folder(command_line);
 
   const auto start = std::chrono::steady_clock::now();
-  const Source source = load_path.empty() ? map_from_frames(options, use_sample) : map_from_file(load_path);
+  ProgressLine progress(command_line, "frame");
+  const Source source = load_path.empty() ? map_from_frames(options, use_sample, progress) : map_from_file(load_path);
   const auto planned = std::chrono::steady_clock::now();
   const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
   const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();

@@ -7,7 +7,6 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/tool_options.hpp"
-#include "occ_improve/sample_scene.hpp"
 
 #include <Eigen/Geometry>
 #include <chrono>
@@ -73,26 +72,23 @@ struct Source {
   InsertionReport insertion;
 };
 
-Source build_from_frames(const ToolOptions& options, bool use_sample) {
-  std::vector<ToolFrame> frames;
+Source build_from_frames(const ToolOptions& options, bool use_sample, ProgressLine& progress) {
+  ToolFrameReader frames(options, use_sample);
   Source source;
-  if (use_sample) {
-    const sample::SampleFrame scene = sample::generate_scene();
-    frames.push_back({"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
-                      scene.intrinsics, "the built-in sample's camera", std::nullopt});
-    source.description = "built-in sample frame";
-  } else {
-    frames = read_tool_frames(options);
-    source.description = std::to_string(frames.size()) + " frame(s)";
-  }
-  const SensorPreset preset = options.preset_for_camera(frames.empty() ? std::nullopt : frames.front().camera);
-  source.model = preset.model;
-  source.grid.emplace(SphericalGeometry(preset.geometry), options.grid);
-  const SensorModel model(preset.model);
-  for (const ToolFrame& frame : frames) source.insertion += insert_points(*source.grid, model, span_of(frame.cloud));
-  if (source.insertion.points_inserted == 0)
-    throw InvalidInput("no point of the input lies inside the grid's field of view (preset " + preset.name + ")");
-  source.description += ", preset " + preset.name + ", " + describe_camera(frames);
+  SensorPreset preset;
+  std::optional<SensorModel> model;
+  const FusedFrames fused = fuse_tool_frames(
+      frames, progress,
+      [&](const std::optional<ToolFrame>& first) {
+        preset = options.preset_for_camera(first ? first->camera : std::nullopt);
+        source.model = preset.model;
+        source.grid.emplace(SphericalGeometry(preset.geometry), options.grid);
+        model.emplace(preset.model);
+      },
+      [&](const ToolFrame& frame) { return insert_points(*source.grid, *model, span_of(frame.cloud)); });
+  source.insertion = fused.insertion;
+  source.description = (use_sample ? std::string("built-in sample frame") : std::to_string(fused.frames) + " frame(s)") +
+                       ", preset " + preset.name + ", " + fused.camera;
   return source;
 }
 
@@ -139,7 +135,8 @@ int run(const CommandLine& command_line) {
     source.description = "map " + path;
     grids.push_back(std::move(source));
   }
-  if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample));
+  ProgressLine progress(command_line, "frame");
+  if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample, progress));
   const double read_seconds = seconds_since(start);
 
   double save_seconds = 0;

@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/sample_scene.hpp"
 
 #include <unistd.h>
 
@@ -47,6 +48,10 @@ PinholeIntrinsics intrinsics_from_list(const std::string& text) {
     throw InvalidParameter(std::string("-intrinsics ") + text + ": " + e.what());
   }
   return k;
+}
+
+double now_seconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // The value of a flag when the tool declares it and it was given or has a default.
@@ -121,9 +126,7 @@ bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
 
 }  // namespace
 
-ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
-  throw_if_interrupted();
-  const InputScope scope(source.path);
+ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source) {
   ToolFrame frame;
   std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
   frame.camera_source = options.intrinsics ? options.intrinsics_flag : source.intrinsics ? "the dataset's camera-intrinsics.txt" : "";
@@ -151,19 +154,97 @@ ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source)
   return frame;
 }
 
-std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
-  std::vector<ToolFrame> frames;
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
+  throw_if_interrupted();
+  const InputScope scope(source.path);
+  return load_tool_frame(options, source);
+}
+
+ToolFrame sample_tool_frame() {
+  const sample::SampleFrame scene = sample::generate_scene();
+  return {"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
+          scene.intrinsics, "the built-in sample's camera", std::nullopt};
+}
+
+ToolFrameReader::ToolFrameReader(const ToolOptions& options, bool use_sample)
+    : options_(options), use_sample_(use_sample) {
+  if (use_sample && !options.inputs.empty()) throw InvalidParameter("give either input files or -sample, not both");
   for (const std::string& input : options.inputs) {
     const InputScope scope(input);
-    for (const FrameSource& source : expand_input(input)) {
-      frames.push_back(read_tool_frame(options, source));
-      const ToolFrame &first = frames.front(), &last = frames.back();
-      if (first.camera && last.camera && !same_camera(*first.camera, *last.camera))
-        throw InvalidInput("'" + source.path + "' was taken with another camera than '" + first.name +
-                           "' (" + describe_camera({last}) + " against " + describe_camera({first}) +
-                           "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
-    }
+    for (FrameSource& source : expand_input(input)) sources_.push_back(std::move(source));
   }
+}
+
+std::optional<ToolFrame> ToolFrameReader::next() {
+  const double start = now_seconds();
+  std::optional<ToolFrame> frame = read_next();
+  read_seconds_ += now_seconds() - start;
+  return frame;
+}
+
+std::optional<ToolFrame> ToolFrameReader::read_next() {
+  if (next_ == count()) return std::nullopt;
+  if (use_sample_) {
+    ++next_;
+    return sample_tool_frame();
+  }
+  ToolFrame frame = read_tool_frame(options_, sources_[next_++]);
+  if (next_ == 1) {
+    first_camera_ = frame.camera;
+    first_name_ = frame.name;
+    first_camera_text_ = describe_camera({frame});
+  } else if (first_camera_ && frame.camera && !same_camera(*first_camera_, *frame.camera)) {
+    throw InvalidInput("'" + frame.name + "' was taken with another camera than '" + first_name_ + "' (" +
+                       describe_camera({frame}) + " against " + first_camera_text_ +
+                       "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
+  }
+  return frame;
+}
+
+FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
+                             const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
+                             const std::function<InsertionReport(const ToolFrame& frame)>& insert) {
+  FusedFrames fused;
+  std::optional<ToolFrame> frame = frames.next();
+  if (frame) {
+    fused.camera = describe_camera({*frame});
+    fused.colour = frame->colour;
+  }
+  prepare(frame);
+  try {
+    for (; frame; frame = frames.next()) {
+      throw_if_interrupted();
+      const InputScope scope(frame->name);
+      fused.insertion += insert(*frame);
+      fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
+      progress.update(++fused.frames, frames.count(), fused.insertion.points_received);
+    }
+  } catch (const Interrupted&) {
+    progress.finish();
+    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n%s\n", fused.frames,
+                frames.count(), describe_points(fused.insertion).c_str());
+    throw;
+  }
+  progress.finish();
+  if (fused.frames > 0 && fused.insertion.points_inserted == 0)
+    throw InvalidInput("no point of the input lies inside the grid's field of view");
+  return fused;
+}
+
+std::string describe_points(const InsertionReport& in) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
+                "%zu used beyond the depth range (free space only)",
+                in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
+                in.beyond_depth_range);
+  return line;
+}
+
+std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
+  ToolFrameReader reader(options);
+  std::vector<ToolFrame> frames;
+  while (std::optional<ToolFrame> frame = reader.next()) frames.push_back(std::move(*frame));
   return frames;
 }
 
@@ -321,10 +402,6 @@ bool help_requested(int argc, const char* const* argv) {
   for (int i = 1; i < argc; ++i)
     if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) return true;
   return false;
-}
-
-double now_seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 }  // namespace

@@ -4,11 +4,13 @@
 // main() that turns every failure into one error line.
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/grid.hpp"
+#include "occ_improve/integrate.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/segmentation.hpp"
 
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -51,16 +53,46 @@ struct ToolFrame {
   std::optional<Image> colour;  ///< registered colour (organized PCDs with rgb/rgba)
 };
 
-/// Reads every input (expand_input: files and dataset folders, in order). Intrinsics are never assumed:
-/// a depth image is back-projected through -intrinsics/-intrinsics_file or its dataset's intrinsics
-/// file, and refused without either; a PCD's camera, when the preset needs one and none was given, is
-/// fitted to its organized points (estimate_intrinsics; refused when unorganized or a poor fit, naming
-/// -intrinsics). A frame without a valid point is refused (require_valid_points), frames seen through
-/// different cameras too: one viewpoint, one camera. Checks for a stop signal between frames and names
-/// the input being read for run_tool's error line (InputScope).
+/// The frames of a tool's inputs (or the built-in sample, for -sample), read one at a time so that a long
+/// sequence is never all in memory. Every input is expanded at construction (expand_input: files and
+/// dataset folders, in order; IoError for a missing one). Each frame follows read_tool_frame's rules, and
+/// a frame seen through another camera than the first is refused: one viewpoint, one camera.
+class ToolFrameReader {
+public:
+  explicit ToolFrameReader(const ToolOptions& options, bool use_sample = false);
+  /// How many frames there are.
+  std::size_t count() const { return use_sample_ ? 1 : sources_.size(); }
+  /// The next frame, or nullopt after the last.
+  std::optional<ToolFrame> next();
+  /// Time spent reading so far [s].
+  double read_seconds() const { return read_seconds_; }
+
+private:
+  std::optional<ToolFrame> read_next();
+
+  const ToolOptions& options_;
+  bool use_sample_;
+  std::vector<FrameSource> sources_;
+  std::size_t next_ = 0;
+  double read_seconds_ = 0;
+  std::optional<PinholeIntrinsics> first_camera_;
+  std::string first_name_, first_camera_text_;
+};
+
+/// The built-in generated Kinect-like frame (samples/scene) as a tool frame, with its camera.
+ToolFrame sample_tool_frame();
+
+/// Every frame of the inputs at once (ToolFrameReader), for tools that need them together.
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
-/// One frame by the same rules.
+/// One frame: a depth image is back-projected through -intrinsics/-intrinsics_file or its dataset's
+/// intrinsics file and refused without either (intrinsics are never assumed); a cloud's camera, when the
+/// preset needs one and none was given, is fitted to its organized points (estimate_intrinsics_fit;
+/// refused when unorganized or a poor fit, naming -intrinsics). A frame without a valid point is refused
+/// (require_valid_points). Checks for a stop signal first and names the input for run_tool's error line
+/// (InputScope).
 ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source);
+/// The same without the stop check and the InputScope, for a reading thread (a grabber's).
+ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source);
 
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
@@ -100,6 +132,26 @@ private:
   std::string unit_;
   double start_seconds_, last_draw_seconds_ = -1.0;
 };
+
+/// What fuse_tool_frames did, for a tool's summary.
+struct FusedFrames {
+  InsertionReport insertion;
+  std::size_t frames = 0;
+  std::string camera;                    ///< describe_camera of the first frame
+  std::optional<Image> colour;           ///< the first frame's colour
+  std::vector<std::string> frame_lines;  ///< "read NAME: N points" per frame
+};
+
+/// Reads every frame (ToolFrameReader), calls `prepare` with the first one (its camera sets the grid), then
+/// `insert` on each, one frame in memory at a time, with the progress line. Refuses a run whose points all
+/// miss the grid. Interrupted: prints how many frames were inserted ("nothing written") and rethrows.
+FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
+                             const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
+                             const std::function<InsertionReport(const ToolFrame& frame)>& insert);
+
+/// The points line of a tool's summary: read, used, skipped and beyond the depth range.
+std::string describe_points(const InsertionReport& report);
+
 
 /// Names the input a tool is working on while it lives, so that run_tool's error line names it even for
 /// a failure whose message does not (std::bad_alloc). Nested scopes name the innermost input.

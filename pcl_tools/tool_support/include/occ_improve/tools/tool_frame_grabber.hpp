@@ -1,0 +1,27 @@
+#pragma once
+// The positional inputs of occ_improve_live as a grabber: every input kind the other tools read (PCD, PLY,
+// depth PNG/PGM/TIFF, dataset folders), replayed in order by the file-sequence machinery (pacing, counting,
+// clean stop) with the tools' frame rules (load_tool_frame).
+#include "occ_improve/pcl/sequence_sources.hpp"
+#include "occ_improve/tools/tool_options.hpp"
+
+#include <vector>
+
+namespace occ_improve {
+
+class ToolFrameGrabber : public FileSequenceGrabber {
+public:
+  /// `options` must outlive the grabber. fps = 0: as fast as possible.
+  ToolFrameGrabber(const ToolOptions& options, std::vector<FrameSource> sources, float fps);
+  ~ToolFrameGrabber() noexcept override { stop(); }
+  std::string getName() const override { return "ToolFrameGrabber"; }
+
+protected:
+  Cloud::Ptr loadFrame(std::size_t index) override;
+
+private:
+  const ToolOptions& options_;
+  std::vector<FrameSource> sources_;
+};
+
+}  // namespace occ_improve

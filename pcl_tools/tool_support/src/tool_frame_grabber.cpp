@@ -1,0 +1,13 @@
+#include "occ_improve/tools/tool_frame_grabber.hpp"
+
+namespace occ_improve {
+
+ToolFrameGrabber::ToolFrameGrabber(const ToolOptions& options, std::vector<FrameSource> sources, float fps)
+    : FileSequenceGrabber(sources.size(), fps), options_(options), sources_(std::move(sources)) {}
+
+FileSequenceGrabber::Cloud::Ptr ToolFrameGrabber::loadFrame(std::size_t index) {
+  ToolFrame frame = load_tool_frame(options_, sources_[index]);
+  return Cloud::Ptr(new Cloud(std::move(frame.cloud)));
+}
+
+}  // namespace occ_improve
