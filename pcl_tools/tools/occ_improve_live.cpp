@@ -212,7 +212,7 @@ int run(const CommandLine& command_line) {
     camera_text = describe_camera({first});
     const std::string files_text = frames.size() == 1 ? frames.front().path
                                                       : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
-    auto source = std::make_shared<ToolFrameGrabber>(options, std::move(frames), static_cast<float>(fps));
+    auto source = std::make_shared<ToolFrameGrabber>(options, first, std::move(frames), static_cast<float>(fps));
     source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
     file_source = source.get();
     grabber = source;

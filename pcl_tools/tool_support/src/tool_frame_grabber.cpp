@@ -2,11 +2,16 @@
 
 namespace occ_improve {
 
-ToolFrameGrabber::ToolFrameGrabber(const ToolOptions& options, std::vector<FrameSource> sources, float fps)
-    : FileSequenceGrabber(sources.size(), fps), options_(options), sources_(std::move(sources)) {}
+ToolFrameGrabber::ToolFrameGrabber(const ToolOptions& options, const ToolFrame& first, std::vector<FrameSource> sources,
+                                   float fps)
+    : FileSequenceGrabber(sources.size(), fps),
+      options_(options),
+      first_{first.name, {}, first.camera, first.camera_source, std::nullopt},
+      sources_(std::move(sources)) {}
 
 FileSequenceGrabber::Cloud::Ptr ToolFrameGrabber::loadFrame(std::size_t index) {
   ToolFrame frame = load_tool_frame(options_, sources_[index]);
+  require_same_camera(first_, frame);
   return Cloud::Ptr(new Cloud(std::move(frame.cloud)));
 }
 

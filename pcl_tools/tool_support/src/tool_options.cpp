@@ -189,14 +189,10 @@ std::optional<ToolFrame> ToolFrameReader::read_next() {
     return sample_tool_frame();
   }
   ToolFrame frame = read_tool_frame(options_, sources_[next_++]);
-  if (next_ == 1) {
-    first_camera_ = frame.camera;
-    first_name_ = frame.name;
-    first_camera_text_ = describe_camera({frame});
-  } else if (first_camera_ && frame.camera && !same_camera(*first_camera_, *frame.camera)) {
-    throw InvalidInput("'" + frame.name + "' was taken with another camera than '" + first_name_ + "' (" +
-                       describe_camera({frame}) + " against " + first_camera_text_ +
-                       "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
+  if (first_) {
+    require_same_camera(*first_, frame);
+  } else {
+    first_ = ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt};
   }
   return frame;
 }
@@ -239,6 +235,13 @@ std::string describe_points(const InsertionReport& in) {
                 in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
                 in.beyond_depth_range);
   return line;
+}
+
+void require_same_camera(const ToolFrame& first, const ToolFrame& frame) {
+  if (first.camera && frame.camera && !same_camera(*first.camera, *frame.camera))
+    throw InvalidInput("'" + frame.name + "' was taken with another camera than '" + first.name + "' (" +
+                       describe_camera({frame}) + " against " + describe_camera({first}) +
+                       "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
 }
 
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {

@@ -11,8 +11,9 @@ namespace occ_improve {
 
 class ToolFrameGrabber : public FileSequenceGrabber {
 public:
-  /// `options` must outlive the grabber. fps = 0: as fast as possible.
-  ToolFrameGrabber(const ToolOptions& options, std::vector<FrameSource> sources, float fps);
+  /// `options` must outlive the grabber. Frames seen through another camera than `first`'s are refused
+  /// (a source error, counted). fps = 0: as fast as possible.
+  ToolFrameGrabber(const ToolOptions& options, const ToolFrame& first, std::vector<FrameSource> sources, float fps);
   ~ToolFrameGrabber() noexcept override { stop(); }
   std::string getName() const override { return "ToolFrameGrabber"; }
 
@@ -21,6 +22,7 @@ protected:
 
 private:
   const ToolOptions& options_;
+  ToolFrame first_;  ///< its name and camera (the cloud is not kept)
   std::vector<FrameSource> sources_;
 };
 

@@ -75,12 +75,15 @@ private:
   std::vector<FrameSource> sources_;
   std::size_t next_ = 0;
   double read_seconds_ = 0;
-  std::optional<PinholeIntrinsics> first_camera_;
-  std::string first_name_, first_camera_text_;
+  std::optional<ToolFrame> first_;  ///< its name and camera (the cloud is not kept)
 };
 
 /// The built-in generated Kinect-like frame (samples/scene) as a tool frame, with its camera.
 ToolFrame sample_tool_frame();
+
+/// Refuses (InvalidInput naming both) a frame seen through another camera than the first frame's: the
+/// frames of one map share one viewpoint and camera.
+void require_same_camera(const ToolFrame& first, const ToolFrame& frame);
 
 /// Every frame of the inputs at once (ToolFrameReader), for tools that need them together.
 std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
