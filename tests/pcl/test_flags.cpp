@@ -3,6 +3,8 @@
 
 #include "occ_improve/errors.hpp"
 
+#include "support/command_line_args.hpp"
+
 #include <gtest/gtest.h>
 
 #include <initializer_list>
@@ -21,27 +23,15 @@ const ToolFlags kTool{"tool",
                       {"-pose"},
                       "  INPUT  anything\n"};
 
-struct Args {
-  std::vector<std::string> storage;
-  std::vector<const char*> argv;
-  Args(std::initializer_list<std::string> args) : storage{"tool"} {
-    storage.insert(storage.end(), args.begin(), args.end());
-    for (const auto& s : storage) argv.push_back(s.c_str());
-  }
-};
+using test::Args;
 
 CommandLine parse(std::initializer_list<std::string> args, const ToolFlags& tool = kTool) {
   Args a(args);
-  return parse_command_line(tool, static_cast<int>(a.argv.size()), a.argv.data());
+  return parse_command_line(tool, a.argc(), a.argv.data());
 }
 
 std::string error_of(std::initializer_list<std::string> args) {
-  try {
-    parse(args);
-  } catch (const InvalidParameter& e) {
-    return e.what();
-  }
-  return "";
+  return test::invalid_parameter_of([&] { parse(args); });
 }
 
 TEST(FlagRegistry, NamesAreUniqueAndEveryValueFlagStatesItsDefault) {

@@ -3,6 +3,8 @@
 #include "occ_improve/errors.hpp"
 #include "support/test_data.hpp"
 
+#include "support/command_line_args.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,15 +18,7 @@ namespace occ_improve {
 namespace {
 
 // argv for the parser: "tool" then the given arguments.
-struct Args {
-  std::vector<std::string> storage;
-  std::vector<const char*> argv;
-  Args(std::initializer_list<std::string> args) : storage{"tool"} {
-    storage.insert(storage.end(), args.begin(), args.end());
-    for (const auto& s : storage) argv.push_back(s.c_str());
-  }
-  int argc() const { return static_cast<int>(argv.size()); }
-};
+using test::Args;
 
 // A tool taking the shared sensor, camera and output flags, -k and -sample, and frame inputs.
 const ToolFlags kTool{"tool",
@@ -42,12 +36,7 @@ ToolOptions parse(std::initializer_list<std::string> args) {
 
 // The message of the InvalidParameter the arguments raise ("" when none).
 std::string error_of(std::initializer_list<std::string> args) {
-  try {
-    parse(args);
-  } catch (const InvalidParameter& e) {
-    return e.what();
-  }
-  return "";
+  return test::invalid_parameter_of([&] { parse(args); });
 }
 
 TEST(ToolOptions, DefaultsAreThePixelNativePresetClampedWithNoInputs) {
