@@ -4,6 +4,8 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
+#include "occ_improve/pcl/tiff_image.hpp"
+#include "image_size.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
@@ -12,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -19,6 +22,18 @@
 #include <vector>
 
 namespace occ_improve {
+
+void detail::require_image_size(const std::string& kind, const std::string& path, std::uint64_t width,
+                                std::uint64_t height, std::uint64_t file_can_hold) {
+  const std::uint64_t pixels = width * height;  // both < 2^32: no overflow
+  std::string problem;
+  if (pixels == 0) problem = "is empty";
+  else if (pixels > kMaxDepthImagePixels) problem = "exceeds the cap of " + std::to_string(kMaxDepthImagePixels) + " pixels";
+  else if (pixels > file_can_hold) problem = "is more than the file can hold (" + std::to_string(file_can_hold) + " pixels)";
+  if (!problem.empty())
+    throw FormatError(kind + " '" + path + "': width x height = " + std::to_string(width) + " x " +
+                      std::to_string(height) + " " + problem);
+}
 
 namespace {
 
@@ -36,19 +51,6 @@ void png_error_to_string(png_structp png, png_const_charp message) {
   png_longjmp(png, 1);
 }
 void png_ignore_warning(png_structp, png_const_charp) {}
-
-// A depth image's size is checked before any pixel buffer exists: against a pixel cap, and against what
-// the file's bytes can hold (a 23-byte header must not make us allocate 20 GB).
-void require_image_size(const std::string& path, std::uint64_t width, std::uint64_t height, std::uint64_t file_can_hold) {
-  const std::uint64_t pixels = width * height;  // both < 2^32: no overflow
-  std::string problem;
-  if (pixels == 0) problem = "is empty";
-  else if (pixels > kMaxDepthImagePixels) problem = "exceeds the cap of " + std::to_string(kMaxDepthImagePixels) + " pixels";
-  else if (pixels > file_can_hold) problem = "is more than the file can hold (" + std::to_string(file_can_hold) + " pixels)";
-  if (!problem.empty())
-    throw FormatError("depth image '" + path + "': width x height = " + std::to_string(width) + " x " +
-                      std::to_string(height) + " " + problem);
-}
 
 // Frees libpng's read and info structs on every way out, exceptions included.
 struct PngReader {
@@ -86,7 +88,7 @@ DepthImage16 read_png16(const std::string& path) {
     throw FormatError(m.str());
   }
   // Deflate expands at most ~1032-fold: a file cannot hold more 2-byte pixels than that.
-  require_image_size(path, png_get_image_width(png, info), png_get_image_height(png, info),
+  detail::require_image_size("depth image", path, png_get_image_width(png, info), png_get_image_height(png, info),
                      ec ? kMaxDepthImagePixels : file_size * 1032 / 2);
   png_set_swap(png);  // PNG is big-endian; we read host-order uint16
   image.width = static_cast<int>(png_get_image_width(png, info));
@@ -114,7 +116,7 @@ DepthImage16 read_pgm16(const std::string& path) {
   in.seekg(0, std::ios::end);
   const std::uint64_t pixel_bytes = static_cast<std::uint64_t>(in.tellg() - header);
   in.seekg(header);
-  require_image_size(path, static_cast<std::uint64_t>(width), static_cast<std::uint64_t>(height), pixel_bytes / 2);
+  detail::require_image_size("depth image", path, static_cast<std::uint64_t>(width), static_cast<std::uint64_t>(height), pixel_bytes / 2);
   DepthImage16 image{width, height, {}};
   image.values.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   std::vector<unsigned char> raw(image.values.size() * 2);
@@ -179,10 +181,35 @@ DepthImage16 read_depth_image16(const std::string& path) {
   const std::string ext = extension_of(path);
   if (ext == "png") return read_png16(path);
   if (ext == "pgm") return read_pgm16(path);
-  throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png or .pgm)");
+  if (ext == "tif" || ext == "tiff") return read_tiff_depth16(path);
+  throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png, .pgm, .tif or .tiff)");
+}
+
+bool is_depth_image_path(const std::string& path) {
+  const std::string ext = extension_of(path);
+  return ext == "png" || ext == "pgm" || ext == "tif" || ext == "tiff";
 }
 
 namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// PCL's grabbers write `<stem>_depth.tiff` and the registered colour as `<stem>_rgb.tiff` beside it.
+std::optional<Image> grabber_colour_beside(const std::string& depth_path, int width, int height) {
+  for (const char* ext : {".tiff", ".tif"}) {
+    const std::string depth_suffix = std::string("_depth") + ext;
+    if (!ends_with(depth_path, depth_suffix)) continue;
+    const std::string rgb = depth_path.substr(0, depth_path.size() - depth_suffix.size()) + "_rgb" + ext;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(rgb, ec)) return std::nullopt;
+    Image colour = read_tiff_rgb8(rgb);
+    if (colour.width != width || colour.height != height) return std::nullopt;  // not registered to this depth
+    return colour;
+  }
+  return std::nullopt;
+}
 
 // The registered colour of an organized cloud's points (PCL packs rgb and rgba alike), row-major RGB.
 Image colour_image(const pcl::PCLPointCloud2& blob) {
@@ -265,6 +292,7 @@ LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k
   frame.intrinsics = k;
   frame.encoding = encoding;
   frame.cloud = organized_cloud(points, k.width, k.height);
+  frame.colour = grabber_colour_beside(path, k.width, k.height);
   return frame;
 }
 
@@ -272,11 +300,11 @@ LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntri
                        std::optional<DepthEncoding> encoding) {
   const std::string ext = extension_of(path);
   if (ext == "pcd") return load_pcd_frame(path);
-  if (ext == "png" || ext == "pgm") {
+  if (is_depth_image_path(path)) {
     if (!intrinsics) throw InvalidInput("depth image '" + path + "' needs camera intrinsics");
     return load_depth_frame(path, *intrinsics, encoding);
   }
-  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .png or .pgm)");
+  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .png, .pgm, .tif or .tiff)");
 }
 
 PinholeIntrinsics read_intrinsics_file(const std::string& path) {
@@ -318,10 +346,12 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
 
 namespace {
 
+// 7-Scenes / 3DMatch `*.depth.png`, PCL ImageGrabber `*_depth.tif(f)`.
 bool is_depth_frame_name(const std::filesystem::path& p) {
   const std::string name = p.filename().string();
-  const std::string suffix = ".depth.png";
-  return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  for (const char* suffix : {".depth.png", "_depth.tiff", "_depth.tif"})
+    if (name.size() > std::strlen(suffix) && ends_with(name, suffix)) return true;
+  return false;
 }
 
 std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder) {
@@ -340,10 +370,8 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   const fs::path p(input);
   if (!fs::exists(p, ec)) throw IoError("input '" + input + "' does not exist");
   if (!fs::is_directory(p, ec)) {
-    const std::string ext = extension_of(input);
-    const bool depth_image = ext == "png" || ext == "pgm";
     const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
-    return {FrameSource{input, depth_image ? intrinsics_beside(folder) : std::nullopt}};
+    return {FrameSource{input, is_depth_image_path(input) ? intrinsics_beside(folder) : std::nullopt}};
   }
   std::vector<std::string> frames;
   for (fs::recursive_directory_iterator it(p, ec), end; it != end && !ec; it.increment(ec)) {
@@ -351,7 +379,7 @@ std::vector<FrameSource> expand_input(const std::string& input) {
     if (it->is_regular_file(ec) && is_depth_frame_name(it->path())) frames.push_back(it->path().string());
   }
   if (ec) throw IoError("cannot list folder '" + input + "': " + ec.message());
-  if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png frames");
+  if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames");
   std::sort(frames.begin(), frames.end());
   const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p);
   std::vector<FrameSource> sources;

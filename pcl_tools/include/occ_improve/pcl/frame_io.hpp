@@ -1,7 +1,7 @@
 #pragma once
 // Reading range frames from files: PCD (organized or not, any XYZ point type) and depth images
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
-// disparity PGM). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
+// disparity PGM, PCL grabbers' 16-bit TIFF in millimetres). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
 #include "occ_improve/presets.hpp"
 #include "occ_improve/render.hpp"
 
@@ -26,7 +26,7 @@ DepthEncoding parse_depth_encoding(const std::string& name);
 /// The inverse: "mm", "tum", "sun", "nyu".
 const char* depth_encoding_name(DepthEncoding encoding);
 
-/// A 16-bit single-channel image (PNG 16-bit grey, or PGM P5 16-bit).
+/// A 16-bit single-channel image (PNG 16-bit grey, PGM P5 16-bit, or TIFF 16-bit unsigned).
 struct DepthImage16 {
   int width = 0, height = 0;
   std::vector<std::uint16_t> values;
@@ -34,9 +34,14 @@ struct DepthImage16 {
 /// The largest depth image read: 2^26 pixels (128 MiB of 16-bit values; a 4K depth map is 8.3 Mpx).
 inline constexpr std::uint64_t kMaxDepthImagePixels = std::uint64_t{1} << 26;
 
-/// Reads a 16-bit PNG or PGM. Its size is checked against kMaxDepthImagePixels and against what the file
-/// can hold before any pixel buffer is allocated (FormatError naming the file and its width x height).
+/// Reads a 16-bit PNG, PGM or TIFF (.tif/.tiff, see tiff_image.hpp). Its size is checked against
+/// kMaxDepthImagePixels and against what the file can hold before any pixel buffer is allocated
+/// (FormatError naming the file and its width x height); any other pixel format is a FormatError.
 DepthImage16 read_depth_image16(const std::string& path);
+
+/// True for the extensions read as depth images (.png, .pgm, .tif, .tiff, any case): these need camera
+/// intrinsics to become a cloud.
+bool is_depth_image_path(const std::string& path);
 
 /// The encoding a 16-bit depth image most likely uses, for when the user did not say:
 ///  - .pgm whose values all fit in 11 bits: kinect_disparity (NYU's raw dumps);
@@ -52,18 +57,21 @@ struct LoadedFrame {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
   std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
-  std::optional<Image> colour;                  ///< registered RGB of an organized PCD with rgb/rgba
+  /// Registered RGB: of an organized PCD with rgb/rgba, or of a `*_depth.tiff` from the `*_rgb.tiff`
+  /// beside it when that has the same size (PCL grabbers' layout).
+  std::optional<Image> colour;
 };
 
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.
 LoadedFrame load_pcd_frame(const std::string& path);
 
 /// A depth image back-projected through `intrinsics` (its size must match the image's, else InvalidInput).
-/// Without an encoding, guess_depth_encoding() chooses it.
+/// Without an encoding, guess_depth_encoding() chooses it. A `*_depth.tif(f)` picks up its colour (above).
 LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics,
                              std::optional<DepthEncoding> encoding = std::nullopt);
 
-/// By extension: .pcd -> PCD; .png/.pgm -> depth image (intrinsics required).
+/// By extension (any case): .pcd -> PCD; .png/.pgm/.tif/.tiff -> depth image (intrinsics required, else
+/// InvalidInput).
 LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
                        std::optional<DepthEncoding> encoding = std::nullopt);
 
@@ -75,8 +83,9 @@ struct FrameSource {
 
 /// A command-line input as frames. A file is itself; a depth image also picks up a
 /// camera-intrinsics.txt beside it or one folder up (the 3DMatch / SUN3D / 7-Scenes layout). A folder
-/// is its *.depth.png frames (seq-*/ subfolders included), sorted by name, with its
-/// camera-intrinsics.txt. Throws IoError when the input does not exist, InvalidInput for a folder with
+/// is its *.depth.png frames and its *_depth.tif(f) frames (PCL ImageGrabber layout; seq-*/ subfolders
+/// included), sorted by path, with its camera-intrinsics.txt (the TIFF layout has none: its calibration
+/// is in the PCLZF folder's XML, so those frames need intrinsics from the user). Throws IoError when the input does not exist, InvalidInput for a folder with
 /// no depth frames.
 std::vector<FrameSource> expand_input(const std::string& input);
 

@@ -1,0 +1,206 @@
+// The other frame formats every tool reads through load_frame / expand_input: PCL grabbers' 16-bit TIFF
+// depth (with the registered RGB TIFF beside it), PLY clouds, and the poses that come with frames
+// (7-Scenes .pose.txt beside a depth image, a PCD's or PLY's VIEWPOINT).
+#include "occ_improve/pcl/frame_io.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/tiff_image.hpp"
+#include "support/temp_folder.hpp"
+#include "support/test_data.hpp"
+
+#include <gtest/gtest.h>
+#include <tiffio.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* const kGrabberTiff = "kinect/pcl_test/grabber_sequences/tiff";
+const char* const kGrabberFrame = "frame_20121214T142255.814212";
+
+PinholeIntrinsics grabber_intrinsics() {  // the pclzf folder's calibration XML
+  PinholeIntrinsics k;
+  k.fx = k.fy = 525;
+  k.cx = 320;
+  k.cy = 240;
+  return k;
+}
+
+std::string read_bytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+void write_bytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
+
+std::string message_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const FormatError& e) {
+    return e.what();
+  }
+  return "no FormatError";
+}
+
+// A TIFF of `samples` x `bits` per pixel in strips of `rows_per_strip`, pixel values from `bytes`.
+void write_tiff(const std::string& path, std::uint32_t width, std::uint32_t height, std::uint16_t bits,
+                std::uint16_t samples, const std::vector<std::uint8_t>& bytes, std::uint32_t rows_per_strip,
+                std::uint16_t compression = COMPRESSION_NONE) {
+  TIFF* tiff = TIFFOpen(path.c_str(), "w");
+  ASSERT_NE(tiff, nullptr);
+  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, width);
+  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, height);
+  TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, bits);
+  TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, samples);
+  TIFFSetField(tiff, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_UINT);
+  TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, samples == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(tiff, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(tiff, TIFFTAG_ROWSPERSTRIP, rows_per_strip);
+  TIFFSetField(tiff, TIFFTAG_COMPRESSION, compression);
+  const std::size_t row_bytes = std::size_t{width} * samples * bits / 8;
+  for (std::uint32_t row = 0; row < height; ++row)
+    ASSERT_EQ(TIFFWriteScanline(tiff, const_cast<std::uint8_t*>(bytes.data()) + row * row_bytes, row, 0), 1);
+  TIFFClose(tiff);
+}
+
+std::vector<std::uint8_t> as_bytes(const std::vector<std::uint16_t>& values) {
+  std::vector<std::uint8_t> bytes(values.size() * 2);
+  std::memcpy(bytes.data(), values.data(), bytes.size());
+  return bytes;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// TIFF
+
+TEST(FrameIoTiffReal, GrabberDepthIsKinectMillimetresWithRegisteredColour) {
+  OCC_REQUIRE_DATA(path, std::string(kGrabberTiff) + "/" + kGrabberFrame + "_depth.tiff");
+  const DepthImage16 raw = read_depth_image16(path);
+  ASSERT_EQ(raw.width, 640);
+  ASSERT_EQ(raw.height, 480);
+  const auto nonzero = std::count_if(raw.values.begin(), raw.values.end(), [](std::uint16_t v) { return v != 0; });
+  const double share = static_cast<double>(nonzero) / static_cast<double>(raw.values.size());
+  EXPECT_GT(share, 0.5);
+  EXPECT_LT(share, 1.0);
+  EXPECT_EQ(guess_depth_encoding(path, raw), DepthEncoding::millimetres);
+  const LoadedFrame f = load_frame(path, grabber_intrinsics());
+  EXPECT_EQ(f.encoding, DepthEncoding::millimetres);
+  EXPECT_EQ(f.cloud.width, 640u);
+  EXPECT_EQ(f.cloud.height, 480u);
+  ASSERT_TRUE(f.colour);
+  EXPECT_EQ(f.colour->width, 640);
+  EXPECT_EQ(f.colour->height, 480);
+  EXPECT_EQ(f.colour->channels, 3);
+  ASSERT_EQ(f.colour->pixels.size(), 640u * 480u * 3u);
+  const auto distinct = std::set<std::uint8_t>(f.colour->pixels.begin(), f.colour->pixels.end()).size();
+  EXPECT_GT(distinct, 100u);  // a real photo, not a blank raster
+}
+
+// The grabber wrote each frame twice: as 16-bit depth TIFF and as an organized PCD in metres, back-projected
+// with the calibration's 525 / 320 / 240. Measured: the same 271575 valid pixels, |dz| and |dx| 0 on every
+// one (the PCD holds millimetres x 1e-3 as float, as we do); 10 um leaves room for float rounding only.
+TEST(FrameIoTiffReal, BackProjectedTiffAgreesWithTheSameFramesPcd) {
+  OCC_REQUIRE_DATA(tiff, std::string(kGrabberTiff) + "/" + kGrabberFrame + "_depth.tiff");
+  OCC_REQUIRE_DATA(pcd, std::string("kinect/pcl_test/grabber_sequences/pcd/") + kGrabberFrame + ".pcd");
+  const LoadedFrame a = load_frame(tiff, grabber_intrinsics());
+  const LoadedFrame b = load_frame(pcd, std::nullopt);
+  ASSERT_EQ(a.cloud.size(), b.cloud.size());
+  std::size_t both = 0, only_one = 0;
+  double max_dz = 0, max_dxy = 0;
+  for (std::size_t i = 0; i < a.cloud.size(); ++i) {
+    const bool va = std::isfinite(a.cloud[i].z), vb = std::isfinite(b.cloud[i].z);
+    only_one += va != vb ? 1 : 0;
+    if (!va || !vb) continue;
+    ++both;
+    max_dz = std::max(max_dz, static_cast<double>(std::abs(a.cloud[i].z - b.cloud[i].z)));
+    max_dxy = std::max({max_dxy, static_cast<double>(std::abs(a.cloud[i].x - b.cloud[i].x)),
+                        static_cast<double>(std::abs(a.cloud[i].y - b.cloud[i].y))});
+  }
+  EXPECT_GT(both, a.cloud.size() / 2);
+  EXPECT_EQ(only_one, 0u) << "pixels valid in one of the two";
+  EXPECT_LT(max_dz, 1e-5);
+  EXPECT_LT(max_dxy, 1e-5);
+}
+
+TEST(FrameIoTiffReal, GrabberFolderExpandsToItsThreeDepthFrames) {
+  OCC_REQUIRE_DATA(folder, kGrabberTiff);
+  const std::vector<FrameSource> sources = expand_input(folder);
+  ASSERT_EQ(sources.size(), 3u);
+  for (const FrameSource& s : sources) {
+    EXPECT_NE(s.path.find("_depth.tiff"), std::string::npos) << s.path;
+    EXPECT_FALSE(s.intrinsics) << "the TIFF folder carries no calibration";
+  }
+  EXPECT_TRUE(std::is_sorted(sources.begin(), sources.end(),
+                             [](const FrameSource& x, const FrameSource& y) { return x.path < y.path; }));
+  EXPECT_THROW(load_frame(sources.front().path, std::nullopt), InvalidInput);
+}
+
+class FrameIoTiffFiles : public test::TempFolderTest {};
+
+TEST_F(FrameIoTiffFiles, TruncatedRealTiffIsAFormatErrorNamingTheFile) {
+  OCC_REQUIRE_DATA(path, std::string(kGrabberTiff) + "/" + kGrabberFrame + "_depth.tiff");
+  const std::string bytes = read_bytes(path), cut = file("cut_depth.tiff");
+  write_bytes(cut, bytes.substr(0, bytes.size() / 2));
+  testing::internal::CaptureStderr();
+  const std::string message = message_of([&] { read_depth_image16(cut); });
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << "libtiff must not print";
+  EXPECT_NE(message.find(cut), std::string::npos) << message;
+}
+
+TEST_F(FrameIoTiffFiles, Synthetic16BitTiffRoundTripsInAnyStripLayout) {
+  const std::uint32_t width = 7, height = 5;
+  std::vector<std::uint16_t> values(width * height);
+  for (std::size_t i = 0; i < values.size(); ++i) values[i] = static_cast<std::uint16_t>(i * 1000 + 1);
+  for (const std::uint32_t rows_per_strip : {1u, 2u, 5u})
+    for (const std::uint16_t compression : {COMPRESSION_NONE, COMPRESSION_LZW, COMPRESSION_ADOBE_DEFLATE}) {
+      const std::string path = file("d" + std::to_string(rows_per_strip) + "_" + std::to_string(compression) + ".tif");
+      write_tiff(path, width, height, 16, 1, as_bytes(values), rows_per_strip, compression);
+      const DepthImage16 image = read_depth_image16(path);
+      EXPECT_EQ(image.width, 7);
+      EXPECT_EQ(image.height, 5);
+      EXPECT_EQ(image.values, values) << path;
+    }
+}
+
+TEST_F(FrameIoTiffFiles, OtherPixelFormatsAreRefusedNamingWhatTheyHold) {
+  const std::string grey8 = file("grey8_depth.tiff"), rgb8 = file("rgb8_depth.tiff");
+  write_tiff(grey8, 4, 3, 8, 1, std::vector<std::uint8_t>(12, 7), 3);
+  write_tiff(rgb8, 4, 3, 8, 3, std::vector<std::uint8_t>(36, 7), 3);
+  const std::string m8 = message_of([&] { read_depth_image16(grey8); });
+  EXPECT_NE(m8.find(grey8), std::string::npos) << m8;
+  EXPECT_NE(m8.find("8-bit samples, 1 per pixel"), std::string::npos) << m8;
+  const std::string m3 = message_of([&] { read_depth_image16(rgb8); });
+  EXPECT_NE(m3.find("8-bit samples, 3 per pixel"), std::string::npos) << m3;
+  // The colour reader takes them; as a depth frame's colour it is used only at the depth's size.
+  EXPECT_EQ(read_tiff_rgb8(rgb8).width, 4);
+}
+
+TEST_F(FrameIoTiffFiles, GarbageAndMissingTiffsAreTypedErrorsAndLibtiffPrintsNothing) {
+  testing::internal::CaptureStderr();
+  EXPECT_THROW(read_depth_image16(file("absent.tiff")), IoError);
+  write_bytes(file("empty.tif"), "");
+  EXPECT_THROW(read_depth_image16(file("empty.tif")), FormatError);
+  write_bytes(file("header.TIFF"), std::string("II*\0\x08\0\0\0\xff\xff", 10));
+  EXPECT_THROW(read_depth_image16(file("header.TIFF")), FormatError);
+  write_bytes(file("mm.tif"), std::string("MM\0*garbage", 11));
+  EXPECT_THROW(read_depth_image16(file("mm.tif")), FormatError);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
+TEST(FrameIo, DepthImagePathsByExtension) {
+  for (const char* p : {"a.png", "b.PGM", "c_depth.tiff", "d.TIF", "dir.x/e.Tiff"}) EXPECT_TRUE(is_depth_image_path(p)) << p;
+  for (const char* p : {"a.pcd", "b.ply", "tiff", "c.tiff.txt", "dir.png/readme"}) EXPECT_FALSE(is_depth_image_path(p)) << p;
+}
+
+}  // namespace
+}  // namespace occ_improve
