@@ -4,6 +4,7 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
+#include "occ_improve/pcl/ply_header.hpp"
 #include "occ_improve/pcl/tiff_image.hpp"
 #include "image_size.hpp"
 
@@ -226,9 +227,10 @@ Image colour_image(const pcl::PCLPointCloud2& blob) {
 
 }  // namespace
 
-LoadedFrame load_pcd_frame(const std::string& path) {
-  pcl::PCLPointCloud2 blob;
-  read_pcd_file(path, blob);
+namespace {
+
+// A cloud PCL read (PCD or PLY) as a frame: x y z required as float, colour kept where it is organized.
+LoadedFrame frame_of_blob(const pcl::PCLPointCloud2& blob, const std::string& path) {
   for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
   bool has_colour = false;
   for (const auto& f : blob.fields) has_colour |= f.name == "rgb" || f.name == "rgba";
@@ -237,6 +239,22 @@ LoadedFrame load_pcd_frame(const std::string& path) {
   pcl::fromPCLPointCloud2(blob, frame.cloud);
   if (has_colour && blob.height > 1) frame.colour = colour_image(blob);
   return frame;
+}
+
+}  // namespace
+
+LoadedFrame load_pcd_frame(const std::string& path) {
+  pcl::PCLPointCloud2 blob;
+  read_pcd_file(path, blob);
+  return frame_of_blob(blob, path);
+}
+
+LoadedFrame load_ply_frame(const std::string& path) {
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  read_ply_file(path, blob, origin, orientation);
+  return frame_of_blob(blob, path);
 }
 
 DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image) {
@@ -300,11 +318,12 @@ LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntri
                        std::optional<DepthEncoding> encoding) {
   const std::string ext = extension_of(path);
   if (ext == "pcd") return load_pcd_frame(path);
+  if (ext == "ply") return load_ply_frame(path);
   if (is_depth_image_path(path)) {
     if (!intrinsics) throw InvalidInput("depth image '" + path + "' needs camera intrinsics");
     return load_depth_frame(path, *intrinsics, encoding);
   }
-  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .png, .pgm, .tif or .tiff)");
+  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .ply, .png, .pgm, .tif or .tiff)");
 }
 
 PinholeIntrinsics read_intrinsics_file(const std::string& path) {

@@ -9,6 +9,7 @@
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>
+#include <pcl/io/ply_io.h>
 #include <tiffio.h>
 
 #include <algorithm>
@@ -18,6 +19,7 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
+#include <limits>
 #include <set>
 #include <string>
 #include <vector>
@@ -195,6 +197,116 @@ TEST_F(FrameIoTiffFiles, GarbageAndMissingTiffsAreTypedErrorsAndLibtiffPrintsNot
   write_bytes(file("mm.tif"), std::string("MM\0*garbage", 11));
   EXPECT_THROW(read_depth_image16(file("mm.tif")), FormatError);
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+}
+
+// ---------------------------------------------------------------------------------------------------
+// PLY
+
+pcl::PointCloud<pcl::PointXYZRGB> organized_rgb_cloud(std::uint32_t width, std::uint32_t height) {
+  pcl::PointCloud<pcl::PointXYZRGB> cloud(width, height);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    auto& p = cloud[i];
+    p.x = 0.01f * static_cast<float>(i % width) - 0.02f;
+    p.y = 0.02f * static_cast<float>(i / width) - 0.01f;
+    p.z = 1.0f + 0.125f * static_cast<float>(i);
+    p.r = static_cast<std::uint8_t>(10 * i);
+    p.g = static_cast<std::uint8_t>(255 - 10 * i);
+    p.b = 7;
+  }
+  cloud[5].x = cloud[5].y = cloud[5].z = std::numeric_limits<float>::quiet_NaN();  // a pixel with no return
+  return cloud;
+}
+
+class FrameIoPlyFiles : public test::TempFolderTest {};
+
+TEST_F(FrameIoPlyFiles, OrganizedCloudRoundTripsInBinaryAndAscii) {
+  const pcl::PointCloud<pcl::PointXYZRGB> cloud = organized_rgb_cloud(4, 3);
+  ASSERT_EQ(pcl::io::savePLYFileBinary(file("binary.ply"), cloud), 0);
+  ASSERT_EQ(pcl::io::savePLYFileASCII(file("ascii.PLY"), cloud), 0);
+  for (const std::string& path : {file("binary.ply"), file("ascii.PLY")}) {
+    const LoadedFrame f = load_frame(path, std::nullopt);
+    ASSERT_EQ(f.cloud.width, 4u) << path;
+    ASSERT_EQ(f.cloud.height, 3u) << path;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (i == 5) {
+        EXPECT_FALSE(std::isfinite(f.cloud[i].z)) << path;
+        continue;
+      }
+      EXPECT_FLOAT_EQ(f.cloud[i].x, cloud[i].x) << path << " point " << i;
+      EXPECT_FLOAT_EQ(f.cloud[i].y, cloud[i].y) << path << " point " << i;
+      EXPECT_FLOAT_EQ(f.cloud[i].z, cloud[i].z) << path << " point " << i;
+    }
+    ASSERT_TRUE(f.colour) << path;
+    EXPECT_EQ(f.colour->width, 4);
+    EXPECT_EQ(f.colour->height, 3);
+    ASSERT_EQ(f.colour->pixels.size(), 36u);
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+      if (i == 5) continue;  // PCL's writer leaves the colour of a pixel without a point out
+      EXPECT_EQ(f.colour->pixels[3 * i], cloud[i].r) << path << " pixel " << i;
+      EXPECT_EQ(f.colour->pixels[3 * i + 1], cloud[i].g) << path << " pixel " << i;
+      EXPECT_EQ(f.colour->pixels[3 * i + 2], cloud[i].b) << path << " pixel " << i;
+    }
+  }
+}
+
+TEST_F(FrameIoPlyFiles, UnorganizedXyzCloudRoundTrips) {
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  for (int i = 0; i < 5; ++i) cloud.push_back(pcl::PointXYZ(0.1f * i, -0.2f * i, 2.0f + i));
+  ASSERT_EQ(pcl::io::savePLYFileBinary(file("xyz.ply"), cloud), 0);
+  const LoadedFrame f = load_frame(file("xyz.ply"), std::nullopt);
+  EXPECT_EQ(f.cloud.width, 5u);
+  EXPECT_EQ(f.cloud.height, 1u);
+  ASSERT_EQ(f.cloud.size(), 5u);
+  EXPECT_FLOAT_EQ(f.cloud[4].z, 6.0f);
+  EXPECT_FALSE(f.colour);
+}
+
+// A PLY header with the given lines between the format line and end_header, then `body`.
+std::string ply(const std::string& format, const std::string& lines, const std::string& body) {
+  return "ply\nformat " + format + " 1.0\n" + lines + "end_header\n" + body;
+}
+const char* const kXyz = "property float x\nproperty float y\nproperty float z\n";
+
+TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
+  const std::string ok = ply("ascii", std::string("element vertex 2\n") + kXyz, "1 2 3\n4 5 6\n");
+  write_bytes(file("ok.ply"), ok);
+  EXPECT_EQ(load_ply_frame(file("ok.ply")).cloud.size(), 2u);  // the baseline the cases below break
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"empty", ""},
+      {"not_ply", "plx\nformat ascii 1.0\nend_header\n"},
+      {"no_end_header", "ply\nformat ascii 1.0\nelement vertex 1\n"},
+      {"absurd_count", ply("binary_little_endian", std::string("element vertex 4294967295\n") + kXyz, "")},
+      {"count_too_big", ply("binary_little_endian", std::string("element vertex 99999999999\n") + kXyz, "")},
+      {"negative_count", ply("ascii", std::string("element vertex -1\n") + kXyz, "1 2 3\n")},
+      {"more_than_file", ply("binary_little_endian", std::string("element vertex 1000\n") + kXyz, std::string(120, 'x'))},
+      {"truncated_binary", ply("binary_little_endian", std::string("element vertex 10\n") + kXyz, std::string(100, '\0'))
+                               .substr(0, 200)},
+      {"truncated_ascii", ply("ascii", std::string("element vertex 3\n") + kXyz, "1 2 3\n4 5 6\n7 8")},
+      {"bad_type", ply("ascii", "element vertex 1\nproperty float128 x\n", "1\n")},
+      {"vertex_list", ply("ascii", std::string("element vertex 1\n") + kXyz + "property list uint uint n\n", "1 2 3 0\n")},
+      {"cols_rows_mismatch", ply("ascii", std::string("obj_info num_cols 100000\nobj_info num_rows 100000\nelement vertex 2\n") + kXyz,
+                                 "1 2 3\n4 5 6\n")},
+      {"cols_negative", ply("ascii", std::string("obj_info num_cols -1\nobj_info num_rows 2\nelement vertex 2\n") + kXyz,
+                            "1 2 3\n4 5 6\n")},
+      {"rows_after_element", ply("ascii", std::string("obj_info num_cols 1\nelement vertex 2\nobj_info num_rows 2\n") + kXyz,
+                                 "1 2 3\n4 5 6\n")},
+      // A camera viewport resets width x height after PCL sized its buffer for 2 points.
+      {"viewport_resize", ply("ascii", std::string("element vertex 2\n") + kXyz +
+                                           "element camera 1\nproperty int viewportx\nproperty int viewporty\n",
+                              "1 2 3\n4 5 6\n1000 1000\n")},
+      {"double_xyz", ply("ascii", "element vertex 1\nproperty double x\nproperty double y\nproperty double z\n", "1 2 3\n")},
+      // Passes the header's size check (a list may be empty), so PCL's parser is the one to refuse it.
+      {"truncated_face_list", ply("binary_little_endian", std::string("element vertex 1\n") + kXyz +
+                                                        "element face 2\nproperty list uchar int vertex_indices\n",
+                                  std::string(12, '\0') + "\x03\x01")},
+      {"no_vertices", ply("ascii", "element face 0\nproperty list uchar int vertex_indices\n", "")},
+  };
+  for (const auto& [name, bytes] : cases) {
+    const std::string path = file(name + ".ply");
+    write_bytes(path, bytes);
+    const std::string message = message_of([&] { load_frame(path, std::nullopt); });
+    EXPECT_NE(message.find(path), std::string::npos) << name << ": " << message;
+  }
 }
 
 TEST(FrameIo, DepthImagePathsByExtension) {

@@ -1,5 +1,5 @@
 #pragma once
-// Reading range frames from files: PCD (organized or not, any XYZ point type) and depth images
+// Reading range frames from files: PCD and PLY (organized or not, any XYZ point type) and depth images
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
 // disparity PGM, PCL grabbers' 16-bit TIFF in millimetres). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
 #include "occ_improve/presets.hpp"
@@ -57,7 +57,7 @@ struct LoadedFrame {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
   std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
-  /// Registered RGB: of an organized PCD with rgb/rgba, or of a `*_depth.tiff` from the `*_rgb.tiff`
+  /// Registered RGB: of an organized PCD or PLY with rgb/rgba (PLY: red green blue), or of a `*_depth.tiff` from the `*_rgb.tiff`
   /// beside it when that has the same size (PCL grabbers' layout).
   std::optional<Image> colour;
 };
@@ -65,12 +65,18 @@ struct LoadedFrame {
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.
 LoadedFrame load_pcd_frame(const std::string& path);
 
+/// Any PLY cloud PCL's PLYReader reads (ascii or binary; vertex x y z as float), organized width x height
+/// where the file carries obj_info num_cols / num_rows (PCL's writer stores them). The header is checked
+/// first (ply_header.hpp). Throws IoError when unreadable, FormatError when malformed or without x/y/z,
+/// ResourceLimit when too large.
+LoadedFrame load_ply_frame(const std::string& path);
+
 /// A depth image back-projected through `intrinsics` (its size must match the image's, else InvalidInput).
 /// Without an encoding, guess_depth_encoding() chooses it. A `*_depth.tif(f)` picks up its colour (above).
 LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics,
                              std::optional<DepthEncoding> encoding = std::nullopt);
 
-/// By extension (any case): .pcd -> PCD; .png/.pgm/.tif/.tiff -> depth image (intrinsics required, else
+/// By extension (any case): .pcd -> PCD; .ply -> PLY; .png/.pgm/.tif/.tiff -> depth image (intrinsics required, else
 /// InvalidInput).
 LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
                        std::optional<DepthEncoding> encoding = std::nullopt);

@@ -41,6 +41,7 @@ PcdHeader validate_pcd_file(const std::string& path);
 
 /// Throws FormatError naming `path` unless `blob` has a field `name` of one value of PCL type `datatype`
 /// (pcl::PCLPointField::FLOAT32, ...): PCL's conversion would otherwise fill the point with zeros silently.
+/// For any blob PCL read (PCD or PLY).
 void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path, const std::string& name,
                        std::uint8_t datatype);
 
