@@ -12,6 +12,8 @@
 #include <pcl/conversions.h>
 #include <png.h>
 
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -229,6 +231,24 @@ Image colour_image(const pcl::PCLPointCloud2& blob) {
 
 namespace {
 
+// The file's sensor pose as LoadedFrame::viewpoint documents it.
+std::optional<Eigen::Isometry3d> viewpoint_of(const Eigen::Vector4f& origin, const Eigen::Quaternionf& orientation,
+                                              const std::string& path) {
+  const Eigen::Quaterniond q = orientation.cast<double>();
+  if (!origin.head<3>().allFinite() || !q.coeffs().allFinite() || std::abs(q.norm() - 1) > 1e-3)
+    throw FormatError("'" + path + "': its viewpoint (sensor origin and orientation) is not a position and a unit quaternion");
+  const Eigen::Quaterniond unit = q.normalized();
+  constexpr double kExact = 1e-6;  // the files write these as plain 0s and 1s
+  const bool at_origin = origin.head<3>().cast<double>().norm() < kExact;
+  const bool identity = std::abs(std::abs(unit.w()) - 1) < kExact;
+  const bool legacy_grabber = std::abs(std::abs(unit.x()) - 1) < kExact;  // qw 0, qx 1: see frame_io.hpp
+  if (at_origin && (identity || legacy_grabber)) return std::nullopt;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = unit.toRotationMatrix();
+  pose.translation() = origin.head<3>().cast<double>();
+  return pose;
+}
+
 // A cloud PCL read (PCD or PLY) as a frame: x y z required as float, colour kept where it is organized.
 LoadedFrame frame_of_blob(const pcl::PCLPointCloud2& blob, const std::string& path) {
   for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
@@ -245,15 +265,17 @@ LoadedFrame frame_of_blob(const pcl::PCLPointCloud2& blob, const std::string& pa
 
 LoadedFrame load_pcd_frame(const std::string& path) {
   pcl::PCLPointCloud2 blob;
-  read_pcd_file(path, blob);
-  return frame_of_blob(blob, path);
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  read_pcd_file(path, blob, origin, orientation);
+  LoadedFrame frame = frame_of_blob(blob, path);
+  frame.viewpoint = viewpoint_of(origin, orientation, path);
+  return frame;
 }
 
 LoadedFrame load_ply_frame(const std::string& path) {
   pcl::PCLPointCloud2 blob;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  read_ply_file(path, blob, origin, orientation);
+  read_ply_file(path, blob);
   return frame_of_blob(blob, path);
 }
 
@@ -326,6 +348,34 @@ LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntri
   throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .ply, .png, .pgm, .tif or .tiff)");
 }
 
+Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError("cannot open pose file '" + path + "'");
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
+  if (!(in >> std::ws).eof()) throw FormatError("pose file '" + path + "' holds more than a 4x4 matrix");
+  if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
+    throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
+  // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
+  // inverse() transposes it, so project it onto the nearest rotation (SVD) to keep T^-1 T = I.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
+  if (rotation.determinant() < 0 || (rotation - m.topLeftCorner<3, 3>()).norm() > 1e-3)
+    throw FormatError("pose file '" + path + "' does not hold a rotation (not orthonormal)");
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = rotation;
+  pose.translation() = m.topRightCorner<3, 1>();
+  return pose;
+}
+
+std::string pose_file_for(const std::string& depth_path) {
+  const std::string suffix = ".depth.png";
+  if (!ends_with(depth_path, suffix)) return {};
+  return depth_path.substr(0, depth_path.size() - suffix.size()) + ".pose.txt";
+}
+
 PinholeIntrinsics read_intrinsics_file(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw IoError("cannot open intrinsics file '" + path + "'");
@@ -373,6 +423,18 @@ bool is_depth_frame_name(const std::filesystem::path& p) {
   return false;
 }
 
+// A frame with the intrinsics found for it and the pose file beside it.
+FrameSource source_of(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics) {
+  FrameSource source{path, intrinsics};
+  const std::string pose_path = pose_file_for(path);
+  std::error_code ec;
+  if (!pose_path.empty() && std::filesystem::is_regular_file(pose_path, ec)) {
+    source.pose = read_pose_matrix_file(pose_path);
+    source.pose_source = std::filesystem::path(pose_path).filename().string();
+  }
+  return source;
+}
+
 std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder) {
   for (const auto& candidate : {folder / "camera-intrinsics.txt", folder.parent_path() / "camera-intrinsics.txt"}) {
     std::error_code ec;
@@ -390,7 +452,7 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   if (!fs::exists(p, ec)) throw IoError("input '" + input + "' does not exist");
   if (!fs::is_directory(p, ec)) {
     const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
-    return {FrameSource{input, is_depth_image_path(input) ? intrinsics_beside(folder) : std::nullopt}};
+    return {source_of(input, is_depth_image_path(input) ? intrinsics_beside(folder) : std::nullopt)};
   }
   std::vector<std::string> frames;
   for (fs::recursive_directory_iterator it(p, ec), end; it != end && !ec; it.increment(ec)) {
@@ -402,7 +464,7 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   std::sort(frames.begin(), frames.end());
   const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p);
   std::vector<FrameSource> sources;
-  for (const auto& f : frames) sources.push_back({f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path())});
+  for (const auto& f : frames) sources.push_back(source_of(f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path())));
   return sources;
 }
 

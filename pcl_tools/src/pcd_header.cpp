@@ -239,9 +239,17 @@ void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path,
 }
 
 void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob) {
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  read_pcd_file(path, blob, origin, orientation);
+}
+
+void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
+                   Eigen::Quaternionf& orientation) {
   validate_pcd_file(path);
   pcl::PCDReader reader;
-  if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
+  int version = 0;
+  if (reader.read(path, blob, origin, orientation, version) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
 }
 
 }  // namespace occ_improve

@@ -223,13 +223,11 @@ PlyHeader validate_ply_file(const std::string& path) {
   return parse_header(in, static_cast<std::uint64_t>(end), path);
 }
 
-void read_ply_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
-                   Eigen::Quaternionf& orientation) {
+void read_ply_file(const std::string& path, pcl::PCLPointCloud2& blob) {
   validate_ply_file(path);
   pcl::PLYReader reader;
-  int version = 0;
   const QuietPclWarnings quiet;
-  if (reader.read(path, blob, origin, orientation, version) < 0) throw FormatError("'" + path + "' is not a readable PLY file");
+  if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PLY file");
   require_consistent(blob, path);
 }
 

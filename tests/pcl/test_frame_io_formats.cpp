@@ -309,6 +309,108 @@ TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
   }
 }
 
+// ---------------------------------------------------------------------------------------------------
+// Poses
+
+// A 2-point ASCII PCD with the given VIEWPOINT line.
+std::string pcd_with_viewpoint(const std::string& viewpoint) {
+  return "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\n"
+         "VIEWPOINT " + viewpoint + "\nPOINTS 2\nDATA ascii\n0 0 1\n0.5 0 2\n";
+}
+
+class FrameIoPoseFiles : public test::TempFolderTest {};
+
+TEST_F(FrameIoPoseFiles, PcdViewpointIsAPoseUnlessIdentityOrTheLegacyGrabberValue) {
+  for (const char* none : {"0 0 0 1 0 0 0", "0 0 0 0 1 0 0", "0 0 0 -1 0 0 0"}) {
+    write_bytes(file("none.pcd"), pcd_with_viewpoint(none));
+    const LoadedFrame f = load_frame(file("none.pcd"), std::nullopt);
+    EXPECT_FALSE(f.viewpoint) << none;
+    EXPECT_FLOAT_EQ(f.cloud[1].x, 0.5f) << "the points are as stored: " << none;
+  }
+  // 90 degrees about z (qw = qz = sqrt(1/2)), 1 m forward of the world origin.
+  write_bytes(file("pose.pcd"), pcd_with_viewpoint("0.5 -1 2 0.70710678 0 0 0.70710678"));
+  const LoadedFrame f = load_frame(file("pose.pcd"), std::nullopt);
+  ASSERT_TRUE(f.viewpoint);
+  EXPECT_TRUE(f.viewpoint->translation().isApprox(Eigen::Vector3d(0.5, -1, 2), 1e-6));
+  EXPECT_TRUE((*f.viewpoint * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d(0.5, 0, 2), 1e-6))
+      << "camera x maps to world y, offset by the origin";
+  EXPECT_FLOAT_EQ(f.cloud[1].x, 0.5f) << "the viewpoint is reported, not applied";
+  // The legacy rotation away from the origin is a real pose: nothing says the grabber wrote it.
+  write_bytes(file("moved.pcd"), pcd_with_viewpoint("1 0 0 0 1 0 0"));
+  EXPECT_TRUE(load_frame(file("moved.pcd"), std::nullopt).viewpoint);
+  write_bytes(file("zero_q.pcd"), pcd_with_viewpoint("0 0 0 0 0 0 0"));
+  EXPECT_NE(message_of([&] { load_frame(file("zero_q.pcd"), std::nullopt); }).find("unit quaternion"), std::string::npos);
+}
+
+TEST(FrameIoPoseReal, KinectPcdsCarryNoViewpoint) {
+  OCC_REQUIRE_DATA(grabber, std::string("kinect/pcl_test/grabber_sequences/pcd/") + kGrabberFrame + ".pcd");  // 0 0 0 0 1 0 0
+  OCC_REQUIRE_DATA(office, "kinect/pcl_test/office1.pcd");
+  EXPECT_FALSE(load_frame(grabber, std::nullopt).viewpoint);
+  EXPECT_FALSE(load_frame(office, std::nullopt).viewpoint);
+}
+
+// PCL 1.13's PLYReader parses the camera element PCL's writer stores, then returns the default pose.
+TEST_F(FrameIoPoseFiles, PlyGivesNoViewpoint) {
+  pcl::PointCloud<pcl::PointXYZ> cloud(2, 2);
+  for (auto& p : cloud) p = pcl::PointXYZ(0.1f, 0.2f, 1.5f);
+  cloud.sensor_origin_ = Eigen::Vector4f(1, 2, 3, 0);
+  cloud.sensor_orientation_ = Eigen::Quaternionf(Eigen::AngleAxisf(0.5f, Eigen::Vector3f(0, 1, 0)));
+  ASSERT_EQ(pcl::io::savePLYFileBinary(file("posed.ply"), cloud), 0);
+  EXPECT_NE(read_bytes(file("posed.ply")).find("property float view_px"), std::string::npos);
+  const LoadedFrame f = load_frame(file("posed.ply"), std::nullopt);
+  EXPECT_FALSE(f.viewpoint);
+  EXPECT_EQ(f.cloud.height, 2u);
+}
+
+const char* const kPose150 =
+    "9.9935108e-001 -2.3533077e-002 2.7267455e-002 -1.4496277e-001\n"
+    "2.4040399e-002 9.9958366e-001 -1.8420193e-002 -9.5221795e-002\n"
+    "-2.6821103e-002 1.9065253e-002 9.9945843e-001 1.2370843e-001\n"
+    "0.0000000e+000 0.0000000e+000 0.0000000e+000 1.0000000e+000\n";
+
+TEST_F(FrameIoPoseFiles, SevenScenesFolderGivesEachFrameItsPose) {
+  write_bytes(file("camera-intrinsics.txt"), "585 0 320\n0 585 240\n0 0 1\n");
+  for (const char* frame : {"frame-000150", "frame-000151", "frame-000152"}) write_bytes(file(std::string(frame) + ".depth.png"), "");
+  write_bytes(file("frame-000150.pose.txt"), kPose150);
+  write_bytes(file("frame-000152.pose.txt"), "1 0 0 0.25\n0 1 0 0\n0 0 1 0\n0 0 0 1\n");
+  const std::vector<FrameSource> sources = expand_input(folder_.string());
+  ASSERT_EQ(sources.size(), 3u);
+  ASSERT_TRUE(sources[0].pose);
+  EXPECT_EQ(sources[0].pose_source, "frame-000150.pose.txt");
+  EXPECT_NEAR(sources[0].pose->translation().x(), -0.14496277, 1e-7);
+  EXPECT_FALSE(sources[1].pose) << "no pose file beside frame 151";
+  EXPECT_EQ(sources[1].pose_source, "");
+  ASSERT_TRUE(sources[2].pose);
+  EXPECT_TRUE(sources[2].pose->translation().isApprox(Eigen::Vector3d(0.25, 0, 0)));
+  for (const FrameSource& s : sources) EXPECT_TRUE(s.intrinsics) << s.path;
+  // A single frame of the layout finds its pose too; a malformed one is refused naming the pose file.
+  const std::vector<FrameSource> one = expand_input(file("frame-000150.depth.png"));
+  ASSERT_EQ(one.size(), 1u);
+  EXPECT_EQ(one[0].pose_source, "frame-000150.pose.txt");
+  write_bytes(file("frame-000151.pose.txt"), "1 0 0\n");
+  EXPECT_NE(message_of([&] { expand_input(folder_.string()); }).find("frame-000151.pose.txt"), std::string::npos);
+}
+
+TEST(FrameIoPoseReal, SevenScenesFramesComeWithTheirPoses) {
+  OCC_REQUIRE_DATA(folder, "sequences/7scenes_redkitchen/frames");
+  const std::vector<FrameSource> sources = expand_input(folder);
+  ASSERT_EQ(sources.size(), 50u);
+  for (const FrameSource& s : sources) {
+    ASSERT_TRUE(s.pose) << s.path;
+    EXPECT_EQ(s.pose_source, fs::path(pose_file_for(s.path)).filename().string());
+  }
+  // The camera moves about 0.25 m over the 50 frames (data README).
+  const double travel = (sources.back().pose->translation() - sources.front().pose->translation()).norm();
+  EXPECT_GT(travel, 0.1);
+  EXPECT_LT(travel, 0.5);
+}
+
+TEST(FrameIo, PoseFileForSevenScenesNamesOnly) {
+  EXPECT_EQ(pose_file_for("/d/frame-000150.depth.png"), "/d/frame-000150.pose.txt");
+  EXPECT_EQ(pose_file_for("/d/frame_1_depth.tiff"), "");
+  EXPECT_EQ(pose_file_for("/d/1_depth.png"), "");
+}
+
 TEST(FrameIo, DepthImagePathsByExtension) {
   for (const char* p : {"a.png", "b.PGM", "c_depth.tiff", "d.TIF", "dir.x/e.Tiff"}) EXPECT_TRUE(is_depth_image_path(p)) << p;
   for (const char* p : {"a.pcd", "b.ply", "tiff", "c.tiff.txt", "dir.png/readme"}) EXPECT_FALSE(is_depth_image_path(p)) << p;

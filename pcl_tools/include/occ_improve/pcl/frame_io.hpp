@@ -8,6 +8,8 @@
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
+#include <Eigen/Geometry>
+
 #include <optional>
 #include <string>
 #include <vector>
@@ -57,9 +59,20 @@ struct LoadedFrame {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
   std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
-  /// Registered RGB: of an organized PCD or PLY with rgb/rgba (PLY: red green blue), or of a `*_depth.tiff` from the `*_rgb.tiff`
-  /// beside it when that has the same size (PCL grabbers' layout).
+  /// Registered RGB: of an organized PCD or PLY with rgb/rgba (PLY: red green blue), or of a
+  /// `*_depth.tiff` from the `*_rgb.tiff` beside it when that has the same size (PCL grabbers' layout).
   std::optional<Image> colour;
+  /// The sensor pose a PCD's VIEWPOINT records, camera-to-world (x_world = viewpoint * x_camera), never
+  /// applied to `cloud`. Always nullopt for PLY and depth images: PCL 1.13's PLYReader parses a PLY's
+  /// camera element but returns the default pose (its read() overwrites what the element gave). For a PCD,
+  /// nullopt when it records
+  ///  - the identity (`VIEWPOINT 0 0 0 1 0 0 0`, PCL's default), or
+  ///  - `VIEWPOINT 0 0 0 0 1 0 0` (qw 0, qx 1: 180 degrees about x) at the origin, which old PCL grabbers
+  ///    wrote while storing the points already in the optical frame (x right, y down, z forward), so
+  ///    applying it would turn such clouds upside down (see shared/data/README.md).
+  /// Otherwise the origin and the normalised orientation as an isometry. A non-finite origin or an
+  /// orientation that is not a unit quaternion (|q| off 1 by more than 1e-3) is a FormatError.
+  std::optional<Eigen::Isometry3d> viewpoint;
 };
 
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.
@@ -76,24 +89,37 @@ LoadedFrame load_ply_frame(const std::string& path);
 LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics,
                              std::optional<DepthEncoding> encoding = std::nullopt);
 
-/// By extension (any case): .pcd -> PCD; .ply -> PLY; .png/.pgm/.tif/.tiff -> depth image (intrinsics required, else
-/// InvalidInput).
+/// By extension (any case): .pcd -> PCD; .ply -> PLY; .png/.pgm/.tif/.tiff -> depth image (intrinsics
+/// required, else InvalidInput).
 LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
                        std::optional<DepthEncoding> encoding = std::nullopt);
 
-/// One frame named by a command-line input, with the intrinsics found beside it (if any).
+/// One frame named by a command-line input, with the intrinsics and pose found beside it (if any).
 struct FrameSource {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< from a camera-intrinsics.txt of the dataset layout
+  /// Camera-to-world of the frame, from the 7-Scenes / 3DMatch `frame-NNNNNN.pose.txt` beside a
+  /// `frame-NNNNNN.depth.png` (pose_file_for); nullopt without one. Not applied by expand_input.
+  std::optional<Eigen::Isometry3d> pose{};
+  std::string pose_source{};  ///< the pose file's name, e.g. "frame-000150.pose.txt"; "" without a pose
 };
 
-/// A command-line input as frames. A file is itself; a depth image also picks up a
-/// camera-intrinsics.txt beside it or one folder up (the 3DMatch / SUN3D / 7-Scenes layout). A folder
-/// is its *.depth.png frames and its *_depth.tif(f) frames (PCL ImageGrabber layout; seq-*/ subfolders
-/// included), sorted by path, with its camera-intrinsics.txt (the TIFF layout has none: its calibration
-/// is in the PCLZF folder's XML, so those frames need intrinsics from the user). Throws IoError when the input does not exist, InvalidInput for a folder with
-/// no depth frames.
+/// A command-line input as frames. A file is itself; a depth image also picks up a camera-intrinsics.txt
+/// beside it or one folder up (the 3DMatch / SUN3D / 7-Scenes layout), and its pose file
+/// (FrameSource::pose). A folder is its *.depth.png frames and its *_depth.tif(f) frames (PCL ImageGrabber
+/// layout; seq-*/ subfolders included), sorted by path, with its camera-intrinsics.txt (the TIFF layout
+/// has none: its calibration is in the PCLZF folder's XML, so those frames need intrinsics from the user).
+/// Throws IoError when the input does not exist, InvalidInput for a folder with no depth frames,
+/// FormatError for a malformed pose file.
 std::vector<FrameSource> expand_input(const std::string& input);
+
+/// The pose file of a 7-Scenes / 3DMatch depth frame: `<dir>/frame-NNNNNN.depth.png` ->
+/// `<dir>/frame-NNNNNN.pose.txt` (whether it exists or not); "" for a name not of that layout.
+std::string pose_file_for(const std::string& depth_path);
+
+/// Reads a 4x4 camera-to-world matrix (7-Scenes .pose.txt); the rotation is projected onto the nearest
+/// rotation matrix. Throws IoError, FormatError (not 4x4, last row not 0 0 0 1, not a rotation).
+Eigen::Isometry3d read_pose_matrix_file(const std::string& path);
 
 /// Intrinsics from a text file: either "fx fy cx cy [width height]" or a 3x3 matrix (7-Scenes/3DMatch
 /// camera-intrinsics.txt); width/height default to 640 x 480.

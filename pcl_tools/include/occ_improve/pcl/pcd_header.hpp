@@ -5,6 +5,8 @@
 // here, products in 64 bits, declared data sizes against the file's size and a memory cap.
 #include <pcl/PCLPointCloud2.h>
 
+#include <Eigen/Geometry>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -47,5 +49,8 @@ void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path,
 
 /// validate_pcd_file(), then PCL's reader. Throws as validate_pcd_file, and FormatError when PCL refuses.
 void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob);
+/// The same, also returning the VIEWPOINT line as PCL parsed it (zero and identity without one).
+void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
+                   Eigen::Quaternionf& orientation);
 
 }  // namespace occ_improve

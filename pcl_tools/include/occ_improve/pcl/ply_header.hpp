@@ -9,7 +9,6 @@
 
 #include <pcl/PCLPointCloud2.h>
 
-#include <Eigen/Geometry>
 #include <cstdint>
 #include <string>
 
@@ -32,9 +31,7 @@ struct PlyHeader {
 PlyHeader validate_ply_file(const std::string& path);
 
 /// validate_ply_file(), then PCL's reader, then the cloud PCL built (width x height x point step = data
-/// size, fields inside the point). `origin` / `orientation` are the camera element's sensor pose (PCL's
-/// defaults, zero and identity, without one). Throws as validate_ply_file, FormatError when PCL refuses.
-void read_ply_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
-                   Eigen::Quaternionf& orientation);
+/// size, fields inside the point). Throws as validate_ply_file, FormatError when PCL refuses.
+void read_ply_file(const std::string& path, pcl::PCLPointCloud2& blob);
 
 }  // namespace occ_improve
