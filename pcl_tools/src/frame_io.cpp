@@ -256,6 +256,8 @@ LoadedFrame frame_of_blob(const pcl::PCLPointCloud2& blob, const std::string& pa
   for (const auto& f : blob.fields) has_colour |= f.name == "rgb" || f.name == "rgba";
   LoadedFrame frame;
   frame.path = path;
+  // PCL's conversion takes &cloud[0] of the cloud it fills, undefined for one of no points (UBSan).
+  if (std::uint64_t{blob.width} * blob.height == 0) return frame;
   pcl::fromPCLPointCloud2(blob, frame.cloud);
   if (has_colour && blob.height > 1) frame.colour = colour_image(blob);
   return frame;

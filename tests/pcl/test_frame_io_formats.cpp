@@ -267,6 +267,17 @@ std::string ply(const std::string& format, const std::string& lines, const std::
 }
 const char* const kXyz = "property float x\nproperty float y\nproperty float z\n";
 
+// Found by the ply fuzzer: PCL's conversion of a cloud of no points was undefined behaviour (PCD alike).
+TEST_F(FrameIoPlyFiles, CloudsOfNoPointsLoadEmpty) {
+  write_bytes(file("none.ply"), ply("ascii", std::string("element vertex 0\n") + kXyz, ""));
+  EXPECT_TRUE(load_frame(file("none.ply"), std::nullopt).cloud.empty());
+  write_bytes(file("none.pcd"), "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\nWIDTH 0\n"
+                                "HEIGHT 2\nPOINTS 0\nDATA ascii\n");
+  const LoadedFrame f = load_frame(file("none.pcd"), std::nullopt);
+  EXPECT_TRUE(f.cloud.empty());
+  EXPECT_FALSE(f.colour);
+}
+
 TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
   const std::string ok = ply("ascii", std::string("element vertex 2\n") + kXyz, "1 2 3\n4 5 6\n");
   write_bytes(file("ok.ply"), ok);

@@ -60,7 +60,8 @@ struct LoadedFrame {
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
   std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
   /// Registered RGB: of an organized PCD or PLY with rgb/rgba (PLY: red green blue), or of a
-  /// `*_depth.tiff` from the `*_rgb.tiff` beside it when that has the same size (PCL grabbers' layout).
+  /// `*_depth.tiff` from the `*_rgb.tiff` beside it when that has the same size (PCL grabbers' layout;
+  /// a corrupt `*_rgb.tiff` is a FormatError naming it).
   std::optional<Image> colour;
   /// The sensor pose a PCD's VIEWPOINT records, camera-to-world (x_world = viewpoint * x_camera), never
   /// applied to `cloud`. Always nullopt for PLY and depth images: PCL 1.13's PLYReader parses a PLY's
