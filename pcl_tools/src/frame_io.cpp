@@ -227,10 +227,6 @@ Image colour_image(const pcl::PCLPointCloud2& blob) {
   return image;
 }
 
-}  // namespace
-
-namespace {
-
 // The file's sensor pose as LoadedFrame::viewpoint documents it.
 std::optional<Eigen::Isometry3d> viewpoint_of(const Eigen::Vector4f& origin, const Eigen::Quaternionf& orientation,
                                               const std::string& path) {
