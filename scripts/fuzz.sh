@@ -6,7 +6,7 @@
 # exits 1 when anything was found.
 set -uo pipefail
 : "${BUILD_DIR:=build}" "${FUZZ_BUILD_DIR:=build-fuzz}" "${FUZZ_SECONDS:=60}" "${JOBS:=2}"
-targets=(pcd depth_png depth_pgm map intrinsics pose)
+targets=(pcd ply depth_png depth_pgm depth_tiff map intrinsics pose)
 
 have_libfuzzer() {
   command -v clang++ >/dev/null 2>&1 || return 1

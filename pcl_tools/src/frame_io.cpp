@@ -4,14 +4,20 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
+#include "occ_improve/pcl/ply_header.hpp"
+#include "occ_improve/pcl/tiff_image.hpp"
+#include "image_size.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
 #include <png.h>
 
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -19,6 +25,18 @@
 #include <vector>
 
 namespace occ_improve {
+
+void detail::require_image_size(const std::string& kind, const std::string& path, std::uint64_t width,
+                                std::uint64_t height, std::uint64_t file_can_hold) {
+  const std::uint64_t pixels = width * height;  // both < 2^32: no overflow
+  std::string problem;
+  if (pixels == 0) problem = "is empty";
+  else if (pixels > kMaxDepthImagePixels) problem = "exceeds the cap of " + std::to_string(kMaxDepthImagePixels) + " pixels";
+  else if (pixels > file_can_hold) problem = "is more than the file can hold (" + std::to_string(file_can_hold) + " pixels)";
+  if (!problem.empty())
+    throw FormatError(kind + " '" + path + "': width x height = " + std::to_string(width) + " x " +
+                      std::to_string(height) + " " + problem);
+}
 
 namespace {
 
@@ -36,19 +54,6 @@ void png_error_to_string(png_structp png, png_const_charp message) {
   png_longjmp(png, 1);
 }
 void png_ignore_warning(png_structp, png_const_charp) {}
-
-// A depth image's size is checked before any pixel buffer exists: against a pixel cap, and against what
-// the file's bytes can hold (a 23-byte header must not make us allocate 20 GB).
-void require_image_size(const std::string& path, std::uint64_t width, std::uint64_t height, std::uint64_t file_can_hold) {
-  const std::uint64_t pixels = width * height;  // both < 2^32: no overflow
-  std::string problem;
-  if (pixels == 0) problem = "is empty";
-  else if (pixels > kMaxDepthImagePixels) problem = "exceeds the cap of " + std::to_string(kMaxDepthImagePixels) + " pixels";
-  else if (pixels > file_can_hold) problem = "is more than the file can hold (" + std::to_string(file_can_hold) + " pixels)";
-  if (!problem.empty())
-    throw FormatError("depth image '" + path + "': width x height = " + std::to_string(width) + " x " +
-                      std::to_string(height) + " " + problem);
-}
 
 // Frees libpng's read and info structs on every way out, exceptions included.
 struct PngReader {
@@ -86,7 +91,7 @@ DepthImage16 read_png16(const std::string& path) {
     throw FormatError(m.str());
   }
   // Deflate expands at most ~1032-fold: a file cannot hold more 2-byte pixels than that.
-  require_image_size(path, png_get_image_width(png, info), png_get_image_height(png, info),
+  detail::require_image_size("depth image", path, png_get_image_width(png, info), png_get_image_height(png, info),
                      ec ? kMaxDepthImagePixels : file_size * 1032 / 2);
   png_set_swap(png);  // PNG is big-endian; we read host-order uint16
   image.width = static_cast<int>(png_get_image_width(png, info));
@@ -114,7 +119,7 @@ DepthImage16 read_pgm16(const std::string& path) {
   in.seekg(0, std::ios::end);
   const std::uint64_t pixel_bytes = static_cast<std::uint64_t>(in.tellg() - header);
   in.seekg(header);
-  require_image_size(path, static_cast<std::uint64_t>(width), static_cast<std::uint64_t>(height), pixel_bytes / 2);
+  detail::require_image_size("depth image", path, static_cast<std::uint64_t>(width), static_cast<std::uint64_t>(height), pixel_bytes / 2);
   DepthImage16 image{width, height, {}};
   image.values.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   std::vector<unsigned char> raw(image.values.size() * 2);
@@ -179,10 +184,35 @@ DepthImage16 read_depth_image16(const std::string& path) {
   const std::string ext = extension_of(path);
   if (ext == "png") return read_png16(path);
   if (ext == "pgm") return read_pgm16(path);
-  throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png or .pgm)");
+  if (ext == "tif" || ext == "tiff") return read_tiff_depth16(path);
+  throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png, .pgm, .tif or .tiff)");
+}
+
+bool is_depth_image_path(const std::string& path) {
+  const std::string ext = extension_of(path);
+  return ext == "png" || ext == "pgm" || ext == "tif" || ext == "tiff";
 }
 
 namespace {
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// PCL's grabbers write `<stem>_depth.tiff` and the registered colour as `<stem>_rgb.tiff` beside it.
+std::optional<Image> grabber_colour_beside(const std::string& depth_path, int width, int height) {
+  for (const char* ext : {".tiff", ".tif"}) {
+    const std::string depth_suffix = std::string("_depth") + ext;
+    if (!ends_with(depth_path, depth_suffix)) continue;
+    const std::string rgb = depth_path.substr(0, depth_path.size() - depth_suffix.size()) + "_rgb" + ext;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(rgb, ec)) return std::nullopt;
+    Image colour = read_tiff_rgb8(rgb);
+    if (colour.width != width || colour.height != height) return std::nullopt;  // not registered to this depth
+    return colour;
+  }
+  return std::nullopt;
+}
 
 // The registered colour of an organized cloud's points (PCL packs rgb and rgba alike), row-major RGB.
 Image colour_image(const pcl::PCLPointCloud2& blob) {
@@ -197,19 +227,54 @@ Image colour_image(const pcl::PCLPointCloud2& blob) {
   return image;
 }
 
-}  // namespace
+// The file's sensor pose as LoadedFrame::viewpoint documents it.
+std::optional<Eigen::Isometry3d> viewpoint_of(const Eigen::Vector4f& origin, const Eigen::Quaternionf& orientation,
+                                              const std::string& path) {
+  const Eigen::Quaterniond q = orientation.cast<double>();
+  if (!origin.head<3>().allFinite() || !q.coeffs().allFinite() || std::abs(q.norm() - 1) > 1e-3)
+    throw FormatError("'" + path + "': its viewpoint (sensor origin and orientation) is not a position and a unit quaternion");
+  const Eigen::Quaterniond unit = q.normalized();
+  constexpr double kExact = 1e-6;  // the files write these as plain 0s and 1s
+  const bool at_origin = origin.head<3>().cast<double>().norm() < kExact;
+  const bool identity = std::abs(std::abs(unit.w()) - 1) < kExact;
+  const bool legacy_grabber = std::abs(std::abs(unit.x()) - 1) < kExact;  // qw 0, qx 1: see frame_io.hpp
+  if (at_origin && (identity || legacy_grabber)) return std::nullopt;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = unit.toRotationMatrix();
+  pose.translation() = origin.head<3>().cast<double>();
+  return pose;
+}
 
-LoadedFrame load_pcd_frame(const std::string& path) {
-  pcl::PCLPointCloud2 blob;
-  read_pcd_file(path, blob);
+// A cloud PCL read (PCD or PLY) as a frame: x y z required as float, colour kept where it is organized.
+LoadedFrame frame_of_blob(const pcl::PCLPointCloud2& blob, const std::string& path) {
   for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
   bool has_colour = false;
   for (const auto& f : blob.fields) has_colour |= f.name == "rgb" || f.name == "rgba";
   LoadedFrame frame;
   frame.path = path;
+  // PCL's conversion takes &cloud[0] of the cloud it fills, undefined for one of no points (UBSan).
+  if (std::uint64_t{blob.width} * blob.height == 0) return frame;
   pcl::fromPCLPointCloud2(blob, frame.cloud);
   if (has_colour && blob.height > 1) frame.colour = colour_image(blob);
   return frame;
+}
+
+}  // namespace
+
+LoadedFrame load_pcd_frame(const std::string& path) {
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  read_pcd_file(path, blob, origin, orientation);
+  LoadedFrame frame = frame_of_blob(blob, path);
+  frame.viewpoint = viewpoint_of(origin, orientation, path);
+  return frame;
+}
+
+LoadedFrame load_ply_frame(const std::string& path) {
+  pcl::PCLPointCloud2 blob;
+  read_ply_file(path, blob);
+  return frame_of_blob(blob, path);
 }
 
 DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image) {
@@ -265,6 +330,7 @@ LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& k
   frame.intrinsics = k;
   frame.encoding = encoding;
   frame.cloud = organized_cloud(points, k.width, k.height);
+  frame.colour = grabber_colour_beside(path, k.width, k.height);
   return frame;
 }
 
@@ -272,11 +338,40 @@ LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntri
                        std::optional<DepthEncoding> encoding) {
   const std::string ext = extension_of(path);
   if (ext == "pcd") return load_pcd_frame(path);
-  if (ext == "png" || ext == "pgm") {
+  if (ext == "ply") return load_ply_frame(path);
+  if (is_depth_image_path(path)) {
     if (!intrinsics) throw InvalidInput("depth image '" + path + "' needs camera intrinsics");
     return load_depth_frame(path, *intrinsics, encoding);
   }
-  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .png or .pgm)");
+  throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .ply, .png, .pgm, .tif or .tiff)");
+}
+
+Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError("cannot open pose file '" + path + "'");
+  Eigen::Matrix4d m;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c)
+      if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
+  if (!(in >> std::ws).eof()) throw FormatError("pose file '" + path + "' holds more than a 4x4 matrix");
+  if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
+    throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
+  // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
+  // inverse() transposes it, so project it onto the nearest rotation (SVD) to keep T^-1 T = I.
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
+  if (rotation.determinant() < 0 || (rotation - m.topLeftCorner<3, 3>()).norm() > 1e-3)
+    throw FormatError("pose file '" + path + "' does not hold a rotation (not orthonormal)");
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = rotation;
+  pose.translation() = m.topRightCorner<3, 1>();
+  return pose;
+}
+
+std::string pose_file_for(const std::string& depth_path) {
+  const std::string suffix = ".depth.png";
+  if (!ends_with(depth_path, suffix)) return {};
+  return depth_path.substr(0, depth_path.size() - suffix.size()) + ".pose.txt";
 }
 
 PinholeIntrinsics read_intrinsics_file(const std::string& path) {
@@ -318,10 +413,24 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
 
 namespace {
 
+// 7-Scenes / 3DMatch `*.depth.png`, PCL ImageGrabber `*_depth.tif(f)`.
 bool is_depth_frame_name(const std::filesystem::path& p) {
   const std::string name = p.filename().string();
-  const std::string suffix = ".depth.png";
-  return name.size() > suffix.size() && name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  for (const char* suffix : {".depth.png", "_depth.tiff", "_depth.tif"})
+    if (name.size() > std::strlen(suffix) && ends_with(name, suffix)) return true;
+  return false;
+}
+
+// A frame with the intrinsics found for it and the pose file beside it.
+FrameSource source_of(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics) {
+  FrameSource source{path, intrinsics};
+  const std::string pose_path = pose_file_for(path);
+  std::error_code ec;
+  if (!pose_path.empty() && std::filesystem::is_regular_file(pose_path, ec)) {
+    source.pose = read_pose_matrix_file(pose_path);
+    source.pose_source = std::filesystem::path(pose_path).filename().string();
+  }
+  return source;
 }
 
 std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder) {
@@ -340,10 +449,8 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   const fs::path p(input);
   if (!fs::exists(p, ec)) throw IoError("input '" + input + "' does not exist");
   if (!fs::is_directory(p, ec)) {
-    const std::string ext = extension_of(input);
-    const bool depth_image = ext == "png" || ext == "pgm";
     const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
-    return {FrameSource{input, depth_image ? intrinsics_beside(folder) : std::nullopt}};
+    return {source_of(input, is_depth_image_path(input) ? intrinsics_beside(folder) : std::nullopt)};
   }
   std::vector<std::string> frames;
   for (fs::recursive_directory_iterator it(p, ec), end; it != end && !ec; it.increment(ec)) {
@@ -351,11 +458,11 @@ std::vector<FrameSource> expand_input(const std::string& input) {
     if (it->is_regular_file(ec) && is_depth_frame_name(it->path())) frames.push_back(it->path().string());
   }
   if (ec) throw IoError("cannot list folder '" + input + "': " + ec.message());
-  if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png frames");
+  if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames");
   std::sort(frames.begin(), frames.end());
   const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p);
   std::vector<FrameSource> sources;
-  for (const auto& f : frames) sources.push_back({f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path())});
+  for (const auto& f : frames) sources.push_back(source_of(f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path())));
   return sources;
 }
 

@@ -231,16 +231,25 @@ void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path,
                        std::uint8_t datatype) {
   const auto f = std::find_if(blob.fields.begin(), blob.fields.end(),
                               [&](const pcl::PCLPointField& field) { return field.name == name; });
-  if (f == blob.fields.end()) fail(path, "has no '" + name + "' field");
+  // Not fail(): the blob may come from a PLY file as well.
+  if (f == blob.fields.end()) throw FormatError("'" + path + "' has no '" + name + "' field");
   if (f->datatype != datatype || f->count != 1)
-    fail(path, "field '" + name + "' has PCL type " + std::to_string(f->datatype) + " x " + std::to_string(f->count) +
-                   ", expected one value of type " + std::to_string(datatype));
+    throw FormatError("'" + path + "': field '" + name + "' has PCL type " + std::to_string(f->datatype) + " x " +
+                      std::to_string(f->count) + ", expected one value of type " + std::to_string(datatype));
 }
 
 void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob) {
+  Eigen::Vector4f origin;
+  Eigen::Quaternionf orientation;
+  read_pcd_file(path, blob, origin, orientation);
+}
+
+void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
+                   Eigen::Quaternionf& orientation) {
   validate_pcd_file(path);
   pcl::PCDReader reader;
-  if (reader.read(path, blob) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
+  int version = 0;
+  if (reader.read(path, blob, origin, orientation, version) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
 }
 
 }  // namespace occ_improve

@@ -5,8 +5,6 @@
 #include <pcl/common/transforms.h>
 #include <pcl/io/openni2_grabber.h>
 
-#include <Eigen/SVD>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -138,28 +136,6 @@ FileSequenceGrabber::Cloud::Ptr PcdSequenceGrabber::loadFrame(std::size_t index)
 // ---------------------------------------------------------------------------------------------------
 // Depth sequences
 
-Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw IoError("cannot open pose file '" + path + "'");
-  Eigen::Matrix4d m;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c)
-      if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
-  if (!(in >> std::ws).eof()) throw FormatError("pose file '" + path + "' holds more than a 4x4 matrix");
-  if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
-    throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
-  // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
-  // inverse() transposes it, so project it onto the nearest rotation (SVD) to keep T^-1 T = I.
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
-  if (rotation.determinant() < 0 || (rotation - m.topLeftCorner<3, 3>()).norm() > 1e-3)
-    throw FormatError("pose file '" + path + "' does not hold a rotation (not orthonormal)");
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = rotation;
-  pose.translation() = m.topRightCorner<3, 1>();
-  return pose;
-}
-
 namespace {
 
 bool ends_with(const std::string& s, const std::string& suffix) {
@@ -241,7 +217,7 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
     seven_scenes = true;
     DepthSequenceFrame frame;
     frame.depth_path = path;
-    const std::string pose_path = path.substr(0, path.size() - std::string(".depth.png").size()) + ".pose.txt";
+    const std::string pose_path = pose_file_for(path);
     if (fs::exists(pose_path)) frame.camera_to_world = read_pose_matrix_file(pose_path);
     sequence.frames.push_back(std::move(frame));
   }

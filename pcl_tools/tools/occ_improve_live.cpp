@@ -188,7 +188,7 @@ int run(const CommandLine& command_line) {
     camera_text = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
     DepthSequenceOptions sequence_options;
     sequence_options.fps = static_cast<float>(fps);
-    sequence_options.use_poses = !command_line.has("-no_poses");
+    sequence_options.use_poses = options.use_poses;
     sequence_options.encoding = options.depth_encoding;
     auto source = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
     source_text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
@@ -213,7 +213,8 @@ int run(const CommandLine& command_line) {
     const std::string files_text = frames.size() == 1 ? frames.front().path
                                                       : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
     auto source = std::make_shared<ToolFrameGrabber>(options, first, std::move(frames), static_cast<float>(fps));
-    source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames)";
+    source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames, " +
+                  (first.pose && options.use_poses ? "poses applied: map in the first frame's view" : "no poses") + ")";
     file_source = source.get();
     grabber = source;
   }

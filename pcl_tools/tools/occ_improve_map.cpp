@@ -110,6 +110,7 @@ int run(const CommandLine& command_line) {
               options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
   std::printf("%s\n", fused.frames ? fused.camera.c_str() : "no frame (the loaded map only)");
   for (const std::string& line : fused.frame_lines) std::printf("%s\n", line.c_str());
+  if (fused.frames > 0) std::printf("%s\n", fused.poses.c_str());
   std::printf("%s\n", describe_points(in).c_str());
   std::printf("time [s]: read %.3f, insert+surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
               frames.read_seconds(), in.seconds, improvement_seconds, ranking_seconds,

@@ -29,7 +29,8 @@ const ToolFlags kFlags{
     "Writes the occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of view and\n"
     "depth range takes the log-odds of the grid voxel holding its centre; unknown voxels stay unknown.\n"
     ".bt = maximum likelihood, .ot = full log-odds (both with OctoMap's own writers). The tree is in a\n"
-    "world frame: the first frame's pose when the inputs have poses, else -pose, else -frame.\n"
+    "world frame: -pose, else the first frame's pose when the inputs have poses (a 7-Scenes folder),\n"
+    "else -frame.\n"
     "Neither format stores the clamping thresholds (the tree in memory has the grid's; a reader of the\n"
     "file gets OctoMap's defaults) nor the sensor model; keep the .occmap (-save) for those.\n"
     "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
@@ -70,6 +71,7 @@ struct Source {
   SensorModelParams model;
   std::string description;
   InsertionReport insertion;
+  std::optional<Eigen::Isometry3d> world_from_grid;  ///< the first frame's pose, when the frames have poses
 };
 
 Source build_from_frames(const ToolOptions& options, bool use_sample, ProgressLine& progress) {
@@ -87,8 +89,9 @@ Source build_from_frames(const ToolOptions& options, bool use_sample, ProgressLi
       },
       [&](const ToolFrame& frame) { return insert_points(*source.grid, *model, span_of(frame.cloud)); });
   source.insertion = fused.insertion;
+  source.world_from_grid = fused.first_pose;
   source.description = (use_sample ? std::string("built-in sample frame") : std::to_string(fused.frames) + " frame(s)") +
-                       ", preset " + preset.name + ", " + fused.camera;
+                       ", preset " + preset.name + ", " + fused.camera + ", " + fused.poses;
   return source;
 }
 
@@ -137,6 +140,7 @@ int run(const CommandLine& command_line) {
   }
   ProgressLine progress(command_line, "frame");
   if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample, progress));
+  if (pose_texts.empty() && grids.front().world_from_grid) poses.front() = *grids.front().world_from_grid;
   const double read_seconds = seconds_since(start);
 
   double save_seconds = 0;

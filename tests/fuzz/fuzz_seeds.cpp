@@ -5,8 +5,10 @@
 #include "occ_improve/presets.hpp"
 
 #include <pcl/io/pcd_io.h>
+#include <pcl/io/ply_io.h>
 #include <pcl/io/png_io.h>
 #include <pcl/point_types.h>
+#include <tiffio.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -34,6 +36,49 @@ void pcd_seeds(const fs::path& dir) {
   writer.writeBinaryCompressed((dir / "compressed.pcd").string(), cloud);
   pcl::PointCloud<pcl::PointXYZ> xyz(3, 1);
   writer.writeBinaryCompressed((dir / "xyz_compressed.pcd").string(), xyz);
+}
+
+void ply_seeds(const fs::path& dir) {
+  pcl::PointCloud<pcl::PointXYZRGB> cloud(4, 3);
+  for (std::size_t i = 0; i < cloud.size(); ++i) {
+    cloud[i].x = 0.1f * static_cast<float>(i % 4);
+    cloud[i].y = 0.1f * static_cast<float>(i / 4);
+    cloud[i].z = 1.5f;
+    cloud[i].r = static_cast<std::uint8_t>(20 * i);
+  }
+  pcl::io::savePLYFileBinary((dir / "organized_binary.ply").string(), cloud);
+  pcl::io::savePLYFileASCII((dir / "organized_ascii.ply").string(), cloud);
+  text(dir / "xyz_ascii.ply",
+       "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 1\n0.5 0 2\n2 0 1\n");
+}
+
+// An 8 x 6 TIFF of `samples` x `bits` per pixel in strips of 2 rows.
+void tiff(const fs::path& path, std::uint16_t bits, std::uint16_t samples, std::uint16_t compression) {
+  const std::uint32_t width = 8, height = 6;
+  TIFF* out = TIFFOpen(path.c_str(), "w");
+  if (!out) return;
+  TIFFSetField(out, TIFFTAG_IMAGEWIDTH, width);
+  TIFFSetField(out, TIFFTAG_IMAGELENGTH, height);
+  TIFFSetField(out, TIFFTAG_BITSPERSAMPLE, bits);
+  TIFFSetField(out, TIFFTAG_SAMPLESPERPIXEL, samples);
+  TIFFSetField(out, TIFFTAG_PHOTOMETRIC, samples == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
+  TIFFSetField(out, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+  TIFFSetField(out, TIFFTAG_ROWSPERSTRIP, 2u);
+  TIFFSetField(out, TIFFTAG_COMPRESSION, compression);
+  std::vector<std::uint8_t> row(width * samples * bits / 8);
+  for (std::uint32_t r = 0; r < height; ++r) {
+    for (std::size_t i = 0; i < row.size(); ++i) row[i] = static_cast<std::uint8_t>(37 * (r + i));
+    TIFFWriteScanline(out, row.data(), r, 0);
+  }
+  TIFFClose(out);
+}
+
+void tiff_seeds(const fs::path& dir) {
+  tiff(dir / "depth16.tiff", 16, 1, COMPRESSION_NONE);
+  tiff(dir / "depth16_lzw.tiff", 16, 1, COMPRESSION_LZW);
+  tiff(dir / "depth16_deflate.tiff", 16, 1, COMPRESSION_ADOBE_DEFLATE);
+  tiff(dir / "rgb8_packbits.tiff", 8, 3, COMPRESSION_PACKBITS);
 }
 
 void depth_seeds(const fs::path& png_dir, const fs::path& pgm_dir) {
@@ -65,8 +110,11 @@ int main(int argc, char** argv) {
     return 1;
   }
   const fs::path root = argv[1];
-  for (const char* t : {"pcd", "depth_png", "depth_pgm", "map", "intrinsics", "pose"}) fs::create_directories(root / t);
+  for (const char* t : {"pcd", "ply", "depth_png", "depth_pgm", "depth_tiff", "map", "intrinsics", "pose"})
+    fs::create_directories(root / t);
   pcd_seeds(root / "pcd");
+  ply_seeds(root / "ply");
+  tiff_seeds(root / "depth_tiff");
   depth_seeds(root / "depth_png", root / "depth_pgm");
   map_seed(root / "map");
   text(root / "intrinsics" / "list.txt", "525 525 319.5 239.5 640 480\n");

@@ -6,12 +6,13 @@ ToolFrameGrabber::ToolFrameGrabber(const ToolOptions& options, const ToolFrame& 
                                    float fps)
     : FileSequenceGrabber(sources.size(), fps),
       options_(options),
-      first_{first.name, {}, first.camera, first.camera_source, std::nullopt},
+      first_{first.name, {}, first.camera, first.camera_source, std::nullopt, first.pose, first.pose_source},
       sources_(std::move(sources)) {}
 
 FileSequenceGrabber::Cloud::Ptr ToolFrameGrabber::loadFrame(std::size_t index) {
   ToolFrame frame = load_tool_frame(options_, sources_[index]);
   require_same_camera(first_, frame);
+  move_into_first_frame(options_, first_, frame);
   return Cloud::Ptr(new Cloud(std::move(frame.cloud)));
 }
 

@@ -4,6 +4,8 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/sample_scene.hpp"
 
+#include <pcl/common/transforms.h>
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -109,12 +111,6 @@ SensorPreset ToolOptions::preset_for_camera(const std::optional<PinholeIntrinsic
 
 namespace {
 
-bool is_depth_image(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext == ".png" || ext == ".pgm";
-}
-
 bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
   // Fitted cameras of one sensor agree to ~1e-4 px; a principal point half a pixel off (319.5 against 320,
   // both common) moves every pixel-native column by half its width.
@@ -130,11 +126,21 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
   ToolFrame frame;
   std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
   frame.camera_source = options.intrinsics ? options.intrinsics_flag : source.intrinsics ? "the dataset's camera-intrinsics.txt" : "";
-  if (!camera && is_depth_image(source.path))
+  if (!camera && is_depth_image_path(source.path))
     throw InvalidParameter("'" + source.path + "' is a depth image and no intrinsics were found for it: give "
                            "-intrinsics FX,FY,CX,CY[,W,H] or -intrinsics_file PATH");
   LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
   require_valid_points(span_of(loaded.cloud), source.path);
+  if (loaded.viewpoint) {
+    // PCL's VIEWPOINT: the points are in the cloud's frame, the sensor at the viewpoint; the grid is the
+    // sensor's, so the points go into the sensor frame whether or not poses are used to fuse frames.
+    pcl::transformPointCloud(loaded.cloud, loaded.cloud, loaded.viewpoint->inverse().matrix().cast<float>());
+    frame.pose = loaded.viewpoint;
+    frame.pose_source = "VIEWPOINT of " + source.path;
+  } else if (source.pose) {
+    frame.pose = source.pose;
+    frame.pose_source = source.pose_source;
+  }
   frame.name = source.path;
   if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
   if (!camera && options.preset_needs_camera()) {
@@ -191,10 +197,16 @@ std::optional<ToolFrame> ToolFrameReader::read_next() {
   ToolFrame frame = read_tool_frame(options_, sources_[next_++]);
   if (first_) {
     require_same_camera(*first_, frame);
+    move_into_first_frame(options_, *first_, frame);
   } else {
-    first_ = ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt};
+    first_ = ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt, frame.pose, frame.pose_source};
   }
   return frame;
+}
+
+std::optional<Eigen::Isometry3d> ToolFrameReader::first_pose() const {
+  if (!first_ || !options_.use_poses) return std::nullopt;
+  return first_->pose;
 }
 
 FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
@@ -222,6 +234,8 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw;
   }
   progress.finish();
+  fused.first_pose = frames.first_pose();
+  fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
   if (fused.frames > 0 && fused.insertion.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view");
   return fused;
@@ -235,6 +249,17 @@ std::string describe_points(const InsertionReport& in) {
                 in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
                 in.beyond_depth_range);
   return line;
+}
+
+void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame) {
+  if (!options.use_poses || (!first.pose && !frame.pose)) return;
+  if (!first.pose || !frame.pose)
+    throw InvalidInput("'" + (frame.pose ? first.name : frame.name) + "' has no pose while '" +
+                       (frame.pose ? frame.name : first.name) + "' has one (" +
+                       (frame.pose ? frame.pose_source : first.pose_source) +
+                       "): give every frame a pose, or -no_poses to take every frame from the first's viewpoint");
+  const Eigen::Isometry3d into_first = first.pose->inverse() * *frame.pose;
+  pcl::transformPointCloud(frame.cloud, frame.cloud, into_first.matrix().cast<float>());
 }
 
 void require_same_camera(const ToolFrame& first, const ToolFrame& frame) {
@@ -311,6 +336,7 @@ ToolOptions parse_tool_options(const CommandLine& c) {
     throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov)");
   }
   if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);
+  t.use_poses = !(c.declares("-no_poses") && c.has("-no_poses"));
   return t;
 }
 

@@ -1,12 +1,14 @@
 #pragma once
-// Reading range frames from files: PCD (organized or not, any XYZ point type) and depth images
+// Reading range frames from files: PCD and PLY (organized or not, any XYZ point type) and depth images
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
-// disparity PGM). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
+// disparity PGM, PCL grabbers' 16-bit TIFF in millimetres). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
 #include "occ_improve/presets.hpp"
 #include "occ_improve/render.hpp"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
+
+#include <Eigen/Geometry>
 
 #include <optional>
 #include <string>
@@ -26,7 +28,7 @@ DepthEncoding parse_depth_encoding(const std::string& name);
 /// The inverse: "mm", "tum", "sun", "nyu".
 const char* depth_encoding_name(DepthEncoding encoding);
 
-/// A 16-bit single-channel image (PNG 16-bit grey, or PGM P5 16-bit).
+/// A 16-bit single-channel image (PNG 16-bit grey, PGM P5 16-bit, or TIFF 16-bit unsigned).
 struct DepthImage16 {
   int width = 0, height = 0;
   std::vector<std::uint16_t> values;
@@ -34,9 +36,14 @@ struct DepthImage16 {
 /// The largest depth image read: 2^26 pixels (128 MiB of 16-bit values; a 4K depth map is 8.3 Mpx).
 inline constexpr std::uint64_t kMaxDepthImagePixels = std::uint64_t{1} << 26;
 
-/// Reads a 16-bit PNG or PGM. Its size is checked against kMaxDepthImagePixels and against what the file
-/// can hold before any pixel buffer is allocated (FormatError naming the file and its width x height).
+/// Reads a 16-bit PNG, PGM or TIFF (.tif/.tiff, see tiff_image.hpp). Its size is checked against
+/// kMaxDepthImagePixels and against what the file can hold before any pixel buffer is allocated
+/// (FormatError naming the file and its width x height); any other pixel format is a FormatError.
 DepthImage16 read_depth_image16(const std::string& path);
+
+/// True for the extensions read as depth images (.png, .pgm, .tif, .tiff, any case): these need camera
+/// intrinsics to become a cloud.
+bool is_depth_image_path(const std::string& path);
 
 /// The encoding a 16-bit depth image most likely uses, for when the user did not say:
 ///  - .pgm whose values all fit in 11 bits: kinect_disparity (NYU's raw dumps);
@@ -52,33 +59,68 @@ struct LoadedFrame {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< known for depth images
   std::optional<DepthEncoding> encoding;        ///< the encoding used, for depth images
-  std::optional<Image> colour;                  ///< registered RGB of an organized PCD with rgb/rgba
+  /// Registered RGB: of an organized PCD or PLY with rgb/rgba (PLY: red green blue), or of a
+  /// `*_depth.tiff` from the `*_rgb.tiff` beside it when that has the same size (PCL grabbers' layout;
+  /// a corrupt `*_rgb.tiff` is a FormatError naming it).
+  std::optional<Image> colour;
+  /// The sensor pose a PCD's VIEWPOINT records, camera-to-world (x_world = viewpoint * x_camera), never
+  /// applied to `cloud`. Always nullopt for PLY and depth images: PCL 1.13's PLYReader parses a PLY's
+  /// camera element but returns the default pose (its read() overwrites what the element gave). For a PCD,
+  /// nullopt when it records
+  ///  - the identity (`VIEWPOINT 0 0 0 1 0 0 0`, PCL's default), or
+  ///  - `VIEWPOINT 0 0 0 0 1 0 0` (qw 0, qx 1: 180 degrees about x) at the origin, which old PCL grabbers
+  ///    wrote while storing the points already in the optical frame (x right, y down, z forward), so
+  ///    applying it would turn such clouds upside down (see shared/data/README.md).
+  /// Otherwise the origin and the normalised orientation as an isometry. A non-finite origin or an
+  /// orientation that is not a unit quaternion (|q| off 1 by more than 1e-3) is a FormatError.
+  std::optional<Eigen::Isometry3d> viewpoint;
 };
 
 /// Any XYZ PCD. Throws IoError when unreadable, FormatError when it has no x/y/z fields.
 LoadedFrame load_pcd_frame(const std::string& path);
 
+/// Any PLY cloud PCL's PLYReader reads (ascii or binary; vertex x y z as float), organized width x height
+/// where the file carries obj_info num_cols / num_rows (PCL's writer stores them). The header is checked
+/// first (ply_header.hpp). Throws IoError when unreadable, FormatError when malformed or without x/y/z,
+/// ResourceLimit when too large.
+LoadedFrame load_ply_frame(const std::string& path);
+
 /// A depth image back-projected through `intrinsics` (its size must match the image's, else InvalidInput).
-/// Without an encoding, guess_depth_encoding() chooses it.
+/// Without an encoding, guess_depth_encoding() chooses it. A `*_depth.tif(f)` picks up its colour (above).
 LoadedFrame load_depth_frame(const std::string& path, const PinholeIntrinsics& intrinsics,
                              std::optional<DepthEncoding> encoding = std::nullopt);
 
-/// By extension: .pcd -> PCD; .png/.pgm -> depth image (intrinsics required).
+/// By extension (any case): .pcd -> PCD; .ply -> PLY; .png/.pgm/.tif/.tiff -> depth image (intrinsics
+/// required, else InvalidInput).
 LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics,
                        std::optional<DepthEncoding> encoding = std::nullopt);
 
-/// One frame named by a command-line input, with the intrinsics found beside it (if any).
+/// One frame named by a command-line input, with the intrinsics and pose found beside it (if any).
 struct FrameSource {
   std::string path;
   std::optional<PinholeIntrinsics> intrinsics;  ///< from a camera-intrinsics.txt of the dataset layout
+  /// Camera-to-world of the frame, from the 7-Scenes / 3DMatch `frame-NNNNNN.pose.txt` beside a
+  /// `frame-NNNNNN.depth.png` (pose_file_for); nullopt without one. Not applied by expand_input.
+  std::optional<Eigen::Isometry3d> pose{};
+  std::string pose_source{};  ///< the pose file's name, e.g. "frame-000150.pose.txt"; "" without a pose
 };
 
-/// A command-line input as frames. A file is itself; a depth image also picks up a
-/// camera-intrinsics.txt beside it or one folder up (the 3DMatch / SUN3D / 7-Scenes layout). A folder
-/// is its *.depth.png frames (seq-*/ subfolders included), sorted by name, with its
-/// camera-intrinsics.txt. Throws IoError when the input does not exist, InvalidInput for a folder with
-/// no depth frames.
+/// A command-line input as frames. A file is itself; a depth image also picks up a camera-intrinsics.txt
+/// beside it or one folder up (the 3DMatch / SUN3D / 7-Scenes layout), and its pose file
+/// (FrameSource::pose). A folder is its *.depth.png frames and its *_depth.tif(f) frames (PCL ImageGrabber
+/// layout; seq-*/ subfolders included), sorted by path, with its camera-intrinsics.txt (the TIFF layout
+/// has none: its calibration is in the PCLZF folder's XML, so those frames need intrinsics from the user).
+/// Throws IoError when the input does not exist, InvalidInput for a folder with no depth frames,
+/// FormatError for a malformed pose file.
 std::vector<FrameSource> expand_input(const std::string& input);
+
+/// The pose file of a 7-Scenes / 3DMatch depth frame: `<dir>/frame-NNNNNN.depth.png` ->
+/// `<dir>/frame-NNNNNN.pose.txt` (whether it exists or not); "" for a name not of that layout.
+std::string pose_file_for(const std::string& depth_path);
+
+/// Reads a 4x4 camera-to-world matrix (7-Scenes .pose.txt); the rotation is projected onto the nearest
+/// rotation matrix. Throws IoError, FormatError (not 4x4, last row not 0 0 0 1, not a rotation).
+Eigen::Isometry3d read_pose_matrix_file(const std::string& path);
 
 /// Intrinsics from a text file: either "fx fy cx cy [width height]" or a 3x3 matrix (7-Scenes/3DMatch
 /// camera-intrinsics.txt); width/height default to 640 x 480.

@@ -5,6 +5,8 @@
 // here, products in 64 bits, declared data sizes against the file's size and a memory cap.
 #include <pcl/PCLPointCloud2.h>
 
+#include <Eigen/Geometry>
+
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -41,10 +43,14 @@ PcdHeader validate_pcd_file(const std::string& path);
 
 /// Throws FormatError naming `path` unless `blob` has a field `name` of one value of PCL type `datatype`
 /// (pcl::PCLPointField::FLOAT32, ...): PCL's conversion would otherwise fill the point with zeros silently.
+/// For any blob PCL read (PCD or PLY).
 void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path, const std::string& name,
                        std::uint8_t datatype);
 
 /// validate_pcd_file(), then PCL's reader. Throws as validate_pcd_file, and FormatError when PCL refuses.
 void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob);
+/// The same, also returning the VIEWPOINT line as PCL parsed it (zero and identity without one).
+void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
+                   Eigen::Quaternionf& orientation);
 
 }  // namespace occ_improve

@@ -159,8 +159,4 @@ private:
 /// file or URI for any other failure. The grabber emits pcl::PointXYZ clouds (among others).
 std::shared_ptr<pcl::Grabber> open_openni2_grabber(const std::string& device_or_oni = "");
 
-/// Reads a 4x4 camera-to-world matrix (7-Scenes .pose.txt); the rotation is projected onto the nearest
-/// rotation matrix. Throws IoError, FormatError (not 4x4, last row not 0 0 0 1, not a rotation).
-Eigen::Isometry3d read_pose_matrix_file(const std::string& path);
-
 }  // namespace occ_improve

@@ -12,7 +12,8 @@ namespace occ_improve {
 class ToolFrameGrabber : public FileSequenceGrabber {
 public:
   /// `options` must outlive the grabber. Frames seen through another camera than `first`'s are refused
-  /// (a source error, counted). fps = 0: as fast as possible.
+  /// (a source error, counted); with poses every frame is moved into `first`'s sensor frame
+  /// (move_into_first_frame). fps = 0: as fast as possible.
   ToolFrameGrabber(const ToolOptions& options, const ToolFrame& first, std::vector<FrameSource> sources, float fps);
   ~ToolFrameGrabber() noexcept override { stop(); }
   std::string getName() const override { return "ToolFrameGrabber"; }
@@ -22,7 +23,7 @@ protected:
 
 private:
   const ToolOptions& options_;
-  ToolFrame first_;  ///< its name and camera (the cloud is not kept)
+  ToolFrame first_;  ///< its name, camera and pose (the cloud is not kept)
   std::vector<FrameSource> sources_;
 };
 

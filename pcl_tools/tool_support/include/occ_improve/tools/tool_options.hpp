@@ -10,6 +10,8 @@
 #include "occ_improve/presets.hpp"
 #include "occ_improve/segmentation.hpp"
 
+#include <Eigen/Geometry>
+
 #include <functional>
 #include <optional>
 #include <stdexcept>
@@ -35,6 +37,7 @@ struct ToolOptions {
   std::string intrinsics_flag;                  ///< "-intrinsics" or "-intrinsics_file PATH", for messages
   std::optional<DepthEncoding> depth_encoding;  ///< unset: chosen per file (see frame_io.hpp)
   int top_k = 10;
+  bool use_poses = true;            ///< false with -no_poses: every frame taken from the first's viewpoint
   std::vector<std::string> inputs;  ///< positional arguments, in command-line order
 
   /// The preset again for a camera found with the input (e.g. a folder's camera-intrinsics.txt) when no
@@ -51,12 +54,18 @@ struct ToolFrame {
   std::optional<PinholeIntrinsics> camera;
   std::string camera_source;  ///< "-intrinsics", "camera-intrinsics.txt ...", "fitted to the cloud, ..."
   std::optional<Image> colour;  ///< registered colour (organized PCDs with rgb/rgba)
+  /// Camera-to-world of the frame: its dataset's pose file, or a PCD's VIEWPOINT (whose points are then
+  /// moved into the sensor frame as they are read, as PCL defines the viewpoint). Unset without either.
+  std::optional<Eigen::Isometry3d> pose{};
+  std::string pose_source{};  ///< "frame-000150.pose.txt", "VIEWPOINT of FILE.pcd"
 };
 
 /// The frames of a tool's inputs (or the built-in sample, for -sample), read one at a time so that a long
 /// sequence is never all in memory. Every input is expanded at construction (expand_input: files and
 /// dataset folders, in order; IoError for a missing one). Each frame follows read_tool_frame's rules, and
-/// a frame seen through another camera than the first is refused: one viewpoint, one camera.
+/// a frame seen through another camera than the first is refused: one viewpoint, one camera. With poses
+/// (and not -no_poses), every frame is moved into the first frame's sensor frame (the grid has one
+/// viewpoint, the first's); a frame without a pose among posed frames is refused, naming -no_poses.
 class ToolFrameReader {
 public:
   explicit ToolFrameReader(const ToolOptions& options, bool use_sample = false);
@@ -66,6 +75,8 @@ public:
   std::optional<ToolFrame> next();
   /// Time spent reading so far [s].
   double read_seconds() const { return read_seconds_; }
+  /// The first frame's camera-to-world when poses are applied (the grid's frame in the world), once read.
+  std::optional<Eigen::Isometry3d> first_pose() const;
 
 private:
   std::optional<ToolFrame> read_next();
@@ -80,6 +91,10 @@ private:
 
 /// The built-in generated Kinect-like frame (samples/scene) as a tool frame, with its camera.
 ToolFrame sample_tool_frame();
+
+/// Moves `frame` into the sensor frame of `first` by their poses (first^-1 * frame), when poses are used
+/// and `first` has one; refuses a frame without a pose then, and a posed frame after an unposed first.
+void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame);
 
 /// Refuses (InvalidInput naming both) a frame seen through another camera than the first frame's: the
 /// frames of one map share one viewpoint and camera.
@@ -140,6 +155,8 @@ private:
 struct FusedFrames {
   InsertionReport insertion;
   std::size_t frames = 0;
+  std::optional<Eigen::Isometry3d> first_pose;  ///< the grid's frame in the world (poses applied), if any
+  std::string poses;                     ///< "poses applied: ..." or "no poses", for the summary
   std::string camera;                    ///< describe_camera of the first frame
   std::optional<Image> colour;           ///< the first frame's colour
   std::vector<std::string> frame_lines;  ///< "read NAME: N points" per frame
