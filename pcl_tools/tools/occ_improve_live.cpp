@@ -38,7 +38,7 @@ const ToolFlags kFlags{
     "Fuses a stream of range frames into the occupancy grid and writes the maps, the same files as\n"
     "occ_improve_map (depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv),\n"
     "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
-    "-simulate or positional PCD files. With poses, every frame is moved into the FIRST frame's sensor\n"
+    "-simulate or positional inputs (below). With poses, every frame is moved into the FIRST frame's sensor\n"
     "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
     "shot against rays asked). Ctrl-C stops cleanly and still writes the maps.\n",
     joined({output_folder_flag_names(),
@@ -164,7 +164,7 @@ int run(const CommandLine& command_line) {
   const int sources = (device ? 1 : 0) + !oni.empty() + !pcd_dir.empty() + !depth_dir.empty() +
                       !options.inputs.empty() + simulate;
   if (sources != 1)
-    throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, PCD files or -simulate); see -h");
+    throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, input files or -simulate); see -h");
   OutputFolder out = open_output_folder(command_line);
   if (simulate) return run_simulation(command_line, options, region_options, out);
 
