@@ -1,11 +1,12 @@
 #include "occ_improve/tools/tool_options.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "support/command_line_args.hpp"
 #include "support/test_data.hpp"
 
-#include "support/command_line_args.hpp"
-
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <filesystem>
@@ -24,7 +25,7 @@ using test::Args;
 const ToolFlags kTool{"tool",
                       {"[options] INPUT..."},
                       "",
-                      joined({sensor_flag_names(), camera_flag_names(), output_folder_flag_names(), {"-k", "-sample"}}),
+                      joined({sensor_flag_names(), camera_flag_names(), output_folder_flag_names(), {"-k", "-sample", "-no_poses"}}),
                       {},
                       {},
                       "  INPUT\n"};
@@ -205,6 +206,42 @@ TEST(ToolFrames, IntrinsicsAreNeverAssumed) {
   // Frames through different cameras are refused; the paper preset needs no camera at all.
   EXPECT_THROW(read_tool_frames(parse({capture, office})), InvalidInput);
   EXPECT_FALSE(read_tool_frames(parse({"-preset", "kinect_v1_paper", capture})).front().camera);
+}
+
+// Poses move every frame into the first one's sensor frame; a frame without one among posed frames is refused.
+TEST(ToolFrames, PosesMoveFramesIntoTheFirstViewAndAMissingPoseIsRefused) {
+  OCC_REQUIRE_DATA(frames_dir, "sequences/7scenes_redkitchen/frames");
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() /
+                                       ("occ_improve_test_poses_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  const std::filesystem::path source(frames_dir);
+  for (const char* name : {"frame-000150.depth.png", "frame-000150.pose.txt", "frame-000170.depth.png",
+                           "frame-000170.pose.txt"})
+    std::filesystem::create_symlink(source / name, folder / name);
+  std::filesystem::create_symlink(source.parent_path() / "camera-intrinsics.txt", folder / "camera-intrinsics.txt");
+  const std::vector<ToolFrame> posed = read_tool_frames(parse({folder.string()}));
+  const std::vector<ToolFrame> unposed = read_tool_frames(parse({folder.string(), "-no_poses"}));
+  ASSERT_EQ(posed.size(), 2u);
+  ASSERT_TRUE(posed[1].pose);
+  // The first frame stays where it is; the second moves by first^-1 * second.
+  EXPECT_EQ(posed[0].cloud[100000].z, unposed[0].cloud[100000].z);
+  const Eigen::Isometry3d into_first = posed[0].pose->inverse() * *posed[1].pose;
+  for (const std::size_t i : {std::size_t{100000}, std::size_t{200000}}) {
+    const auto& p = unposed[1].cloud[i];
+    if (!std::isfinite(p.z)) continue;
+    const Eigen::Vector3d expected = into_first * Eigen::Vector3d(p.x, p.y, p.z);
+    EXPECT_LT((expected - posed[1].cloud[i].getVector3fMap().cast<double>()).norm(), 1e-5) << i;
+  }
+  std::filesystem::remove(folder / "frame-000170.pose.txt");
+  try {
+    read_tool_frames(parse({folder.string()}));
+    FAIL() << "a frame without a pose among posed frames";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("-no_poses"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read_tool_frames(parse({folder.string(), "-no_poses"})).size(), 2u);
+  std::filesystem::remove_all(folder);
 }
 
 // -depth_bins 100000000 took 3.1 GB before the cap error: now refused while parsing, before any grid exists.

@@ -372,13 +372,6 @@ std::vector<std::string> joined(std::initializer_list<std::vector<std::string>> 
   return all;
 }
 
-double parse_number_value(const std::string& flag, const std::string& text) {
-  FlagSpec f;
-  f.name = flag;
-  f.kind = FlagKind::number;
-  return checked_number(f, text);
-}
-
 std::vector<double> parse_number_list(const std::string& flag, const std::string& text) {
   std::vector<double> values;
   std::stringstream in(text);

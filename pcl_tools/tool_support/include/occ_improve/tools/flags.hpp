@@ -101,9 +101,8 @@ std::vector<std::string> output_folder_flag_names();
 /// The lists one after the other.
 std::vector<std::string> joined(std::initializer_list<std::vector<std::string>> lists);
 
-/// "a finite number" parsing shared by the table and the tools' list values ("-fov 57,43"): throws
-/// InvalidParameter "FLAG VALUE is invalid: must be ..." naming both.
-double parse_number_value(const std::string& flag, const std::string& text);
+/// The comma-separated finite numbers of a list value ("-fov 57,43"); throws InvalidParameter naming the
+/// flag, the value and the item that is not a number.
 std::vector<double> parse_number_list(const std::string& flag, const std::string& text);
 
 }  // namespace occ_improve
