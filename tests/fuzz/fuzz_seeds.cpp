@@ -3,12 +3,12 @@
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/presets.hpp"
+#include "support/tiff_writer.hpp"
 
 #include <pcl/io/pcd_io.h>
 #include <pcl/io/ply_io.h>
 #include <pcl/io/png_io.h>
 #include <pcl/point_types.h>
-#include <tiffio.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -56,22 +56,10 @@ void ply_seeds(const fs::path& dir) {
 // An 8 x 6 TIFF of `samples` x `bits` per pixel in strips of 2 rows.
 void tiff(const fs::path& path, std::uint16_t bits, std::uint16_t samples, std::uint16_t compression) {
   const std::uint32_t width = 8, height = 6;
-  TIFF* out = TIFFOpen(path.c_str(), "w");
-  if (!out) return;
-  TIFFSetField(out, TIFFTAG_IMAGEWIDTH, width);
-  TIFFSetField(out, TIFFTAG_IMAGELENGTH, height);
-  TIFFSetField(out, TIFFTAG_BITSPERSAMPLE, bits);
-  TIFFSetField(out, TIFFTAG_SAMPLESPERPIXEL, samples);
-  TIFFSetField(out, TIFFTAG_PHOTOMETRIC, samples == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
-  TIFFSetField(out, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-  TIFFSetField(out, TIFFTAG_ROWSPERSTRIP, 2u);
-  TIFFSetField(out, TIFFTAG_COMPRESSION, compression);
-  std::vector<std::uint8_t> row(width * samples * bits / 8);
-  for (std::uint32_t r = 0; r < height; ++r) {
-    for (std::size_t i = 0; i < row.size(); ++i) row[i] = static_cast<std::uint8_t>(37 * (r + i));
-    TIFFWriteScanline(out, row.data(), r, 0);
-  }
-  TIFFClose(out);
+  std::vector<std::uint8_t> bytes(std::size_t{width} * height * samples * bits / 8);
+  const std::size_t row_bytes = bytes.size() / height;
+  for (std::size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<std::uint8_t>(37 * (i / row_bytes + i % row_bytes));
+  occ_improve::test::write_tiff(path.string(), width, height, bits, samples, bytes, 2, compression);
 }
 
 void tiff_seeds(const fs::path& dir) {

@@ -7,6 +7,7 @@
 #include "occ_improve/pcl/tiff_image.hpp"
 #include "support/temp_folder.hpp"
 #include "support/test_data.hpp"
+#include "support/tiff_writer.hpp"
 
 #include <gtest/gtest.h>
 #include <pcl/io/ply_io.h>
@@ -53,27 +54,6 @@ std::string message_of(const std::function<void()>& f) {
     return e.what();
   }
   return "no FormatError";
-}
-
-// A TIFF of `samples` x `bits` per pixel in strips of `rows_per_strip`, pixel values from `bytes`.
-void write_tiff(const std::string& path, std::uint32_t width, std::uint32_t height, std::uint16_t bits,
-                std::uint16_t samples, const std::vector<std::uint8_t>& bytes, std::uint32_t rows_per_strip,
-                std::uint16_t compression = COMPRESSION_NONE) {
-  TIFF* tiff = TIFFOpen(path.c_str(), "w");
-  ASSERT_NE(tiff, nullptr);
-  TIFFSetField(tiff, TIFFTAG_IMAGEWIDTH, width);
-  TIFFSetField(tiff, TIFFTAG_IMAGELENGTH, height);
-  TIFFSetField(tiff, TIFFTAG_BITSPERSAMPLE, bits);
-  TIFFSetField(tiff, TIFFTAG_SAMPLESPERPIXEL, samples);
-  TIFFSetField(tiff, TIFFTAG_SAMPLEFORMAT, SAMPLEFORMAT_UINT);
-  TIFFSetField(tiff, TIFFTAG_PHOTOMETRIC, samples == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
-  TIFFSetField(tiff, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
-  TIFFSetField(tiff, TIFFTAG_ROWSPERSTRIP, rows_per_strip);
-  TIFFSetField(tiff, TIFFTAG_COMPRESSION, compression);
-  const std::size_t row_bytes = std::size_t{width} * samples * bits / 8;
-  for (std::uint32_t row = 0; row < height; ++row)
-    ASSERT_EQ(TIFFWriteScanline(tiff, const_cast<std::uint8_t*>(bytes.data()) + row * row_bytes, row, 0), 1);
-  TIFFClose(tiff);
 }
 
 std::vector<std::uint8_t> as_bytes(const std::vector<std::uint16_t>& values) {
@@ -166,7 +146,7 @@ TEST_F(FrameIoTiffFiles, Synthetic16BitTiffRoundTripsInAnyStripLayout) {
   for (const std::uint32_t rows_per_strip : {1u, 2u, 5u})
     for (const std::uint16_t compression : {COMPRESSION_NONE, COMPRESSION_LZW, COMPRESSION_ADOBE_DEFLATE}) {
       const std::string path = file("d" + std::to_string(rows_per_strip) + "_" + std::to_string(compression) + ".tif");
-      write_tiff(path, width, height, 16, 1, as_bytes(values), rows_per_strip, compression);
+      ASSERT_TRUE(test::write_tiff(path, width, height, 16, 1, as_bytes(values), rows_per_strip, compression));
       const DepthImage16 image = read_depth_image16(path);
       EXPECT_EQ(image.width, 7);
       EXPECT_EQ(image.height, 5);
@@ -176,8 +156,8 @@ TEST_F(FrameIoTiffFiles, Synthetic16BitTiffRoundTripsInAnyStripLayout) {
 
 TEST_F(FrameIoTiffFiles, OtherPixelFormatsAreRefusedNamingWhatTheyHold) {
   const std::string grey8 = file("grey8_depth.tiff"), rgb8 = file("rgb8_depth.tiff");
-  write_tiff(grey8, 4, 3, 8, 1, std::vector<std::uint8_t>(12, 7), 3);
-  write_tiff(rgb8, 4, 3, 8, 3, std::vector<std::uint8_t>(36, 7), 3);
+  ASSERT_TRUE(test::write_tiff(grey8, 4, 3, 8, 1, std::vector<std::uint8_t>(12, 7), 3));
+  ASSERT_TRUE(test::write_tiff(rgb8, 4, 3, 8, 3, std::vector<std::uint8_t>(36, 7), 3));
   const std::string m8 = message_of([&] { read_depth_image16(grey8); });
   EXPECT_NE(m8.find(grey8), std::string::npos) << m8;
   EXPECT_NE(m8.find("8-bit samples, 1 per pixel"), std::string::npos) << m8;
