@@ -210,7 +210,7 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
     return sequence;
   }
   DepthSequence sequence;
-  const std::vector<std::string> images = files_in(directory_name, {".png", ".pgm"});
+  const std::vector<std::string> images = files_in(directory_name, {".png", ".pgm", ".tif", ".tiff"});
   bool seven_scenes = false;
   for (const std::string& path : images) {
     if (!ends_with(path, ".depth.png")) continue;
@@ -232,7 +232,7 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
     for (const std::string& path : images)
       if (!some_named_depth || named_depth(path)) sequence.frames.push_back({path, std::nullopt});
   }
-  if (sequence.frames.empty()) throw InvalidInput("no depth image (.png/.pgm) found in '" + directory_name + "'");
+  if (sequence.frames.empty()) throw InvalidInput("no depth image (.png/.pgm/.tif/.tiff) found in '" + directory_name + "'");
   return sequence;
 }
 

@@ -13,11 +13,13 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <future>
 #include <thread>
 
@@ -424,6 +426,32 @@ TEST(SequenceSources, PlainFolderTakesTheDepthImagesOnly) {
   EXPECT_EQ(fs::path(sequence.frames[1].depth_path).filename(), "2_depth.png");
   EXPECT_FALSE(sequence.encoding.has_value());  // guessed per file
   EXPECT_FALSE(sequence.intrinsics.has_value());
+}
+
+// -depth_dir read PNG/PGM only; PCL's own image-grabber layout is 16-bit TIFF with RGB TIFFs beside it.
+TEST(SequenceSources, PclGrabberTiffFolderReplaysItsDepthFrames) {
+  OCC_REQUIRE_DATA(folder, "kinect/pcl_test/grabber_sequences/tiff");
+  const DepthSequence sequence = scan_depth_sequence(folder);
+  ASSERT_EQ(sequence.frames.size(), 3u);
+  for (const DepthSequenceFrame& f : sequence.frames)
+    EXPECT_NE(fs::path(f.depth_path).filename().string().find("_depth.tiff"), std::string::npos) << f.depth_path;
+  PinholeIntrinsics kinect;  // the calibration of the PCLZF copy of these frames: 525, 525, 320, 240
+  kinect.fx = kinect.fy = 525;
+  kinect.cx = 320;
+  kinect.cy = 240;
+  DepthSequenceGrabber grabber(sequence, kinect);
+  std::vector<std::size_t> valid;
+  std::function<void(const FileSequenceGrabber::Cloud::ConstPtr&)> on_frame =
+      [&](const FileSequenceGrabber::Cloud::ConstPtr& cloud) {
+        valid.push_back(static_cast<std::size_t>(std::count_if(cloud->begin(), cloud->end(),
+                                                               [](const pcl::PointXYZ& p) { return p.z > 0; })));
+      };
+  grabber.registerCallback(on_frame);
+  grabber.start();
+  grabber.waitUntilDone();
+  ASSERT_EQ(valid.size(), 3u);
+  EXPECT_EQ(grabber.errors(), 0u);
+  for (std::size_t n : valid) EXPECT_GT(n, 200000u);  // 271,575 valid pixels in the first frame
 }
 
 TEST(SequenceSources, ErrorsNameTheProblem) {

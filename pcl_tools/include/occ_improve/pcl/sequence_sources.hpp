@@ -119,8 +119,9 @@ struct DepthSequence {
 ///    when present; intrinsics from `camera-intrinsics.txt` in the folder or its parent;
 ///  - TUM RGB-D: `depth.txt` ("timestamp depth/file.png" lines, 1/5000 m), poses from `groundtruth.txt`
 ///    ("t tx ty tz qx qy qz qw", nearest timestamp within 20 ms) when present;
-///  - otherwise every .png/.pgm in name order (only those with "depth" in their name when some have
-///    it, so colour images beside them are left out), no poses, encoding guessed per file.
+///  - otherwise every .png/.pgm/.tif/.tiff in name order (only those with "depth" in their name when some
+///    have it, so colour images beside them are left out: PCL's grabber layout `*_depth.tiff` with
+///    `*_rgb.tiff`), no poses, encoding guessed per file.
 /// Throws IoError when unreadable, InvalidInput when no depth image is found, FormatError on a bad pose.
 DepthSequence scan_depth_sequence(const std::string& directory);
 
