@@ -143,6 +143,130 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   return why == "interrupted" ? 128 + SIGINT : 0;
 }
 
+// The stream a run reads, and the sensor preset that fits it.
+struct StreamSource {
+  std::shared_ptr<pcl::Grabber> grabber;
+  FileSequenceGrabber* file_source = nullptr;  ///< the grabber, when it replays files (paced, finite)
+  SensorPreset preset;
+  std::string text, camera;  ///< for the summary
+};
+
+std::string poses_text(bool applied) { return applied ? "poses applied: map in the first frame's view" : "no poses"; }
+
+StreamSource open_device(const ToolOptions& options, const std::optional<std::string>& device, const std::string& oni) {
+  StreamSource s;
+  s.grabber = open_openni2_grabber(device ? *device : oni);
+  s.preset = options.preset;
+  s.text = device ? "OpenNI2 device " + (device->empty() ? std::string("(first)") : *device) : "recording " + oni;
+  s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag
+                                : "camera: Kinect v1 defaults fx = fy = 525 (give -intrinsics for another device)";
+  return s;
+}
+
+StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth_dir, int max_frames, double fps) {
+  DepthSequence sequence = scan_depth_sequence(depth_dir);
+  if (max_frames > 0 && sequence.frames.size() > static_cast<std::size_t>(max_frames))
+    sequence.frames.resize(static_cast<std::size_t>(max_frames));  // file sources stop exactly there
+  const std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : sequence.intrinsics;
+  if (!camera) throw InvalidParameter("-depth_dir " + depth_dir + ": no camera-intrinsics.txt there; give -intrinsics or -intrinsics_file");
+  DepthSequenceOptions sequence_options;
+  sequence_options.fps = static_cast<float>(fps);
+  sequence_options.use_poses = options.use_poses;
+  sequence_options.encoding = options.depth_encoding;
+  auto grabber = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
+  StreamSource s;
+  s.preset = options.preset_for_camera(camera);
+  s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
+  s.text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
+           poses_text(grabber->posesApplied()) + ")";
+  s.file_source = grabber.get();
+  s.grabber = grabber;
+  return s;
+}
+
+// -pcd_dir's PCD files, or the positional inputs of any kind (expand_input, as every tool reads them).
+StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, int max_frames, double fps) {
+  std::vector<FrameSource> frames;
+  if (!pcd_dir.empty()) {
+    const PcdSequenceGrabber listing(pcd_dir);
+    for (const std::string& file : listing.files()) frames.push_back(FrameSource{file, std::nullopt});
+  }
+  for (const std::string& input : options.inputs)
+    for (FrameSource& frame : expand_input(input)) frames.push_back(std::move(frame));
+  if (max_frames > 0 && frames.size() > static_cast<std::size_t>(max_frames))
+    frames.resize(static_cast<std::size_t>(max_frames));
+  // The first frame's camera (fitted to its organized points unless -intrinsics is given).
+  const ToolFrame first = read_tool_frame(options, frames.front());
+  const std::string files_text = frames.size() == 1 ? frames.front().path
+                                                    : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
+  auto grabber = std::make_shared<ToolFrameGrabber>(options, first, std::move(frames), static_cast<float>(fps));
+  StreamSource s;
+  s.preset = options.preset_for_camera(first.camera);
+  s.camera = describe_camera({first});
+  s.text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(grabber->frameCount()) + " frames, " +
+           poses_text(first.pose && options.use_poses) + ")";
+  s.file_source = grabber.get();
+  s.grabber = grabber;
+  return s;
+}
+
+// A saved map fixes the geometry and the model; the source's frames must fit it.
+std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOptions& options, SensorPreset& preset) {
+  if (load_path.empty()) return std::make_shared<Mapper>(preset, options.grid);
+  LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
+  auto mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
+  preset.name = "loaded from " + load_path;
+  preset.geometry = mapper->geometry().params();
+  preset.model = mapper->model().params();
+  return mapper;
+}
+
+// When the run ends, besides the source finishing.
+struct StreamLimits {
+  bool stop_on_signal;
+  int max_frames;
+};
+
+// Polls the running pipeline, showing its counters, until the source is done or a limit is reached.
+const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const StreamLimits& limits,
+                          const std::atomic<bool>& stop_signalled, ProgressLine& progress) {
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    const PipelineStatistics s = pipeline.statistics();
+    char line[200];
+    std::snprintf(line, sizeof line, "frames %llu, processed %llu, dropped %llu, rejected %llu, %.1f frames/s",
+                  static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
+                  static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
+                  s.processed_per_second());
+    progress.show(line);
+    if (stop_signal_received()) return "interrupted";
+    if (limits.stop_on_signal && stop_signalled) return "stop signal";
+    if (limits.max_frames > 0 && s.processed >= static_cast<std::uint64_t>(limits.max_frames)) return "-max_frames reached";
+    if (source.file_source && !source.file_source->isRunning() && s.in_flight == 0) return "source finished";
+  }
+}
+
+void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, const std::optional<FrameResult>& last) {
+  pcl::console::print_info("Stopped: %s\n", stop_reason);
+  pcl::console::print_info(
+      "Frames: %llu received, %llu processed, %llu dropped, %llu rejected, %llu source errors in %.2f s "
+      "(%.1f frames/s)\n",
+      static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
+      static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
+      static_cast<unsigned long long>(s.grabber_errors), s.wall_seconds, s.processed_per_second());
+  pcl::console::print_info("Per frame [ms]: convert %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
+                           s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms),
+                           s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
+  if (!last) return;
+  pcl::console::print_info("Stop signal: %s (%s)\n", last->stop.stop ? "yes" : "no", last->stop.reason.c_str());
+  for (std::size_t i = 0; i < last->top_regions.size(); ++i) {
+    const Region& r = last->top_regions[i];
+    pcl::console::print_info("  region %zu: improvement %.2f over %zu rays, azimuth %.1f deg, elevation %.1f deg, depth %.2f m\n",
+                             i + 1, r.summed_improvement, r.area_columns, r.centroid_azimuth_rad * 180.0 / M_PI,
+                             r.centroid_elevation_rad * 180.0 / M_PI, r.mean_depth_m);
+  }
+}
+
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   const std::optional<std::string> device = command_line.has("-device") ? command_line.text("-device").value_or("")
@@ -154,10 +278,7 @@ int run(const CommandLine& command_line) {
   const std::string depth_dir = command_line.text("-depth_dir").value_or("");
   const int save_every = *command_line.integer("-save_every");
   const double fps = *command_line.number("-fps");
-  const int threads = *command_line.integer("-threads");
   const int max_frames = *command_line.integer("-max_frames");
-  const bool drop = command_line.has("-drop");
-  const bool stop_on_signal = command_line.has("-stop_on_signal");
   RegionOptions region_options;
   region_options.min_improvement = static_cast<float>(*command_line.number("-min_improvement"));
   const bool simulate = command_line.has("-simulate");
@@ -168,83 +289,21 @@ int run(const CommandLine& command_line) {
   OutputFolder out = open_output_folder(command_line);
   if (simulate) return run_simulation(command_line, options, region_options, out);
 
-  // The source, and the sensor preset that fits it.
-  std::shared_ptr<pcl::Grabber> grabber;
-  FileSequenceGrabber* file_source = nullptr;
-  SensorPreset preset = options.preset;
-  std::string source_text, camera_text;
-  if (device || !oni.empty()) {
-    grabber = open_openni2_grabber(device ? *device : oni);
-    source_text = device ? "OpenNI2 device " + (device->empty() ? std::string("(first)") : *device) : "recording " + oni;
-    camera_text = options.intrinsics ? "camera from " + options.intrinsics_flag
-                                     : "camera: Kinect v1 defaults fx = fy = 525 (give -intrinsics for another device)";
-  } else if (!depth_dir.empty()) {
-    DepthSequence sequence = scan_depth_sequence(depth_dir);
-    if (max_frames > 0 && sequence.frames.size() > static_cast<std::size_t>(max_frames))
-      sequence.frames.resize(static_cast<std::size_t>(max_frames));  // file sources stop exactly there
-    const std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : sequence.intrinsics;
-    if (!camera) throw InvalidParameter("-depth_dir " + depth_dir + ": no camera-intrinsics.txt there; give -intrinsics or -intrinsics_file");
-    if (!options.intrinsics) preset = options.preset_for_camera(camera);
-    camera_text = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
-    DepthSequenceOptions sequence_options;
-    sequence_options.fps = static_cast<float>(fps);
-    sequence_options.use_poses = options.use_poses;
-    sequence_options.encoding = options.depth_encoding;
-    auto source = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
-    source_text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
-                  (source->posesApplied() ? "poses applied: map in the first frame's view" : "no poses") + ")";
-    file_source = source.get();
-    grabber = source;
-  } else {
-    // -pcd_dir's PCD files, or the positional inputs of any kind (expand_input, as every tool reads them).
-    std::vector<FrameSource> frames;
-    if (!pcd_dir.empty()) {
-      const PcdSequenceGrabber listing(pcd_dir);
-      for (const std::string& file : listing.files()) frames.push_back(FrameSource{file, std::nullopt});
-    }
-    for (const std::string& input : options.inputs)
-      for (FrameSource& frame : expand_input(input)) frames.push_back(std::move(frame));
-    if (max_frames > 0 && frames.size() > static_cast<std::size_t>(max_frames))
-      frames.resize(static_cast<std::size_t>(max_frames));
-    // The first frame's camera (fitted to its organized points unless -intrinsics is given).
-    const ToolFrame first = read_tool_frame(options, frames.front());
-    preset = options.preset_for_camera(first.camera);
-    camera_text = describe_camera({first});
-    const std::string files_text = frames.size() == 1 ? frames.front().path
-                                                      : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
-    auto source = std::make_shared<ToolFrameGrabber>(options, first, std::move(frames), static_cast<float>(fps));
-    source_text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(source->frameCount()) + " frames, " +
-                  (first.pose && options.use_poses ? "poses applied: map in the first frame's view" : "no poses") + ")";
-    file_source = source.get();
-    grabber = source;
-  }
-
-  const InputScope scope(source_text);
+  StreamSource source = device || !oni.empty() ? open_device(options, device, oni)
+                        : !depth_dir.empty()   ? open_depth_dir(options, depth_dir, max_frames, fps)
+                                               : open_files(options, pcd_dir, max_frames, fps);
+  const InputScope scope(source.text);
   PipelineOptions pipeline_options;
-  pipeline_options.insertion.threads = threads;
+  pipeline_options.insertion.threads = *command_line.integer("-threads");
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
-  pipeline_options.backpressure = file_source != nullptr && !drop;
-  // A saved map fixes the geometry and the model; the source's frames must fit it.
-  std::shared_ptr<Mapper> mapper;
-  if (!load_path.empty()) {
-    LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
-    mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
-    preset.name = "loaded from " + load_path;
-    preset.geometry = mapper->geometry().params();
-    preset.model = mapper->model().params();
-  } else {
-    mapper = std::make_shared<Mapper>(preset, options.grid);
-  }
-  Pipeline pipeline(mapper, with_camera(pipeline_options, preset));
-  const double depth_max_m = preset.geometry.depth_max_m;
-  std::vector<std::string> written;
+  pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
+  Pipeline pipeline(make_mapper(load_path, options, source.preset), with_camera(pipeline_options, source.preset));
   const auto save_grid = [&] {
     if (!save_path.empty()) save_map(save_path, pipeline.mapper().grid(), pipeline.mapper().model().params());
   };
 
   std::mutex report_mutex;
-  FrameResult last;
-  bool have_result = false;
+  std::optional<FrameResult> last;
   std::atomic<bool> stop_signalled{false};
   std::atomic<int> maps_written{0};
   std::uint64_t frames_seen = 0;  // only touched by the worker
@@ -252,7 +311,6 @@ int run(const CommandLine& command_line) {
     {
       std::lock_guard<std::mutex> lock(report_mutex);
       last = r;
-      have_result = true;
     }
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
@@ -266,60 +324,27 @@ int run(const CommandLine& command_line) {
     progress.finish();
     pcl::console::print_warn("%s\n", e.message.c_str());
   });
-  if (file_source)
-    file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
-  pipeline.attach(*grabber);
+  if (source.file_source)
+    source.file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
+  pipeline.attach(*source.grabber);
 
-  pcl::console::print_info("%s\n", camera_text.c_str());
-  pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source_text.c_str(),
-                           preset.name.c_str(), preset.geometry.azimuth_bins, preset.geometry.elevation_bins,
-                           preset.geometry.depth_bins, depth_max_m);
+  const GeometryParams& g = source.preset.geometry;
+  pcl::console::print_info("%s\n", source.camera.c_str());
+  pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source.text.c_str(),
+                           source.preset.name.c_str(), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_max_m);
   pipeline.start();
-  const char* stop_reason = "source finished";
-  for (;;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    const PipelineStatistics s = pipeline.statistics();
-    char line[200];
-    std::snprintf(line, sizeof line, "frames %llu, processed %llu, dropped %llu, rejected %llu, %.1f frames/s",
-                  static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
-                  static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
-                  s.processed_per_second());
-    progress.show(line);
-    if (stop_signal_received()) { stop_reason = "interrupted"; break; }
-    if (stop_on_signal && stop_signalled) { stop_reason = "stop signal"; break; }
-    if (max_frames > 0 && s.processed >= static_cast<std::uint64_t>(max_frames)) { stop_reason = "-max_frames reached"; break; }
-    if (file_source && !file_source->isRunning() && s.in_flight == 0) break;
-  }
+  const char* stop_reason =
+      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signalled, progress);
   pipeline.stop();
   progress.finish();
   if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !stop_signal_received())
-    throw InvalidInput("no frame of " + source_text + " was used (" + std::to_string(s.rejected) +
+    throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +
                        std::to_string(s.grabber_errors) + " unreadable)");
-  written = write_maps(pipeline.mapper(), out, region_options, options.top_k);
+  const std::vector<std::string> written = write_maps(pipeline.mapper(), out, region_options, options.top_k);
   save_grid();
   if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
-
-  const PipelineStatistics s = pipeline.statistics();
-  pcl::console::print_info("Stopped: %s\n", stop_reason);
-  pcl::console::print_info(
-      "Frames: %llu received, %llu processed, %llu dropped, %llu rejected, %llu source errors in %.2f s "
-      "(%.1f frames/s)\n",
-      static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
-      static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
-      static_cast<unsigned long long>(s.grabber_errors), s.wall_seconds, s.processed_per_second());
-  pcl::console::print_info("Per frame [ms]: convert %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
-                           s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms),
-                           s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
-  if (have_result) {
-    pcl::console::print_info("Stop signal: %s (%s)\n", last.stop.stop ? "yes" : "no", last.stop.reason.c_str());
-    for (std::size_t i = 0; i < last.top_regions.size(); ++i) {
-      const Region& r = last.top_regions[i];
-      pcl::console::print_info("  region %zu: improvement %.2f over %zu rays, azimuth %.1f deg, elevation %.1f deg, depth %.2f m\n",
-                               i + 1, r.summed_improvement, r.area_columns, r.centroid_azimuth_rad * 180.0 / M_PI,
-                               r.centroid_elevation_rad * 180.0 / M_PI, r.mean_depth_m);
-    }
-  }
+  print_stream_summary(pipeline.statistics(), stop_reason, last);
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());
   // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.
