@@ -95,12 +95,52 @@ Source build_from_frames(const ToolOptions& options, bool use_sample, ProgressLi
   return source;
 }
 
+// world <- grid per map: the -pose values (one per map), else -frame's (replaced by the first frame's pose
+// for posed input frames once they are read).
+std::vector<Eigen::Isometry3d> parse_poses(const CommandLine& command_line, std::size_t maps) {
+  const std::vector<std::string> texts = command_line.values("-pose");
+  if (!texts.empty() && texts.size() != maps)
+    throw InvalidParameter("give one -pose per map (" + std::to_string(maps) + " map(s), " +
+                           std::to_string(texts.size()) + " poses)");
+  if (maps > 1 && texts.empty())
+    throw InvalidParameter("merging " + std::to_string(maps) + " maps needs one -pose per -load");
+  std::vector<Eigen::Isometry3d> poses;
+  for (const std::string& text : texts) poses.push_back(parse_pose(text));
+  if (poses.empty())
+    poses.push_back(*command_line.text("-frame") == "z_up" ? z_up_from_optical() : Eigen::Isometry3d::Identity());
+  return poses;
+}
+
+Source load_saved_map(const std::string& path, std::size_t memory_cap_bytes) {
+  throw_if_interrupted();
+  const InputScope scope(path);
+  LoadedMap loaded = load_map(path, memory_cap_bytes);
+  Source source;
+  source.grid.emplace(std::move(loaded.grid));
+  source.model = loaded.model;
+  source.description = "map " + path;
+  return source;
+}
+
+// Every grid into the tree at its pose; the first map set the tree's clamping, the others merge into it.
+OctomapExportReport export_grids(const std::vector<Source>& grids, const std::vector<Eigen::Isometry3d>& poses,
+                                 octomap::OcTree& tree) {
+  OctomapExportReport report;
+  for (std::size_t i = 0; i < grids.size(); ++i) {
+    const OctomapExportReport r = add_to_octree(tree, *grids[i].grid, poses[i]);
+    report.occupied_written += r.occupied_written;
+    report.free_written += r.free_written;
+    report.left_unknown += r.left_unknown;
+    report.seconds += r.seconds;
+  }
+  return report;
+}
+
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   const std::string output = command_line.text("-o").value_or("");
   const std::string save_path = command_line.text("-save").value_or("");
   const std::vector<std::string> load_paths = command_line.values("-load");
-  const std::vector<std::string> pose_texts = command_line.values("-pose");
   const bool use_sample = command_line.has("-sample");
   if (output.empty()) throw InvalidParameter("-o OUT.bt|OUT.ot is required (see -h)");
   require_octomap_output_path(output);
@@ -108,39 +148,21 @@ int run(const CommandLine& command_line) {
   const int sources = (load_paths.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
   if (!load_paths.empty() && !save_path.empty()) throw InvalidParameter("-save only applies to a grid built from frames");
-  const std::size_t maps = std::max<std::size_t>(load_paths.size(), 1);
-  if (!pose_texts.empty() && pose_texts.size() != maps)
-    throw InvalidParameter("give one -pose per map (" + std::to_string(maps) + " map(s), " +
-                           std::to_string(pose_texts.size()) + " poses)");
-  if (maps > 1 && pose_texts.empty())
-    throw InvalidParameter("merging " + std::to_string(maps) + " maps needs one -pose per -load");
+  std::vector<Eigen::Isometry3d> poses = parse_poses(command_line, std::max<std::size_t>(load_paths.size(), 1));
   const PresetOverrides& o = options.overrides;
   const bool preset_flags = command_line.has("-preset") || o.sigma_depth_m ||
                             o.sigma_depth_per_m2 || o.sigma_angle_rad || o.support_k || o.depth_bins ||
                             o.depth_max_m || o.fov_horizontal_deg || o.fov_vertical_deg;
   if (!load_paths.empty() && preset_flags)
     std::cerr << "warning: preset flags are ignored with -load: a saved map carries its own geometry and model\n";
-  std::vector<Eigen::Isometry3d> poses;
-  for (const std::string& text : pose_texts) poses.push_back(parse_pose(text));
-  const bool z_up = *command_line.text("-frame") == "z_up";
-  if (poses.empty()) poses.push_back(z_up ? z_up_from_optical() : Eigen::Isometry3d::Identity());
 
   // Every source is read before the first export, so a bad map fails before any work.
   auto start = std::chrono::steady_clock::now();
   std::vector<Source> grids;
-  for (const std::string& path : load_paths) {
-    throw_if_interrupted();
-    const InputScope scope(path);
-    LoadedMap loaded = load_map(path, options.grid.memory_cap_bytes);
-    Source source;
-    source.grid.emplace(std::move(loaded.grid));
-    source.model = loaded.model;
-    source.description = "map " + path;
-    grids.push_back(std::move(source));
-  }
+  for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options.grid.memory_cap_bytes));
   ProgressLine progress(command_line, "frame");
   if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample, progress));
-  if (pose_texts.empty() && grids.front().world_from_grid) poses.front() = *grids.front().world_from_grid;
+  if (!command_line.has("-pose") && grids.front().world_from_grid) poses.front() = *grids.front().world_from_grid;
   const double read_seconds = seconds_since(start);
 
   double save_seconds = 0;
@@ -150,16 +172,8 @@ int run(const CommandLine& command_line) {
     save_seconds = seconds_since(start);
   }
 
-  // The first map sets the tree's clamping; the others merge into it.
   const auto tree = make_octree(*grids.front().grid, resolution);
-  OctomapExportReport report;
-  for (std::size_t i = 0; i < grids.size(); ++i) {
-    const OctomapExportReport r = add_to_octree(*tree, *grids[i].grid, poses[i]);
-    report.occupied_written += r.occupied_written;
-    report.free_written += r.free_written;
-    report.left_unknown += r.left_unknown;
-    report.seconds += r.seconds;
-  }
+  const OctomapExportReport report = export_grids(grids, poses, *tree);
   throw_if_interrupted();  // before the output is written: an interrupted run leaves nothing behind
   start = std::chrono::steady_clock::now();
   create_parent_folders(output);
@@ -172,10 +186,7 @@ int run(const CommandLine& command_line) {
     std::printf("read %s: %d x %d x %d bins, %zu touched columns, %s mode\n", source.description.c_str(),
                 g.azimuth_bins, g.elevation_bins, g.depth_bins, grid.touched_column_count(),
                 grid.clamped() ? "clamped" : "exact");
-    if (source.insertion.points_received)
-      std::printf("points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view\n",
-                  source.insertion.points_received, source.insertion.points_inserted,
-                  source.insertion.skipped_invalid, source.insertion.skipped_outside_fov);
+    if (source.insertion.points_received) std::printf("%s\n", describe_points(source.insertion).c_str());
   }
   if (!save_path.empty()) std::printf("saved map %s\n", save_path.c_str());
   std::printf("OcTree at %.4g m: %zu occupied and %zu free leaf updates, %zu left unknown; %zu leaves, %.1f MB\n",
