@@ -315,6 +315,22 @@ TEST_F(Tools, APcdViewpointIsTheSensorPose) {
   EXPECT_EQ(regions("a"), regions("b"));
 }
 
+// Repeated -load/-pose (the one flag pair a tool lets repeat) merges saved maps into one tree.
+TEST_F(Tools, OctomapMergesSavedMapsOnePosePerMap) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -save wall.occmap -o map").exit_code, 0);
+  const std::string map = " -load " + file("wall.occmap");
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, map + " -o one.bt").exit_code, 0);
+  const ToolRun merged = run(OCC_TO_OCTOMAP_EXECUTABLE, map + " -pose 0,0,0,0,0,0,1" + map + " -pose 3,0,0,0,0,0,1 -o two.bt");
+  ASSERT_EQ(merged.exit_code, 0) << merged.err;
+  EXPECT_GT(fs::file_size(file("two.bt")), fs::file_size(file("one.bt")));  // two views 3 m apart
+  const ToolRun unposed = run(OCC_TO_OCTOMAP_EXECUTABLE, map + map + " -o bad.bt");
+  EXPECT_NE(unposed.err.find("needs one -pose per -load"), std::string::npos) << unposed.err;
+  const ToolRun bad_pose = run(OCC_TO_OCTOMAP_EXECUTABLE, map + " -pose 0,0,0,0,0,0,2 -o bad.bt");
+  EXPECT_NE(bad_pose.err.find("-pose 0,0,0,0,0,0,2 is invalid"), std::string::npos) << bad_pose.err;
+  EXPECT_FALSE(fs::exists(file("bad.bt")));
+}
+
 TEST_F(Tools, NoArgumentsPrintsTheUsageAndFails) {
   for (const std::string& tool : kAllTools) {
     const ToolRun r = run(tool, "");
