@@ -31,7 +31,7 @@ const ToolFlags kFlags{
     "2 sigma(z); columns = distinct rays a frame's kept points fall in.\n"
     "Writes OUTDIR/filter.csv (strategy,fraction,frame,asked,kept,columns,points,leaf_m,quality).\n",
     joined({output_folder_flag_names(), {"-fractions", "-max_frames", "-radius", "-seed"}, sensor_flag_names(),
-            camera_flag_names()}),
+            {"-intrinsics", "-intrinsics_file"}}),  // the sequence's layout fixes its depth encoding
     {{"-o", "out/filter"}},
     {},
     "  SEQUENCE_FOLDER           7-Scenes (frame-*.depth.png + .pose.txt) or TUM RGB-D (depth.txt,\n"
