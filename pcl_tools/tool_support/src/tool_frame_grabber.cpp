@@ -6,7 +6,7 @@ ToolFrameGrabber::ToolFrameGrabber(const ToolOptions& options, const ToolFrame& 
                                    float fps)
     : FileSequenceGrabber(sources.size(), fps),
       options_(options),
-      first_{first.name, {}, first.camera, first.camera_source, std::nullopt, first.pose, first.pose_source},
+      first_(frame_header(first)),
       sources_(std::move(sources)) {}
 
 FileSequenceGrabber::Cloud::Ptr ToolFrameGrabber::loadFrame(std::size_t index) {

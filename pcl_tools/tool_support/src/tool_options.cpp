@@ -199,7 +199,7 @@ std::optional<ToolFrame> ToolFrameReader::read_next() {
     require_same_camera(*first_, frame);
     move_into_first_frame(options_, *first_, frame);
   } else {
-    first_ = ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt, frame.pose, frame.pose_source};
+    first_ = frame_header(frame);
   }
   return frame;
 }
@@ -249,6 +249,10 @@ std::string describe_points(const InsertionReport& in) {
                 in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
                 in.beyond_depth_range);
   return line;
+}
+
+ToolFrame frame_header(const ToolFrame& frame) {
+  return ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt, frame.pose, frame.pose_source};
 }
 
 void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame) {

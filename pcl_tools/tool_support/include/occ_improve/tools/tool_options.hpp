@@ -96,6 +96,10 @@ ToolFrame sample_tool_frame();
 /// and `first` has one; refuses a frame without a pose then, and a posed frame after an unposed first.
 void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame);
 
+/// The frame's name, camera and pose without its points and colour: what the checks against a first frame
+/// (require_same_camera, move_into_first_frame) keep of it.
+ToolFrame frame_header(const ToolFrame& frame);
+
 /// Refuses (InvalidInput naming both) a frame seen through another camera than the first frame's: the
 /// frames of one map share one viewpoint and camera.
 void require_same_camera(const ToolFrame& first, const ToolFrame& frame);
