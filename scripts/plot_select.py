@@ -38,14 +38,19 @@ def read_runs(path):
     return runs
 
 
-def plot_scene(path):
+def load_scene(path):
+    """A scene's runs, its name, strategy (a)'s rows, the rays of a full frame, the budgets of the other
+    strategies and the target (95% of the quality of 5 full frames)."""
     runs = read_runs(path)
     scene = os.path.splitext(os.path.basename(path))[0]
     full = next(rows for (s, _), rows in runs.items() if s == "a_full")
-    frame_rays = int(full[0]["budget_rays"])
     budgets = sorted({b for (s, b) in runs if s != "a_full"})
+    return runs, scene, full, int(full[0]["budget_rays"]), budgets, 0.95 * float(full[-1]["quality"])
+
+
+def plot_scene(path):
+    runs, scene, full, frame_rays, budgets, target = load_scene(path)
     fig, axes = plt.subplots(1, len(budgets), figsize=(5 * len(budgets), 4), sharey=True, squeeze=False)
-    target = 0.95 * float(full[-1]["quality"])
     for ax, budget in zip(axes[0], budgets):
         ax.plot([int(r["rays_asked"]) / frame_rays for r in full], [float(r["quality"]) for r in full], "ks",
                 label="(a) full frames")
@@ -80,14 +85,10 @@ def first_reaching(rows, target, frame_rays):
 
 def target_rows(path):
     """One markdown row per budget of a scene."""
-    runs = read_runs(path)
-    scene = os.path.splitext(os.path.basename(path))[0]
-    full = next(rows for (s, _), rows in runs.items() if s == "a_full")
-    frame_rays = int(full[0]["budget_rays"])
-    target = 0.95 * float(full[-1]["quality"])
+    runs, scene, full, frame_rays, budgets, target = load_scene(path)
     fmt = lambda v: "-" if v is None else f"{v:.2f}"
     out = []
-    for budget in sorted({b for (s, b) in runs if s != "a_full"}):
+    for budget in budgets:
         need = {s: first_reaching(runs.get((s, budget), []), target, frame_rays) for s in STYLE}
         guided = {s: need[s] for s in ("d_guided", "e_returns", "f_reacquire") if need[s] is not None}
         best = min(guided, key=guided.get) if guided else "e_returns"
