@@ -158,5 +158,84 @@ TEST_F(OutputFolderTest, LeftoversOfDeadWritersAreRemovedOnTheNextWrite) {
   EXPECT_EQ(contents(file("out/result.txt")), "one");
 }
 
+// A run killed between the two renames of a commit left the old output only as .out.tmp-PID.old, and the
+// next run, even one that failed, deleted it: it is now moved back, and leftovers go only after a commit.
+TEST_F(OutputFolderTest, AnInterruptedCommitIsRecoveredEvenByARunThatFails) {
+  fs::create_directories(file(".out.tmp-999999999.old"));  // beyond Linux's pid_max: a dead writer
+  put(".out.tmp-999999999.old/result.txt", "old output");
+  put(".out.tmp-999999999.old/" + std::string(kOutputMarkerName), "tool_a\nresult.txt\n");
+  fs::create_directories(file(".out.tmp-999999999"));
+  put(".out.tmp-999999999/result.txt", "the dead run's new output");
+  { OutputFolder failing_run(file("out"), "tool_a", false); }  // fails before its commit
+  EXPECT_EQ(contents(file("out/result.txt")), "old output");
+  EXPECT_FALSE(fs::exists(file(".out.tmp-999999999.old")));
+  EXPECT_TRUE(fs::exists(file(".out.tmp-999999999/result.txt")));  // kept: no successful commit yet
+  publish(file("out"), false, "new");
+  EXPECT_EQ(contents(file("out/result.txt")), "new");
+  EXPECT_FALSE(fs::exists(file(".out.tmp-999999999")));
+}
+
+// -o on a symbolic link replaced the link by a folder.
+TEST_F(OutputFolderTest, ASymbolicLinkIsWrittenThrough) {
+  fs::create_directories(file("real"));
+  fs::create_directory_symlink(file("real"), file("link"));
+  publish(file("link"), false, "one");
+  publish(file("link"), false, "two");
+  EXPECT_TRUE(fs::is_symlink(file("link")));
+  EXPECT_EQ(contents(file("real/result.txt")), "two");
+  fs::create_directory_symlink(file("nowhere"), file("dangling"));
+  EXPECT_THROW(OutputFolder(file("dangling"), "tool_a", false), IoError);
+}
+
+class OutputFileTest : public OutputFolderTest {
+protected:
+  static bool starts_with_map(const std::string& path) { return contents(path).rfind("MAP", 0) == 0; }
+  void save(const std::string& target, bool overwrite, const std::string& text) {
+    OutputFile out(target, "-save", overwrite, starts_with_map, "a map");
+    std::ofstream(out.staged()) << text;
+    out.commit();
+  }
+};
+
+// -save overwrote anything, a user's cloud or notes included.
+TEST_F(OutputFileTest, OnlyItsOwnKindOfFileIsReplacedUnlessOverwrite) {
+  save(file("m.map"), false, "MAP one");
+  save(file("m.map"), false, "MAP two");
+  EXPECT_EQ(contents(file("m.map")), "MAP two");
+  put("notes.txt", "mine");
+  try {
+    save(file("notes.txt"), false, "MAP three");
+    FAIL() << "a foreign file was replaced";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("-overwrite"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("-save"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(contents(file("notes.txt")), "mine");
+  save(file("notes.txt"), true, "MAP three");
+  EXPECT_EQ(contents(file("notes.txt")), "MAP three");
+  EXPECT_EQ(entry_count(), 2u);  // no staged file left
+}
+
+TEST_F(OutputFileTest, FoldersMissingParentsAndUncommittedWritesLeaveNothing) {
+  fs::create_directories(file("dir"));
+  EXPECT_THROW(save(file("dir"), true, "MAP"), IoError);
+  EXPECT_THROW(save(file("missing/m.map"), true, "MAP"), IoError);
+  put("m.map", "MAP old");
+  {
+    OutputFile out(file("m.map"), "-save", false, starts_with_map, "a map");
+    std::ofstream(out.staged()) << "MAP new, never committed";
+  }
+  EXPECT_EQ(contents(file("m.map")), "MAP old");
+  EXPECT_EQ(entry_count(), 2u);
+}
+
+TEST_F(OutputFileTest, ASymbolicLinkIsWrittenThrough) {
+  put("real.map", "MAP old");
+  fs::create_symlink(file("real.map"), file("link.map"));
+  save(file("link.map"), false, "MAP new");
+  EXPECT_TRUE(fs::is_symlink(file("link.map")));
+  EXPECT_EQ(contents(file("real.map")), "MAP new");
+}
+
 }  // namespace
 }  // namespace occ_improve

@@ -4,11 +4,14 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <fstream>
 #include <optional>
 #include <random>
 #include <sstream>
+#include <sys/statvfs.h>
 #include <unistd.h>
 
 namespace occ_improve {
@@ -55,7 +58,20 @@ bool is_stale(const fs::path& leftover, long pid) {
   return modified_since_epoch + std::chrono::seconds(1) < *started;
 }
 
+// Whether the file system holding `path` (or its folder, for a file not yet there) has no block left.
+bool no_room_left(const fs::path& path) {
+  struct statvfs info {};
+  const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  return ::statvfs(folder.c_str(), &info) == 0 && info.f_bavail == 0;
+}
+
 }  // namespace
+
+std::string describe_write_failure(const std::string& path) {
+  const int error = errno;
+  if (error == ENOSPC || no_room_left(path)) return "no space left on device";
+  return error != 0 ? std::generic_category().message(error) : std::string("write failed");
+}
 
 void remove_stale_leftovers(const std::string& folder, const std::string& prefix) {
   std::error_code ec;
@@ -103,43 +119,140 @@ void write_file_atomically(const std::string& path, const std::string& what,
   remove_stale_leftovers(target.parent_path().string(), target.filename().string() + ".partial-");
   const std::string temporary = temporary_name(path);
   bool written = false;
+  std::string failure;
   {
+    errno = 0;
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
-    if (!out) throw IoError("cannot create '" + temporary + "' to write " + what + " '" + path + "'");
+    if (!out)
+      throw IoError("cannot write " + what + " '" + path + "': cannot create '" + temporary +
+                    "': " + describe_write_failure(temporary));
     written = write(out);
     out.close();
     written = written && static_cast<bool>(out);
+    if (!written) failure = describe_write_failure(temporary);
   }
   std::error_code error;
   if (written) fs::rename(temporary, path, error);
   if (!written || error) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
-    throw IoError("cannot write " + what + " '" + path + "'" +
-                  (error ? ": " + error.message() : std::string(" (disk full?)")));
+    throw IoError("cannot write " + what + " '" + path + "': " + (error ? error.message() : failure));
   }
 }
 
-OutputFolder::OutputFolder(const std::string& target, const std::string& tool, bool overwrite)
-    : target_(fs::absolute(target).lexically_normal()), shown_(target), tool_(tool), overwrite_(overwrite) {
-  if (target_.filename().empty()) target_ = target_.parent_path();  // "out/" and "." name the folder itself
-  const fs::path parent = target_.parent_path();
+namespace {
+
+// `path` made absolute and normal, a symbolic link followed to what it names (so that a later rename
+// replaces the named file or folder, not the link). A dangling link is refused: there is nothing to replace.
+fs::path resolved_target(const std::string& path, const std::string& what) {
+  fs::path target = fs::absolute(path).lexically_normal();
+  if (target.filename().empty()) target = target.parent_path();  // "out/" and "." name the folder itself
   std::error_code ec;
-  if (!fs::is_directory(parent, ec))
-    throw IoError("cannot write output folder '" + shown_ + "': '" + parent.string() +
-                  (fs::exists(parent, ec) ? "' is not a folder" : "' does not exist"));
+  if (!fs::is_symlink(target, ec)) return target;
+  const fs::path linked = fs::canonical(target, ec);
+  if (ec) throw IoError(what + " '" + path + "' is a symbolic link to nothing (" + ec.message() + ")");
+  return linked;
+}
+
+// Refuses a parent that is missing, not a folder, unreachable or not writable, naming the real cause.
+void require_writable_folder(const fs::path& folder, const std::string& what, const std::string& shown) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(folder, ec);
+  std::string problem;
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    problem = "cannot reach '" + folder.string() + "': " + ec.message();
+  else if (!fs::exists(status))
+    problem = "'" + folder.string() + "' does not exist";
+  else if (!fs::is_directory(status))
+    problem = "'" + folder.string() + "' is not a folder";
+  else if (::access(folder.c_str(), W_OK | X_OK) != 0)
+    problem = "cannot write in '" + folder.string() + "': " + std::generic_category().message(errno);
+  if (!problem.empty()) throw IoError("cannot write " + what + " '" + shown + "': " + problem);
+}
+
+// "<folder>/.<name>.staged-<pid>-<random><extension>": hidden, named by its writer's PID (for
+// remove_stale_leftovers) and keeping the target's extension (writers that choose the format by it).
+fs::path staged_name(const fs::path& target) {
+  std::random_device random;
+  std::ostringstream name;
+  name << "." << target.filename().string() << ".staged-" << ::getpid() << '-' << std::hex << random()
+       << target.extension().string();
+  return target.parent_path() / name.str();
+}
+
+}  // namespace
+
+OutputFile::OutputFile(const std::string& target, const std::string& flag, bool overwrite,
+                       const std::function<bool(const std::string&)>& is_own, const std::string& kind)
+    : shown_(target) {
+  const fs::path resolved = resolved_target(target, flag);
+  const std::string what = flag + " file";
+  std::error_code ec;
+  if (fs::is_directory(resolved, ec))
+    throw IoError("cannot write " + what + " '" + target + "': it is a folder; name a file");
+  require_writable_folder(resolved.parent_path(), what, target);
+  if (fs::exists(resolved, ec) && !overwrite && !is_own(resolved.string()))
+    throw IoError(flag + " '" + target + "' exists and is not " + kind +
+                  " written by occ_improve: choose another name, or give -overwrite to replace it");
+  remove_stale_leftovers(resolved.parent_path().string(), "." + resolved.filename().string() + ".staged-");
+  target_ = resolved.string();
+  staged_ = staged_name(resolved).string();
+  errno = 0;
+  if (!std::ofstream(staged_, std::ios::binary))  // the writability check, for real
+    throw IoError("cannot write " + what + " '" + target + "': " + describe_write_failure(staged_));
+}
+
+OutputFile::~OutputFile() {
+  std::error_code ignored;
+  fs::remove(staged_, ignored);
+}
+
+void OutputFile::commit() {
+  std::error_code ec;
+  fs::rename(staged_, target_, ec);
+  if (ec) throw IoError("cannot move the new '" + shown_ + "' into place: " + ec.message());
+}
+
+OutputFolder::OutputFolder(const std::string& target, const std::string& tool, bool overwrite)
+    : target_(resolved_target(target, "output folder")), shown_(target), tool_(tool), overwrite_(overwrite) {
+  const fs::path parent = target_.parent_path();
+  require_writable_folder(parent, "output folder", shown_);
+  std::error_code ec;
   if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
     throw IoError("output folder '" + shown_ + "' exists and is not a folder");
+  recover_interrupted_commit();
   if (!overwrite_ && !target_is_own())
     throw IoError("output folder '" + shown_ + "' already holds files " + tool_ +
                   " did not write: choose another -o, or give -overwrite to write into it (files of the "
                   "same names are replaced, nothing else is touched)");
-  const std::string staging_prefix = "." + target_.filename().string() + ".tmp-";
-  remove_stale_leftovers(parent.string(), staging_prefix);
-  staging_ = parent / (staging_prefix + std::to_string(::getpid()));
+  staging_ = parent / ("." + target_.filename().string() + ".tmp-" + std::to_string(::getpid()));
   fs::create_directory(staging_, ec);
   if (ec) throw IoError("cannot write output folder '" + shown_ + "': cannot create '" + staging_.string() + "': " +
                         ec.message());
+}
+
+// A run killed between replace_whole's two renames left the previous output as ".<name>.tmp-<pid>.old" and
+// no target: the newest such leftover of a dead run becomes the target again.
+void OutputFolder::recover_interrupted_commit() {
+  std::error_code ec;
+  if (fs::exists(target_, ec)) return;
+  const std::string prefix = "." + target_.filename().string() + ".tmp-";
+  fs::path newest;
+  fs::file_time_type newest_time{};
+  for (fs::directory_iterator it(target_.parent_path(), ec), end; it != end && !ec; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() + 4 || name.compare(0, prefix.size(), prefix) != 0 ||
+        name.compare(name.size() - 4, 4, ".old") != 0)
+      continue;
+    const std::string pid = name.substr(prefix.size(), name.size() - 4 - prefix.size());
+    if (pid.empty() || pid.size() > 9 || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::error_code time_error;
+    const fs::file_time_type time = fs::last_write_time(it->path(), time_error);
+    if (time_error || !is_stale(it->path(), std::stol(pid)) || (!newest.empty() && time <= newest_time)) continue;
+    newest = it->path();
+    newest_time = time;
+  }
+  if (!newest.empty()) fs::rename(newest, target_, ec);
 }
 
 OutputFolder::~OutputFolder() {
@@ -172,6 +285,8 @@ void OutputFolder::commit() {
   else
     throw IoError("output folder '" + shown_ + "' now holds files " + tool_ + " did not write: give -overwrite");
   files_.clear();  // a further commit publishes what is staged after this one
+  // Only now, with the new output in place, may what dead runs left beside it go.
+  remove_stale_leftovers(target_.parent_path().string(), "." + target_.filename().string() + ".tmp-");
 }
 
 void OutputFolder::replace_whole() {

@@ -20,11 +20,43 @@ namespace occ_improve {
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write);
 
+/// Why writing `path` failed, for an error message: "no space left on device" when errno says so or the
+/// file system of `path` has no room left, else strerror(errno) ("permission denied", ...). Call it right
+/// after the failed operation, before errno changes.
+std::string describe_write_failure(const std::string& path);
+
 /// Removes the entries of `folder` named "<prefix><pid>..." that a writer killed mid-write left behind:
 /// those whose PID is not running, or is running a process that started after the entry was last
 /// modified (the PID was reused). A live writer's entries are kept. Called before each write to the same
 /// place (write_file_atomically: "<name>.partial-", OutputFolder: ".<name>.tmp-").
 void remove_stale_leftovers(const std::string& folder, const std::string& prefix);
+
+/// One output file of a tool (-save MAP, occ_to_octomap's -o TREE), checked before any work and written in
+/// two steps, so that a run that fails anywhere leaves the previous file as it was:
+///  - the constructor refuses (IoError/InvalidParameter naming `flag`): a folder, a missing or unwritable
+///    parent, and an existing file that `is_own` does not recognise as one this project wrote (checked by
+///    its magic) unless `overwrite`; a symbolic link is written through (the link stays, its target changes);
+///  - staged() is where the content is written (a temporary beside the target);
+///  - commit() renames it over the target (it may be written and committed again: a tool that saves as it
+///    goes); the destructor removes a staged file never committed.
+class OutputFile {
+public:
+  OutputFile(const std::string& target, const std::string& flag, bool overwrite,
+             const std::function<bool(const std::string& existing)>& is_own, const std::string& kind);
+  OutputFile(const OutputFile&) = delete;
+  OutputFile& operator=(const OutputFile&) = delete;
+  ~OutputFile();
+
+  /// The temporary to write the content to (a file the writer may itself replace atomically).
+  const std::string& staged() const { return staged_; }
+  /// Moves the staged file over the target. Throws IoError when there is no staged file or the rename fails.
+  void commit();
+  /// The target as the user named it.
+  const std::string& path() const { return shown_; }
+
+private:
+  std::string shown_, target_, staged_;
+};
 
 /// The file by which an output folder says which tool wrote it: the tool's name on the first line, then
 /// one line per file the tool wrote there.
@@ -37,6 +69,10 @@ inline constexpr const char* kOutputMarkerName = ".occ_improve_output";
 ///  - any other non-empty folder is refused (IoError naming -overwrite) unless `overwrite` is set; then
 ///    the staged files are renamed into it one by one, replacing only files of the same names, and no
 ///    marker is written (the folder still is not the tool's own).
+/// A symbolic link to a folder is written through: the link stays and the folder it names is replaced.
+/// A run killed between the two renames of a commit leaves the old output as ".<name>.tmp-<pid>.old"; the
+/// next OutputFolder on the same target moves it back when the target is missing, and leftovers of dead
+/// runs are removed only after a successful commit.
 /// The staging folder is removed on destruction unless committed. commit() may be called again after
 /// more files are written (a tool that publishes intermediate results); each call replaces the last.
 class OutputFolder {
@@ -55,9 +91,12 @@ public:
   void commit();
   /// The target as the user named it.
   const std::string& path() const { return shown_; }
+  /// The folder the files go to, absolute and with symbolic links resolved.
+  const std::filesystem::path& resolved() const { return target_; }
 
 private:
   bool target_is_own() const;
+  void recover_interrupted_commit();
   void replace_whole();
   void move_files_in();
 
