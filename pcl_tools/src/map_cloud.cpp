@@ -1,12 +1,10 @@
-// PointImprovement is a custom point type: the PCD writer's templates are instantiated here, from
-// their implementation header, as PCL asks for types it does not precompile.
+// PointImprovement is a custom point type: PCL's templates are instantiated for it here, as PCL asks for
+// types it does not precompile.
 #define PCL_NO_PRECOMPILE
 #include "occ_improve/pcl/map_cloud.hpp"
 
 #include "occ_improve/errors.hpp"
-
-#include <pcl/io/impl/pcd_io.hpp>
-#include <pcl/io/pcd_io.h>
+#include "occ_improve/pcl/pcd_writer.hpp"
 
 #include <limits>
 #include <sstream>
@@ -53,14 +51,7 @@ pcl::PointCloud<PointImprovement> to_improvement_cloud(const SphericalGeometry& 
 }
 
 void save_improvement_cloud(const std::string& path, const pcl::PointCloud<PointImprovement>& cloud) {
-  pcl::PCDWriter writer;
-  int status = -1;
-  try {
-    status = writer.writeBinary(path, cloud);
-  } catch (const pcl::PCLException& e) {  // PCL throws when the file cannot be opened or mapped
-    throw IoError("cannot write PCD file '" + path + "': " + e.detailedMessage());
-  }
-  if (status != 0) throw IoError("cannot write PCD file '" + path + "'");
+  save_pcd_binary(path, cloud);
 }
 
 }  // namespace occ_improve

@@ -2,6 +2,7 @@
 // closing remark) and writes a labelled cloud, label and contour images and a per-segment table.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
+#include "occ_improve/pcl/pcd_writer.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
@@ -71,8 +72,7 @@ int run(const CommandLine& command_line) {
     q.g = rgb[1];
     q.b = rgb[2];
   }
-  const std::string cloud_path = out.file("labels.pcd");
-  if (pcl::io::savePCDFileBinary(cloud_path, labelled) < 0) throw IoError("cannot write '" + cloud_path + "'");
+  save_pcd_binary(out.file("labels.pcd"), labelled);
   write_png(out.file("labels.png"), render_segmentation(result.segmentation));
   write_png(out.file("contours.png"), render_contours(result.segmentation));
   const std::string csv_path = out.file("segments.csv");
