@@ -328,6 +328,12 @@ void save_map(const std::string& path, const SphericalGrid& grid, const SensorMo
   });
 }
 
+bool is_map_file(const std::string& path) {
+  char magic[sizeof(kMagic)] = {};
+  std::ifstream in(path, std::ios::binary);
+  return in.read(magic, sizeof magic) && std::memcmp(magic, kMagic, sizeof kMagic) == 0;
+}
+
 LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
   const std::vector<char> bytes = read_file(path, memory_cap_bytes);
   auto fail = [&](const std::string& problem) { throw FormatError("map '" + path + "': " + problem); };

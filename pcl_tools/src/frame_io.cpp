@@ -447,7 +447,9 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path p(input);
-  if (!fs::exists(p, ec)) throw IoError("input '" + input + "' does not exist");
+  if (!fs::exists(p, ec))
+    throw IoError("input '" + input + "' " +
+                  (ec && ec != std::errc::no_such_file_or_directory ? "cannot be reached: " + ec.message() : "does not exist"));
   if (!fs::is_directory(p, ec)) {
     const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
     return {source_of(input, is_depth_image_path(input) ? intrinsics_beside(folder) : std::nullopt)};

@@ -22,7 +22,8 @@ namespace fs = std::filesystem;
 
 FileSequenceGrabber::FileSequenceGrabber(std::size_t frame_count, float fps)
     : frame_count_(frame_count), fps_(fps), frame_signal_(createSignal<FrameSignal>()) {
-  detail::require_parameter(std::isfinite(fps) && fps >= 0.0f, "fps", fps, ">= 0 (0 = as fast as possible)");
+  detail::require_parameter(std::isfinite(fps) && (fps == 0.0f || (fps >= kMinimumFps && fps <= 1e6f)), "fps", fps,
+                            "0 (as fast as possible) or in [0.001, 1e6]");
 }
 
 FileSequenceGrabber::~FileSequenceGrabber() noexcept { stop(); }

@@ -7,6 +7,7 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
+#include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/tools/tool_frame_grabber.hpp"
 #include "occ_improve/tools/tool_options.hpp"
@@ -50,10 +51,14 @@ const ToolFlags kFlags{
     {},
     frame_inputs_help()};
 
-// Every write publishes the whole set, so the folder always holds one consistent state of the map.
-std::vector<std::string> write_maps(const Mapper& mapper, OutputFolder& out, const RegionOptions& regions, int top_k) {
+// Every write publishes the whole set (and the -save map), so the folder always holds one consistent state
+// of the map; a failure anywhere commits nothing.
+std::vector<std::string> write_maps(const Mapper& mapper, OutputFolder& out, MapSaveTarget& save,
+                                    const RegionOptions& regions, int top_k) {
   const std::vector<std::string> names = write_map_outputs(out, mapper, summarize_map(mapper, regions, top_k), std::nullopt);
+  if (save.requested()) save_map(save.staged_path(), mapper.grid(), mapper.model().params());
   out.commit();
+  save.commit();
   return names;
 }
 
@@ -87,7 +92,7 @@ SimulatedShot acquire(const Shot& shot, VirtualSensor& sensor, Mapper& mapper, R
 }
 
 int run_simulation(const CommandLine& command_line, const ToolOptions& options, const RegionOptions& regions,
-                   OutputFolder& out) {
+                   OutputFolder& out, MapSaveTarget& save) {
   const std::string frame_path = *command_line.text("-simulate");
   const int budget = *command_line.integer("-budget"), max_shots = *command_line.integer("-max_shots");
   const ToolFrame frame = read_tool_frame(options, FrameSource{frame_path, std::nullopt});
@@ -132,7 +137,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
     gain.push_back(s.expected_gain);
   }
   if (shots.size() >= 2) write_png(out.file("gain.png"), render_curve(asked, gain));
-  const std::vector<std::string> names = write_maps(mapper, out, regions, options.top_k);
+  const std::vector<std::string> names = write_maps(mapper, out, save, regions, options.top_k);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%zu shots, %zu rays asked (%.2f frames), %zu returned, in %.2f s; stopped: %s\n", shots.size(),
               shots.empty() ? 0 : shots.back().rays_asked_total,
@@ -272,12 +277,13 @@ int run(const CommandLine& command_line) {
   const std::optional<std::string> device = command_line.has("-device") ? command_line.text("-device").value_or("")
                                                                         : std::optional<std::string>();
   const std::string load_path = command_line.text("-load").value_or("");
-  const std::string save_path = command_line.text("-save").value_or("");
   const std::string oni = command_line.text("-oni").value_or("");
   const std::string pcd_dir = command_line.text("-pcd_dir").value_or("");
   const std::string depth_dir = command_line.text("-depth_dir").value_or("");
   const int save_every = *command_line.integer("-save_every");
   const double fps = *command_line.number("-fps");
+  if (fps > 0 && fps < kMinimumFps)  // a longer frame period overflows the grabber's clock
+    throw InvalidParameter("-fps " + *command_line.text("-fps") + " is invalid: must be 0 (as fast as possible) or at least 0.001");
   const int max_frames = *command_line.integer("-max_frames");
   RegionOptions region_options;
   region_options.min_improvement = static_cast<float>(*command_line.number("-min_improvement"));
@@ -287,7 +293,8 @@ int run(const CommandLine& command_line) {
   if (sources != 1)
     throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, input files or -simulate); see -h");
   OutputFolder out = open_output_folder(command_line);
-  if (simulate) return run_simulation(command_line, options, region_options, out);
+  MapSaveTarget save(command_line, &out);
+  if (simulate) return run_simulation(command_line, options, region_options, out, save);
 
   StreamSource source = device || !oni.empty() ? open_device(options, device, oni)
                         : !depth_dir.empty()   ? open_depth_dir(options, depth_dir, max_frames, fps)
@@ -298,9 +305,6 @@ int run(const CommandLine& command_line) {
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
   pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
   Pipeline pipeline(make_mapper(load_path, options, source.preset), with_camera(pipeline_options, source.preset));
-  const auto save_grid = [&] {
-    if (!save_path.empty()) save_map(save_path, pipeline.mapper().grid(), pipeline.mapper().model().params());
-  };
 
   std::mutex report_mutex;
   std::optional<FrameResult> last;
@@ -314,8 +318,7 @@ int run(const CommandLine& command_line) {
     }
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
-      write_maps(pipeline.mapper(), out, region_options, options.top_k);
-      save_grid();
+      write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
       ++maps_written;
     }
   });
@@ -341,9 +344,8 @@ int run(const CommandLine& command_line) {
     throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +
                        std::to_string(s.grabber_errors) + " unreadable)");
-  const std::vector<std::string> written = write_maps(pipeline.mapper(), out, region_options, options.top_k);
-  save_grid();
-  if (!save_path.empty()) pcl::console::print_info("Saved the grid to %s\n", save_path.c_str());
+  const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
+  if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
   print_stream_summary(pipeline.statistics(), stop_reason, last);
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());

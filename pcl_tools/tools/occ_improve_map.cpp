@@ -8,6 +8,7 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
+#include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/render.hpp"
@@ -51,7 +52,6 @@ int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   const bool use_sample = command_line.has("-sample");
   const std::string load_path = command_line.text("-load").value_or("");
-  const std::string save_path = command_line.text("-save").value_or("");
   InsertionOptions insertion;
   insertion.threads = *command_line.integer("-threads");
   RegionOptions region_options;
@@ -59,8 +59,9 @@ int run(const CommandLine& command_line) {
   if (!use_sample && options.inputs.empty() && load_path.empty())
     throw InvalidParameter("no input: give PCD / depth image files or a dataset folder, -sample or -load (see -h)");
 
-  // Fail on an unwritable or foreign output folder before any work.
+  // Fail on an unwritable or foreign output folder, or a -save that may not be replaced, before any work.
   OutputFolder staging = open_output_folder(command_line);
+  MapSaveTarget save(command_line, &staging);
 
   // The first frame sets the camera, so the grid; the others are read and inserted one by one (insertion
   // with the surface kept current, then the incremental improvement; timed by the mapper).
@@ -95,9 +96,10 @@ int run(const CommandLine& command_line) {
   start = std::chrono::steady_clock::now();
   const std::vector<std::string> written =
       write_map_outputs(staging, *mapper, summary, fused.colour);
+  if (save.requested()) save_map(save.staged_path(), mapper->grid(), mapper->model().params());
   throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
-  if (!save_path.empty()) save_map(save_path, mapper->grid(), mapper->model().params());
+  save.commit();
   const double write_seconds = seconds_since(start);
   const std::vector<Region>& regions = summary.regions;
   const std::vector<RankedRay>& rays = summary.rays;
@@ -130,6 +132,7 @@ int run(const CommandLine& command_line) {
                 static_cast<double>(rays.front().depth_m));
   std::printf("stop: %s (%s)\n", summary.stop.stop ? "yes" : "no", summary.stop.reason.c_str());
   std::printf("wrote %s/: %s\n", staging.path().c_str(), join_names(written).c_str());
+  if (save.requested()) std::printf("saved map %s\n", save.path().c_str());
   return 0;
 }
 

@@ -6,6 +6,7 @@
 #include "occ_improve/octomap/export.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
 #include <Eigen/Geometry>
@@ -35,7 +36,7 @@ const ToolFlags kFlags{
     "file gets OctoMap's defaults) nor the sensor model; keep the .occmap (-save) for those.\n"
     "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
     "are added, then clamped.\n",
-    joined({{"-o", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame"}, sensor_flag_names(),
+    joined({{"-o", "-overwrite", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame"}, sensor_flag_names(),
             camera_flag_names(), {"-no_poses"}}),
     {},
     {"-load", "-pose"},
@@ -139,7 +140,6 @@ OctomapExportReport export_grids(const std::vector<Source>& grids, const std::ve
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   const std::string output = command_line.text("-o").value_or("");
-  const std::string save_path = command_line.text("-save").value_or("");
   const std::vector<std::string> load_paths = command_line.values("-load");
   const bool use_sample = command_line.has("-sample");
   if (output.empty()) throw InvalidParameter("-o OUT.bt|OUT.ot is required (see -h)");
@@ -147,7 +147,12 @@ int run(const CommandLine& command_line) {
   const double resolution = *command_line.number("-resolution");
   const int sources = (load_paths.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
-  if (!load_paths.empty() && !save_path.empty()) throw InvalidParameter("-save only applies to a grid built from frames");
+  if (!load_paths.empty() && command_line.has("-save"))
+    throw InvalidParameter("-save only applies to a grid built from frames");
+  // Both outputs are checked (never an input, never a foreign file) before any work, committed after it.
+  MapSaveTarget save(command_line, nullptr);
+  if (save.requested()) require_distinct_outputs(save.path(), "-save", output, "-o");
+  const auto tree_file = open_output_file(command_line, "-o", is_octomap_file, "an OctoMap file");
   std::vector<Eigen::Isometry3d> poses = parse_poses(command_line, std::max<std::size_t>(load_paths.size(), 1));
   const PresetOverrides& o = options.overrides;
   const bool preset_flags = command_line.has("-preset") || o.sigma_depth_m ||
@@ -166,9 +171,9 @@ int run(const CommandLine& command_line) {
   const double read_seconds = seconds_since(start);
 
   double save_seconds = 0;
-  if (!save_path.empty()) {
+  if (save.requested()) {
     start = std::chrono::steady_clock::now();
-    save_map(save_path, *grids.front().grid, grids.front().model);
+    save_map(save.staged_path(), *grids.front().grid, grids.front().model);
     save_seconds = seconds_since(start);
   }
 
@@ -176,8 +181,10 @@ int run(const CommandLine& command_line) {
   const OctomapExportReport report = export_grids(grids, poses, *tree);
   throw_if_interrupted();  // before the output is written: an interrupted run leaves nothing behind
   start = std::chrono::steady_clock::now();
-  create_parent_folders(output);
-  write_octree(*tree, output);
+  write_octree(*tree, tree_file->staged());
+  throw_if_interrupted();
+  save.commit();
+  tree_file->commit();
   const double write_seconds = seconds_since(start);
 
   for (const Source& source : grids) {
@@ -188,7 +195,7 @@ int run(const CommandLine& command_line) {
                 grid.clamped() ? "clamped" : "exact");
     if (source.insertion.points_received) std::printf("%s\n", describe_points(source.insertion).c_str());
   }
-  if (!save_path.empty()) std::printf("saved map %s\n", save_path.c_str());
+  if (save.requested()) std::printf("saved map %s\n", save.path().c_str());
   std::printf("OcTree at %.4g m: %zu occupied and %zu free leaf updates, %zu left unknown; %zu leaves, %.1f MB\n",
               resolution, report.occupied_written, report.free_written, report.left_unknown,
               tree->getNumLeafNodes(), static_cast<double>(tree->memoryUsage()) / 1e6);

@@ -95,7 +95,7 @@ TEST(CommandLine, RefusalsNameTheFlagAndTheValue) {
   refused({"-threads"}, "-threads needs a value");
   refused({"-o"}, "-o needs a value");
   refused({"-o", "-q"}, "-o needs a value");  // a flag is not a folder name
-  refused({"-fps", "abc"}, "-fps abc is invalid: must be a finite number >= 0");
+  refused({"-fps", "abc"}, "-fps abc is invalid: must be a finite number in [0, 1000]");
   refused({"-fps", "-1"}, "-fps -1 is invalid");
   refused({"-contour", "abc"}, "-contour abc is invalid: must be a finite number < 0");
   refused({"-contour", "0"}, "-contour 0 is invalid");

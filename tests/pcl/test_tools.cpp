@@ -398,5 +398,139 @@ TEST_F(Tools, SimulateRunsTheSelectiveLoopUntilThePlanSaysStop) {
   EXPECT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 0 -o sim3").exit_code, 1);
 }
 
+// ---- Nothing a user owns is lost (issue 18): -save and occ_to_octomap's -o, failed runs, interrupted commits.
+
+bool starts_with(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
+
+// -save replaced anything, the run's own input included, and occ_to_octomap -save X -o X lost the map.
+TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  const std::string cloud_bytes = contents(wall);
+  std::ofstream(file("notes.txt")) << "my notes";
+  for (const std::string& args : {wall + " -o out -save wall.pcd", wall + " -o out -save wall.pcd -overwrite",
+                                  wall + " -o out -save notes.txt"}) {
+    const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_NE(r.err.find("-save"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(folder_ / "out")) << "refused before any work: " << args;
+  }
+  EXPECT_EQ(contents(wall), cloud_bytes);
+  EXPECT_EQ(contents(folder_ / "notes.txt"), "my notes");
+  EXPECT_NE(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save notes.txt").err.find("-overwrite"), std::string::npos);
+  // A map it wrote is replaced; with -overwrite, so is another file.
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save m.occmap").exit_code, 0);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save m.occmap").exit_code, 0);
+  EXPECT_TRUE(starts_with(contents(folder_ / "m.occmap"), "OCCIMAP"));
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save notes.txt -overwrite").exit_code, 0);
+  EXPECT_TRUE(starts_with(contents(folder_ / "notes.txt"), "OCCIMAP"));
+
+  // A file inside an input folder, in the live tool.
+  fs::create_directory(folder_ / "frames");
+  fs::copy_file(wall, folder_ / "frames" / "f100.pcd");
+  const ToolRun live = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -o live -save frames/f100.pcd -overwrite");
+  EXPECT_EQ(live.exit_code, 1);
+  EXPECT_NE(live.err.find("input folder"), std::string::npos) << live.err;
+  EXPECT_EQ(contents(folder_ / "frames" / "f100.pcd"), cloud_bytes);
+
+  // occ_to_octomap: -o and -save never the same file, -o never a file OctoMap did not write.
+  const ToolRun same = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -save same.bt -o same.bt");
+  EXPECT_EQ(same.exit_code, 1);
+  EXPECT_NE(same.err.find("name the same file"), std::string::npos) << same.err;
+  const ToolRun tree = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o notes.bt");
+  EXPECT_EQ(tree.exit_code, 0);
+  EXPECT_EQ(tree.err.find("done."), std::string::npos) << "OctoMap's writer printed on stderr: " << tree.err;
+  EXPECT_TRUE(starts_with(contents(folder_ / "notes.bt"), "# Octomap OcTree"));
+  EXPECT_GT(octomap::OcTree(file("notes.bt")).size(), 0u) << "OctoMap reads what we wrote";
+  EXPECT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o notes.bt").exit_code, 0) << "its own tree is replaced";
+  std::ofstream(file("mine.bt")) << "not a tree";
+  const ToolRun foreign = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o mine.bt");
+  EXPECT_EQ(foreign.exit_code, 1);
+  EXPECT_NE(foreign.err.find("-overwrite"), std::string::npos) << foreign.err;
+  EXPECT_EQ(contents(folder_ / "mine.bt"), "not a tree");
+}
+
+// A failed -save was reported after -o had been replaced: now every target is checked first and nothing is
+// committed when any write fails.
+TEST_F(Tools, AFailedSaveCommitsNothing) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out").exit_code, 0);
+  const std::string rays_before = contents(folder_ / "out" / "rays.csv");
+  std::ofstream(folder_ / "out" / "rays.csv", std::ios::app) << "# the previous run's\n";
+  const std::string marked = contents(folder_ / "out" / "rays.csv");
+  fs::create_directory(folder_ / "a_folder");
+  const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save a_folder -overwrite");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("a_folder"), std::string::npos) << r.err;
+  EXPECT_EQ(contents(folder_ / "out" / "rays.csv"), marked) << "the previous output is untouched";
+  EXPECT_FALSE(rays_before.empty());
+}
+
+// A full disk gave PCL's "raw_fallocate ... errno 17 File exists" and an empty-quoted error.
+TEST_F(Tools, AFullDiskIsNamedAndCommitsNothing) {
+  fs::create_directory(folder_ / "full");
+  const std::string mount = "mount -t tmpfs -o size=32k tmpfs " + (folder_ / "full").string() + " 2>/dev/null";
+  if (std::system(mount.c_str()) != 0) GTEST_SKIP() << "cannot mount a small tmpfs here (needs root)";
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  const ToolRun outputs = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o full/out");
+  const ToolRun save = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save full/m.occmap");
+  const std::set<std::string> left = files_in(folder_ / "full");
+  std::system(("umount " + (folder_ / "full").string()).c_str());
+  for (const ToolRun& r : {outputs, save}) {
+    EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
+    EXPECT_NE(r.err.find("no space left on device"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("full/"), std::string::npos) << r.err;
+  }
+  EXPECT_TRUE(left.empty()) << "nothing half-written is left: " << left.size() << " entries";
+  EXPECT_FALSE(fs::exists(folder_ / "out")) << "the -o folder is not committed when -save fails";
+}
+
+// A run killed between its two renames left the old output as .out.tmp-PID.old, which the next run
+// deleted even when it failed on a typo'd input.
+TEST_F(Tools, TheOutputOfARunKilledBetweenItsRenamesIsRecovered) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out").exit_code, 0);
+  const std::string rays = contents(folder_ / "out" / "rays.csv");
+  fs::rename(folder_ / "out", folder_ / ".out.tmp-999999999.old");  // PID beyond pid_max: a dead run
+  EXPECT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, "typo.pcd -o out").exit_code, 1);
+  EXPECT_EQ(contents(folder_ / "out" / "rays.csv"), rays);
+  EXPECT_FALSE(fs::exists(folder_ / ".out.tmp-999999999.old"));
+}
+
+// -o on a symbolic link replaced the link by a folder; a rerun of -o r1 -save r1/m.occmap was refused
+// because the map was not in the folder's marker.
+TEST_F(Tools, OutputLinksAreWrittenThroughAndASaveInsideTheOutputIsItsOwn) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  fs::create_directory(folder_ / "real");
+  fs::create_directory_symlink(folder_ / "real", folder_ / "link");
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o link").exit_code, 0);
+  EXPECT_TRUE(fs::is_symlink(folder_ / "link"));
+  EXPECT_TRUE(fs::is_regular_file(folder_ / "real" / "rays.csv"));
+  for (int i = 0; i < 2; ++i) {
+    const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o r1 -save r1/m.occmap");
+    ASSERT_EQ(r.exit_code, 0) << "run " << i << ": " << r.err;
+  }
+  EXPECT_TRUE(starts_with(contents(folder_ / "r1" / "m.occmap"), "OCCIMAP"));
+  EXPECT_NE(contents(folder_ / "r1" / ".occ_improve_output").find("\nm.occmap\n"), std::string::npos);
+}
+
+// "-intrinsics -585,..." was read as a flag; a camera of another size than an organized cloud ran silently;
+// -fps 1e-12 overflowed the frame period.
+TEST_F(Tools, ValuesThatLookLikeFlagsAndCamerasThatDoNotFitAreNamed) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  const ToolRun negative = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -intrinsics -585,585,32,24,64,48 -o out");
+  EXPECT_EQ(negative.exit_code, 1);
+  EXPECT_EQ(negative.err.find("needs a value"), std::string::npos) << negative.err;
+  EXPECT_NE(negative.err.find("-intrinsics -585,585,32,24,64,48"), std::string::npos) << negative.err;
+  const ToolRun wrong_size = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -intrinsics 585,585,320,240,640,480 -o out");
+  EXPECT_EQ(wrong_size.exit_code, 1);
+  EXPECT_NE(wrong_size.err.find("is 64 x 48 but the camera"), std::string::npos) << wrong_size.err;
+  EXPECT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -intrinsics 200,200,32,24,64,48 -o out").exit_code, 0);
+  fs::create_directory(folder_ / "frames");
+  fs::copy_file(wall, folder_ / "frames" / "f100.pcd");
+  const ToolRun fps = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -fps 1e-12 -o live");
+  EXPECT_EQ(fps.exit_code, 1);
+  EXPECT_NE(fps.err.find("-fps 1e-12 is invalid"), std::string::npos) << fps.err;
+}
+
 }  // namespace
 }  // namespace occ_improve

@@ -30,6 +30,10 @@ constexpr std::uint32_t kOldestMapFormatVersion = 1;
 void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
               const ReturnRecord& returns = ReturnRecord());
 
+/// Whether `path` starts with the map format's magic: a file save_map wrote (any version, perhaps corrupt).
+/// What the tools check before they replace a file with -save (nothing else a user owns is replaced).
+bool is_map_file(const std::string& path);
+
 struct LoadedMap {
   SphericalGrid grid;
   SensorModelParams model;

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 
 namespace occ_improve {
@@ -224,11 +225,30 @@ void require_octomap_output_path(const std::string& path) {
     throw InvalidParameter("OctoMap output '" + path + "' must end in .bt (maximum likelihood) or .ot (full)");
 }
 
+bool is_octomap_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string first_line;
+  return std::getline(in, first_line) && first_line.rfind("# Octomap OcTree", 0) == 0;
+}
+
+namespace {
+
+// OctoMap's own header and data writers. writeBinaryConst() would write the same bytes, but then prints
+// " done." on stderr (OCTOMAP_DEBUG in Debian's build), which a tool's one error line must not follow.
+bool write_binary_tree(const octomap::OcTree& tree, std::ostream& out) {
+  out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
+      << "id " << tree.getTreeType() << "\nsize " << tree.size() << "\nres " << tree.getResolution() << "\ndata\n";
+  tree.writeBinaryData(out);
+  return static_cast<bool>(out);
+}
+
+}  // namespace
+
 void write_octree(const octomap::OcTree& tree, const std::string& path) {
   require_octomap_output_path(path);
   const bool full = std::filesystem::path(path).extension() == ".ot";
   write_file_atomically(path, "OctoMap file", [&](std::ostream& out) {
-    return full ? tree.write(out) : tree.writeBinaryConst(out);
+    return full ? tree.write(out) : write_binary_tree(tree, out);
   });
 }
 

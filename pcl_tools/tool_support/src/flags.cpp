@@ -5,6 +5,7 @@
 #include "occ_improve/presets.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -129,7 +130,8 @@ std::vector<FlagSpec> map_and_output_flags() {
       value_flag("-load", K::text, "MAP.occmap", kMap,
                  "start from a saved grid (same viewpoint); it carries its own preset, so preset flags are\n"
                  "ignored", "", "none: an empty grid"),
-      value_flag("-save", K::text, "MAP.occmap", kMap, "save the resulting grid (written atomically)", "", "not saved"),
+      value_flag("-save", K::text, "MAP.occmap", kMap, "save the resulting grid (written atomically, after the other outputs); an existing file\n"
+                 "is replaced only when it is an occ_improve map (or with -overwrite), never an input", "", "not saved"),
       bounded(value_flag("-threads", K::integer, "N", kMap, "insertion threads; 0: all cores", "0"), 0, 1024),
       bounded(value_flag("-k", K::integer, "K", kMap, "how many top rays and regions to report", "10"), 1),
       value_flag("-min_improvement", K::number, "V", kMap,
@@ -140,7 +142,9 @@ std::vector<FlagSpec> map_and_output_flags() {
                  "this tool did not write (marker " + std::string(kOutputMarkerName) + ") is refused",
                  "", "required"),
       switch_flag("-overwrite", kOutput,
-                  "write into such a folder anyway: files of the same names are replaced, nothing else is touched"),
+                  "write into such a folder anyway: files of the same names are replaced, nothing else is touched;\n"
+                  "also replace an output file (-save, occ_to_octomap -o) that occ_improve did not write (an\n"
+                  "input of the run is never replaced)"),
       switch_flag("-q", kOutput, "no progress line (it is only shown when stderr is a terminal)"),
   };
 }
@@ -158,9 +162,9 @@ std::vector<FlagSpec> stream_flags() {
                  "depth-image sequence: 7-Scenes (frame-*.depth.png, .pose.txt, camera-intrinsics.txt),\n"
                  "TUM RGB-D (depth.txt, groundtruth.txt) or a folder of 16-bit PNG/PGM/TIFF (PCL's grabber\n"
                  "layout: *_depth.tiff)", "", "none"),
-      bounded(value_flag("-fps", K::number, "F", kStream, "file sources: frames per second; 0: as fast as possible",
-                         "0"),
-              0),
+      bounded(value_flag("-fps", K::number, "F", kStream,
+                         "file sources: frames per second, 0 (as fast as possible) or at least 0.001", "0"),
+              0, 1000),
       switch_flag("-drop", kStream,
                   "file sources: the newest frame wins, like a live sensor (default: every frame is processed)"),
       bounded(value_flag("-max_frames", K::integer, "N", kStream,
@@ -242,12 +246,10 @@ bool contains(const std::vector<std::string>& list, const std::string& s) {
   return std::find(list.begin(), list.end(), s) != list.end();
 }
 
-// A negative number ("-0.5") is a value, not a flag.
+// A flag is a dash and a letter ("-o", "--help"); a dash and a digit or point starts a value: a negative
+// number ("-0.5") or a list of them ("-intrinsics -585,585,320,240").
 bool looks_like_flag(const std::string& arg) {
-  if (arg.size() < 2 || arg[0] != '-') return false;
-  char* end = nullptr;
-  std::strtod(arg.c_str(), &end);
-  return *end != '\0';
+  return arg.size() >= 2 && arg[0] == '-' && (std::isalpha(static_cast<unsigned char>(arg[1])) || arg[1] == '-');
 }
 
 std::string format_bound(double v) {

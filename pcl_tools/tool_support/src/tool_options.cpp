@@ -120,6 +120,19 @@ bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
          std::abs(a.cy - b.cy) <= kTolerancePx;
 }
 
+// An organized cloud is one camera image: a camera of another size would put its pixels on the wrong rays
+// (or outside the grid), so it is refused as a depth image of the wrong size is.
+void require_camera_fits(const pcl::PointCloud<pcl::PointXYZ>& cloud, const std::optional<PinholeIntrinsics>& camera,
+                         const std::string& path, const std::string& camera_source) {
+  if (!camera || cloud.height <= 1) return;
+  if (static_cast<int>(cloud.width) == camera->width && static_cast<int>(cloud.height) == camera->height) return;
+  std::ostringstream m;
+  m << "cloud '" << path << "' is " << cloud.width << " x " << cloud.height << " but the camera (" << camera_source
+    << ") is " << camera->width << " x " << camera->height << ": give the cloud's own intrinsics (FX,FY,CX,CY,"
+    << cloud.width << "," << cloud.height << ")";
+  throw InvalidInput(m.str());
+}
+
 }  // namespace
 
 ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source) {
@@ -131,6 +144,7 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
                            "-intrinsics FX,FY,CX,CY[,W,H] or -intrinsics_file PATH");
   LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
   require_valid_points(span_of(loaded.cloud), source.path);
+  require_camera_fits(loaded.cloud, camera, source.path, frame.camera_source);
   if (loaded.viewpoint) {
     // PCL's VIEWPOINT: the points are in the cloud's frame, the sensor at the viewpoint; the grid is the
     // sensor's, so the points go into the sensor frame whether or not poses are used to fuse frames.

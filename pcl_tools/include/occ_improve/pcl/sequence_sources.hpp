@@ -37,6 +37,10 @@
 
 namespace occ_improve {
 
+/// The slowest replay rate a file source takes [frames/s]: one frame per 1000 s (a longer period
+/// overflows the clock's duration type).
+constexpr double kMinimumFps = 1e-3;
+
 /// Common machinery of the file sequences: the reading thread, pacing, counting, clean stop.
 class FileSequenceGrabber : public pcl::Grabber {
 public:

@@ -72,6 +72,10 @@ std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eige
 /// half-written file. Throws InvalidParameter for another extension, IoError when it cannot write.
 void write_octree(const octomap::OcTree& tree, const std::string& path);
 
+/// Whether `path` starts with the first line OctoMap writes in a .bt or .ot file ("# Octomap OcTree ...").
+/// What occ_to_octomap checks before it replaces a file with -o.
+bool is_octomap_file(const std::string& path);
+
 /// The extension check of write_octree alone, for tools to fail before any work.
 void require_octomap_output_path(const std::string& path);
 

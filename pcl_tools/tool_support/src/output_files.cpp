@@ -1,0 +1,87 @@
+#include "occ_improve/tools/output_files.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/map_io.hpp"
+#include "occ_improve/tools/tool_options.hpp"
+
+#include <filesystem>
+#include <vector>
+
+namespace occ_improve {
+namespace fs = std::filesystem;
+namespace {
+
+// Every path the run reads from, as given.
+std::vector<std::string> run_inputs(const CommandLine& c) {
+  std::vector<std::string> inputs = c.positionals();
+  for (const char* flag : {"-load", "-intrinsics_file", "-oni", "-pcd_dir", "-depth_dir", "-simulate"})
+    if (c.declares(flag))
+      for (const std::string& value : c.values(flag))
+        if (!value.empty()) inputs.push_back(value);
+  return inputs;
+}
+
+// `path` absolute, normal, with the symbolic links of its existing part resolved.
+fs::path comparable(const std::string& path) {
+  std::error_code ec;
+  fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
+  return ec ? fs::absolute(path).lexically_normal() : resolved;
+}
+
+// Whether `inner` is `outer` or lies below it.
+bool is_within(const fs::path& inner, const fs::path& outer) {
+  const fs::path relative = inner.lexically_relative(outer);
+  return !relative.empty() && *relative.begin() != "..";
+}
+
+}  // namespace
+
+void require_not_an_input(const CommandLine& command_line, const std::string& path, const std::string& flag) {
+  const fs::path target = comparable(path);
+  for (const std::string& input : run_inputs(command_line)) {
+    std::error_code ec;
+    const fs::path source = comparable(input);
+    const bool folder = fs::is_directory(source, ec);
+    if (target == source || (folder && is_within(target, source)))
+      throw InvalidParameter(flag + " '" + path + "' would overwrite " + (folder ? "a file in the input folder '" : "the input '") +
+                             input + "': choose an output outside the inputs");
+  }
+}
+
+void require_distinct_outputs(const std::string& path_a, const std::string& flag_a, const std::string& path_b,
+                              const std::string& flag_b) {
+  if (comparable(path_a) == comparable(path_b))
+    throw InvalidParameter(flag_a + " '" + path_a + "' and " + flag_b + " '" + path_b +
+                           "' name the same file: give each output its own name");
+}
+
+std::unique_ptr<OutputFile> open_output_file(const CommandLine& command_line, const std::string& flag,
+                                             const std::function<bool(const std::string&)>& is_own,
+                                             const std::string& kind) {
+  const std::string path = *command_line.text(flag);
+  require_not_an_input(command_line, path, flag);
+  create_parent_folders(path);
+  return std::make_unique<OutputFile>(path, flag, command_line.has("-overwrite"), is_own, kind);
+}
+
+MapSaveTarget::MapSaveTarget(const CommandLine& command_line, OutputFolder* folder)
+    : shown_(command_line.text("-save").value_or("")) {
+  if (shown_.empty()) return;
+  if (folder && comparable(shown_).parent_path() == comparable(folder->resolved().string())) {
+    require_not_an_input(command_line, shown_, "-save");
+    folder_ = folder;
+    return;
+  }
+  file_ = open_output_file(command_line, "-save", is_map_file, "a map");
+}
+
+std::string MapSaveTarget::staged_path() {
+  if (folder_) return folder_->file(fs::path(shown_).filename().string());
+  return file_->staged();
+}
+
+void MapSaveTarget::commit() {
+  if (file_) file_->commit();
+}
+
+}  // namespace occ_improve
