@@ -160,12 +160,14 @@ void bind_mapper_insertion(py::class_<PyMapper>& c) {
         "Inserts points in the sensor frame (metres): an N x 3 or H x W x 3 array. float32 arrays whose points "
         "lie at one constant stride (C order, or slices like cloud[..., :3]) are read in place; other dtypes "
         "and layouts are converted to a float32 copy first. NaN/Inf/zero points are skipped and counted. "
-        "threads=0: all cores. Releases the GIL.");
+        "threads: 0 = all cores, at most 1024 (InvalidParameter otherwise). Releases the GIL.");
   c.def("insert_depth", &insert_depth_array, py::arg("depth"), py::arg("intrinsics"), py::arg("scale") = 1.0,
         py::arg("threads") = 0,
         "Inserts an H x W depth image (z-depth; value * scale = metres, 0 or NaN = no return) through its "
         "intrinsics. A C-contiguous float32 image is read in place; others (e.g. uint16 millimetres with "
-        "scale=0.001) are converted first. Releases the GIL.");
+        "scale=0.001) are converted first. Raises InvalidParameter for a scale under which the median return lies "
+        "outside the depth range while millimetres or metres would not, and for intrinsics of another camera "
+        "than the preset's. Releases the GIL.");
 }
 
 void bind_mapper_properties(py::class_<PyMapper>& c) {
