@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 
 namespace occ_improve {
 namespace {
@@ -177,6 +178,65 @@ TEST(Integrate, DepthImageSizeMismatchThrows) {
   std::vector<float> depth(100, 1.0f);
   DepthImage image{depth.data(), depth.size(), kinect_v1_intrinsics()};
   EXPECT_THROW(insert_depth_image(grid, SensorModel(p.model), image), InvalidInput);
+}
+
+TEST(Integrate, ThreadCountsOutsideTheToolsRangeAreRefused) {
+  const SensorPreset p = kinect_v1_paper();
+  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  const std::vector<Eigen::Vector3f> points{{0.0f, 0.0f, 1.0f}};
+  for (const int threads : {-1, InsertionOptions::kMaxThreads + 1, 40000}) {
+    try {
+      insert_points(grid, SensorModel(p.model), PointSpan::from(points), {threads});
+      ADD_FAILURE() << "threads = " << threads << " was accepted";
+    } catch (const InvalidParameter& e) {
+      EXPECT_EQ(std::string(e.what()), "threads = " + std::to_string(threads) +
+                                           " is invalid: must be in [0, 1024] (0: all cores)");
+    }
+  }
+  EXPECT_EQ(grid.touched_column_count(), 0u);
+  EXPECT_EQ(insert_points(grid, SensorModel(p.model), PointSpan::from(points), {InsertionOptions::kMaxThreads})
+                .points_inserted, 1u);
+}
+
+TEST(Integrate, DepthImageOfAnotherCameraThanTheGridsIsRefused) {
+  PinholeIntrinsics camera;
+  camera.fx = camera.fy = 585.0;
+  std::vector<float> depth(static_cast<std::size_t>(camera.width * camera.height), 2.0f);
+  for (const SensorPreset& p : {kinect_v1(camera), kinect_v1_spherical(camera)}) {
+    SphericalGrid grid{SphericalGeometry(p.geometry)};
+    const SensorModel model(p.model);
+    try {
+      insert_depth_image(grid, model, DepthImage{depth.data(), depth.size(), kinect_v1_intrinsics()});
+      ADD_FAILURE() << p.name << ": the nominal camera was accepted";
+    } catch (const InvalidParameter& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("intrinsics (fx=525.00 fy=525.00 cx=319.50 cy=239.50 640x480) are not the "
+                                            "camera the grid was built for (fx=585.00 fy=585.00 cx=319.50 "
+                                            "cy=239.50 640x480)", 0), 0u) << e.what();
+    }
+    EXPECT_EQ(grid.touched_column_count(), 0u);
+    PinholeIntrinsics nearly = camera;
+    nearly.cx += 0.04;  // within same_camera's 0.05 px
+    EXPECT_EQ(insert_depth_image(grid, model, DepthImage{depth.data(), depth.size(), nearly}).points_inserted,
+              depth.size()) << p.name;
+  }
+  // A grid that does not depend on a camera takes any.
+  const SensorPreset paper = kinect_v1_paper();
+  SphericalGrid grid{SphericalGeometry(paper.geometry)};
+  EXPECT_GT(insert_depth_image(grid, SensorModel(paper.model), DepthImage{depth.data(), depth.size(), camera})
+                .points_inserted, 0u);
+}
+
+TEST(Integrate, SameCameraAllowsFittingNoiseButNotHalfAPixel) {
+  PinholeIntrinsics a;
+  PinholeIntrinsics b = a;
+  b.fx += 0.049;
+  EXPECT_TRUE(same_camera(a, b));
+  b.cx += 0.5;
+  EXPECT_FALSE(same_camera(a, b));
+  b = a;
+  b.width = 320;
+  EXPECT_FALSE(same_camera(a, b));
+  EXPECT_EQ(camera_text(a), "fx=525.00 fy=525.00 cx=319.50 cy=239.50 640x480");
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace occ_improve {
 
@@ -16,6 +17,19 @@ void PinholeIntrinsics::validate() const {
   require_parameter(std::isfinite(cy), "cy", cy, "finite");
   require_parameter(width > 0 && width <= 65536, "width", width, "in [1, 65536]");
   require_parameter(height > 0 && height <= 65536, "height", height, "in [1, 65536]");
+}
+
+bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
+  constexpr double kTolerancePx = 0.05;
+  return a.width == b.width && a.height == b.height && std::abs(a.fx - b.fx) <= kTolerancePx &&
+         std::abs(a.fy - b.fy) <= kTolerancePx && std::abs(a.cx - b.cx) <= kTolerancePx &&
+         std::abs(a.cy - b.cy) <= kTolerancePx;
+}
+
+std::string camera_text(const PinholeIntrinsics& k) {
+  char text[160];
+  std::snprintf(text, sizeof text, "fx=%.2f fy=%.2f cx=%.2f cy=%.2f %dx%d", k.fx, k.fy, k.cx, k.cy, k.width, k.height);
+  return text;
 }
 
 const char* to_string(AngularBinning binning) {

@@ -11,6 +11,7 @@
 #include <limits>
 #include <utility>
 #include <sstream>
+#include <string>
 
 namespace occ_improve {
 
@@ -399,6 +400,7 @@ namespace {
 InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
                        SurfaceMap* surface, std::vector<ColumnIndex>* surface_changed) {
   const auto start = std::chrono::steady_clock::now();
+  options.validate();
   if (points.count > 0 && points.xyz == nullptr) throw InvalidInput("insert_points: null point buffer with count > 0");
   if (points.stride_floats < 3) {
     std::ostringstream m;
@@ -583,8 +585,22 @@ std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image) {
   return points;
 }
 
+void InsertionOptions::validate() const {
+  const std::string range = "in [0, " + std::to_string(kMaxThreads) + "] (0: all cores)";
+  detail::require_parameter(threads >= 0 && threads <= kMaxThreads, "threads", threads, range.c_str());
+}
+
+void require_grid_camera(const SphericalGeometry& geometry, const PinholeIntrinsics& intrinsics) {
+  const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
+  if (!camera || same_camera(*camera, intrinsics)) return;
+  throw InvalidParameter("intrinsics (" + camera_text(intrinsics) + ") are not the camera the grid was built for (" +
+                         camera_text(*camera) + "): its pixels would fall in other columns or outside the field " +
+                         "of view; build the preset from these intrinsics");
+}
+
 InsertionReport insert_depth_image(SphericalGrid& grid, const SensorModel& model, const DepthImage& image,
                                    const InsertionOptions& options) {
+  require_grid_camera(grid.geometry(), image.intrinsics);
   const auto points = depth_image_to_points(image);
   return insert_points(grid, model, PointSpan::from(points), options);
 }

@@ -3,6 +3,7 @@
 // them) and rethrows the first exception after all have joined, so no thread outlives the call.
 #include <algorithm>
 #include <exception>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -21,21 +22,24 @@ void run_parts(int parts, Body&& body) {
     return;
   }
   std::vector<std::exception_ptr> errors(static_cast<std::size_t>(parts));
+  const auto run = [&](int p) {
+    try {
+      body(p, parts);
+    } catch (...) {
+      errors[static_cast<std::size_t>(p)] = std::current_exception();
+    }
+  };
   std::vector<std::thread> threads;
   threads.reserve(static_cast<std::size_t>(parts) - 1);
-  for (int p = 1; p < parts; ++p)
-    threads.emplace_back([&, p] {
-      try {
-        body(p, parts);
-      } catch (...) {
-        errors[static_cast<std::size_t>(p)] = std::current_exception();
-      }
-    });
+  // A thread the system refuses (std::system_error) must not escape with others still joinable, which
+  // would std::terminate: the caller runs the parts left over itself, so every part runs exactly once.
+  int started = 1;
   try {
-    body(0, parts);
-  } catch (...) {
-    errors[0] = std::current_exception();
+    for (; started < parts; ++started) threads.emplace_back(run, started);
+  } catch (const std::system_error&) {
   }
+  run(0);
+  for (int p = started; p < parts; ++p) run(p);
   for (auto& t : threads) t.join();
   for (auto& e : errors)
     if (e) std::rethrow_exception(e);

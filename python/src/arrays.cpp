@@ -50,21 +50,48 @@ std::size_t point_stride_floats(const py::array& a) {
   return static_cast<std::size_t>(stride / f);
 }
 
-/// Any array-like (nested lists too) as an ndarray, without a copy when it already is one.
-py::array as_array(const py::handle& object) {
-  py::array a = py::array::ensure(object);
-  if (!a) throw py::error_already_set();
-  return a;
+/// Where a ragged nested sequence first breaks: "row 0 has 3 values, row 1 has 2", empty when its rows
+/// all have one length (the break is deeper, or it is not a sequence of sequences).
+std::string ragged_rows_text(const py::handle& object) {
+  if (!py::isinstance<py::sequence>(object) || py::isinstance<py::str>(object)) return "";
+  const auto rows = py::reinterpret_borrow<py::sequence>(object);
+  const auto length = [](const py::handle& row) -> py::ssize_t {
+    const bool nested = py::isinstance<py::sequence>(row) && !py::isinstance<py::str>(row);
+    return nested ? static_cast<py::ssize_t>(py::len(row)) : -1;
+  };
+  const auto describe = [](py::ssize_t i, py::ssize_t n) {
+    if (n < 0) return "row " + std::to_string(i) + " is a single value";
+    return "row " + std::to_string(i) + " has " + std::to_string(n) + (n == 1 ? " value" : " values");
+  };
+  const py::ssize_t count = static_cast<py::ssize_t>(py::len(rows));
+  for (py::ssize_t i = 1; i < count; ++i)
+    if (length(rows[i]) != length(rows[0])) return describe(0, length(rows[0])) + ", " + describe(i, length(rows[i]));
+  return "";
+}
+
+/// Any array-like (nested lists too) as an ndarray, without a copy when it already is one. A nested
+/// sequence numpy cannot make an array of (rows of different lengths) is InvalidInput naming `expected`.
+py::array as_array(const py::handle& object, const char* what, const char* expected) {
+  if (py::isinstance<py::array>(object)) return py::reinterpret_borrow<py::array>(object);
+  try {
+    return py::module_::import("numpy").attr("asarray")(object);
+  } catch (py::error_already_set& e) {
+    if (!e.matches(PyExc_ValueError)) throw;
+    const std::string rows = ragged_rows_text(object);
+    const std::string given = rows.empty() ? "a sequence numpy cannot make one array of (" + std::string(py::str(e.value()))
+                                           : "a ragged nested sequence (" + rows;
+    throw InvalidInput(std::string(what) + " must be " + expected + ", got " + given + ")");
+  }
 }
 
 }  // namespace
 
 PointsInput points_from_array(const py::handle& object) {
-  const py::array points = as_array(object);
+  static const char* const expected = "an N x 3 or H x W x 3 array of x, y, z";
+  const py::array points = as_array(object, "points", expected);
   require_real_numbers(points, "points");
   const bool shaped = (points.ndim() == 2 || points.ndim() == 3) && points.shape(points.ndim() - 1) == 3;
-  if (!shaped)
-    throw InvalidInput("points must be an N x 3 or H x W x 3 array of x, y, z, got shape " + shape_text(points));
+  if (!shaped) throw InvalidInput(std::string("points must be ") + expected + ", got shape " + shape_text(points));
   PointsInput in;
   in.span.count = static_cast<std::size_t>(points.size() / 3);
   const std::size_t stride = is_native_float32(points) ? point_stride_floats(points) : 0;
@@ -84,7 +111,7 @@ PointsInput points_from_array(const py::handle& object) {
 }
 
 DepthInput depth_from_array(const py::handle& object, const PinholeIntrinsics& intrinsics) {
-  const py::array depth = as_array(object);
+  const py::array depth = as_array(object, "depth", "an H x W array of depths");
   require_real_numbers(depth, "depth");
   if (depth.ndim() != 2 || depth.shape(0) != intrinsics.height || depth.shape(1) != intrinsics.width) {
     throw InvalidInput("depth must be an H x W array matching the intrinsics (" + std::to_string(intrinsics.height) +

@@ -8,8 +8,11 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <sstream>
+#include <vector>
 
 namespace occ_improve::python {
 namespace {
@@ -34,20 +37,64 @@ void bind_reports(py::module_& m) {
   def_fields_repr(mr, {"insertion", "improvement_seconds", "surface_columns_changed", "rays_recomputed"});
 }
 
-MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads) {
-  const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
+InsertionOptions insertion_options(int threads) {
   InsertionOptions options;
   options.threads = threads;
+  options.validate();  // before any work: a bad count is the caller's mistake, not a failure halfway
+  return options;
+}
+
+MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads) {
+  const InsertionOptions options = insertion_options(threads);
+  const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
   return with_mapper(self, [&](Mapper& m) { return m.insert(in.span, options); });
+}
+
+/// The depth units a scale can convert from, in the order their suggestion is tried.
+struct DepthUnit {
+  double scale;
+  const char* name;
+};
+constexpr DepthUnit kDepthUnits[] = {{1e-3, "millimetres"}, {1.0, "metres"}};
+// Nearer than this no depth camera measures; a median below it is a unit mistake, as one beyond the grid.
+constexpr double kNearestPlausibleDepthM = 0.05;
+// Fewer returns than this say nothing about the unit (the tools' unit guess needs as many).
+constexpr std::size_t kReturnsToJudgeUnit = 100;
+
+/// Refuses a `scale` that puts the median return of the image outside the grid's depth range when one
+/// of the usual units would put it inside: every return would otherwise be inserted beyond the range (the
+/// map then says free to its end) or crammed near the sensor, without a word. Anything else is accepted.
+void require_plausible_scale(const float* raw, std::size_t pixels, double scale, const GeometryParams& g) {
+  std::vector<float> returns;
+  returns.reserve(pixels);
+  for (std::size_t i = 0; i < pixels; ++i)
+    if (raw[i] > 0.0f && std::isfinite(raw[i])) returns.push_back(raw[i]);
+  if (returns.size() < kReturnsToJudgeUnit) return;
+  const auto middle = returns.begin() + static_cast<std::ptrdiff_t>(returns.size() / 2);
+  std::nth_element(returns.begin(), middle, returns.end());
+  const double median = *middle;
+  const double nearest_m = std::max(g.depth_min_m, kNearestPlausibleDepthM);
+  const auto plausible = [&](double s) { return median * s >= nearest_m && median * s <= g.depth_max_m; };
+  if (plausible(scale)) return;
+  for (const DepthUnit& unit : kDepthUnits) {
+    if (unit.scale == scale || !plausible(unit.scale)) continue;
+    std::ostringstream m;
+    m << "scale = " << scale << " puts the median depth of this image at " << median * scale
+      << " m, outside the grid's plausible depth range [" << nearest_m << ", " << g.depth_max_m
+      << "] m: the image looks like " << unit.name << ": pass scale=" << unit.scale;
+    throw InvalidParameter(m.str());
+  }
 }
 
 MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const PinholeIntrinsics& intrinsics,
                                 double scale, int threads) {
   occ_improve::detail::require_parameter(std::isfinite(scale) && scale > 0, "scale", scale, "finite and > 0");
+  const InsertionOptions options = insertion_options(threads);
+  // The camera first: an image of another camera's size is better explained by the camera than the shape.
+  require_grid_camera(self.mapper.geometry(), intrinsics);
   const DepthInput in = depth_from_array(depth, intrinsics);
-  InsertionOptions options;
-  options.threads = threads;
   return with_mapper(self, [&](Mapper& m) {
+    require_plausible_scale(in.depth, in.pixels, scale, m.geometry().params());
     // Scaling happens here, without the GIL; the back-projection is the library's own.
     std::vector<float> scaled;
     const float* metres = in.depth;
@@ -113,12 +160,14 @@ void bind_mapper_insertion(py::class_<PyMapper>& c) {
         "Inserts points in the sensor frame (metres): an N x 3 or H x W x 3 array. float32 arrays whose points "
         "lie at one constant stride (C order, or slices like cloud[..., :3]) are read in place; other dtypes "
         "and layouts are converted to a float32 copy first. NaN/Inf/zero points are skipped and counted. "
-        "threads=0: all cores. Releases the GIL.");
+        "threads: 0 = all cores, at most 1024 (InvalidParameter otherwise). Releases the GIL.");
   c.def("insert_depth", &insert_depth_array, py::arg("depth"), py::arg("intrinsics"), py::arg("scale") = 1.0,
         py::arg("threads") = 0,
         "Inserts an H x W depth image (z-depth; value * scale = metres, 0 or NaN = no return) through its "
         "intrinsics. A C-contiguous float32 image is read in place; others (e.g. uint16 millimetres with "
-        "scale=0.001) are converted first. Releases the GIL.");
+        "scale=0.001) are converted first. Raises InvalidParameter for a scale under which the median return lies "
+        "outside the depth range while millimetres or metres would not, and for intrinsics of another camera "
+        "than the preset's. Releases the GIL.");
 }
 
 void bind_mapper_properties(py::class_<PyMapper>& c) {

@@ -1,6 +1,7 @@
 // Presets, geometry and sensor-model parameters, grid options: plain structs with keyword constructors.
 #include "bindings.hpp"
 
+#include "occ_improve/errors.hpp"
 #include "occ_improve/grid.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
@@ -71,6 +72,16 @@ void bind_model_params(py::module_& m) {
                       "sigma_depth_floor_m", "support_k"});
 }
 
+/// preset_by_name(name) for a preset that does not depend on a camera; a camera preset is refused
+/// rather than built for the nominal Kinect v1 as the C++ overload does.
+SensorPreset preset_by_name_without_camera(const std::string& name) {
+  SensorPreset preset = preset_by_name(name);  // unknown names raise here, listing the known ones
+  if (preset.camera)
+    throw InvalidParameter("preset '" + name + "' is built from the depth camera's intrinsics: call preset_by_name('" +
+                           name + "', intrinsics) (kinect_v1_intrinsics() for OpenNI's nominal Kinect v1)");
+  return preset;
+}
+
 void bind_preset(py::module_& m) {
   py::class_<SensorPreset> p(m, "SensorPreset", "A grid geometry and a sensor model that belong together.");
   def_keyword_init<SensorPreset>(p);
@@ -94,16 +105,20 @@ void bind_preset(py::module_& m) {
   def_fields_repr(o, {"depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
 
   m.def("kinect_v1_paper", &kinect_v1_paper, "The paper's set-up: 640 x 480 x 512 bins, 57 x 43 deg, [0, 5 m).");
-  m.def("kinect_v1", &kinect_v1, py::arg("intrinsics") = kinect_v1_intrinsics(),
+  // The camera presets take the camera's intrinsics, never a default: a grid built for another camera
+  // puts every pixel in the wrong column. kinect_v1_intrinsics() asks for OpenNI's values explicitly.
+  m.def("kinect_v1", &kinect_v1, py::arg("intrinsics"),
         "For real use (the default): one column per pixel of the camera, depth along z, inverse-depth bins "
-        "over [0.5 m, 8 m].");
-  m.def("kinect_v1_spherical", &kinect_v1_spherical, py::arg("intrinsics") = kinect_v1_intrinsics(),
+        "over [0.5 m, 8 m]. intrinsics: the depth camera's (read_intrinsics, or kinect_v1_intrinsics() for "
+        "OpenNI's nominal Kinect v1).");
+  m.def("kinect_v1_spherical", &kinect_v1_spherical, py::arg("intrinsics"),
         "kinect_v1's depth model over spherical bins spanning the image (columns outside it not observable).");
   m.def("preset_from_pinhole", &preset_from_pinhole, py::arg("intrinsics"),
         py::arg("options") = PinholePresetOptions{}, py::arg("name") = "pinhole",
         "A preset for any pinhole depth camera: one column per pixel over the image's angular extent.");
-  m.def("preset_by_name", py::overload_cast<const std::string&>(&preset_by_name), py::arg("name"),
-        "'kinect_v1', 'kinect_v1_paper' or 'kinect_v1_spherical'; raises InvalidParameter listing the known names.");
+  m.def("preset_by_name", &preset_by_name_without_camera, py::arg("name"),
+        "'kinect_v1_paper' (the camera presets need intrinsics: preset_by_name(name, intrinsics)); raises "
+        "InvalidParameter listing the known names.");
   m.def("preset_by_name", py::overload_cast<const std::string&, const PinholeIntrinsics&>(&preset_by_name),
         py::arg("name"), py::arg("intrinsics"), "The named preset for this camera (kinect_v1_paper ignores it).");
   m.def("preset_names", &preset_names, "The names preset_by_name accepts.");

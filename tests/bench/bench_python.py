@@ -89,7 +89,7 @@ def main() -> None:
     args = parser.parse_args()
     if args.cpu:
         args.threads = 1  # other threads' CPU time would not be counted
-    preset = oi.preset_by_name(args.preset)
+    preset = oi.preset_by_name(args.preset, oi.sample_depth()[1])  # the camera presets for the sample's camera
     frames = sample_frames(args.frames)
     measure(preset, frames[:2], 1, args.threads, args.cpu)  # warm-up: first-touch allocations, caches
     pairs = measure(preset, frames, args.sequences, args.threads, args.cpu)

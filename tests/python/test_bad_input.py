@@ -1,4 +1,7 @@
 """Bad input: wrong shapes and dtypes, NaN-only and empty frames, bad parameters."""
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -15,6 +18,143 @@ def test_wrong_point_shapes_raise_invalid_input(mapper, shape):
     with pytest.raises(oi.InvalidInput, match=r"N x 3 or H x W x 3 .* got shape") as e:
         mapper.insert(np.ones(shape, np.float32))
     assert isinstance(e.value, ValueError)
+
+
+@pytest.mark.parametrize("rows, given", [
+    ([[0, 0, 1.0], [0.1, 0]], "row 0 has 3 values, row 1 has 2 values"),
+    ([[0, 0, 1.0], 2.0], "row 0 has 3 values, row 1 is a single value"),
+    ([[[0, 0, 1.0], [0, 0, 2.0]], [[0, 0, 1.0], [0, 0]]], r"inhomogeneous shape"),  # ragged one level down
+])
+def test_ragged_point_lists_raise_invalid_input_naming_the_shape(mapper, rows, given):
+    """These gave "Internal error: pybind11::error_already_set called while Python error indicator not set"."""
+    with pytest.raises(oi.InvalidInput, match=r"points must be an N x 3 or H x W x 3 array of x, y, z, got .*"
+                                              + given) as e:
+        mapper.insert(rows)
+    assert isinstance(e.value, ValueError)
+    assert mapper.touched_columns() == 0
+
+
+def test_ragged_depth_lists_raise_invalid_input(mapper):
+    k = oi.PinholeIntrinsics(fx=2.0, fy=2.0, cx=0.5, cy=0.5, width=2, height=2)
+    with pytest.raises(oi.InvalidInput, match=r"depth must be an H x W array of depths, got a ragged nested "
+                                              r"sequence \(row 0 has 2 values, row 1 has 1 value\)"):
+        mapper.insert_depth([[1.0, 1.0], [1.0]], k)
+
+
+@pytest.mark.parametrize("threads", [-1, 1025, 40000])
+def test_thread_counts_outside_the_tools_range_raise_invalid_parameter(mapper, sample, threads):
+    """threads=40000 aborted the interpreter (a thread the system refused, std::terminate); -1 was taken."""
+    depth, intrinsics = sample
+    message = rf"threads = {threads} is invalid: must be in \[0, 1024\]"
+    with pytest.raises(oi.InvalidParameter, match=message) as e:
+        mapper.insert(np.zeros((4, 3), np.float32) + [0, 0, 1], threads=threads)
+    assert isinstance(e.value, ValueError)
+    with pytest.raises(oi.InvalidParameter, match=message):
+        mapper.insert_depth(depth, intrinsics, threads=threads)
+    assert mapper.touched_columns() == 0
+
+
+REFUSED_THREADS = """
+import resource, sys
+import numpy as np
+import occ_improve as oi
+depth, k = oi.sample_depth()
+points = oi.depth_to_points(depth, k).reshape(-1, 3)
+one = oi.Mapper(oi.kinect_v1_paper())
+one.insert(points, threads=1)
+# 1.5 GB more address space: room for the grid, not for 1024 thread stacks of 8 MB.
+size = int(next(l for l in open("/proc/self/status") if l.startswith("VmSize")).split()[1]) * 1024
+resource.setrlimit(resource.RLIMIT_AS, (size + 1_500_000_000, resource.RLIM_INFINITY))
+many = oi.Mapper(oi.kinect_v1_paper())
+r = many.insert(points, threads=1024).insertion
+print(r.points_inserted, one.touched_columns(), many.touched_columns(),
+      int(np.array_equal(many.improvement(), one.improvement())), int(np.array_equal(many.depth(), one.depth())))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/status")
+def test_threads_the_system_refuses_leave_their_work_to_the_caller():
+    """1024 threads where the address space holds far fewer stacks: a refused thread aborted the
+    interpreter ("terminate called without an active exception"); now the calling thread runs the parts
+    left over, and the maps equal the single-threaded ones."""
+    run = subprocess.run([sys.executable, "-c", REFUSED_THREADS], capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0, run.stderr[-2000:]
+    inserted, touched_one, touched_many, same_improvement, same_depth = map(int, run.stdout.split())
+    assert inserted > 250_000 and touched_many == touched_one > 250_000
+    assert (same_improvement, same_depth) == (1, 1)
+
+
+@pytest.mark.parametrize("scale, unit, suggested", [(1.0, "millimetres", "0.001"), (1000.0, "millimetres", "0.001")])
+def test_millimetres_with_a_metres_scale_are_refused(sample, scale, unit, suggested):
+    """uint16 millimetres with scale=1 (or Open3D's depth_scale=1000 habit) put every return beyond the grid:
+    the map said free to its end, with no warning. Now the scale is refused with the one to pass."""
+    depth, intrinsics = sample
+    millimetres = np.round(depth * 1000).astype(np.uint16)
+    median_m = float(np.median(millimetres[millimetres > 0])) * scale
+    for preset, far_m in ((oi.kinect_v1(intrinsics), 8), (oi.kinect_v1_paper(), 5)):
+        mapper = oi.Mapper(preset)
+        with pytest.raises(oi.InvalidParameter) as e:
+            mapper.insert_depth(millimetres, intrinsics, scale=scale)
+        text = str(e.value)
+        assert text.startswith(f"scale = {scale:g} puts the median depth of this image at ")
+        assert float(text.split(" at ")[1].split(" m,")[0]) == pytest.approx(median_m, rel=1e-5)
+        assert f"depth range [" in text and f", {far_m}] m" in text
+        assert text.endswith(f"looks like {unit}: pass scale={suggested}")
+        assert mapper.touched_columns() == 0
+
+
+def test_metres_with_a_millimetres_scale_are_refused(sample):
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    for scale in (0.001, 1000.0):
+        with pytest.raises(oi.InvalidParameter, match=rf"^scale = {scale:g} .* looks like metres: pass scale=1$"):
+            mapper.insert_depth(depth, intrinsics, scale=scale)
+    assert mapper.touched_columns() == 0
+
+
+def test_plausible_scales_and_scenes_beyond_the_range_are_accepted(sample):
+    depth, intrinsics = sample
+    millimetres = np.round(depth * 1000).astype(np.uint16)
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    r = mapper.insert_depth(millimetres, intrinsics, scale=0.001).insertion
+    assert r.points_inserted == np.count_nonzero(millimetres) and r.beyond_depth_range == 0
+    r = mapper.insert_depth(depth, intrinsics, scale=1).insertion
+    assert r.points_inserted == np.count_nonzero(depth)
+    # A far scene no other unit explains is the caller's data: inserted, counted beyond the range.
+    far = np.where(depth > 0, depth * 3, 0).astype(np.float32)
+    assert np.median(far[far > 0]) > 8
+    r = mapper.insert_depth(far, intrinsics).insertion
+    assert r.beyond_depth_range > r.points_inserted / 2
+    # Too few returns to judge the unit: accepted as given.
+    sparse = np.zeros_like(millimetres)
+    sparse[240, :50] = 1500
+    assert mapper.insert_depth(sparse, intrinsics).insertion.points_inserted == 50
+
+
+def test_depth_images_of_another_camera_are_refused(sample):
+    """A kinect_v1 grid built for fx = 585 silently dropped most pixels of a depth image given with other
+    intrinsics as outside its field of view."""
+    depth, k = sample
+    assert (k.fx, k.width) == (585.0, 640)
+    nominal = oi.kinect_v1_intrinsics()
+    half = oi.PinholeIntrinsics(fx=292.5, fy=292.5, cx=159.5, cy=119.5, width=320, height=240)
+    for preset in (oi.kinect_v1(k), oi.kinect_v1_spherical(k)):
+        mapper = oi.Mapper(preset)
+        with pytest.raises(oi.InvalidParameter, match=r"intrinsics \(fx=525.00 fy=525.00 cx=319.50 cy=239.50 640x480\) "
+                                                      r"are not the camera the grid was built for \(fx=585.00 fy=585.00 "
+                                                      r"cx=319.50 cy=239.50 640x480\)"):
+            mapper.insert_depth(depth, nominal)
+        with pytest.raises(oi.InvalidParameter, match=r"\(fx=292.50 .* 320x240\) are not the camera .*640x480"):
+            mapper.insert_depth(depth[::2, ::2].copy(), half)
+        # The grid's own camera, and an image of another size, still say which is wrong.
+        with pytest.raises(oi.InvalidInput, match=r"\(480, 640\), got shape \(240, 320\)"):
+            mapper.insert_depth(depth[::2, ::2], k)
+        assert mapper.touched_columns() == 0
+        r = mapper.insert_depth(depth, oi.PinholeIntrinsics(fx=585.01, fy=585, cx=319.5, cy=239.5)).insertion
+        assert r.points_inserted == np.count_nonzero(depth)  # within the tools' 0.05 px: the same camera
+    # A grid that does not depend on a camera takes any.
+    paper = oi.Mapper(oi.kinect_v1_paper())
+    assert paper.insert_depth(depth[::2, ::2].copy(), half).insertion.points_inserted > 0
 
 
 @pytest.mark.parametrize("dtype", [np.complex64, np.bool_, object, "U3"])

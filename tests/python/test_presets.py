@@ -41,11 +41,29 @@ def test_kinect_preset_is_built_from_its_intrinsics():
 
 def test_lookup_by_name_and_its_error():
     assert oi.preset_names() == ["kinect_v1", "kinect_v1_paper", "kinect_v1_spherical"]
+    k = oi.PinholeIntrinsics(fx=585, fy=585, cx=320, cy=240)
     for name in oi.preset_names():
-        assert oi.preset_by_name(name).name == name
+        preset = oi.preset_by_name(name, k)
+        assert preset.name == name
+        assert preset.camera is None if name == "kinect_v1_paper" else preset.camera.fx == 585
+    assert oi.preset_by_name("kinect_v1_paper").geometry.depth_max_m == 5.0
     with pytest.raises(oi.InvalidParameter, match="known presets are kinect_v1, kinect_v1_paper, kinect_v1_spherical") as e:
         oi.preset_by_name("kinect_v9")
     assert isinstance(e.value, ValueError) and isinstance(e.value, oi.Error)
+
+
+def test_camera_presets_never_assume_intrinsics():
+    """kinect_v1 without intrinsics used to build a grid for fx = 525 silently; now the camera is required,
+    and OpenNI's nominal Kinect v1 is asked for by name."""
+    for preset in (oi.kinect_v1, oi.kinect_v1_spherical):
+        with pytest.raises(TypeError, match="intrinsics"):
+            preset()
+    for name in ("kinect_v1", "kinect_v1_spherical"):
+        with pytest.raises(oi.InvalidParameter, match=f"preset '{name}' is built from the depth camera's "
+                                                      rf"intrinsics: call preset_by_name\('{name}', intrinsics\)"):
+            oi.preset_by_name(name)
+    nominal = oi.kinect_v1(oi.kinect_v1_intrinsics())
+    assert (nominal.camera.fx, nominal.camera.cx, nominal.camera.width) == (525.0, 319.5, 640)
 
 
 def test_bad_intrinsics_raise_invalid_parameter_naming_the_field():

@@ -54,6 +54,26 @@ def test_raw_millimetres_and_metres_give_the_same_maps():
     np.testing.assert_allclose(depth, raw * 0.001, atol=1e-6)
 
 
+def test_raw_millimetres_without_their_scale_and_the_nominal_camera_are_refused():
+    """The PNG's uint16 millimetres with the default scale (or Open3D's depth_scale=1000) put every return
+    beyond 8 m; the nominal Kinect v1 (fx = 525) is not the kitchen camera (fx = 585)."""
+    _, k = kitchen_frame()
+    from PIL import Image
+    raw = np.asarray(Image.open(data_file(f"{KITCHEN}/frames/frame-000150.depth.png"))).astype(np.uint16)
+    mapper = oi.Mapper(oi.kinect_v1(k))
+    for scale in (1.0, 1000.0):
+        with pytest.raises(oi.InvalidParameter, match=r"looks like millimetres: pass scale=0.001$") as e:
+            mapper.insert_depth(raw, k, scale=scale)
+        median_m = float(str(e.value).split(" at ")[1].split(" m,")[0])
+        assert median_m == pytest.approx(np.median(raw[raw > 0]) * scale, rel=1e-5)
+    with pytest.raises(oi.InvalidParameter, match=r"\(fx=525.00 .*\) are not the camera the grid was built for "
+                                                  r"\(fx=585.00 fy=585.00 cx=320.00 cy=240.00 640x480\)"):
+        mapper.insert_depth(raw, oi.kinect_v1_intrinsics(), scale=0.001)
+    assert mapper.touched_columns() == 0
+    r = mapper.insert_depth(raw, k, scale=0.001).insertion
+    assert r.points_inserted == np.count_nonzero(raw) and r.skipped_outside_fov == 0
+
+
 def test_a_short_sequence_lowers_the_improvement_frame_after_frame():
     """The camera moves ~5 mm per frame; from one viewpoint's grid, each frame still adds knowledge."""
     _, k = kitchen_frame()

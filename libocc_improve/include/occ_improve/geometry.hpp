@@ -21,6 +21,7 @@
 #include <cmath>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 namespace occ_improve {
@@ -35,6 +36,12 @@ struct PinholeIntrinsics {
   }
   bool operator!=(const PinholeIntrinsics& o) const { return !(*this == o); }
 };
+
+/// Same size and fx, fy, cx, cy within 0.05 px: one camera, up to the ~1e-4 px by which fitted or
+/// file-rounded intrinsics of one sensor differ. Half a pixel (cx 319.5 against 320, both common) is not.
+bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b);
+/// "fx=525.00 fy=525.00 cx=319.50 cy=239.50 640x480", for messages.
+std::string camera_text(const PinholeIntrinsics& k);
 
 enum class AngularBinning {
   spherical,  ///< uniform azimuth x elevation bins, radians; depth is the range (the paper)

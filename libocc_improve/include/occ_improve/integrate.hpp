@@ -50,7 +50,10 @@ struct DepthImage {
 };
 
 struct InsertionOptions {
-  int threads = 0;  ///< 0: std::thread::hardware_concurrency(); 1: single-threaded
+  /// More threads than this is a mistake (the tools' -threads has the same bound), not a request.
+  static constexpr int kMaxThreads = 1024;
+  int threads = 0;  ///< 0: std::thread::hardware_concurrency(); 1: single-threaded; at most kMaxThreads
+  void validate() const;  ///< threads outside [0, kMaxThreads] -> InvalidParameter
 };
 
 /// What happened to every point handed in: received = inserted + skipped_invalid + skipped_outside_fov.
@@ -81,8 +84,14 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
 InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
                               std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options = {});
 
+/// Throws InvalidParameter naming both cameras when the grid was built for a camera (pinhole columns, or a
+/// spherical grid's observable columns) and `intrinsics` describe another one (same_camera): its pixels
+/// would land in other columns or outside the field of view and be dropped without a word.
+void require_grid_camera(const SphericalGeometry& geometry, const PinholeIntrinsics& intrinsics);
+
 /// Back-projects an organized depth image through its intrinsics and inserts it.
-/// Throws InvalidInput when the buffer is null or its size does not match the intrinsics.
+/// Throws InvalidInput when the buffer is null or its size does not match the intrinsics, and as
+/// require_grid_camera when the image is from another camera than the grid's.
 InsertionReport insert_depth_image(SphericalGrid& grid, const SensorModel& model, const DepthImage& image,
                                    const InsertionOptions& options = {});
 

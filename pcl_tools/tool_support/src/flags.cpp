@@ -2,6 +2,7 @@
 
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
+#include "occ_improve/integrate.hpp"
 #include "occ_improve/presets.hpp"
 
 #include <algorithm>
@@ -132,7 +133,8 @@ std::vector<FlagSpec> map_and_output_flags() {
                  "ignored", "", "none: an empty grid"),
       value_flag("-save", K::text, "MAP.occmap", kMap, "save the resulting grid (written atomically, after the other outputs); an existing file\n"
                  "is replaced only when it is an occ_improve map (or with -overwrite), never an input", "", "not saved"),
-      bounded(value_flag("-threads", K::integer, "N", kMap, "insertion threads; 0: all cores", "0"), 0, 1024),
+      bounded(value_flag("-threads", K::integer, "N", kMap, "insertion threads; 0: all cores", "0"), 0,
+              InsertionOptions::kMaxThreads),
       bounded(value_flag("-k", K::integer, "K", kMap, "how many top rays and regions to report", "10"), 1),
       value_flag("-min_improvement", K::number, "V", kMap,
                  "a region's rays have improvement >= V (0.2: above a ray seen once, below no data)", "0.2"),

@@ -111,15 +111,6 @@ SensorPreset ToolOptions::preset_for_camera(const std::optional<PinholeIntrinsic
 
 namespace {
 
-bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
-  // Fitted cameras of one sensor agree to ~1e-4 px; a principal point half a pixel off (319.5 against 320,
-  // both common) moves every pixel-native column by half its width.
-  constexpr double kTolerancePx = 0.05;
-  return a.width == b.width && a.height == b.height && std::abs(a.fx - b.fx) <= kTolerancePx &&
-         std::abs(a.fy - b.fy) <= kTolerancePx && std::abs(a.cx - b.cx) <= kTolerancePx &&
-         std::abs(a.cy - b.cy) <= kTolerancePx;
-}
-
 // An organized cloud is one camera image: a camera of another size would put its pixels on the wrong rays
 // (or outside the grid), so it is refused as a depth image of the wrong size is.
 void require_camera_fits(const pcl::PointCloud<pcl::PointXYZ>& cloud, const std::optional<PinholeIntrinsics>& camera,
@@ -297,11 +288,7 @@ std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
 std::string describe_camera(const std::vector<ToolFrame>& frames) {
   for (const ToolFrame& f : frames) {
     if (!f.camera) continue;
-    const PinholeIntrinsics& k = *f.camera;
-    char text[160];
-    std::snprintf(text, sizeof text, "camera fx=%.2f fy=%.2f cx=%.2f cy=%.2f %dx%d", k.fx, k.fy, k.cx, k.cy, k.width,
-                  k.height);
-    return std::string(text) + " (" + f.camera_source + ")";
+    return "camera " + camera_text(*f.camera) + " (" + f.camera_source + ")";
   }
   return "no camera (the preset's grid does not depend on one)";
 }
