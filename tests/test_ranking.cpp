@@ -1,12 +1,14 @@
 // Ranking: top rays, 8-connected regions, the stop signal.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
+#include "occ_improve/planner.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -64,6 +66,7 @@ TEST(Ranking, RegionsAreEightConnectedAndSorted) {
   // A 3 x 3 block of 0.3 with one unknown column: sum 2.7, peak 0.3.
   for (int e = 5; e <= 7; ++e)
     for (int a = 12; a <= 14; ++a) set(a, e, 0.3f);
+  set(14, 7, 0.35f);  // the peak: sum 2.75
   m.surface.unknown[m.geometry.column(13, 6)] = 1;
   m.surface.depth_m[m.geometry.column(13, 6)] = 0.0f;
   m.surface.depth_m[m.geometry.column(12, 5)] = 3.0f;
@@ -72,14 +75,23 @@ TEST(Ranking, RegionsAreEightConnectedAndSorted) {
   set(0, 11, 0.04f), set(1, 11, 0.04f), set(2, 11, 0.04f), set(3, 11, 0.04f);
   const auto regions = find_regions(m.geometry, m.improvement, m.surface);
   ASSERT_EQ(regions.size(), 2u);
-  EXPECT_NEAR(regions[0].summed_improvement, 2.7, 1e-5);
-  EXPECT_EQ(regions[0].area_columns, 9u);
-  EXPECT_FLOAT_EQ(regions[0].peak_improvement, 0.3f);
-  EXPECT_NEAR(regions[0].mean_depth_m, (7 * 2.0 + 3.0) / 8, 1e-6);
-  EXPECT_NEAR(regions[0].centroid_azimuth_rad, m.geometry.azimuth().centre(13), 1e-12);
-  EXPECT_NEAR(regions[0].centroid_elevation_rad, m.geometry.elevation().centre(6), 1e-12);
-  EXPECT_TRUE(regions[0].centroid_direction.isApprox(m.geometry.direction(13, 6), 1e-9));
-  EXPECT_NEAR(regions[0].centroid_direction.norm(), 1.0, 1e-12);
+  const Region& block = regions[0];
+  EXPECT_NEAR(block.summed_improvement, 2.75, 1e-5);
+  EXPECT_EQ(block.area_columns, 9u);
+  EXPECT_FLOAT_EQ(block.peak_improvement, 0.35f);
+  EXPECT_EQ(block.peak_u, 14);
+  EXPECT_EQ(block.peak_v, 7);
+  EXPECT_EQ(block.min_u, 12);
+  EXPECT_EQ(block.max_u, 14);
+  EXPECT_EQ(block.min_v, 5);
+  EXPECT_EQ(block.max_v, 7);
+  EXPECT_NEAR(block.mean_depth_m, (7 * 2.0 + 3.0) / 8, 1e-6);
+  EXPECT_EQ(block.centre_u, 13);  // the middle column of the block
+  EXPECT_EQ(block.centre_v, 6);
+  EXPECT_NEAR(block.centre_azimuth_rad, m.geometry.azimuth().centre(13), 1e-12);
+  EXPECT_NEAR(block.centre_elevation_rad, m.geometry.elevation().centre(6), 1e-12);
+  EXPECT_TRUE(block.centre_direction.isApprox(m.geometry.direction(13, 6), 1e-9));
+  EXPECT_NEAR(block.centre_direction.norm(), 1.0, 1e-12);
   EXPECT_NEAR(regions[1].summed_improvement, 1.0, 1e-5);
   EXPECT_EQ(regions[1].area_columns, 5u);
   // Lower area threshold: the small region appears too.
@@ -88,6 +100,65 @@ TEST(Ranking, RegionsAreEightConnectedAndSorted) {
   EXPECT_EQ(find_regions(m.geometry, m.improvement, m.surface, o).size(), 3u);
   o.min_improvement = std::numeric_limits<float>::quiet_NaN();
   EXPECT_THROW(find_regions(m.geometry, m.improvement, m.surface, o), InvalidParameter);
+}
+
+// The centre was the mean position of the region's columns: for a region wrapped around an object (its
+// shadow or border, as on a real table scene) that mean lies on the object, outside the region.
+TEST(Ranking, ARegionsCentreIsOneOfItsColumns) {
+  Maps m = small_maps(30, 20);
+  // A ring 2 columns wide around an object (improvement 0) at u 8-21, v 5-14; the ring is open at the
+  // bottom right, so its mean position is inside the hole.
+  for (int v = 3; v <= 16; ++v)
+    for (int u = 6; u <= 23; ++u) {
+      const bool hole = u >= 8 && u <= 21 && v >= 5 && v <= 14;
+      const bool gap = v >= 15 && u >= 18;
+      if (!hole && !gap) m.improvement.value[m.geometry.column(u, v)] = 0.3f;
+    }
+  const auto regions = find_regions(m.geometry, m.improvement, m.surface);
+  ASSERT_EQ(regions.size(), 1u);
+  const Region& ring = regions[0];
+  EXPECT_GE(m.improvement.value[m.geometry.column(ring.centre_u, ring.centre_v)], 0.2f)
+      << "centre (" << ring.centre_u << ", " << ring.centre_v << ") is not in the region";
+  EXPECT_EQ(ring.min_u, 6);
+  EXPECT_EQ(ring.max_u, 23);
+  EXPECT_EQ(ring.min_v, 3);
+  EXPECT_EQ(ring.max_v, 16);
+  // The medoid: no column of the ring has a smaller summed L1 distance to the others.
+  const auto summed_distance = [&](int cu, int cv) {
+    double d = 0;
+    for (int v = 0; v < 20; ++v)
+      for (int u = 0; u < 30; ++u)
+        if (m.improvement.value[m.geometry.column(u, v)] >= 0.2f) d += std::abs(u - cu) + std::abs(v - cv);
+    return d;
+  };
+  const double centre_distance = summed_distance(ring.centre_u, ring.centre_v);
+  for (int v = 0; v < 20; ++v)
+    for (int u = 0; u < 30; ++u)
+      if (m.improvement.value[m.geometry.column(u, v)] >= 0.2f) {
+        EXPECT_GE(summed_distance(u, v), centre_distance) << u << ", " << v;
+      }
+}
+
+// Equal values were taken in scan order by top_rays (the first ten: row 0, columns 0-9) and spread by a
+// hash in the planner: one rule (rank_key) now orders both, and a region's peak among equals.
+TEST(Ranking, TiesFollowOneRuleInTopRaysRegionsAndThePlanner) {
+  Maps m = small_maps(64, 48);
+  std::fill(m.improvement.value.begin(), m.improvement.value.end(), 0.3f);
+  const auto rays = top_rays(m.improvement, m.surface, 10);
+  ASSERT_EQ(rays.size(), 10u);
+  int first_row = 0;
+  for (const RankedRay& r : rays) first_row += r.elevation_bin == 0;
+  EXPECT_LT(first_row, 3) << "ties taken in scan order";
+  PlanRequest request;
+  request.budget_rays = 10;
+  const Shot shot = plan_next_shot(m.improvement, ReturnRecord::for_grid(64, 48), request);
+  ASSERT_EQ(shot.columns.size(), 10u);
+  for (std::size_t i = 0; i < rays.size(); ++i) EXPECT_EQ(rays[i].column, shot.columns[i]) << i;
+  for (std::size_t i = 1; i < rays.size(); ++i)
+    EXPECT_GT(rank_key(0.3f, rays[i - 1].column), rank_key(0.3f, rays[i].column));
+  const auto regions = find_regions(m.geometry, m.improvement, m.surface);
+  ASSERT_EQ(regions.size(), 1u);
+  EXPECT_EQ(m.geometry.column(regions[0].peak_u, regions[0].peak_v), rays[0].column);
 }
 
 TEST(Ranking, StopSignalFollowsTheThresholds) {
@@ -137,7 +208,6 @@ TEST(Ranking, StopMonitorFiresWhenProgressStallsOnly) {
   StopMonitor monitor({}, ProgressCriteria{0.01, 3});  // 10% drops are progress, 0% is not
   Region big{};
   big.summed_improvement = 30.0;  // keeps the best-region threshold quiet
-  big.centroid_direction = Eigen::Vector3d::UnitZ();
   const std::vector<Region> regions = {big};
   // Shrinking by 10% per frame is progress.
   for (int frame = 0; frame < 6; ++frame) {

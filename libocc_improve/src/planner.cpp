@@ -1,67 +1,14 @@
 #include "occ_improve/planner.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/ranking.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <sstream>
 
 namespace occ_improve {
 namespace {
-
-/// MurmurHash3's 32-bit finaliser: a bijection, so every column has its own spread rank.
-std::uint32_t spread_rank(std::uint32_t h) {
-  h ^= h >> 16;
-  h *= 0x85ebca6bu;
-  h ^= h >> 13;
-  h *= 0xc2b2ae35u;
-  h ^= h >> 16;
-  return h;
-}
-
-/// Unsigned key in the order of the float (larger float, larger key).
-std::uint32_t ordered_bits(float f) {
-  std::uint32_t u;
-  std::memcpy(&u, &f, sizeof u);
-  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
-}
-
-struct Ranked {
-  std::uint64_t key;  ///< score bits, then the complement of the spread rank: larger key = taken first
-  ColumnIndex column;
-};
-
-/// The k columns of largest value (ties by spread rank) among the eligible ones (nullptr: all), best
-/// first. A histogram of the top 16 key bits finds a bound below which no winner lies, so only the few
-/// candidates above it are sorted.
-std::vector<ColumnIndex> take_best(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k) {
-  const std::size_t n = value.size();
-  std::vector<std::uint32_t> histogram(1u << 16, 0);
-  // NaN (a column the sensor cannot observe) is never taken.
-  const auto takes = [&](std::size_t c) { return (!eligible || eligible[c]) && value[c] == value[c]; };
-  for (std::size_t c = 0; c < n; ++c)
-    if (takes(c)) ++histogram[ordered_bits(value[c]) >> 16];
-  std::size_t above = 0;
-  std::uint32_t bound = 1u << 16;
-  while (bound > 0 && above < k) above += histogram[--bound];
-  std::vector<Ranked> candidates;
-  candidates.reserve(above);
-  for (std::size_t c = 0; c < n; ++c) {
-    const std::uint32_t bits = ordered_bits(value[c]);
-    if ((bits >> 16) >= bound && takes(c)) {
-      const auto col = static_cast<ColumnIndex>(c);
-      candidates.push_back({(std::uint64_t{bits} << 32) | ~spread_rank(col), col});
-    }
-  }
-  k = std::min(k, candidates.size());
-  const auto better = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
-  std::nth_element(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), candidates.end(), better);
-  std::sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), better);
-  std::vector<ColumnIndex> out(k);
-  for (std::size_t i = 0; i < k; ++i) out[i] = candidates[i].column;
-  return out;
-}
 
 Shot rays_shot(const std::vector<float>& score, const PlanRequest& request) {
   const auto negative_budget = static_cast<std::size_t>(std::floor(request.negative_share * request.budget_rays));
@@ -75,13 +22,13 @@ Shot rays_shot(const std::vector<float>& score, const PlanRequest& request) {
       flipped[c] = -score[c];
       is_negative[c] = (!mask || mask[c]) && score[c] < 0;
     }
-    negative = take_best(flipped, is_negative.data(), negative_budget);
+    negative = best_columns(flipped, is_negative.data(), negative_budget);
     rest = mask ? request.candidates : std::vector<std::uint8_t>(score.size(), 1);
     for (ColumnIndex c : negative) rest[c] = 0;
     mask = rest.data();
   }
   Shot shot;
-  shot.columns = take_best(score, mask, static_cast<std::size_t>(request.budget_rays) - negative.size());
+  shot.columns = best_columns(score, mask, static_cast<std::size_t>(request.budget_rays) - negative.size());
   shot.ranked_rays = shot.columns.size();
   for (ColumnIndex c : shot.columns) shot.expected_gain += score[c];
   shot.columns.insert(shot.columns.end(), negative.begin(), negative.end());

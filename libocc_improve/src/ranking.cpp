@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <sstream>
 
 namespace occ_improve {
@@ -17,34 +19,137 @@ void require_same_size(const ImprovementMap& map, const SurfaceMap& surface) {
                        ") differ in size");
 }
 
+/// MurmurHash3's 32-bit finaliser: a bijection, so every column has its own spread rank.
+std::uint32_t spread_rank(std::uint32_t h) {
+  h ^= h >> 16;
+  h *= 0x85ebca6bu;
+  h ^= h >> 13;
+  h *= 0xc2b2ae35u;
+  h ^= h >> 16;
+  return h;
+}
+
+/// Unsigned key in the order of the float (larger float, larger key).
+std::uint32_t ordered_bits(float f) {
+  std::uint32_t u;
+  std::memcpy(&u, &f, sizeof u);
+  return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
 }  // namespace
+
+std::uint64_t rank_key(float value, ColumnIndex column) {
+  return (std::uint64_t{ordered_bits(value)} << 32) | ~spread_rank(column);
+}
+
+/// A histogram of the top 16 key bits finds a bound below which no winner lies, so only the few
+/// candidates above it are sorted (the planner ranks a 640 x 480 view per shot).
+std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k) {
+  const std::size_t n = value.size();
+  std::vector<std::uint32_t> histogram(1u << 16, 0);
+  const auto takes = [&](std::size_t c) { return (!eligible || eligible[c]) && !std::isnan(value[c]); };
+  const auto key = [&](std::size_t c) { return rank_key(value[c], static_cast<ColumnIndex>(c)); };
+  for (std::size_t c = 0; c < n; ++c)
+    if (takes(c)) ++histogram[key(c) >> 48];
+  std::size_t above = 0;
+  std::uint64_t bound = 1u << 16;
+  while (bound > 0 && above < k) above += histogram[--bound];
+  struct Ranked {
+    std::uint64_t key;
+    ColumnIndex column;
+  };
+  std::vector<Ranked> candidates;
+  candidates.reserve(above);
+  for (std::size_t c = 0; c < n; ++c)
+    if (const std::uint64_t kc = key(c); (kc >> 48) >= bound && takes(c))
+      candidates.push_back({kc, static_cast<ColumnIndex>(c)});
+  k = std::min(k, candidates.size());
+  const auto better = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
+  std::nth_element(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), candidates.end(), better);
+  std::sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), better);
+  std::vector<ColumnIndex> out(k);
+  for (std::size_t i = 0; i < k; ++i) out[i] = candidates[i].column;
+  return out;
+}
 
 std::vector<RankedRay> top_rays(const ImprovementMap& map, const SurfaceMap& surface, int k) {
   detail::require_parameter(k > 0, "k", k, "> 0");
   require_same_size(map, surface);
-  // Columns that are not observable hold NaN (improvement.hpp): never ranked.
-  std::vector<ColumnIndex> order;
-  order.reserve(map.value.size());
-  for (std::size_t c = 0; c < map.value.size(); ++c)
-    if (!std::isnan(map.value[c])) order.push_back(static_cast<ColumnIndex>(c));
-  const auto better = [&](ColumnIndex a, ColumnIndex b) {
-    return map.value[a] > map.value[b] || (map.value[a] == map.value[b] && a < b);
-  };
-  const std::size_t n = std::min(order.size(), static_cast<std::size_t>(k));
-  std::partial_sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n), order.end(), better);
+  const std::vector<ColumnIndex> best = best_columns(map.value, nullptr, static_cast<std::size_t>(k));
   std::vector<RankedRay> rays;
-  rays.reserve(n);
+  rays.reserve(best.size());
   const auto w = static_cast<ColumnIndex>(map.width);
-  for (std::size_t r = 0; r < n; ++r) {
-    const ColumnIndex c = order[r];
+  for (const ColumnIndex c : best)
     rays.push_back({c, static_cast<int>(c % w), static_cast<int>(c / w), map.value[c], surface.depth_m[c]});
-  }
   return rays;
 }
 
 void RegionOptions::validate() const {
   detail::require_parameter(std::isfinite(min_improvement), "min_improvement", min_improvement, "finite");
 }
+
+namespace {
+
+/// For each position p in [lo, lo + counts.size()), the summed distance |p - x| over the members' x, from
+/// their histogram `counts` (index x - lo): one pass each way instead of one per member.
+std::vector<double> summed_distances(const std::vector<std::size_t>& counts) {
+  const std::size_t n = counts.size();
+  std::vector<double> sum(n, 0.0);
+  double below = 0, carried = 0;  // members left of p, and their summed distance to p
+  for (std::size_t p = 0; p < n; ++p) {
+    carried += below;
+    sum[p] = carried;
+    below += static_cast<double>(counts[p]);
+  }
+  double above = 0;
+  carried = 0;
+  for (std::size_t p = n; p-- > 0;) {
+    carried += above;
+    sum[p] += carried;
+    above += static_cast<double>(counts[p]);
+  }
+  return sum;
+}
+
+/// Bounding box, peak and medoid (L1 in columns and rows) of a region's columns; ties by rank_key.
+void describe_columns(const SphericalGeometry& geometry, const ImprovementMap& map,
+                      const std::vector<ColumnIndex>& members, Region& r) {
+  r.min_u = r.min_v = std::numeric_limits<int>::max();
+  r.max_u = r.max_v = std::numeric_limits<int>::min();
+  ColumnIndex peak = members.front();
+  for (const ColumnIndex c : members) {
+    const int u = geometry.azimuth_bin_of(c), v = geometry.elevation_bin_of(c);
+    r.min_u = std::min(r.min_u, u), r.max_u = std::max(r.max_u, u);
+    r.min_v = std::min(r.min_v, v), r.max_v = std::max(r.max_v, v);
+    if (rank_key(map.value[c], c) > rank_key(map.value[peak], peak)) peak = c;
+  }
+  r.peak_u = geometry.azimuth_bin_of(peak), r.peak_v = geometry.elevation_bin_of(peak);
+  r.peak_improvement = map.value[peak];
+  // L1 distance separates into columns and rows: a member's summed distance is su[u] + sv[v].
+  std::vector<std::size_t> count_u(static_cast<std::size_t>(r.max_u - r.min_u + 1), 0);
+  std::vector<std::size_t> count_v(static_cast<std::size_t>(r.max_v - r.min_v + 1), 0);
+  for (const ColumnIndex c : members) {
+    ++count_u[static_cast<std::size_t>(geometry.azimuth_bin_of(c) - r.min_u)];
+    ++count_v[static_cast<std::size_t>(geometry.elevation_bin_of(c) - r.min_v)];
+  }
+  const std::vector<double> su = summed_distances(count_u), sv = summed_distances(count_v);
+  const auto cost = [&](ColumnIndex c) {
+    return su[static_cast<std::size_t>(geometry.azimuth_bin_of(c) - r.min_u)] +
+           sv[static_cast<std::size_t>(geometry.elevation_bin_of(c) - r.min_v)];
+  };
+  ColumnIndex centre = members.front();
+  for (const ColumnIndex c : members)
+    if (cost(c) < cost(centre) || (cost(c) == cost(centre) && rank_key(map.value[c], c) > rank_key(map.value[centre], centre)))
+      centre = c;
+  r.centre_u = geometry.azimuth_bin_of(centre), r.centre_v = geometry.elevation_bin_of(centre);
+  r.centre_direction = geometry.direction(r.centre_u, r.centre_v);
+  const Eigen::Vector3d& d = r.centre_direction;
+  const SphericalPoint angles = to_spherical(d.x(), d.y(), d.z());
+  r.centre_azimuth_rad = angles.azimuth;
+  r.centre_elevation_rad = angles.elevation;
+}
+
+}  // namespace
 
 std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
                                  const SurfaceMap& surface, const RegionOptions& options) {
@@ -56,30 +161,27 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
                        std::to_string(geometry.height()) + ")");
   const int w = map.width, h = map.height;
   std::vector<std::uint8_t> visited(map.value.size(), 0);
-  std::vector<ColumnIndex> stack;
+  std::vector<ColumnIndex> stack, members;
   std::vector<Region> regions;
   for (std::size_t seed = 0; seed < map.value.size(); ++seed) {
     if (visited[seed] || !(map.value[seed] >= options.min_improvement)) continue;
     // Flood fill, 8-connected.
-    Region r{0.0, 0, map.value[seed], 0.0, 0.0, 0.0, 0.0, Eigen::Vector3d::Zero(), 0.0};
+    Region r;
     double depth_sum = 0;
     std::size_t known = 0;
     visited[seed] = 1;
     stack.assign(1, static_cast<ColumnIndex>(seed));
+    members.clear();
     while (!stack.empty()) {
       const ColumnIndex c = stack.back();
       stack.pop_back();
-      const int a = geometry.azimuth_bin_of(c), e = geometry.elevation_bin_of(c);
-      const float v = map.value[c];
-      r.summed_improvement += v;
-      ++r.area_columns;
-      r.peak_improvement = std::max(r.peak_improvement, v);
-      r.centroid_horizontal += geometry.azimuth().centre(a);
-      r.centroid_vertical += geometry.elevation().centre(e);
+      members.push_back(c);
+      r.summed_improvement += map.value[c];
       if (!surface.unknown[c]) {
         depth_sum += surface.depth_m[c];
         ++known;
       }
+      const int a = geometry.azimuth_bin_of(c), e = geometry.elevation_bin_of(c);
       for (int de = -1; de <= 1; ++de)
         for (int da = -1; da <= 1; ++da) {
           const int na = a + da, ne = e + de;
@@ -90,14 +192,9 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
           stack.push_back(n);
         }
     }
+    r.area_columns = members.size();
     if (r.area_columns < options.min_area_columns) continue;
-    r.centroid_horizontal /= static_cast<double>(r.area_columns);
-    r.centroid_vertical /= static_cast<double>(r.area_columns);
-    r.centroid_direction = geometry.direction_at(r.centroid_horizontal, r.centroid_vertical);
-    const Eigen::Vector3d& d = r.centroid_direction;
-    const SphericalPoint angles = to_spherical(d.x(), d.y(), d.z());
-    r.centroid_azimuth_rad = angles.azimuth;
-    r.centroid_elevation_rad = angles.elevation;
+    describe_columns(geometry, map, members, r);
     r.mean_depth_m = known ? depth_sum / static_cast<double>(known) : 0.0;
     regions.push_back(r);
   }

@@ -226,6 +226,8 @@ std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOpti
   return mapper;
 }
 
+constexpr const char* kStopSignalReason = "stop signal";
+
 // When the run ends, besides the source finishing.
 struct StreamLimits {
   bool stop_on_signal;
@@ -245,14 +247,21 @@ const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const 
                   s.processed_per_second());
     progress.show(line);
     if (stop_signal_received()) return "interrupted";
-    if (limits.stop_on_signal && stop_signalled) return "stop signal";
+    if (limits.stop_on_signal && stop_signalled) return kStopSignalReason;
     if (limits.max_frames > 0 && s.processed >= static_cast<std::uint64_t>(limits.max_frames)) return "-max_frames reached";
     if (source.file_source && !source.file_source->isRunning() && s.in_flight == 0) return "source finished";
   }
 }
 
-void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, const std::optional<FrameResult>& last) {
-  pcl::console::print_info("Stopped: %s\n", stop_reason);
+// `fired`: the first frame whose stop signal fired (the one that ends a -stop_on_signal run); the frames
+// processed after it may have made progress again, so the last frame's signal can read "continue".
+void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, const std::optional<FrameResult>& fired,
+                          const std::optional<FrameResult>& last) {
+  if (fired && std::string(stop_reason) == kStopSignalReason)
+    pcl::console::print_info("Stopped: %s (frame %llu: %s)\n", stop_reason,
+                             static_cast<unsigned long long>(fired->frame_index + 1), fired->stop.reason.c_str());
+  else
+    pcl::console::print_info("Stopped: %s\n", stop_reason);
   pcl::console::print_info(
       "Frames: %llu received, %llu processed, %llu dropped, %llu rejected, %llu source errors in %.2f s "
       "(%.1f frames/s)\n",
@@ -263,12 +272,20 @@ void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, 
                            s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms),
                            s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
   if (!last) return;
-  pcl::console::print_info("Stop signal: %s (%s)\n", last->stop.stop ? "yes" : "no", last->stop.reason.c_str());
+  if (fired && std::string(stop_reason) != kStopSignalReason)
+    pcl::console::print_info("Stop signal first fired at frame %llu: %s\n",
+                             static_cast<unsigned long long>(fired->frame_index + 1), fired->stop.reason.c_str());
+  pcl::console::print_info("Stop signal after the last frame (%llu): %s (%s)\n",
+                           static_cast<unsigned long long>(last->frame_index + 1), last->stop.stop ? "yes" : "no",
+                           last->stop.reason.c_str());
+  // u, v: the region's centre column (pixel with the pixel-native presets); the angles are its direction's.
   for (std::size_t i = 0; i < last->top_regions.size(); ++i) {
     const Region& r = last->top_regions[i];
-    pcl::console::print_info("  region %zu: improvement %.2f over %zu rays, azimuth %.1f deg, elevation %.1f deg, depth %.2f m\n",
-                             i + 1, r.summed_improvement, r.area_columns, r.centroid_azimuth_rad * 180.0 / M_PI,
-                             r.centroid_elevation_rad * 180.0 / M_PI, r.mean_depth_m);
+    pcl::console::print_info(
+        "  region %zu: improvement %.2f over %zu rays, centre u %d v %d, azimuth %.1f deg, elevation %.1f deg, "
+        "depth %.2f m\n",
+        i + 1, r.summed_improvement, r.area_columns, r.centre_u, r.centre_v, r.centre_azimuth_rad * 180.0 / M_PI,
+        r.centre_elevation_rad * 180.0 / M_PI, r.mean_depth_m);
   }
 }
 
@@ -307,7 +324,7 @@ int run(const CommandLine& command_line) {
   Pipeline pipeline(make_mapper(load_path, options, source.preset), with_camera(pipeline_options, source.preset));
 
   std::mutex report_mutex;
-  std::optional<FrameResult> last;
+  std::optional<FrameResult> last, fired;
   std::atomic<bool> stop_signalled{false};
   std::atomic<int> maps_written{0};
   std::uint64_t frames_seen = 0;  // only touched by the worker
@@ -315,6 +332,7 @@ int run(const CommandLine& command_line) {
     {
       std::lock_guard<std::mutex> lock(report_mutex);
       last = r;
+      if (r.stop.stop && !fired) fired = r;
     }
     if (r.stop.stop) stop_signalled = true;
     if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
@@ -346,7 +364,7 @@ int run(const CommandLine& command_line) {
                        std::to_string(s.grabber_errors) + " unreadable)");
   const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
   if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
-  print_stream_summary(pipeline.statistics(), stop_reason, last);
+  print_stream_summary(pipeline.statistics(), stop_reason, fired, last);
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());
   // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.

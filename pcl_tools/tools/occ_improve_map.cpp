@@ -119,16 +119,17 @@ int run(const CommandLine& command_line) {
               write_seconds);
   std::printf("top %zu of %zu regions (improvement >= %.3g, >= %zu rays):\n", regions.size(), summary.all_regions.size(),
               static_cast<double>(region_options.min_improvement), region_options.min_area_columns);
-  std::printf("  rank  summed  area   peak  azimuth  elevation  depth\n");
+  // u, v: the region's centre column (pixel with the pixel-native presets); the angles are its direction's.
+  std::printf("  rank  summed  area   peak  centre u,v   azimuth  elevation  depth\n");
   for (std::size_t i = 0; i < regions.size(); ++i) {
     const Region& r = regions[i];
-    std::printf("  %4zu %7.2f %5zu %6.3f %7.2fd %9.2fd %5.2fm\n", i + 1, r.summed_improvement, r.area_columns,
-                static_cast<double>(r.peak_improvement), r.centroid_azimuth_rad * kRadToDeg,
-                r.centroid_elevation_rad * kRadToDeg, r.mean_depth_m);
+    std::printf("  %4zu %7.2f %5zu %6.3f  %4d,%-4d %7.2fd %9.2fd %5.2fm\n", i + 1, r.summed_improvement, r.area_columns,
+                static_cast<double>(r.peak_improvement), r.centre_u, r.centre_v, r.centre_azimuth_rad * kRadToDeg,
+                r.centre_elevation_rad * kRadToDeg, r.mean_depth_m);
   }
   if (!rays.empty())
-    std::printf("best ray: azimuth bin %d, elevation bin %d, improvement %.3f, surface depth %.2f m\n",
-                rays.front().azimuth_bin, rays.front().elevation_bin, static_cast<double>(rays.front().improvement),
+    std::printf("best ray: column u %d, row v %d, improvement %.3f, surface depth %.2f m\n", rays.front().azimuth_bin,
+                rays.front().elevation_bin, static_cast<double>(rays.front().improvement),
                 static_cast<double>(rays.front().depth_m));
   std::printf("stop: %s (%s)\n", summary.stop.stop ? "yes" : "no", summary.stop.reason.c_str());
   std::printf("wrote %s/: %s\n", staging.path().c_str(), join_names(written).c_str());

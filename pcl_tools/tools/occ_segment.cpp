@@ -23,7 +23,7 @@ const ToolFlags kFlags{
     "Segments one organized frame along its negative-improvement contours (the paper's closing remark).\n"
     "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png, contours.png,\n"
     "segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
-    joined({output_folder_flag_names(), {"-contour", "-min_segment", "-plane"}, sensor_flag_names(),
+    joined({output_folder_flag_names(), {"-contour", "-min_segment", "-no_plane", "-plane_distance"}, sensor_flag_names(),
             camera_flag_names()}),
     {},
     {},
@@ -48,7 +48,6 @@ int run(const CommandLine& command_line) {
   std::printf("%s\n", describe_camera(frames).c_str());
   SegmentationParams params = segmentation_defaults(preset);
   apply_segmentation_flags(command_line, params);
-  params.remove_dominant_plane = command_line.has("-plane");
 
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
   throw_if_interrupted();

@@ -96,7 +96,6 @@ int run(const CommandLine& command_line) {
   const std::string preset_name = *command_line.text("-preset");
   SegmentationParams ours = segmentation_defaults(preset_by_name(preset_name));
   apply_segmentation_flags(command_line, ours);
-  ours.remove_dominant_plane = !command_line.has("-no_plane");
   pcl_params.validate();
   const std::vector<std::string>& files = command_line.positionals();
   if (files.empty()) throw InvalidParameter("no labelled .pcd file given (see -h)");

@@ -21,16 +21,29 @@ void bind_region_types(py::module_& m) {
       .def_readwrite("min_area_columns", &RegionOptions::min_area_columns)
       .def("validate", &RegionOptions::validate);
   def_fields_repr(o, {"min_improvement", "min_area_columns"});
-  py::class_<Region> r(m, "Region", "An 8-connected region of high improvement (read-only).");
+  py::class_<Region> r(m, "Region",
+                       "An 8-connected region of high improvement (read-only). Positions are grid coordinates u "
+                       "(column) and v (row, grows downwards): image pixels with the pixel-native presets.");
   r.def_readonly("summed_improvement", &Region::summed_improvement)
       .def_readonly("area_columns", &Region::area_columns)
       .def_readonly("peak_improvement", &Region::peak_improvement)
-      .def_readonly("centroid_azimuth_rad", &Region::centroid_azimuth_rad)
-      .def_readonly("centroid_elevation_rad", &Region::centroid_elevation_rad)
-      .def_readonly("centroid_direction", &Region::centroid_direction, "Unit vector in the sensor frame, shape (3,).")
+      .def_readonly("centre_u", &Region::centre_u, "The medoid's column: always a ray of the region.")
+      .def_readonly("centre_v", &Region::centre_v, "The medoid's row.")
+      .def_readonly("peak_u", &Region::peak_u, "Column of the peak (ties as top_rays).")
+      .def_readonly("peak_v", &Region::peak_v)
+      .def_readonly("min_u", &Region::min_u, "Bounding box, inclusive.")
+      .def_readonly("min_v", &Region::min_v)
+      .def_readonly("max_u", &Region::max_u)
+      .def_readonly("max_v", &Region::max_v)
+      .def_readonly("centre_azimuth_rad", &Region::centre_azimuth_rad, "Azimuth of centre_direction (SPEC 1).")
+      .def_readonly("centre_elevation_rad", &Region::centre_elevation_rad,
+                    "Elevation of centre_direction (SPEC 1; y down, so it grows downwards like v).")
+      .def_readonly("centre_direction", &Region::centre_direction,
+                    "Unit vector through the centre ray, sensor frame, shape (3,).")
       .def_readonly("mean_depth_m", &Region::mean_depth_m, "Over known rays, 0 if none.");
-  def_fields_repr(r, {"summed_improvement", "area_columns", "peak_improvement", "centroid_azimuth_rad",
-                      "centroid_elevation_rad", "mean_depth_m"});
+  def_fields_repr(r, {"summed_improvement", "area_columns", "peak_improvement", "centre_u", "centre_v", "peak_u",
+                      "peak_v", "min_u", "min_v", "max_u", "max_v", "centre_azimuth_rad", "centre_elevation_rad",
+                      "mean_depth_m"});
 }
 
 void bind_stop_types(py::module_& m) {
@@ -79,7 +92,9 @@ void bind_ranking(py::module_& m) {
         "8-connected regions of improvement >= options.min_improvement, largest summed improvement first.");
   c.def("top_rays", &mapper_top_rays, py::arg("k"),
         "The k rays of highest improvement, best first, as a structured array with fields column, "
-        "azimuth_bin, elevation_bin (int), improvement, depth_m (float32; depth 0 where unknown).");
+        "azimuth_bin, elevation_bin (int: u and v, the pixel with the pixel-native presets), improvement, "
+        "depth_m (float32; depth 0 where unknown). Equal values are ordered as the planner orders them "
+        "(spread over the view by a fixed hash of the column), not in scan order.");
   c.def("stop_signal", [](PyMapper& self, const StopCriteria& criteria, const RegionOptions& options) {
     return with_mapper(self, [&](Mapper& mp) {
       return stop_signal(mp.improvement(), find_regions(mp.geometry(), mp.improvement(), mp.surface(), options),

@@ -50,8 +50,8 @@ def main() -> None:
         look = ""
         if regions:
             best = regions[0]
-            look = (f", look next at azimuth {math.degrees(best.centroid_azimuth_rad):+.1f} deg, "
-                    f"elevation {math.degrees(best.centroid_elevation_rad):+.1f} deg")
+            look = (f", look next at azimuth {math.degrees(best.centre_azimuth_rad):+.1f} deg, "
+                    f"elevation {math.degrees(best.centre_elevation_rad):+.1f} deg")
         print(f"frame {number:2d}: total {signal.total_improvement:9.1f}{look}")
         if signal.stop:
             print(f"stop after {number} frames: {signal.reason}")

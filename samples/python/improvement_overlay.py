@@ -54,10 +54,9 @@ def draw(mapper: oi.Mapper, depth, colour, title: str):
                         extent=(0, mapper.width, mapper.height, 0))
     figure.colorbar(shown, ax=axis, fraction=0.035, label="expected improvement of one more measurement")
     for rank, region in enumerate(regions, 1):
-        bins = mapper.locate(region.centroid_direction)
-        if bins is not None:
-            axis.plot(*bins, "o", mfc="none", mec="white", ms=14, mew=2)
-            axis.annotate(str(rank), bins, color="white", fontsize=12, ha="center", va="center")
+        centre = (region.centre_u, region.centre_v)  # a ray of the region, in the image's columns and rows
+        axis.plot(*centre, "o", mfc="none", mec="white", ms=14, mew=2)
+        axis.annotate(str(rank), centre, color="white", fontsize=12, ha="center", va="center")
     axis.set_title(f"{title}: best regions (circles), red = worth measuring again")
     axis.set_axis_off()
     return figure

@@ -1,5 +1,8 @@
 // occ_improve_map end to end, as a user runs it: outputs on the built-in sample, and bad input giving a
 // one-line error, a non-zero exit and no output folder.
+#include "occ_improve/sample_scene.hpp"
+#include "support/csv_table.hpp"
+#include "support/test_data.hpp"
 #include "support/tool_run.hpp"
 
 #include <gtest/gtest.h>
@@ -7,6 +10,9 @@
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <set>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -100,6 +106,97 @@ TEST_F(OccImproveMapTool, BadInputFailsCleanlyWithoutOutput) {
   // An output folder that cannot be created.
   const ToolRun r = run_tool("-sample -o /proc/occ_improve_out");
   EXPECT_EQ(r.exit_code, 1) << r.output;
+}
+
+constexpr double kDeg = 180.0 / 3.14159265358979323846;
+
+// rays.csv gave pixel indices times 180/pi as degrees with the pixel-native default (azimuth_deg 57.3
+// for pixel 1), and its ties went in scan order (the first ten rays: one row, ten neighbouring columns).
+TEST_F(OccImproveMapTool, RaysCsvGivesPixelsDirectionsAndTrueAnglesWithTiesSpread) {
+  const fs::path out = dir_ / "out";
+  const ToolRun r = run_tool("-sample -k 50 -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const occ_improve::test::CsvTable rays = occ_improve::test::read_csv(out / "rays.csv");
+  ASSERT_EQ(rays.rows.size(), 50u);
+  const std::vector<std::string> header = {"rank",        "improvement", "column_u",      "row_v",         "direction_x",
+                                           "direction_y", "direction_z", "azimuth_deg", "elevation_deg", "depth_m"};
+  EXPECT_EQ(rays.header, header);
+  const auto camera = occ_improve::sample::generate_scene().intrinsics;  // the default preset's columns are its pixels
+  std::set<int> rows;
+  for (std::size_t i = 0; i < rays.rows.size(); ++i) {
+    const double u = rays.value(i, "column_u"), v = rays.value(i, "row_v");
+    const double x = rays.value(i, "direction_x"), y = rays.value(i, "direction_y"), z = rays.value(i, "direction_z");
+    ASSERT_TRUE(u >= 0 && u < camera.width && v >= 0 && v < camera.height) << u << ", " << v;
+    // The unit ray through pixel (u, v).
+    const double px = (u - camera.cx) / camera.fx, py = (v - camera.cy) / camera.fy, n = std::sqrt(px * px + py * py + 1);
+    EXPECT_NEAR(x, px / n, 2e-6) << i;
+    EXPECT_NEAR(y, py / n, 2e-6) << i;
+    EXPECT_NEAR(z, 1 / n, 2e-6) << i;
+    // Degrees of that ray (SPEC 1), inside the camera's field of view (+-28.7 x +-22.3 deg).
+    EXPECT_NEAR(rays.value(i, "azimuth_deg"), std::atan2(x, z) * kDeg, 2e-3) << i;
+    EXPECT_NEAR(rays.value(i, "elevation_deg"), std::atan2(y, std::hypot(x, z)) * kDeg, 2e-3) << i;
+    EXPECT_LT(std::abs(rays.value(i, "azimuth_deg")), 29.0) << i;
+    EXPECT_LT(std::abs(rays.value(i, "elevation_deg")), 23.0) << i;
+    if (i > 0) {
+      EXPECT_LE(rays.value(i, "improvement"), rays.value(i - 1, "improvement")) << i;
+    }
+    if (i < 10) rows.insert(static_cast<int>(v));
+  }
+  // The sample's best rays are its many no-data rays, all of one value: the tie is spread over the view.
+  EXPECT_EQ(rays.value(0, "improvement"), rays.value(9, "improvement"));
+  EXPECT_GE(rows.size(), 8u) << "the first ten rays fall on " << rows.size() << " rows";
+
+  // The spherical preset: the angles are the bins' centres (57 x 43 deg in 640 x 480 bins).
+  const fs::path paper = dir_ / "paper";
+  ASSERT_EQ(run_tool("-sample -preset kinect_v1_paper -k 20 -o " + paper.string()).exit_code, 0);
+  const occ_improve::test::CsvTable spherical = occ_improve::test::read_csv(paper / "rays.csv");
+  ASSERT_EQ(spherical.rows.size(), 20u);
+  for (std::size_t i = 0; i < spherical.rows.size(); ++i) {
+    EXPECT_NEAR(spherical.value(i, "azimuth_deg"), -28.5 + (spherical.value(i, "column_u") + 0.5) * 57.0 / 640, 2e-3);
+    EXPECT_NEAR(spherical.value(i, "elevation_deg"), -21.5 + (spherical.value(i, "row_v") + 0.5) * 43.0 / 480, 2e-3);
+  }
+}
+
+// One float field of an organized cloud at pixel (u, v).
+float field_at(const pcl::PCLPointCloud2& cloud, const std::string& name, int u, int v) {
+  for (const auto& f : cloud.fields)
+    if (f.name == name) {
+      float value;
+      std::memcpy(&value, &cloud.data[static_cast<std::size_t>(v) * cloud.row_step + static_cast<std::size_t>(u) * cloud.point_step + f.offset],
+                  sizeof value);
+      return value;
+    }
+  ADD_FAILURE() << "no field " << name;
+  return NAN;
+}
+
+// regions.csv gave a region's mean position, which on a real table scene lay on the table, outside the
+// region (the region is the band of no data around the objects). Its centre is now one of its pixels.
+TEST_F(OccImproveMapTool, RegionCentresArePixelsOfTheirRegionsOnARealTableScene) {
+  // learn8: its best region (the no-data area around the table: floor and walls cropped) has its mean
+  // position on the table, at pixel (379, 130), 1.13 m away; 9 of the 10 mosd_learn clouds are alike.
+  OCC_REQUIRE_DATA(cloud_path, "segmentation/mosd_learn/learn8.pcd");
+  const fs::path out = dir_ / "out";
+  const ToolRun r = run_tool(cloud_path + " -k 10 -o " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  pcl::PCLPointCloud2 surface;
+  ASSERT_EQ(pcl::io::loadPCDFile((out / "surface.pcd").string(), surface), 0);
+  const occ_improve::test::CsvTable regions = occ_improve::test::read_csv(out / "regions.csv");
+  ASSERT_GE(regions.rows.size(), 3u);
+  for (std::size_t i = 0; i < regions.rows.size(); ++i) {
+    const auto at = [&](const char* name) { return static_cast<int>(regions.value(i, name)); };
+    const int cu = at("centre_u"), cv = at("centre_v"), pu = at("peak_u"), pv = at("peak_v");
+    EXPECT_GE(field_at(surface, "improvement", cu, cv), 0.2f) << "region " << i + 1 << ": centre (" << cu << ", " << cv
+                                                              << ") is not in the region";
+    EXPECT_NEAR(field_at(surface, "improvement", pu, pv), regions.value(i, "peak_improvement"), 1e-5) << i;
+    EXPECT_TRUE(at("min_u") <= cu && cu <= at("max_u") && at("min_v") <= cv && cv <= at("max_v")) << i;
+    EXPECT_TRUE(at("min_u") <= pu && pu <= at("max_u") && at("min_v") <= pv && pv <= at("max_v")) << i;
+    const double x = regions.value(i, "direction_x"), y = regions.value(i, "direction_y"), z = regions.value(i, "direction_z");
+    EXPECT_NEAR(std::sqrt(x * x + y * y + z * z), 1.0, 1e-5);
+    // The direction is the centre pixel's: below the image's centre row (v grows downwards), y > 0.
+    EXPECT_EQ(y > 0, cv >= 240) << i;  // cy = 239.5
+    EXPECT_NEAR(regions.value(i, "elevation_deg"), std::atan2(y, std::hypot(x, z)) * kDeg, 2e-3) << i;
+  }
 }
 
 std::string contents(const fs::path& path) {

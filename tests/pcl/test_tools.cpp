@@ -3,6 +3,7 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/sample_scene.hpp"
+#include "support/csv_table.hpp"
 #include "support/temp_folder.hpp"
 #include "support/test_data.hpp"
 
@@ -361,6 +362,87 @@ TEST_F(Tools, SigtermStopsCleanlyWithTheSummaryAndAnExitCodeOfTheSignal) {
   for (const auto& entry : fs::directory_iterator(folder_))
     EXPECT_EQ(entry.path().filename().string().find(".out.tmp-"), std::string::npos) << "staging left: " << entry.path();
   EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / "improvement.png")) << "the map so far is published";
+}
+
+// occ_improve_live -stop_on_signal printed "Stopped: stop signal" and then the last frame's signal, which
+// may read "no (continue ...)": the reason that stopped the run was never printed.
+TEST_F(Tools, StopOnSignalPrintsTheReasonOfTheStopThatFired) {
+  fs::create_directory(folder_ / "frames");
+  for (int i = 0; i < 12; ++i) fs::copy_file(write_cloud("wall.pcd", 2.0f), folder_ / "frames" / ("f" + std::to_string(100 + i) + ".pcd"));
+  const ToolRun r = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -stop_on_signal -o out");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  const std::string text = r.out + r.err;
+  const std::string head = "Stopped: stop signal (frame ";
+  const std::size_t at = text.find(head);
+  ASSERT_NE(at, std::string::npos) << text;
+  const std::string line = text.substr(at + head.size(), text.find('\n', at) - at - head.size());
+  const std::size_t colon = line.find(": ");
+  ASSERT_NE(colon, std::string::npos) << line;
+  const int frame = std::stoi(line.substr(0, colon));
+  const std::string reason = line.substr(colon + 2);
+  EXPECT_GE(frame, 1);
+  EXPECT_LE(frame, 12);
+  // A reason that stops (stop_signal and StopMonitor name one of these), not the "continue" of a later frame.
+  EXPECT_TRUE(reason.rfind("total expected improvement", 0) == 0 || reason.rfind("best region", 0) == 0 ||
+              reason.rfind("progress stalled", 0) == 0)
+      << reason;
+  EXPECT_EQ(reason.find("continue"), std::string::npos) << reason;
+  // The live tool's rays.csv: pixels and true angles, as occ_improve_map's (a 64 x 48 camera of +-28.5 deg).
+  const test::CsvTable rays = test::read_csv(folder_ / "out" / "rays.csv");
+  ASSERT_FALSE(rays.rows.empty());
+  for (std::size_t i = 0; i < rays.rows.size(); ++i) {
+    EXPECT_LT(rays.value(i, "column_u"), 64) << i;
+    EXPECT_LT(rays.value(i, "row_v"), 48) << i;
+    EXPECT_LT(std::abs(rays.value(i, "azimuth_deg")), 32.0) << i;
+    EXPECT_NEAR(rays.value(i, "azimuth_deg"),
+                std::atan2(rays.value(i, "direction_x"), rays.value(i, "direction_z")) * 180 / M_PI, 2e-3);
+  }
+}
+
+// occ_segment without -plane merged the objects with the table into one segment (mOSD learn0: one segment
+// of every valid ray) while occ_segment_eval removed the plane unless -no_plane: one default now (removed),
+// one flag (-no_plane).
+TEST_F(Tools, SegmentRemovesTheTableByDefaultOnARealTableScene) {
+  OCC_REQUIRE_DATA(cloud_path, "segmentation/mosd_learn/learn0.pcd");
+  ASSERT_EQ(run(OCC_SEGMENT_EXECUTABLE, cloud_path + " -o seg").exit_code, 0);
+  pcl::PointCloud<pcl::PointXYZRGBL> truth, labels;
+  ASSERT_EQ(pcl::io::loadPCDFile(cloud_path, truth), 0);
+  ASSERT_EQ(pcl::io::loadPCDFile(file("seg/labels.pcd"), labels), 0);
+  ASSERT_EQ(truth.size(), labels.size());
+  const test::CsvTable segments = test::read_csv(folder_ / "seg" / "segments.csv");
+  double valid = 0, planes = 0;
+  for (std::size_t i = 0; i < segments.rows.size(); ++i) {
+    valid += segments.value(i, "rays");
+    planes += segments.value(i, "plane");
+  }
+  EXPECT_EQ(planes, 1) << "the table is one plane segment";
+  ASSERT_GE(segments.rows.size(), 3u) << "the table and at least two objects";
+  // Where the table's points (truth labels 1-9) went: nearly all into the plane, a few at its edges into
+  // small segments of their own, none into the objects' segments.
+  std::map<std::uint32_t, std::size_t> table_points;
+  std::size_t table = 0;
+  for (std::size_t p = 0; p < truth.size(); ++p)
+    if (truth[p].label >= 1 && truth[p].label <= 9) {
+      ++table;
+      ++table_points[labels[p].label];
+    }
+  ASSERT_GT(table, 100000u);
+  for (std::size_t i = 0; i < segments.rows.size(); ++i) {
+    const auto label = static_cast<std::uint32_t>(segments.value(i, "label"));
+    const double share = static_cast<double>(table_points[label]) / static_cast<double>(table);
+    if (segments.value(i, "plane") == 1) {
+      EXPECT_GT(share, 0.9) << "the plane segment holds " << share << " of the table";
+    } else {
+      EXPECT_LT(segments.value(i, "rays"), 0.5 * valid) << "segment " << label;
+      EXPECT_LT(share, 0.01) << "segment " << label << " holds " << share << " of the table";
+    }
+  }
+  // -no_plane keeps it (the old default: then everything is one segment); -plane is gone.
+  ASSERT_EQ(run(OCC_SEGMENT_EXECUTABLE, cloud_path + " -no_plane -o kept").exit_code, 0);
+  const test::CsvTable kept = test::read_csv(folder_ / "kept" / "segments.csv");
+  EXPECT_LT(kept.rows.size(), segments.rows.size());
+  for (std::size_t i = 0; i < kept.rows.size(); ++i) EXPECT_EQ(kept.value(i, "plane"), 0);
+  EXPECT_EQ(run(OCC_SEGMENT_EXECUTABLE, cloud_path + " -plane -o old").exit_code, 1);
 }
 
 // occ_improve_live -simulate: the closed loop against the virtual sensor over a frame, until the plan

@@ -27,10 +27,43 @@ def test_regions_are_sorted_and_above_the_threshold(paper_mapper):
     for r in regions:
         assert r.area_columns >= 10 and r.peak_improvement >= 0.2
         assert r.summed_improvement <= r.area_columns * r.peak_improvement + 1e-6
-        assert np.linalg.norm(r.centroid_direction) == pytest.approx(1.0)
+        assert np.linalg.norm(r.centre_direction) == pytest.approx(1.0)
     # Every column above the threshold is in at most one region: the areas cannot add up to more.
     assert sum(r.area_columns for r in regions) <= np.count_nonzero(improvement >= 0.2)
     assert len(paper_mapper.regions(oi.RegionOptions(min_improvement=10.0))) == 0
+
+
+def test_region_positions_are_columns_of_the_region(sample):
+    """The centre was the mean position, which can lie outside the region; it is now one of its rays."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mapper.insert_depth(depth, intrinsics)
+    improvement = mapper.improvement()
+    regions = mapper.regions()
+    assert len(regions) >= 2
+    for r in regions:
+        assert improvement[r.centre_v, r.centre_u] >= 0.2
+        assert improvement[r.peak_v, r.peak_u] == pytest.approx(r.peak_improvement)
+        assert r.min_u <= r.centre_u <= r.max_u and r.min_v <= r.centre_v <= r.max_v
+        assert r.min_u <= r.peak_u <= r.max_u and r.min_v <= r.peak_v <= r.max_v
+        assert 0 <= r.min_u and r.max_u < mapper.width and 0 <= r.min_v and r.max_v < mapper.height
+        inside = improvement[r.min_v:r.max_v + 1, r.min_u:r.max_u + 1] >= 0.2
+        assert np.count_nonzero(inside) >= r.area_columns  # the box holds the whole region
+        np.testing.assert_allclose(r.centre_direction, mapper.direction(r.centre_u, r.centre_v), atol=1e-12)
+        x, y, z = r.centre_direction
+        assert r.centre_azimuth_rad == pytest.approx(np.arctan2(x, z))
+        assert r.centre_elevation_rad == pytest.approx(np.arctan2(y, np.hypot(x, z)))
+        assert (y > 0) == (r.centre_v > intrinsics.cy)  # elevation and v grow downwards
+
+
+def test_equal_rays_are_spread_over_the_view_not_taken_in_scan_order(sample):
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mapper.insert_depth(depth, intrinsics)
+    rays = mapper.top_rays(50)
+    assert np.all(rays["improvement"][:10] == rays["improvement"][0])  # the no-data rays all tie
+    assert len(set(rays["elevation_bin"][:10].tolist())) >= 8
+    assert not np.all(np.diff(rays["column"][:10].astype(np.int64)) > 0)
 
 
 def test_stop_signal_follows_its_thresholds(paper_mapper):

@@ -18,7 +18,7 @@ def test_occluders_are_cut_from_the_background(sample):
     mapper = oi.Mapper(preset)
     mapper.insert_depth(depth, intrinsics)
     params = oi.segmentation_defaults(preset)
-    params.remove_dominant_plane = True
+    assert params.remove_dominant_plane and oi.SegmentationParams().remove_dominant_plane  # the tools' default
     s = mapper.segment(params)
     box, pole = label_at(mapper, s, (-0.6, 0.45, 1.6)), label_at(mapper, s, (0.4, -0.5, 2.3))
     wall, floor = label_at(mapper, s, (-2.0, -1.0, 4.2)), label_at(mapper, s, (0.0, 0.8, 3.0))

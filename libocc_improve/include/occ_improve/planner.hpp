@@ -14,11 +14,12 @@
 //  - window: the window_width x window_height rectangle of largest summed score (ROI readout);
 //  - decimation: the regular pattern of every step-th column and row, step the smallest one whose
 //    pattern fits the budget, at the offset of largest summed score.
-// Ties: equal scores (at the start every ray is unknown and equal) go to the ray of lower spread rank, a
-// fixed hash of the column index, so that a tie is broken evenly over the view instead of row by row;
-// equal windows and offsets go to the lowest (row, column). No spacing is imposed between chosen rays:
-// with one column per pixel each ray is a distinct measurement, and rays whose neighbours have just been
-// measured score lower at the next plan anyway.
+// Ties: rays are ordered by rank_key (ranking.hpp), the one order top_rays uses too: equal scores (at
+// the start every ray is unknown and equal) go to the ray of lower spread rank, a fixed hash of the
+// column index, so that a tie is broken evenly over the view instead of row by row; equal windows and
+// offsets go to the lowest (row, column). No spacing is imposed between chosen rays: with one column per
+// pixel each ray is a distinct measurement, and rays whose neighbours have just been measured score
+// lower at the next plan anyway.
 // Re-acquisition (the paper: "regions of negative improvement can be re-acquired"): negative_share of a
 // rays shot goes to the rays of most negative score (depth transitions); they do not count in the gain.
 // Stop: the plan says stop when the expected gain is below stop_gain_per_ray_below x the rays taken by

@@ -2,11 +2,18 @@
 // Where to look next: the best rays, connected regions of high improvement, and when to stop (SPEC 9).
 //
 // Conventions (docs/METHOD.md, "Ranking"):
+//  - one order of rays everywhere (rank_key): larger value first; equal values go to the lower spread
+//    rank, a fixed hash of the column index, so a tie (at the start every ray is unknown and equal) is
+//    spread over the view instead of taken row by row. top_rays, a region's peak and centre, and the
+//    planner (planner.hpp) all rank with it;
 //  - regions are 8-connected (diagonal neighbours join), so a thin diagonal no-data band or depth edge
 //    stays one region;
-//  - a region's centroid is the mean of its columns' centre positions in the binning's unit (angles, or
-//    pixels), so each column counts once and the centroid is the middle of the area to re-acquire, not
-//    pulled towards its peak;
+//  - a region's centre is its medoid: the column of the region with the least summed distance (in
+//    columns and rows, L1) to the region's other columns. Not the mean position: a region wrapped around
+//    an object (its shadow, its border) has its mean on the object, outside the region, and a sensor
+//    aimed there looks at what it has already seen;
+//  - positions are grid coordinates u (column = azimuth bin, grows to the right, +x) and v (row =
+//    elevation bin, grows downwards, +y): with the pixel-native presets, the image pixel (u, v);
 //  - columns that are not observable (NaN improvement, improvement.hpp) are never ranked, never in a
 //    region and never counted by the stop signal.
 #include "occ_improve/geometry.hpp"
@@ -15,19 +22,28 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 namespace occ_improve {
 
+/// The rank of a ray: larger key = ranked first. The value's order, then the complement of the column's
+/// spread rank (MurmurHash3's 32-bit finaliser of the column index: a bijection, so no two columns tie).
+std::uint64_t rank_key(float value, ColumnIndex column);
+
+/// The k columns of largest rank_key among the eligible ones (nullptr: all), best first; NaN values (not
+/// observable) are never taken. Returns min(k, eligible non-NaN columns) columns.
+std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k);
+
 struct RankedRay {
   ColumnIndex column;
-  int azimuth_bin, elevation_bin;
+  int azimuth_bin, elevation_bin;  ///< u (column) and v (row); the image pixel with the pixel-native presets
   float improvement;
   float depth_m;  ///< surface depth (0 where unknown)
 };
 
-/// The k rays of highest improvement, best first (ties: lower column index first).
+/// The k rays of highest improvement, best first, ties by rank_key (best_columns).
 /// k <= 0 -> InvalidParameter; maps of different sizes -> InvalidInput. Returns min(k, rays) rays.
 std::vector<RankedRay> top_rays(const ImprovementMap& map, const SurfaceMap& surface, int k);
 
@@ -40,14 +56,18 @@ struct RegionOptions {
   void validate() const;              ///< NaN / infinite threshold -> InvalidParameter
 };
 
+/// A region's columns are named by grid coordinates (u, v): column and row, pixels with the pixel-native
+/// presets (v grows downwards).
 struct Region {
-  double summed_improvement;
-  std::size_t area_columns;
-  float peak_improvement;
-  double centroid_horizontal, centroid_vertical;        ///< mean column centre, binning's unit (rad or px)
-  double centroid_azimuth_rad, centroid_elevation_rad;  ///< angles of centroid_direction (SPEC 1)
-  Eigen::Vector3d centroid_direction;                   ///< unit vector in the sensor frame
-  double mean_depth_m;                                  ///< over known columns, 0 if none
+  double summed_improvement = 0;
+  std::size_t area_columns = 0;
+  float peak_improvement = 0;
+  int peak_u = 0, peak_v = 0;      ///< the column of peak_improvement (ties by rank_key)
+  int centre_u = 0, centre_v = 0;  ///< the medoid: always a column of the region (ties by rank_key)
+  int min_u = 0, min_v = 0, max_u = 0, max_v = 0;  ///< bounding box, inclusive
+  Eigen::Vector3d centre_direction = Eigen::Vector3d::UnitZ();  ///< unit ray through the centre column, sensor frame
+  double centre_azimuth_rad = 0, centre_elevation_rad = 0;      ///< SPEC 1 angles of centre_direction
+  double mean_depth_m = 0;                                      ///< over known columns, 0 if none
 };
 
 /// 8-connected regions of improvement >= min_improvement with at least min_area_columns columns,

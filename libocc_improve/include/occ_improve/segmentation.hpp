@@ -29,8 +29,9 @@ struct SegmentationParams {
   float contour_improvement_below = -0.02f;
   /// Regions with fewer rays are not segments of their own but attached to a neighbouring segment.
   std::size_t min_segment_columns = 200;
-  /// Dominant-plane removal (RANSAC over the surface points).
-  bool remove_dominant_plane = false;
+  /// Dominant-plane removal (RANSAC over the surface points). On by default: the table or floor touches
+  /// every object standing on it, and without removal they merge into one segment (docs/SEGMENTATION.md).
+  bool remove_dominant_plane = true;
   double plane_distance_m = 0.01;         ///< inlier band half-width around the plane
   std::size_t plane_min_columns = 3000;   ///< a smaller best plane is not removed
   int plane_ransac_iterations = 200;

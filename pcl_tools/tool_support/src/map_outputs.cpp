@@ -13,18 +13,22 @@ namespace {
 
 constexpr double kRadToDeg = 57.29577951308232;
 
+// Directions and angles are written for both binnings: the angles are those of the unit direction
+// (SPEC 1: azimuth atan2(x, z), elevation atan2(y, hypot(x, z)), y down), so they are degrees with the
+// pixel-native presets too, never pixel positions.
 void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
   std::ofstream out(path);
   if (!out) throw IoError("cannot write '" + path + "'");
-  out << "rank,summed_improvement,area_columns,peak_improvement,centroid_azimuth_deg,centroid_elevation_deg,"
-         "direction_x,direction_y,direction_z,mean_depth_m\n";
+  out << "rank,summed_improvement,area_columns,peak_improvement,centre_u,centre_v,peak_u,peak_v,min_u,min_v,max_u,"
+         "max_v,direction_x,direction_y,direction_z,azimuth_deg,elevation_deg,mean_depth_m\n";
   char line[512];
   for (std::size_t i = 0; i < regions.size(); ++i) {
     const Region& r = regions[i];
-    std::snprintf(line, sizeof line, "%zu,%.6f,%zu,%.6f,%.4f,%.4f,%.6f,%.6f,%.6f,%.4f\n", i + 1,
-                  r.summed_improvement, r.area_columns, static_cast<double>(r.peak_improvement),
-                  r.centroid_azimuth_rad * kRadToDeg, r.centroid_elevation_rad * kRadToDeg, r.centroid_direction.x(),
-                  r.centroid_direction.y(), r.centroid_direction.z(), r.mean_depth_m);
+    std::snprintf(line, sizeof line, "%zu,%.6f,%zu,%.6f,%d,%d,%d,%d,%d,%d,%d,%d,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f\n", i + 1,
+                  r.summed_improvement, r.area_columns, static_cast<double>(r.peak_improvement), r.centre_u, r.centre_v,
+                  r.peak_u, r.peak_v, r.min_u, r.min_v, r.max_u, r.max_v, r.centre_direction.x(),
+                  r.centre_direction.y(), r.centre_direction.z(), r.centre_azimuth_rad * kRadToDeg,
+                  r.centre_elevation_rad * kRadToDeg, r.mean_depth_m);
     out << line;
   }
   if (!out.flush()) throw IoError("cannot write '" + path + "'");
@@ -33,13 +37,15 @@ void write_regions_csv(const std::string& path, const std::vector<Region>& regio
 void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, const std::vector<RankedRay>& rays) {
   std::ofstream out(path);
   if (!out) throw IoError("cannot write '" + path + "'");
-  out << "rank,improvement,azimuth_bin,elevation_bin,azimuth_deg,elevation_deg,depth_m\n";
+  out << "rank,improvement,column_u,row_v,direction_x,direction_y,direction_z,azimuth_deg,elevation_deg,depth_m\n";
   char line[256];
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const RankedRay& r = rays[i];
-    std::snprintf(line, sizeof line, "%zu,%.6f,%d,%d,%.4f,%.4f,%.4f\n", i + 1, static_cast<double>(r.improvement),
-                  r.azimuth_bin, r.elevation_bin, geometry.azimuth().centre(r.azimuth_bin) * kRadToDeg,
-                  geometry.elevation().centre(r.elevation_bin) * kRadToDeg, static_cast<double>(r.depth_m));
+    const Eigen::Vector3d d = geometry.direction(r.azimuth_bin, r.elevation_bin);
+    const SphericalPoint angles = to_spherical(d.x(), d.y(), d.z());
+    std::snprintf(line, sizeof line, "%zu,%.6f,%d,%d,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f\n", i + 1,
+                  static_cast<double>(r.improvement), r.azimuth_bin, r.elevation_bin, d.x(), d.y(), d.z(),
+                  angles.azimuth * kRadToDeg, angles.elevation * kRadToDeg, static_cast<double>(r.depth_m));
     out << line;
   }
   if (!out.flush()) throw IoError("cannot write '" + path + "'");

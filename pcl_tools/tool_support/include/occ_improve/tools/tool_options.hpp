@@ -218,7 +218,7 @@ ToolOptions parse_tool_options(const CommandLine& command_line);
 /// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
 SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
 
-/// -contour, -min_segment and -plane_distance, those the tool declares and the user gave (or, for
+/// -contour, -min_segment, -plane_distance and -no_plane, those the tool declares and the user gave (or, for
 /// -min_segment, its table default), over a preset's segmentation defaults (segmentation_defaults).
 void apply_segmentation_flags(const CommandLine& command_line, SegmentationParams& params);
 
