@@ -182,6 +182,12 @@ fs::path staged_name(const fs::path& target) {
 
 }  // namespace
 
+void write_text_file(const std::string& path, const std::string& what, const std::string& text) {
+  write_file_atomically(path, what, [&](std::ostream& out) {
+    return static_cast<bool>(out.write(text.data(), static_cast<std::streamsize>(text.size())));
+  });
+}
+
 OutputFile::OutputFile(const std::string& target, const std::string& flag, bool overwrite,
                        const std::function<bool(const std::string&)>& is_own, const std::string& kind)
     : shown_(target) {

@@ -20,6 +20,9 @@ namespace occ_improve {
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write);
 
+/// write_file_atomically of a text held in memory (CSV tables, plan summaries).
+void write_text_file(const std::string& path, const std::string& what, const std::string& text);
+
 /// Why writing `path` failed, for an error message: "no space left on device" when errno says so or the
 /// file system of `path` has no room left, else strerror(errno) ("permission denied", ...). Call it right
 /// after the failed operation, before errno changes.

@@ -1,11 +1,11 @@
 #include "occ_improve/tools/map_outputs.hpp"
 
+#include "occ_improve/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/map_cloud.hpp"
 
 #include <cstdio>
-#include <fstream>
 
 namespace occ_improve {
 
@@ -17,9 +17,7 @@ constexpr double kRadToDeg = 57.29577951308232;
 // (SPEC 1: azimuth atan2(x, z), elevation atan2(y, hypot(x, z)), y down), so they are degrees with the
 // pixel-native presets too, never pixel positions.
 void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
-  std::ofstream out(path);
-  if (!out) throw IoError("cannot write '" + path + "'");
-  out << "rank,summed_improvement,area_columns,peak_improvement,centre_u,centre_v,peak_u,peak_v,min_u,min_v,max_u,"
+  std::string out = "rank,summed_improvement,area_columns,peak_improvement,centre_u,centre_v,peak_u,peak_v,min_u,min_v,max_u,"
          "max_v,direction_x,direction_y,direction_z,azimuth_deg,elevation_deg,mean_depth_m\n";
   char line[512];
   for (std::size_t i = 0; i < regions.size(); ++i) {
@@ -29,15 +27,13 @@ void write_regions_csv(const std::string& path, const std::vector<Region>& regio
                   r.peak_u, r.peak_v, r.min_u, r.min_v, r.max_u, r.max_v, r.centre_direction.x(),
                   r.centre_direction.y(), r.centre_direction.z(), r.centre_azimuth_rad * kRadToDeg,
                   r.centre_elevation_rad * kRadToDeg, r.mean_depth_m);
-    out << line;
+    out += line;
   }
-  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+  write_text_file(path, "CSV file", out);
 }
 
 void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, const std::vector<RankedRay>& rays) {
-  std::ofstream out(path);
-  if (!out) throw IoError("cannot write '" + path + "'");
-  out << "rank,improvement,column_u,row_v,direction_x,direction_y,direction_z,azimuth_deg,elevation_deg,depth_m\n";
+  std::string out = "rank,improvement,column_u,row_v,direction_x,direction_y,direction_z,azimuth_deg,elevation_deg,depth_m\n";
   char line[256];
   for (std::size_t i = 0; i < rays.size(); ++i) {
     const RankedRay& r = rays[i];
@@ -46,9 +42,9 @@ void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, 
     std::snprintf(line, sizeof line, "%zu,%.6f,%d,%d,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f\n", i + 1,
                   static_cast<double>(r.improvement), r.azimuth_bin, r.elevation_bin, d.x(), d.y(), d.z(),
                   angles.azimuth * kRadToDeg, angles.elevation * kRadToDeg, static_cast<double>(r.depth_m));
-    out << line;
+    out += line;
   }
-  if (!out.flush()) throw IoError("cannot write '" + path + "'");
+  write_text_file(path, "CSV file", out);
 }
 
 }  // namespace
