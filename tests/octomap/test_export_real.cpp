@@ -17,6 +17,7 @@
 #include <octomap/OcTree.h>
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -168,11 +169,20 @@ TEST_P(ExportAgainstInsertPointCloud, OccupiedLeavesAgree) {
   EXPECT_EQ(points_in_holes, 0u) << "see the line above";
 }
 
+// e.g. capture0001_kinect_v1_2cm
+std::string case_name(const ::testing::TestParamInfo<Case>& info) {
+  const std::string& frame = std::get<0>(info.param);
+  const std::size_t slash = frame.rfind('/'), dot = frame.rfind('.');
+  const long centimetres = std::lround(std::get<2>(info.param) * 100);
+  return frame.substr(slash + 1, dot - slash - 1) + "_" + std::get<1>(info.param) + "_" + std::to_string(centimetres) + "cm";
+}
+
 INSTANTIATE_TEST_SUITE_P(RealFrames, ExportAgainstInsertPointCloud,
                          ::testing::Combine(::testing::Values("kinect/pcl_tutorials/pairwise/capture0001.pcd",
                                                               "segmentation/mosd_learn/learn0.pcd"),
                                             ::testing::Values("kinect_v1", "kinect_v1_spherical"),
-                                            ::testing::Values(0.01, 0.02, 0.05)));
+                                            ::testing::Values(0.01, 0.02, 0.05)),
+                         case_name);
 
 #else
 
