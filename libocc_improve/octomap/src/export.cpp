@@ -7,12 +7,14 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
-#include <optional>
 #include <memory>
-#include <vector>
+#include <ostream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace occ_improve {
 namespace {
