@@ -27,8 +27,9 @@ const ToolFlags kFlags{
     "occ_to_octomap",
     {"-load MAP.occmap [-pose P] [-load MAP2 -pose P2 ...] [options] -o OUT.bt|OUT.ot",
      "[options] INPUT... -o OUT.bt|OUT.ot", "-sample [options] -o OUT.bt|OUT.ot"},
-    "Writes the occupancy grid as an OctoMap OcTree: every leaf inside the sensor's field of view and\n"
-    "depth range takes the log-odds of the grid voxel holding its centre; unknown voxels stay unknown.\n"
+    "Writes the occupancy grid as an OctoMap OcTree: a leaf is occupied when any occupied grid voxel\n"
+    "reaches into it (it takes their largest log-odds), free when it lies wholly in free space (it takes\n"
+    "the log-odds at its centre), unknown otherwise.\n"
     ".bt = maximum likelihood, .ot = full log-odds (both with OctoMap's own writers). The tree is in a\n"
     "world frame: -pose, else the first frame's pose when the inputs have poses (a 7-Scenes folder),\n"
     "else -frame.\n"

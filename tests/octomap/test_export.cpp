@@ -1,6 +1,7 @@
-// Export of the spherical grid to OctoMap (octomap/export.hpp): files read back with OctoMap agree with
-// the grid, maps from two poses merge by the documented rule, writing leaves the caller's tree alone, and
-// bad input is refused with typed errors and no half-written file.
+// Export of the spherical grid to OctoMap (octomap/export.hpp): leaves follow the conversion rule (no
+// occupied space missed, nothing but free space written free) in the tree and in files read back with
+// OctoMap, a thin wall exports without holes, maps from two poses merge by the documented rule, writing
+// leaves the caller's tree alone, and bad input is refused with typed errors and no half-written file.
 #include "support/temp_folder.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate.hpp"
@@ -14,8 +15,14 @@
 #include <octomap/AbstractOcTree.h>
 #include <octomap/OcTree.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -26,6 +33,9 @@ namespace fs = std::filesystem;
 using test::Occupancy;
 
 constexpr double kResolution = 0.03;
+// Share of sampled leaves whose exported class equals the lattice estimate (the rest: thin features the
+// lattice misses). Measured: see the printed figures.
+constexpr double kMinAgreement = 0.97;
 
 // The sample frame in the paper preset (clamped) and in an exact-mode grid, built once.
 const SphericalGrid& sample_grid(UpdateMode mode) {
@@ -62,13 +72,21 @@ Eigen::Vector3d finest_centre(const octomap::OcTree::leaf_iterator& it, double r
 
 using OctomapExport = test::TempFolderTest;
 
-void expect_agreement(const test::Agreement& a) {
-  EXPECT_GT(a.compared, 2000u);
+// The rule's two guarantees hold on every compared leaf; the lattice estimate agrees otherwise except
+// where it misses a feature thinner than its spacing.
+void expect_agreement(const test::Agreement& a, double min_fraction) {
+  EXPECT_EQ(a.compared, a.per_class[0] + a.per_class[1] + a.per_class[2]);
   EXPECT_GT(a.per_class[static_cast<int>(Occupancy::free)], 500u);
-  EXPECT_GT(a.per_class[static_cast<int>(Occupancy::occupied)], 0u);
+  EXPECT_GT(a.per_class[static_cast<int>(Occupancy::occupied)], 20u);
   EXPECT_GT(a.per_class[static_cast<int>(Occupancy::unknown)], 100u);
-  ::testing::Test::RecordProperty("agreement", std::to_string(a.agreed) + "/" + std::to_string(a.compared));
-  EXPECT_GE(a.fraction(), 0.99) << a.agreed << " / " << a.compared << " (" << a.near_boundary << " near boundaries)";
+  EXPECT_EQ(a.holes, 0u) << "leaves holding occupied space exported as not occupied";
+  EXPECT_EQ(a.false_free, 0u) << "leaves holding non-free space exported free";
+  const std::string figures = std::to_string(a.agreed) + "/" + std::to_string(a.compared) + " (occupied " +
+                              std::to_string(a.per_class[2]) + ", free " + std::to_string(a.per_class[1]) +
+                              ", unknown " + std::to_string(a.per_class[0]) + ")";
+  std::printf("agreement with the lattice estimate: %s\n", figures.c_str());
+  ::testing::Test::RecordProperty("agreement", figures);
+  EXPECT_GE(a.fraction(), min_fraction) << figures;
 }
 
 // The grid exported from some_pose(), with the report's counts checked.
@@ -89,18 +107,18 @@ TEST_F(OctomapExport, FilesReadBackAgreeWithTheGrid) {
   EXPECT_NEAR(tree->getClampingThresMin(), grid.options().probability_min, 1e-7);
   EXPECT_NEAR(tree->getClampingThresMax(), grid.options().probability_max, 1e-7);
 
-  expect_agreement(test::compare_occupancy(grid, pose, *tree, options, 20000));
+  expect_agreement(test::compare_leaves(grid, pose, *tree, options, 5000), kMinAgreement);
 
   write_octree(*tree, file("map.ot"));
   std::unique_ptr<octomap::AbstractOcTree> read(octomap::AbstractOcTree::read(file("map.ot")));
   auto* full = dynamic_cast<octomap::OcTree*>(read.get());
   ASSERT_NE(full, nullptr);
-  expect_agreement(test::compare_occupancy(grid, pose, *full, options, 20000, 11));
+  expect_agreement(test::compare_leaves(grid, pose, *full, options, 5000, 11), kMinAgreement);
 
   write_octree(*tree, file("map.bt"));
   const octomap::OcTree binary(file("map.bt"));
   ASSERT_GT(binary.size(), 0u);
-  expect_agreement(test::compare_occupancy(grid, pose, binary, options, 20000, 13));
+  expect_agreement(test::compare_leaves(grid, pose, binary, options, 5000, 13), kMinAgreement);
   EXPECT_EQ(entry_count(), 2u) << "no temporary file may be left behind";
 }
 
@@ -109,25 +127,77 @@ TEST_F(OctomapExport, PixelNativeGridAgreesToo) {
   SphericalGrid grid(SphericalGeometry(preset.geometry));
   insert_points(grid, SensorModel(preset.model), PointSpan::from(sample::generate_scene().points()));
   const OctomapExportOptions options;
-  expect_agreement(test::compare_occupancy(grid, some_pose(), *exported(grid, options), options, 20000));
+  expect_agreement(test::compare_leaves(grid, some_pose(), *exported(grid, options), options, 5000), kMinAgreement);
 }
 
+// A 64 x 48 camera facing a wall 2 m away, one point per pixel 1 cm apart: the kinect_v1 preset's occupied
+// shell there is a few millimetres deep, thinner than a 2 cm leaf. Leaf centres fell between its depth
+// bins and the export held no occupied leaf at all; every leaf holding a wall point must be occupied.
+TEST_F(OctomapExport, AThinWallExportsWithoutHoles) {
+  const PinholeIntrinsics camera{200.0, 200.0, 32.0, 24.0, 64, 48};
+  std::vector<Eigen::Vector3f> wall;
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) wall.emplace_back((u - 32) * 0.01f, (v - 24) * 0.01f, 2.0f);
+  const SensorPreset preset = kinect_v1(camera);
+  SphericalGrid grid(SphericalGeometry(preset.geometry));
+  insert_points(grid, SensorModel(preset.model), PointSpan::from(wall));
+  for (double resolution : {0.01, 0.02, 0.05}) {
+    OctomapExportReport report;
+    const auto tree = to_octree(grid, Eigen::Isometry3d::Identity(), resolution, {}, &report);
+    std::set<octomap::OcTreeKey, bool (*)(const octomap::OcTreeKey&, const octomap::OcTreeKey&)> wall_leaves(
+        [](const octomap::OcTreeKey& a, const octomap::OcTreeKey& b) {
+          return std::lexicographical_compare(&a.k[0], &a.k[3], &b.k[0], &b.k[3]);
+        });
+    std::size_t holes = 0;
+    for (const Eigen::Vector3f& p : wall) {
+      const octomap::OcTreeKey key = tree->coordToKey(p.x(), p.y(), p.z());
+      if (!wall_leaves.insert(key).second) continue;
+      const octomap::OcTreeNode* node = tree->search(key);
+      holes += node && tree->isNodeOccupied(node) ? 0 : 1;
+    }
+    EXPECT_EQ(holes, 0u) << "of " << wall_leaves.size() << " leaves holding wall points at " << resolution << " m";
+    // Occupied leaves lie on the wall: within a leaf and the shell's depth (sigma_z = 5.7 mm at 2 m) of it.
+    std::size_t occupied = 0;
+    for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
+      if (!tree->isNodeOccupied(*it)) continue;
+      occupied += 1;
+      EXPECT_NEAR(it.getZ(), 2.0, resolution + 0.02) << "occupied leaf off the wall at " << resolution << " m";
+    }
+    EXPECT_GE(occupied, wall_leaves.size());
+    EXPECT_EQ(report.occupied_written, occupied);
+    EXPECT_GT(report.free_written, 0u);
+  }
+}
+
+// Free leaves carry the log-odds of the voxel at their centre; occupied ones the largest of the occupied
+// voxels reaching them, so at least the largest a lattice inside them finds.
 TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBounds) {
   for (UpdateMode mode : {UpdateMode::clamped, UpdateMode::exact}) {
     const SphericalGrid& grid = sample_grid(mode);
     const Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     const OctomapExportOptions options;
     const auto tree = to_octree(grid, pose, kResolution, options);
-    std::size_t checked = 0, equal = 0;
+    std::size_t free_checked = 0, free_equal = 0, occupied_checked = 0, occupied_below = 0, leaf = 0;
     float lowest = 0;
     for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
-      if (++checked % 7 != 0) continue;  // every 7th leaf keeps the test short
-      const auto expected = test::spherical_log_odds(grid, pose, finest_centre(it, kResolution), options);
-      ASSERT_TRUE(expected.has_value()) << "a leaf was written for an unknown voxel";
-      equal += std::abs(*expected - it->getLogOdds()) <= 1e-6f ? 1 : 0;
       lowest = std::min(lowest, it->getLogOdds());
+      if (++leaf % 7 != 0) continue;  // every 7th leaf keeps the test short
+      const Eigen::Vector3d centre = finest_centre(it, kResolution);
+      if (it->getLogOdds() < 0) {
+        const auto expected = test::spherical_log_odds(grid, pose, centre, options);
+        ++free_checked;
+        free_equal += expected && std::abs(*expected - it->getLogOdds()) <= 1e-6f ? 1 : 0;
+      } else {
+        const test::LeafEstimate e = test::estimate_leaf(grid, pose, centre, kResolution, options, 4);
+        ++occupied_checked;
+        occupied_below += it->getLogOdds() < e.largest_occupied ? 1 : 0;
+      }
     }
-    EXPECT_GE(equal, static_cast<std::size_t>(0.999 * (checked / 7))) << equal << " / " << checked / 7 << " mode " << static_cast<int>(mode);
+    const int m = static_cast<int>(mode);
+    EXPECT_GT(free_checked, 1000u) << "mode " << m;
+    EXPECT_EQ(free_equal, free_checked) << "mode " << m;
+    EXPECT_GT(occupied_checked, 100u) << "mode " << m;
+    EXPECT_EQ(occupied_below, 0u) << "of " << occupied_checked << " occupied leaves, mode " << m;
     if (mode == UpdateMode::exact) {
       EXPECT_LT(lowest, grid.log_odds_min() - 10.0f) << "exact-mode free space must keep its large log-odds";
     } else {
@@ -136,6 +206,7 @@ TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBou
   }
 }
 
+// The merged tree against the two views exported alone: every leaf is the clamped sum of theirs.
 TEST_F(OctomapExport, TwoPosesMergeByAddingLogOddsThenClamping) {
   const SphericalGrid& grid = sample_grid(UpdateMode::clamped);
   const Eigen::Isometry3d a = Eigen::Isometry3d::Identity();
@@ -145,20 +216,23 @@ TEST_F(OctomapExport, TwoPosesMergeByAddingLogOddsThenClamping) {
   const OctomapExportOptions options;
   auto tree = to_octree(grid, a, kResolution, options);
   add_to_octree(*tree, grid, b, options);
+  const auto alone_a = to_octree(grid, a, kResolution, options), alone_b = to_octree(grid, b, kResolution, options);
   const float lo = grid.log_odds_min(), hi = grid.log_odds_max();
 
   std::size_t both = 0, checked = 0, matching = 0;
   for (auto it = tree->begin_leafs(), end = tree->end_leafs(); it != end; ++it) {
     const Eigen::Vector3d w = finest_centre(it, kResolution);
-    const auto la = test::spherical_log_odds(grid, a, w, options), lb = test::spherical_log_odds(grid, b, w, options);
-    ASSERT_TRUE(la || lb) << "a leaf neither view knows";
-    const float expected = std::clamp(std::clamp(la.value_or(0.0f), lo, hi) + lb.value_or(0.0f), lo, hi);
-    both += (la && lb) ? 1 : 0;
+    const octomap::OcTreeNode* na = alone_a->search(w.x(), w.y(), w.z());
+    const octomap::OcTreeNode* nb = alone_b->search(w.x(), w.y(), w.z());
+    ASSERT_TRUE(na || nb) << "a leaf neither view wrote";
+    const float la = na ? na->getLogOdds() : 0.0f, lb = nb ? nb->getLogOdds() : 0.0f;
+    const float expected = std::clamp(la + lb, lo, hi);
+    both += (na && nb) ? 1 : 0;
     ++checked;
     matching += std::abs(expected - it->getLogOdds()) <= 1e-5f ? 1 : 0;
   }
   EXPECT_GT(both, 10000u) << "the two views must overlap for the test to mean something";
-  EXPECT_GE(matching, static_cast<std::size_t>(0.999 * checked)) << matching << " / " << checked;
+  EXPECT_EQ(matching, checked);
 }
 
 // A digest of every leaf (key and log-odds) and of the node count, to see any change to the tree.
@@ -182,6 +256,19 @@ TEST_F(OctomapExport, WritingLeavesTheCallersTreeUnchanged) {
   octomap::OcTree copy(*tree);
   copy.writeBinary(file("pruned.bt"));
   EXPECT_NE(digest(copy), before);
+}
+
+// write_octree writes the .bt header itself (OctoMap's writer prints " done." to stderr): the same bytes
+// as OctoMap's writeBinaryConst.
+TEST_F(OctomapExport, BinaryFilesHoldOctomapsOwnBytes) {
+  const auto tree = to_octree(sample_grid(UpdateMode::clamped), Eigen::Isometry3d::Identity(), 0.05);
+  write_octree(*tree, file("a.bt"));
+  std::ostringstream expected;
+  ASSERT_TRUE(tree->writeBinaryConst(expected));
+  std::ifstream in(file("a.bt"), std::ios::binary);
+  const std::string written{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  EXPECT_GT(written.size(), 1000u);
+  EXPECT_TRUE(written == expected.str()) << written.size() << " bytes against " << expected.str().size();
 }
 
 TEST_F(OctomapExport, BadResolutionPoseAndPathsAreRefused) {

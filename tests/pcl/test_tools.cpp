@@ -214,8 +214,19 @@ TEST_F(Tools, MapAndLiveWriteTheSameFilesAndCreateTheParentsOfTheOutput) {
   EXPECT_EQ(map_files, files_in(folder_ / "other/live"));
   for (const char* name : {"legend.png", "regions.csv", "rays.csv", "surface.pcd", "improvement.png"})
     EXPECT_EQ(map_files.count(name), 1u) << name;
-  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o trees/wall.bt").exit_code, 0);
-  EXPECT_TRUE(fs::exists(folder_ / "trees/wall.bt"));
+  const ToolRun octomap = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o trees/wall.bt");
+  ASSERT_EQ(octomap.exit_code, 0) << octomap.err;
+  EXPECT_EQ(octomap.err, "") << "OctoMap's own writer printed to stderr";
+  // The wall, 2 m ahead (x in the default z-up frame), thinner than a 2 cm leaf: the export held no occupied
+  // leaf at all while it sampled leaf centres.
+  const octomap::OcTree tree(file("trees/wall.bt"));
+  std::size_t occupied = 0;
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
+    if (tree.isNodeOccupied(*it)) {
+      ++occupied;
+      EXPECT_NEAR(it.getX(), 2.0, 0.04);
+    }
+  EXPECT_GE(occupied, 32u * 24u) << "a 64 x 48 cm wall covers at least 32 x 24 leaves of 2 cm";
 }
 
 // The mean centre of a tree's occupied leaves.

@@ -7,9 +7,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <memory>
+#include <ostream>
 #include <sstream>
+#include <utility>
+#include <vector>
 
 namespace occ_improve {
 namespace {
@@ -108,6 +114,474 @@ void frustum_bounds(const SphericalGeometry& g, double far_m, const Eigen::Isome
   hi.array() += bulge;
 }
 
+
+// ---- What the grid's voxels say about the leaves they reach (the conversion rule in export.hpp) ----
+
+enum class VoxelClass { unknown, free, occupied };
+
+// Occupied and free: evidence outside the unknown band. An untouched voxel (log-odds exactly 0) is unknown
+// even with a zero band.
+VoxelClass classify(float log_odds, float band) {
+  if (log_odds > 0 && log_odds >= band) return VoxelClass::occupied;
+  if (log_odds < 0 && log_odds <= -band) return VoxelClass::free;
+  return VoxelClass::unknown;
+}
+
+struct LeafMark {
+  float occupied_log_odds = -std::numeric_limits<float>::infinity();  ///< max over occupied voxels reaching it
+  bool free_boundary = false;  ///< a face between free and not-free space reaches it
+  bool occupied() const { return occupied_log_odds > -std::numeric_limits<float>::infinity(); }
+  bool marked() const { return free_boundary || occupied(); }
+};
+
+// The marks of the leaves in the key box [lo, hi], in blocks of 8 x 8 x 8 leaves allocated on first touch:
+// marks gather along surfaces and free-space boundaries, and consecutive pieces of a column reach the same
+// block (a hash map of leaf keys spent most of the export chasing cache misses).
+class LeafMarks {
+public:
+  LeafMarks(const octomap::OcTreeKey& lo, const octomap::OcTreeKey& hi) : lo_(lo) {
+    for (int axis = 0; axis < 3; ++axis) blocks_[axis] = (hi[axis] - lo[axis]) / kBlock + 1;
+    table_.resize(static_cast<std::size_t>(blocks_[0]) * blocks_[1] * blocks_[2]);
+  }
+
+  /// The mark of a leaf inside the box, its block allocated when needed.
+  LeafMark& at(const octomap::OcTreeKey& key) {
+    std::size_t slot;
+    std::unique_ptr<Block>& block = table_[locate(key, slot)];
+    if (!block) block = std::make_unique<Block>();
+    return block->marks[slot];
+  }
+  /// nullptr when the leaf was never marked.
+  const LeafMark* find(const octomap::OcTreeKey& key) const {
+    std::size_t slot;
+    const std::unique_ptr<Block>& block = table_[locate(key, slot)];
+    return block && block->marks[slot].marked() ? &block->marks[slot] : nullptr;
+  }
+  template <typename Visit>
+  void for_each_occupied(Visit&& visit) const {
+    for (std::size_t b = 0; b < table_.size(); ++b) {
+      if (!table_[b]) continue;
+      const unsigned bx = static_cast<unsigned>(b % blocks_[0]), by = static_cast<unsigned>(b / blocks_[0] % blocks_[1]),
+                     bz = static_cast<unsigned>(b / blocks_[0] / blocks_[1]);
+      for (unsigned slot = 0; slot < kBlock * kBlock * kBlock; ++slot) {
+        const LeafMark& mark = table_[b]->marks[slot];
+        if (!mark.occupied()) continue;
+        octomap::OcTreeKey key;
+        key[0] = static_cast<octomap::key_type>(lo_[0] + bx * kBlock + slot % kBlock);
+        key[1] = static_cast<octomap::key_type>(lo_[1] + by * kBlock + slot / kBlock % kBlock);
+        key[2] = static_cast<octomap::key_type>(lo_[2] + bz * kBlock + slot / (kBlock * kBlock));
+        visit(key, mark.occupied_log_odds);
+      }
+    }
+  }
+
+private:
+  static constexpr unsigned kBlock = 8;
+  struct Block {
+    LeafMark marks[kBlock * kBlock * kBlock];
+  };
+  std::size_t locate(const octomap::OcTreeKey& key, std::size_t& slot) const {
+    const unsigned x = key[0] - lo_[0], y = key[1] - lo_[1], z = key[2] - lo_[2];
+    slot = (x % kBlock) + kBlock * ((y % kBlock) + kBlock * (z % kBlock));
+    return (x / kBlock) + blocks_[0] * ((y / kBlock) + static_cast<std::size_t>(blocks_[1]) * (z / kBlock));
+  }
+  octomap::OcTreeKey lo_;
+  unsigned blocks_[3];
+  std::vector<std::unique_ptr<Block>> table_;
+};
+
+// A piece of the grid in the world frame: the points origin + d q for the depth coordinate d in [near, far]
+// (near >= 0) and directions q in the box [q_lo, q_hi]. Directions are world-frame vectors scaled so that d is
+// the depth coordinate (unit vectors for the spherical binning, sensor z = 1 for the pinhole one); the box
+// of a few column corners' directions holds a run of voxels, a cap (near == far) or a strip of faces
+// between columns.
+struct Patch {
+  Eigen::Vector3d q_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d q_hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+  double near = 0, far = 0;
+
+  void include(const Eigen::Vector3d& q) {
+    q_lo = q_lo.cwiseMin(q);
+    q_hi = q_hi.cwiseMax(q);
+  }
+  void include(const Patch& other) {
+    q_lo = q_lo.cwiseMin(other.q_lo);
+    q_hi = q_hi.cwiseMax(other.q_hi);
+  }
+  /// Extent across the rays at depth coordinate d (the box's diagonal).
+  double width_at(double d) const { return (q_hi - q_lo).norm() * d; }
+};
+
+// The leaves a patch reaches, conservatively: the patch is cut along its depth into pieces at most step_m
+// long, and every leaf meeting a piece's axis-aligned box (padded by pad_m) is visited. For d >= 0 the box
+// of {d q} over the piece's depths and the direction box is the box of its corner points; a pinhole voxel,
+// cap or face is the convex hull of its corner points, and the curved faces of a spherical one bulge out of
+// that box by less than pad_m. So a leaf is visited only where the patch passes within
+// max(step_m, the patch's width) of it.
+class PatchCover {
+public:
+  PatchCover(const octomap::OcTree& tree, const Eigen::Vector3d& origin, const octomap::OcTreeKey& lo,
+             const octomap::OcTreeKey& hi, double step_m, double pad_m)
+      : tree_(tree), origin_(origin), lo_(lo), hi_(hi), step_m_(step_m), pad_m_(pad_m) {}
+
+  double step_m() const { return step_m_; }
+  const octomap::OcTreeKey& key_lo() const { return lo_; }
+  const octomap::OcTreeKey& key_hi() const { return hi_; }
+
+  template <typename Visit>
+  void for_each_leaf(const Patch& p, Visit&& visit) const {
+    const double ray_length = p.q_lo.cwiseAbs().cwiseMax(p.q_hi.cwiseAbs()).norm();  // per unit depth, at most
+    const int pieces = std::max(1, static_cast<int>(std::ceil((p.far - p.near) * ray_length / step_m_)));
+    for (int k = 0; k < pieces; ++k) {
+      const double d0 = p.near + (p.far - p.near) * k / pieces;
+      const double d1 = k + 1 == pieces ? p.far : p.near + (p.far - p.near) * (k + 1) / pieces;
+      visit_box(origin_ + (d0 * p.q_lo).cwiseMin(d1 * p.q_lo), origin_ + (d0 * p.q_hi).cwiseMax(d1 * p.q_hi), visit);
+    }
+  }
+
+private:
+  template <typename Visit>
+  void visit_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, Visit& visit) const {
+    unsigned first[3], last[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      first[axis] = std::max<unsigned>(lo_[axis], tree_.coordToKey(lo[axis] - pad_m_));
+      last[axis] = std::min<unsigned>(hi_[axis], tree_.coordToKey(hi[axis] + pad_m_));
+      if (first[axis] > last[axis]) return;
+    }
+    octomap::OcTreeKey key;
+    for (unsigned x = first[0]; x <= last[0]; ++x)
+      for (unsigned y = first[1]; y <= last[1]; ++y)
+        for (unsigned z = first[2]; z <= last[2]; ++z) {
+          key[0] = static_cast<octomap::key_type>(x);
+          key[1] = static_cast<octomap::key_type>(y);
+          key[2] = static_cast<octomap::key_type>(z);
+          visit(key);
+        }
+  }
+
+  const octomap::OcTree& tree_;
+  Eigen::Vector3d origin_;
+  octomap::OcTreeKey lo_, hi_;
+  double step_m_, pad_m_;
+};
+
+// Bins [first, end) of one column.
+struct BinRun {
+  int first, end;
+};
+
+// Walks the grid and marks the leaves its occupied voxels and its free-space boundaries reach. The
+// boundary of the free space is made of caps (where a column's free run starts or ends) and of faces
+// between neighbouring columns (over the depths where exactly one of the two is free; outside the grid is
+// unknown). Caps at the same bin in neighbouring columns of a row, and faces along one edge line, are
+// gathered into patches no wider than the cover's step: far fewer boxes, no looser than the step.
+class LeafMarker {
+public:
+  LeafMarker(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor, float band, const PatchCover& cover)
+      : grid_(grid), g_(grid.geometry()), band_(band), cover_(cover), marks_(cover.key_lo(), cover.key_hi()),
+        corners_(static_cast<std::size_t>(g_.width() + 1) * (g_.height() + 1)) {
+    const Eigen::Matrix3d rotation = world_from_sensor.linear();
+    for (int v = 0; v <= g_.height(); ++v)
+      for (int h = 0; h <= g_.width(); ++h)
+        corners_[corner_index(h, v)] = rotation * g_.point_at(g_.azimuth().lower(h), g_.elevation().lower(v), 1.0);
+  }
+
+  LeafMarks mark() {
+    first_run_.reserve(g_.column_count() + 1);
+    for (int v = 0; v < g_.height(); ++v) {
+      for (int h = 0; h < g_.width(); ++h) {
+        first_run_.push_back(static_cast<std::uint32_t>(runs_.size()));
+        if (const ColumnData* column = grid_.find(g_.column(h, v))) scan_column(h, v, *column);
+        close_caps_before(h);
+      }
+      close_caps_before(g_.width());
+    }
+    first_run_.push_back(static_cast<std::uint32_t>(runs_.size()));
+    mark_lateral_faces();
+    return std::move(marks_);
+  }
+
+private:
+  struct OpenCap {  ///< caps at one bin in consecutive columns of the row being scanned
+    int bin, last_h;
+    Patch patch;
+  };
+  struct Strip {  ///< faces along one edge line, gathered
+    bool open = false;
+    Patch patch;
+    int end = 0;  ///< largest end bin of its runs
+    std::vector<BinRun> runs;
+  };
+
+  std::size_t corner_index(int h, int v) const { return static_cast<std::size_t>(v) * (g_.width() + 1) + h; }
+  const Eigen::Vector3d& corner(int h, int v) const { return corners_[corner_index(h, v)]; }
+  double depth_at(int bin) const { return g_.depth().lower(bin); }  // a bin's near edge; bins() gives the far end
+
+  Patch column_patch(int h, int v) const {
+    Patch p;
+    for (int dv = 0; dv <= 1; ++dv)
+      for (int dh = 0; dh <= 1; ++dh) p.include(corner(h + dh, v + dv));
+    return p;
+  }
+
+  void mark_boundary(const Patch& p) {
+    cover_.for_each_leaf(p, [&](const octomap::OcTreeKey& key) { marks_.at(key).free_boundary = true; });
+  }
+  void mark_occupied(const Patch& p, float log_odds) {
+    cover_.for_each_leaf(p, [&](const octomap::OcTreeKey& key) {
+      float& value = marks_.at(key).occupied_log_odds;
+      value = std::max(value, log_odds);
+    });
+  }
+
+  // One column's stored bins (uniform run, then window; the tail is unknown): occupied voxels grouped into
+  // runs no deeper than the cover's step, each carrying its largest log-odds; a cap wherever free space
+  // starts or ends next to unknown space (next to an occupied voxel the voxel's own box holds the cap); the
+  // free runs kept for the faces between columns.
+  void scan_column(int h, int v, const ColumnData& column) {
+    const int end = std::min(column.window_end(), g_.depth().bins());
+    Patch patch = column_patch(h, v);
+    const double ray_length = patch.q_lo.cwiseAbs().cwiseMax(patch.q_hi.cwiseAbs()).norm();
+    VoxelClass previous = VoxelClass::unknown;
+    int free_first = 0, group_first = -1, group_end = 0;
+    float group_max = 0;
+    const auto close_group = [&] {
+      if (group_first < 0) return;
+      patch.near = depth_at(group_first);
+      patch.far = depth_at(group_end);
+      mark_occupied(patch, group_max);
+      group_first = -1;
+    };
+    const auto block = [&](int first, int block_end, VoxelClass c, float log_odds) {
+      if ((c == VoxelClass::free) != (previous == VoxelClass::free)) {
+        if (c != VoxelClass::occupied && previous != VoxelClass::occupied) add_cap(h, v, first);
+        if (c == VoxelClass::free) free_first = first;
+        else runs_.push_back({free_first, first});
+      }
+      previous = c;
+      if (c != VoxelClass::occupied) return close_group();
+      if (group_first >= 0 && (depth_at(block_end) - depth_at(group_first)) * ray_length > cover_.step_m()) close_group();
+      if (group_first < 0) {
+        group_first = first;
+        group_max = log_odds;
+      }
+      group_max = std::max(group_max, log_odds);
+      group_end = block_end;
+    };
+    const int uniform_end = std::min(column.uniform_end, end);
+    if (uniform_end > 0) block(0, uniform_end, classify(column.uniform_value, band_), column.uniform_value);
+    for (int b = uniform_end; b < end; ++b) {
+      const float value = column.window[static_cast<std::size_t>(b - uniform_end)];
+      block(b, b + 1, classify(value, band_), value);
+    }
+    block(end, end, VoxelClass::unknown, 0.0f);  // the unknown tail (or the grid's far end)
+  }
+
+  // A cap at `bin` of column (h, v): joins the row's open cap at that bin when that ended at column h - 1
+  // and stays within the step.
+  void add_cap(int h, int v, int bin) {
+    const Patch column = column_patch(h, v);
+    const double depth = depth_at(bin);
+    for (OpenCap& cap : open_caps_) {
+      if (cap.bin != bin || cap.last_h != h - 1) continue;
+      Patch joined = cap.patch;
+      joined.include(column);
+      if (joined.width_at(depth) <= cover_.step_m()) {
+        cap.patch = joined;
+        cap.last_h = h;
+        return;
+      }
+    }
+    OpenCap cap{bin, h, column};
+    cap.patch.near = cap.patch.far = depth;
+    open_caps_.push_back(cap);
+  }
+  // Marks the caps that did not reach column h.
+  void close_caps_before(int h) {
+    const auto closed = std::partition(open_caps_.begin(), open_caps_.end(), [&](const OpenCap& c) { return c.last_h >= h; });
+    for (auto it = closed; it != open_caps_.end(); ++it) mark_boundary(it->patch);
+    open_caps_.erase(closed, open_caps_.end());
+  }
+
+  std::pair<const BinRun*, const BinRun*> free_runs(int h, int v) const {
+    if (h < 0 || v < 0 || h >= g_.width() || v >= g_.height()) return {nullptr, nullptr};  // outside: unknown
+    const std::size_t c = g_.column(h, v);
+    return {runs_.data() + first_run_[c], runs_.data() + first_run_[c + 1]};
+  }
+
+  void mark_lateral_faces() {
+    Strip strip;
+    for (int h = 0; h <= g_.width(); ++h) {  // edges between columns h - 1 and h, along v
+      for (int v = 0; v < g_.height(); ++v) add_face(strip, free_runs(h - 1, v), free_runs(h, v), corner(h, v), corner(h, v + 1));
+      close_strip(strip);
+    }
+    for (int v = 0; v <= g_.height(); ++v) {  // edges between rows v - 1 and v, along h
+      for (int h = 0; h < g_.width(); ++h) add_face(strip, free_runs(h, v - 1), free_runs(h, v), corner(h, v), corner(h + 1, v));
+      close_strip(strip);
+    }
+  }
+
+  // The face between two neighbouring columns (edge e0-e1) over the bins where exactly one is free, added to
+  // the strip along this edge line while the strip stays within the step.
+  void add_face(Strip& strip, std::pair<const BinRun*, const BinRun*> a, std::pair<const BinRun*, const BinRun*> b,
+                const Eigen::Vector3d& e0, const Eigen::Vector3d& e1) {
+    difference_.clear();
+    if (a.first != a.second || b.first != b.second) symmetric_difference(a, b, difference_);
+    if (difference_.empty()) return close_strip(strip);
+    Patch edge;
+    edge.include(e0);
+    edge.include(e1);
+    const int end = std::max(strip.open ? strip.end : 0, difference_.back().end);
+    if (strip.open) {
+      Patch joined = strip.patch;
+      joined.include(edge);
+      if (joined.width_at(depth_at(end)) > cover_.step_m()) close_strip(strip);
+    }
+    if (!strip.open) {
+      strip.open = true;
+      strip.patch = edge;
+      strip.end = 0;
+    }
+    strip.patch.include(edge);
+    strip.end = std::max(strip.end, difference_.back().end);
+    strip.runs.insert(strip.runs.end(), difference_.begin(), difference_.end());
+  }
+
+  // Marks a strip over the union of its runs.
+  void close_strip(Strip& strip) {
+    if (!strip.open) return;
+    std::sort(strip.runs.begin(), strip.runs.end(), [](const BinRun& x, const BinRun& y) { return x.first < y.first; });
+    Patch face = strip.patch;
+    for (std::size_t i = 0; i < strip.runs.size();) {
+      int first = strip.runs[i].first, end = strip.runs[i].end;
+      for (++i; i < strip.runs.size() && strip.runs[i].first <= end; ++i) end = std::max(end, strip.runs[i].end);
+      face.near = depth_at(first);
+      face.far = depth_at(end);
+      mark_boundary(face);
+    }
+    strip.runs.clear();
+    strip.open = false;
+  }
+
+  // Bins inside exactly one of two sorted lists of disjoint runs, as sorted runs.
+  void symmetric_difference(std::pair<const BinRun*, const BinRun*> a, std::pair<const BinRun*, const BinRun*> b,
+                            std::vector<BinRun>& out) {
+    edges_.clear();
+    for (const BinRun* r = a.first; r != a.second; ++r) edges_.insert(edges_.end(), {r->first, r->end});
+    for (const BinRun* r = b.first; r != b.second; ++r) edges_.insert(edges_.end(), {r->first, r->end});
+    std::sort(edges_.begin(), edges_.end());
+    const auto inside = [](std::pair<const BinRun*, const BinRun*> runs, int bin) {
+      for (const BinRun* r = runs.first; r != runs.second; ++r)
+        if (bin >= r->first && bin < r->end) return true;
+      return false;
+    };
+    int open = -1;  // first bin of the run being built
+    for (int bin : edges_) {
+      const bool differs = inside(a, bin) != inside(b, bin);
+      if (differs && open < 0) open = bin;
+      if (!differs && open >= 0) {
+        out.push_back({open, bin});
+        open = -1;
+      }
+    }
+  }
+
+  const SphericalGrid& grid_;
+  const SphericalGeometry& g_;
+  float band_;
+  const PatchCover& cover_;
+  LeafMarks marks_;
+  std::vector<Eigen::Vector3d> corners_;  ///< (width + 1) x (height + 1) column-corner directions, world frame
+  std::vector<BinRun> runs_;              ///< free runs of every column, in column order
+  std::vector<std::uint32_t> first_run_;  ///< per column, its first run in runs_ (and one past the end)
+  std::vector<OpenCap> open_caps_;
+  std::vector<BinRun> difference_;
+  std::vector<int> edges_;
+};
+
+// Patches are cut into pieces at most this fraction of a leaf long: a leaf is marked occupied, or not wholly
+// free, when an occupied voxel or a free-space boundary passes within this distance of it (export.hpp).
+constexpr double kPieceFraction = 0.25;
+
+// How far the curved faces of a spherical voxel (range caps, elevation cones) and the directions between its
+// corners stray from the corners' box: less than r alpha^2 / 8 for a column alpha wide (diagonally) at range
+// r, taken 4 times over. The pinhole binning's faces are planes. Plus a nanometre for rounding.
+double curvature_pad_m(const SphericalGeometry& g, double far_m) {
+  if (g.binning() != AngularBinning::spherical) return 1e-9;
+  const double alpha = std::hypot(g.azimuth().width(), g.elevation().width());
+  return 1e-9 + far_m * alpha * alpha / 2;
+}
+
+// Leaves wholly in free space: the voxel holding the centre is free and no free-space boundary reaches the
+// leaf (a leaf holding free and non-free space is crossed by one). They take the log-odds of the voxel
+// holding their centre. Leaves whose centre is in the field of view and that are neither free nor occupied
+// count as unknown.
+template <typename Write>
+void write_free_leaves(const octomap::OcTree& tree, const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+                       double far_m, const octomap::OcTreeKey& key_lo, const octomap::OcTreeKey& key_hi, float band,
+                       const LeafMarks& marks, Write&& write, OctomapExportReport& report) {
+  const SphericalGeometry& geometry = grid.geometry();
+  const double near2 = geometry.params().depth_min_m * geometry.params().depth_min_m;
+  const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
+  const Eigen::Vector3d origin = world_from_sensor.translation();
+  // Loop order: innermost along the world axis nearest the sensor's x (neighbouring columns of one row lie
+  // side by side in the grid's tiles), then the one nearest its depth axis; a fixed x-y-z order stepped
+  // across image rows and missed the cache on nearly every column lookup.
+  int inner = 0;
+  for (int a = 1; a < 3; ++a)
+    if (std::abs(sensor_from_world(2, a)) > std::abs(sensor_from_world(2, inner))) inner = a;
+  const int a1 = (inner + 1) % 3, a2 = (inner + 2) % 3;
+  const int middle = std::abs(sensor_from_world(0, a1)) >= std::abs(sensor_from_world(0, a2)) ? a1 : a2;
+  const int outer = 3 - inner - middle;
+  // Sensor-frame position of a leaf centre: p = R^T (c - t), stepped along the inner axis.
+  const Eigen::Vector3d step = sensor_from_world.col(inner) * tree.getResolution();
+  GridAccessor accessor(grid);
+  octomap::OcTreeKey key;
+  for (unsigned ko = key_lo[outer]; ko <= key_hi[outer]; ++ko) {
+    key[outer] = static_cast<octomap::key_type>(ko);
+    for (unsigned km = key_lo[middle]; km <= key_hi[middle]; ++km) {
+      key[middle] = static_cast<octomap::key_type>(km);
+      key[inner] = key_lo[inner];
+      const Eigen::Vector3d first(tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key[2]));
+      Eigen::Vector3d p = sensor_from_world * (first - origin);
+      for (unsigned ki = key_lo[inner]; ki <= key_hi[inner]; ++ki, p += step) {
+        ++report.leaves_examined;
+        // The depth coordinate (range or z) is at most the range: leaves nearer than the grid start are out.
+        const double rho2 = p.squaredNorm();
+        if (rho2 < near2 || rho2 == 0.0) continue;
+        RayPosition ray;
+        if (!geometry.project(p.x(), p.y(), p.z(), ray) || ray.depth >= far_m) continue;
+        const int bin = geometry.depth().bin(ray.depth);
+        if (bin < 0 || bin >= geometry.depth().bins()) continue;
+        key[inner] = static_cast<octomap::key_type>(ki);
+        if (const LeafMark* mark = marks.find(key)) {
+          report.left_unknown += mark->occupied() ? 0 : 1;  // occupied leaves are already written
+          continue;
+        }
+        const float value = accessor.log_odds(geometry.column(ray.horizontal_bin, ray.vertical_bin), bin);
+        if (classify(value, band) == VoxelClass::free) {
+          write(key, value);
+        } else {
+          ++report.left_unknown;
+        }
+      }
+    }
+  }
+}
+
+// OcTree::writeBinaryConst, whose header is written here: Debian's liboctomap is built with its debug
+// output on and prints " done." to stderr after every binary write (issue 18: before a tool's error line).
+// The header is AbstractOccupancyOcTree::writeBinaryConst's, byte for byte; the data is OctoMap's own.
+bool write_binary(const octomap::OcTree& tree, std::ostream& out) {
+  out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+  out << "id " << tree.getTreeType() << std::endl;
+  out << "size " << tree.size() << std::endl;
+  out << "res " << tree.getResolution() << std::endl;
+  out << "data" << std::endl;
+  tree.writeBinaryData(out);
+  return out.good();
+}
+
 }  // namespace
 
 void OctomapExportOptions::validate() const {
@@ -166,42 +640,18 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
     throw InvalidParameter(msg.str());
   }
 
-  const double log_odds_band = logit(0.5 + options.unknown_band_probability);
-  const GeometryParams& params = geometry.params();
-  const double near2 = params.depth_min_m * params.depth_min_m;
-  // Sensor-frame position of a leaf centre: p = R^T (c - t), stepped along world z inside the loop.
-  const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
-  const Eigen::Vector3d origin = world_from_sensor.translation();
-  const Eigen::Vector3d step_z = sensor_from_world.col(2) * resolution;
-  GridAccessor accessor(grid);
+  const float band = static_cast<float>(logit(0.5 + options.unknown_band_probability));
+  const PatchCover cover(tree, world_from_sensor.translation(), key_lo, key_hi, kPieceFraction * resolution,
+                         curvature_pad_m(geometry, far_m));
+  const LeafMarks marks = LeafMarker(grid, world_from_sensor, band, cover).mark();
+
   OctomapExportReport report;
-  octomap::OcTreeKey key;
-  for (unsigned kx = key_lo[0]; kx <= key_hi[0]; ++kx) {
-    key[0] = static_cast<octomap::key_type>(kx);
-    for (unsigned ky = key_lo[1]; ky <= key_hi[1]; ++ky) {
-      key[1] = static_cast<octomap::key_type>(ky);
-      const Eigen::Vector3d first(tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key_lo[2]));
-      Eigen::Vector3d p = sensor_from_world * (first - origin);
-      for (unsigned kz = key_lo[2]; kz <= key_hi[2]; ++kz, p += step_z) {
-        ++report.leaves_examined;
-        // The depth coordinate (range or z) is at most the range: leaves nearer than the grid start are out.
-        const double rho2 = p.squaredNorm();
-        if (rho2 < near2 || rho2 == 0.0) continue;
-        RayPosition ray;
-        if (!geometry.project(p.x(), p.y(), p.z(), ray) || ray.depth >= far_m) continue;
-        const int bin = geometry.depth().bin(ray.depth);
-        if (bin < 0 || bin >= geometry.depth().bins()) continue;
-        const float value = accessor.log_odds(geometry.column(ray.horizontal_bin, ray.vertical_bin), bin);
-        if (std::abs(value) < log_odds_band) {
-          ++report.left_unknown;
-          continue;
-        }
-        key[2] = static_cast<octomap::key_type>(kz);
-        const octomap::OcTreeNode* node = tree.updateNode(key, value, true);
-        (tree.isNodeOccupied(node) ? report.occupied_written : report.free_written) += 1;
-      }
-    }
-  }
+  const auto write = [&](const octomap::OcTreeKey& key, float log_odds) {
+    const octomap::OcTreeNode* node = tree.updateNode(key, log_odds, true);
+    (tree.isNodeOccupied(node) ? report.occupied_written : report.free_written) += 1;
+  };
+  marks.for_each_occupied(write);
+  write_free_leaves(tree, grid, world_from_sensor, far_m, key_lo, key_hi, band, marks, write, report);
   // Lazy insertion leaves inner nodes stale and every leaf expanded: refresh the inner nodes, then merge
   // children of equal value (uniform free space at the clamp) as OctoMap's own insertion does.
   tree.updateInnerOccupancy();
@@ -231,24 +681,11 @@ bool is_octomap_file(const std::string& path) {
   return std::getline(in, first_line) && first_line.rfind("# Octomap OcTree", 0) == 0;
 }
 
-namespace {
-
-// OctoMap's own header and data writers. writeBinaryConst() would write the same bytes, but then prints
-// " done." on stderr (OCTOMAP_DEBUG in Debian's build), which a tool's one error line must not follow.
-bool write_binary_tree(const octomap::OcTree& tree, std::ostream& out) {
-  out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n"
-      << "id " << tree.getTreeType() << "\nsize " << tree.size() << "\nres " << tree.getResolution() << "\ndata\n";
-  tree.writeBinaryData(out);
-  return static_cast<bool>(out);
-}
-
-}  // namespace
-
 void write_octree(const octomap::OcTree& tree, const std::string& path) {
   require_octomap_output_path(path);
   const bool full = std::filesystem::path(path).extension() == ".ot";
   write_file_atomically(path, "OctoMap file", [&](std::ostream& out) {
-    return full ? tree.write(out) : write_binary_tree(tree, out);
+    return full ? tree.write(out) : write_binary(tree, out);
   });
 }
 
