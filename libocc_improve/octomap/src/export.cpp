@@ -1,6 +1,7 @@
 #include "occ_improve/octomap/export.hpp"
 
 #include "occ_improve/atomic_file.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/sensor_model.hpp"
 
@@ -178,6 +179,7 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
   for (unsigned kx = key_lo[0]; kx <= key_hi[0]; ++kx) {
     key[0] = static_cast<octomap::key_type>(kx);
     for (unsigned ky = key_lo[1]; ky <= key_hi[1]; ++ky) {
+      throw_if_stop_requested();  // a column of leaves along z per poll
       key[1] = static_cast<octomap::key_type>(ky);
       const Eigen::Vector3d first(tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key_lo[2]));
       Eigen::Vector3d p = sensor_from_world * (first - origin);
