@@ -74,7 +74,7 @@ int run(const CommandLine& command_line) {
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
         if (load_path.empty()) return void(mapper.emplace(preset, options.grid));
-        LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
+        LoadedMap loaded = load_tool_map(load_path, options);
         preset.name = "loaded from " + load_path;
         preset.geometry = loaded.grid.geometry().params();
         preset.model = loaded.model;
@@ -95,7 +95,7 @@ int run(const CommandLine& command_line) {
   start = std::chrono::steady_clock::now();
   const std::vector<std::string> written =
       write_map_outputs(staging, *mapper, summary, fused.colour);
-  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
+  throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
   if (!save_path.empty()) save_map(save_path, mapper->grid(), mapper->model().params());
   const double write_seconds = seconds_since(start);
