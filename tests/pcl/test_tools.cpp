@@ -464,11 +464,17 @@ TEST_F(Tools, OctomapExportStopsPromptlyOnSigint) {
 // 1280 x 1024 cloud was refused without naming the input or -depth_bins. Both now name the input, the
 // claimed size and the flags (-memory_cap 8: the machine-independent cap of before).
 TEST_F(Tools, HugeClaimsAreRefusedNamingTheInputTheSizeAndTheFlag) {
-  const fs::path map = fs::path(OCC_IMPROVE_SOURCE_DIR) / "tests/fuzz/corpus/map/columns_100000000_depth_bins_16.occmap";
-  const ToolRun loaded = run(OCC_TO_OCTOMAP_EXECUTABLE, "-load " + map.string() + " -memory_cap 8 -o out.bt");
-  expect_one_error_line_naming(loaded, map.filename().string(), "the 1e8-column map", true);
-  EXPECT_NE(loaded.err.find("10000 x 10000 x 16 bins"), std::string::npos) << loaded.err;
-  EXPECT_NE(loaded.err.find("-memory_cap"), std::string::npos) << loaded.err;
+  const fs::path corpus = fs::path(OCC_IMPROVE_SOURCE_DIR) / "tests/fuzz/corpus/map";
+  for (const auto& [name, claim] : {std::pair<std::string, std::string>{"columns_100000000_depth_bins_16.occmap",
+                                                                        "10000 x 10000 x 16 bins"},
+                                    {"depth_bins_134217728_valid_model.occmap", "1 x 1 x 134217728 bins"}}) {
+    const ToolRun loaded = run(OCC_TO_OCTOMAP_EXECUTABLE, "-load " + (corpus / name).string() + " -memory_cap 8 -o out.bt");
+    expect_one_error_line_naming(loaded, name, "the map claiming " + claim, true);
+    EXPECT_NE(loaded.err.find(claim), std::string::npos) << loaded.err;
+    EXPECT_NE(loaded.err.find("above memory_cap_bytes = 8192 MiB; raise the cap with -memory_cap GIB"), std::string::npos)
+        << loaded.err;
+    EXPECT_FALSE(fs::exists(folder_ / "out.bt"));
+  }
   pcl::PointCloud<pcl::PointXYZ> big(1280, 1024);
   for (int v = 0; v < 1024; ++v)
     for (int u = 0; u < 1280; ++u) big.at(u, v) = pcl::PointXYZ((u - 640) * 2.0f / 1050, (v - 512) * 2.0f / 1050, 2.0f);

@@ -105,7 +105,9 @@ std::vector<FlagSpec> sensor_flags() {
                          "the preset's"),
               0),
       bounded(value_flag("-sigma_angle", K::number, "RAD", kSensor,
-                         "angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre)", "",
+                         "angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre);\n"
+                         "at most 4 bin widths, and support_k x sigma at most 8 (docs/METHOD.md)",
+                         "",
                          "the preset's"),
               0, kInf, true),
       bounded(value_flag("-support_k", K::number, "K", kSensor, "region of support in standard deviations", "",
