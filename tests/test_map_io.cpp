@@ -369,6 +369,41 @@ TEST_F(BadMapFile, SizesAreCheckedAgainstTheCallersCapBeforeAllocating) {
   EXPECT_EQ(load_map(file("good.occmap"), cap).grid.options().memory_cap_bytes, cap);
 }
 
+// A 172-byte map claiming 10000 x 10000 columns of 16 bins passed the old cap of 8 GiB (its voxels:
+// 6.4 GB) and the run then took 7.2 GB in dense per-column maps; one claiming 2^27 depth bins of one
+// column took 4.2 GB in per-bin tables. The worst case now counts both, and both are refused under the
+// old 8 GiB, naming the file, the claimed grid and the cap.
+TEST_F(BadMapFile, ClaimedColumnsAndDepthBinsCountTheirDenseMapsAndTables) {
+  const std::size_t old_default_cap = std::size_t{8} << 30;
+  const auto refusal = [&](std::int32_t azimuth, std::int32_t elevation, std::int32_t depth) -> std::string {
+    auto bytes = good_;
+    const std::int32_t bins[] = {azimuth, elevation, depth};
+    std::memcpy(bytes.data() + kAzimuthBinsOffset, bins, sizeof bins);
+    reseal(bytes);
+    write_bytes(file("claims.occmap"), bytes);
+    try {
+      load_map(file("claims.occmap"), old_default_cap);
+    } catch (const ResourceLimit& e) {
+      return e.what();
+    }
+    return "";
+  };
+  for (const std::string& e : {refusal(10000, 10000, 16), refusal(1, 1, 134217728)}) {
+    EXPECT_NE(e.find("claims.occmap"), std::string::npos) << e;
+    EXPECT_NE(e.find("above memory_cap_bytes = 8192 MiB"), std::string::npos) << e;
+  }
+  EXPECT_NE(refusal(10000, 10000, 16).find("grid of 10000 x 10000 x 16 bins"), std::string::npos);
+  // 100 bytes of maps per column and more: at least 1e8 x (16 x 4 + 100) bytes.
+  GeometryParams g;
+  g.azimuth_bins = g.elevation_bins = 10000;
+  g.depth_bins = 16;
+  EXPECT_GT(grid_worst_case_bytes(g), 1e8 * (16 * 4 + 100));
+  // The default cap is half of the machine's physical memory.
+  const double physical = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  EXPECT_NEAR(static_cast<double>(default_memory_cap_bytes()), physical / 2, 4096.0);
+  EXPECT_EQ(GridOptions{}.memory_cap_bytes, default_memory_cap_bytes());
+}
+
 TEST_F(MapIo, ReturnRecordRoundTripsAndABadOneIsRefused) {
   SensorPreset preset = kinect_v1_paper();
   preset.geometry.azimuth_bins = 40;

@@ -1,5 +1,7 @@
 // Eq. 1 evaluated stably in log space (SPEC 3) and the sensor model's parameters.
 #include "occ_improve/errors.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/presets.hpp"
 #include "occ_improve/sensor_model.hpp"
 #include "reference/reference.hpp"
 
@@ -82,6 +84,48 @@ TEST(SensorModel, NonsenseParametersThrowNamingTheField) {
   p = {};
   p.sigma_depth_floor_m = 0;
   expect_named(p, "sigma_depth_floor_m");
+}
+
+// Sigmas beyond what the binning can mean are refused where a model meets a grid (validate_for: the
+// presets, the Mapper, load_map, the tools' overrides), naming the field, its value and the bound; an
+// angle of 3.2 rad on the pixel-native grid ran for hours before.
+TEST(SensorModel, SigmasAreBoundedByTheBinning) {
+  const SensorPreset pixel = kinect_v1();  // 1 px bins
+  EXPECT_NO_THROW(pixel.model.validate_for(pixel.geometry));
+  const auto error_of = [](const SensorPreset& preset) -> std::string {
+    try {
+      preset.model.validate_for(preset.geometry);
+    } catch (const InvalidParameter& e) {
+      return e.what();
+    }
+    return "";
+  };
+  SensorPreset wide = pixel;
+  wide.model.sigma_u_px = 4.5;  // above 4 bin widths
+  std::string e = error_of(wide);
+  EXPECT_NE(e.find("sigma_u_px = 4.5"), std::string::npos) << e;
+  EXPECT_NE(e.find("<= 4 bin widths = 4 px"), std::string::npos) << e;
+  wide.model.sigma_u_px = 4.0;  // on the bound: the window k sigma = 8 bins, also on its bound
+  EXPECT_EQ(error_of(wide), "");
+  wide.model.support_k = 2.5;  // k sigma = 10 bins
+  e = error_of(wide);
+  EXPECT_NE(e.find("support_k x sigma_u_px = 10"), std::string::npos) << e;
+  EXPECT_NE(e.find("<= 8 bin widths = 8 px"), std::string::npos) << e;
+  SensorPreset paper = kinect_v1_paper();  // spherical: bins of 0.995 rad / 640 = 1.55 mrad
+  EXPECT_EQ(error_of(paper), "");
+  paper.model.sigma_elevation_rad = 3.2;
+  e = error_of(paper);
+  EXPECT_NE(e.find("sigma_elevation_rad = 3.2"), std::string::npos) << e;
+  EXPECT_NE(e.find("rad for this grid"), std::string::npos) << e;
+  SensorPreset deep = pixel;  // 0.5-8 m: k sigma_rho(8 m) must stay within 7.5 m
+  deep.model.sigma_depth_m = 4.0;
+  e = error_of(deep);
+  EXPECT_NE(e.find("support_k x sigma_rho(depth_max)"), std::string::npos) << e;
+  EXPECT_NE(e.find("the depth range 7.5 m"), std::string::npos) << e;
+  deep.model.sigma_depth_m = 3.0;  // 2 x (3 + 1.425e-3 x 64) = 6.18 m
+  EXPECT_EQ(error_of(deep), "");
+  // The Mapper refuses such a model before computing anything.
+  EXPECT_THROW(Mapper{wide}, InvalidParameter);
 }
 
 }  // namespace

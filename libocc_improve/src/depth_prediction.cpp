@@ -1,5 +1,6 @@
 #include "occ_improve/depth_prediction.hpp"
 
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <cmath>
@@ -28,6 +29,7 @@ PredictedDepth predict_depth(const SurfaceMap& surface, const DepthPredictionPar
     }
   const int w = surface.width, h = surface.height;
   for (std::size_t head = 0; head < queue.size(); ++head) {
+    poll_stop(head);
     const ColumnIndex c = queue[head];
     const std::int32_t next = out.distance[c] + 1;
     if (next > params.radius_columns) break;  // the queue is in distance order: nothing nearer is left

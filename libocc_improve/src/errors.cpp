@@ -1,6 +1,22 @@
 #include "occ_improve/errors.hpp"
 
+#include <csignal>
 #include <sstream>
+#include <string>
+
+namespace occ_improve {
+
+namespace {
+std::string cancelled_message(int reason) {
+  if (reason == SIGINT) return "interrupted by SIGINT";
+  if (reason == SIGTERM) return "interrupted by SIGTERM";
+  return "cancelled (stop requested, reason " + std::to_string(reason) + ")";
+}
+}  // namespace
+
+Cancelled::Cancelled(int reason) : Error(cancelled_message(reason)), reason_(reason) {}
+
+}  // namespace occ_improve
 
 namespace occ_improve::detail {
 

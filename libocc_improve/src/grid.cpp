@@ -3,8 +3,14 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/sensor_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <thread>
+
+#if __has_include(<unistd.h>)
+#include <unistd.h>  // sysconf: the machine's physical memory, for the default cap
+#endif
 
 namespace occ_improve {
 
@@ -23,9 +29,21 @@ GridOptions GridOptions::octomap_clamping() {
   return o;
 }
 
+std::size_t default_memory_cap_bytes() {
+  constexpr std::size_t kFallback = std::size_t{8} << 30;
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGE_SIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), page_bytes = sysconf(_SC_PAGE_SIZE);
+  if (pages > 0 && page_bytes > 0) return static_cast<std::size_t>(pages) / 2 * static_cast<std::size_t>(page_bytes);
+#endif
+  return kFallback;
+}
+
 double grid_worst_case_bytes(const GeometryParams& g) {
-  const double voxels = static_cast<double>(g.azimuth_bins) * g.elevation_bins * g.depth_bins;
-  return voxels * sizeof(float) + 2.0 * sizeof(double) * (g.depth_bins + 1.0);
+  const double columns = static_cast<double>(g.azimuth_bins) * g.elevation_bins;
+  const double per_column = static_cast<double>(g.depth_bins) * sizeof(float) + kWorstCaseBytesPerColumn;
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  const double per_bin = 2.0 * sizeof(double) + kInsertionScratchRowsPerThread * sizeof(float) * threads;
+  return columns * per_column + per_bin * (g.depth_bins + 1.0);
 }
 
 void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_bytes) {
@@ -33,8 +51,9 @@ void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_b
   if (worst_case <= static_cast<double>(memory_cap_bytes)) return;
   std::ostringstream m;
   m << "grid of " << g.azimuth_bins << " x " << g.elevation_bins << " x " << g.depth_bins << " bins may need up to "
-    << worst_case / (1 << 20) << " MiB, above memory_cap_bytes = " << static_cast<double>(memory_cap_bytes) / (1 << 20)
-    << " MiB";
+    << worst_case / (1 << 20) << " MiB (its voxels, " << kWorstCaseBytesPerColumn
+    << " bytes of maps per column and the tables per depth bin), above memory_cap_bytes = "
+    << static_cast<double>(memory_cap_bytes) / (1 << 20) << " MiB";
   throw ResourceLimit(m.str());
 }
 

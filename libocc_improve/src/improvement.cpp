@@ -1,6 +1,7 @@
 #include "occ_improve/improvement.hpp"
 
 #include "fast_math.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "opdf_kernel.hpp"
 #include "parallel.hpp"
@@ -270,6 +271,7 @@ ImprovementMap compute_improvement(const SphericalGeometry& geometry, const Sens
   detail::run_parts(parts, [&](int part, int count) {
     std::vector<float> inv_sigma(static_cast<std::size_t>(geometry.width()));
     for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
+      throw_if_stop_requested();
       float* row = map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(geometry.width());
       kernel.row(geometry, model, surface, e, row, inv_sigma);
       mask_unobservable(geometry, e, row);
@@ -308,6 +310,7 @@ std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, c
   detail::run_parts(parts, [&](int part, int count) {
     std::vector<float> scratch(static_cast<std::size_t>(w)), inv_sigma(static_cast<std::size_t>(w));
     for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
+      throw_if_stop_requested();
       const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
       const auto row_affected = static_cast<int>(
           std::count(affected.begin() + static_cast<std::ptrdiff_t>(row_start),

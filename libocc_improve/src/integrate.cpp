@@ -1,6 +1,7 @@
 #include "occ_improve/integrate.hpp"
 
 #include "fast_math.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "opdf_kernel.hpp"
 #include "parallel.hpp"
@@ -423,7 +424,7 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
     const std::size_t end = points.count * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
     std::size_t kept = begin;
     for (std::size_t i = begin; i < end; ++i)
-      if (to_measurement(points.xyz + i * points.stride_floats, g, model, measurements.slots[kept],
+      if (poll_stop(i), to_measurement(points.xyz + i * points.stride_floats, g, model, measurements.slots[kept],
                          chunk_reports[static_cast<std::size_t>(part)]))
         ++kept;
     measurements.ranges[static_cast<std::size_t>(part)] = {begin, kept};
@@ -481,6 +482,7 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
     std::size_t column_updates = 0;
     for (std::size_t t = 0; t < band_tiles; ++t) {
       if (tile_begin[t] == tile_begin[t + 1]) continue;
+      throw_if_stop_requested();  // per tile: up to 64 columns' measurements
       const int a_first = static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile;
       const int e_first = (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile;
       const int a_last = std::min(a_first + kTile, g.width()) - 1, e_last = std::min(e_first + kTile, g.height()) - 1;

@@ -1,6 +1,7 @@
 #include "occ_improve/map_io.hpp"
 
 #include "occ_improve/atomic_file.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <cmath>
@@ -228,6 +229,7 @@ void read_columns(Reader& r, SphericalGrid& grid) {
   auto value_ok = [&](float v) { return std::isfinite(v) && (!clamped || (v >= lo && v <= hi)); };
   std::int64_t previous = -1;
   for (std::uint64_t n = 0; n < count; ++n) {
+    poll_stop(static_cast<std::size_t>(n));
     const auto index = r.get<std::uint32_t>("column record");
     const auto uniform_end = r.get<std::int32_t>("column record");
     const auto uniform_value = r.get<float>("column record");
@@ -367,6 +369,8 @@ LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
   } catch (const ResourceLimit& e) {
     throw ResourceLimit("map '" + path + "': geometry: " + e.what());
   }
+  // After the cap: a file claiming a huge grid is a ResourceLimit whatever its sigmas.
+  validated(r, "sensor model", [&] { model.validate_for(geometry); });
   LoadedMap loaded{SphericalGrid(SphericalGeometry(geometry), options), model, {}};
   read_columns(r, loaded.grid);
   loaded.returns = read_returns(r, loaded.grid.geometry(), version);

@@ -20,6 +20,7 @@ Mapper::Mapper(const SensorPreset& preset, const GridOptions& options)
              SensorModel(preset.model)) {}
 
 Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(grid)), model_(model) {
+  model_.params().validate_for(grid_.geometry().params());  // sigmas the binning can mean (cost bound)
   grid_.take_changed_columns();  // the surface below already accounts for everything in the grid
   surface_ = compute_surface(grid_);
   improvement_ = compute_improvement(grid_.geometry(), model_, surface_);

@@ -68,7 +68,7 @@ SensorPreset preset_from_pinhole(const PinholeIntrinsics& k, const PinholePreset
       spherical ? (p.geometry.elevation_max_rad - p.geometry.elevation_min_rad) / k.height : std::atan(1.0 / k.fy);
   p.model.sigma_azimuth_rad = azimuth_pixel_rad / std::sqrt(12.0);
   p.model.sigma_elevation_rad = elevation_pixel_rad / std::sqrt(12.0);
-  p.model.validate();
+  p.model.validate_for(p.geometry);
   return p;
 }
 

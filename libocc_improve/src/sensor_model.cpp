@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
+#include <string>
 
 namespace occ_improve {
 
@@ -26,6 +28,49 @@ void SensorModelParams::validate() const {
                     "> 0 (or sigma_depth_per_m2 > 0)");
   require_parameter(std::isfinite(support_k) && support_k > 0 && support_k <= 10, "support_k", support_k,
                     "in (0, 10]");
+}
+
+namespace {
+
+// Width of one angular bin of `g` in the binning's unit: radians (spherical) or pixels (pinhole, whose
+// columns are the camera's pixels).
+double bin_width(const GeometryParams& g, bool horizontal) {
+  if (g.angular_binning == AngularBinning::pinhole) return 1.0;
+  return horizontal ? (g.azimuth_max_rad - g.azimuth_min_rad) / g.azimuth_bins
+                    : (g.elevation_max_rad - g.elevation_min_rad) / g.elevation_bins;
+}
+
+void require_angular_bounds(const char* name, double sigma, double support_k, double width, const char* unit) {
+  std::ostringstream bound;
+  bound << "<= " << kMaxAngularSigmaBins << " bin widths = " << kMaxAngularSigmaBins * width << ' ' << unit
+        << " for this grid (a wider spread means the grid is finer than the sensor resolves: use fewer bins)";
+  require_parameter(sigma <= kMaxAngularSigmaBins * width, name, sigma, bound.str().c_str());
+  std::ostringstream support;
+  support << "<= " << kMaxSupportBins << " bin widths = " << kMaxSupportBins * width << ' ' << unit
+          << " for this grid (the region of support support_k x " << name << "; lower support_k or the sigma)";
+  const std::string what = std::string("support_k x ") + name;
+  require_parameter(support_k * sigma <= kMaxSupportBins * width, what.c_str(), support_k * sigma,
+                    support.str().c_str());
+}
+
+}  // namespace
+
+void SensorModelParams::validate_for(const GeometryParams& g) const {
+  validate();
+  const bool pinhole = g.angular_binning == AngularBinning::pinhole;
+  const char* unit = pinhole ? "px" : "rad";
+  require_angular_bounds(pinhole ? "sigma_u_px" : "sigma_azimuth_rad", pinhole ? sigma_u_px : sigma_azimuth_rad,
+                         support_k, bin_width(g, true), unit);
+  require_angular_bounds(pinhole ? "sigma_v_px" : "sigma_elevation_rad", pinhole ? sigma_v_px : sigma_elevation_rad,
+                         support_k, bin_width(g, false), unit);
+  const double far_sigma =
+      std::max(sigma_depth_floor_m, sigma_depth_m + sigma_depth_per_m2 * g.depth_max_m * g.depth_max_m);
+  const double range = g.depth_max_m - g.depth_min_m;
+  std::ostringstream depth;
+  depth << "<= the depth range " << range << " m (support_k x sigma_rho at depth_max = " << g.depth_max_m
+        << " m, from sigma_depth_m, sigma_depth_per_m2 and sigma_depth_floor_m)";
+  require_parameter(support_k * far_sigma <= range, "support_k x sigma_rho(depth_max)", support_k * far_sigma,
+                    depth.str().c_str());
 }
 
 SensorModel::SensorModel(const SensorModelParams& params) : params_(params) { params.validate(); }

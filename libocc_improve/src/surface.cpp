@@ -1,5 +1,6 @@
 #include "occ_improve/surface.hpp"
 
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/sensor_model.hpp"
 #include "parallel.hpp"
 
@@ -106,6 +107,7 @@ SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
     const std::size_t begin = n * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
     const std::size_t end = n * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
     for (std::size_t i = begin; i < end; ++i) {
+      poll_stop(i);
       const ColumnData* c = access.find(static_cast<ColumnIndex>(i));
       if (c && c->touched()) m.set(i, column_surface(c, grid));
     }
@@ -122,6 +124,7 @@ std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::ve
     const std::size_t begin = columns.size() * static_cast<std::size_t>(part) / static_cast<std::size_t>(n);
     const std::size_t end = columns.size() * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(n);
     for (std::size_t i = begin; i < end; ++i) {
+      poll_stop(i);
       const ColumnIndex c = columns[i];
       // Distinct columns: no two parts write the same entry.
       if (refresh_column_surface(grid, c, grid.find(c), surface)) changed[static_cast<std::size_t>(part)].push_back(c);

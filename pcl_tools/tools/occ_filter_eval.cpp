@@ -88,7 +88,7 @@ int run(const CommandLine& command_line) {
   for (double fraction : fractions)
     for (KeepStrategy strategy : {KeepStrategy::improvement, KeepStrategy::improvement_shuffled, KeepStrategy::random_sample,
                                   KeepStrategy::voxel_grid}) {
-      throw_if_interrupted();
+      throw_if_stop_requested();
       const std::vector<FilterStep> steps = run_keep_strategy(strategy, fraction, frames, s.preset, reference, eval);
       write_steps(csv, strategy, fraction, steps);
       std::printf("%-20s %.2f: %zu points, quality %.4f\n", keep_strategy_name(strategy), fraction,

@@ -112,7 +112,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   const auto start = std::chrono::steady_clock::now();
   try {
     while (static_cast<int>(shots.size()) < max_shots) {
-      throw_if_interrupted();
+      throw_if_stop_requested();
       const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
       if (shot.stop) {
         why = "the plan says stop: " + shot.reason;
@@ -126,9 +126,10 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
                     shots.back().expected_gain);
       progress.show(line);
     }
-  } catch (const Interrupted&) {
+  } catch (const Cancelled&) {
     why = "interrupted";  // what was acquired is still written, as a live run's map is
   }
+  const int signal = take_stop_request();
   progress.finish();
   write_shots_csv(out.file("shots.csv"), shots);
   std::vector<double> asked, gain;
@@ -145,7 +146,8 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
               returns.total_returned(), seconds, why.c_str());
   std::printf("wrote %s/: shots.csv%s %s\n", out.path().c_str(), shots.size() >= 2 ? " gain.png" : "",
               join_names(names).c_str());
-  return why == "interrupted" ? 128 + SIGINT : 0;
+  if (signal) throw Cancelled(signal);
+  return 0;
 }
 
 // The stream a run reads, and the sensor preset that fits it.
@@ -218,7 +220,7 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
 // A saved map fixes the geometry and the model; the source's frames must fit it.
 std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOptions& options, SensorPreset& preset) {
   if (load_path.empty()) return std::make_shared<Mapper>(preset, options.grid);
-  LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
+  LoadedMap loaded = load_tool_map(load_path, options);
   auto mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
   preset.name = "loaded from " + load_path;
   preset.geometry = mapper->geometry().params();
@@ -246,7 +248,7 @@ const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const 
                   static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
                   s.processed_per_second());
     progress.show(line);
-    if (stop_signal_received()) return "interrupted";
+    if (stop_requested()) return "interrupted";
     if (limits.stop_on_signal && stop_signalled) return kStopSignalReason;
     if (limits.max_frames > 0 && s.processed >= static_cast<std::uint64_t>(limits.max_frames)) return "-max_frames reached";
     if (source.file_source && !source.file_source->isRunning() && s.in_flight == 0) return "source finished";
@@ -358,7 +360,8 @@ int run(const CommandLine& command_line) {
       follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signalled, progress);
   pipeline.stop();
   progress.finish();
-  if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !stop_signal_received())
+  const int signal = take_stop_request();  // the maps so far are still written below
+  if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !signal)
     throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +
                        std::to_string(s.grabber_errors) + " unreadable)");
@@ -368,7 +371,7 @@ int run(const CommandLine& command_line) {
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());
   // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.
-  if (const int signal = stop_signal_received()) throw Interrupted(signal);
+  if (signal) throw Cancelled(signal);
   return 0;
 }
 

@@ -75,7 +75,7 @@ int run(const CommandLine& command_line) {
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
         if (load_path.empty()) return void(mapper.emplace(preset, options.grid));
-        LoadedMap loaded = load_map(load_path, options.grid.memory_cap_bytes);
+        LoadedMap loaded = load_tool_map(load_path, options);
         preset.name = "loaded from " + load_path;
         preset.geometry = loaded.grid.geometry().params();
         preset.model = loaded.model;
@@ -97,7 +97,7 @@ int run(const CommandLine& command_line) {
   const std::vector<std::string> written =
       write_map_outputs(staging, *mapper, summary, fused.colour);
   if (save.requested()) save_map(save.staged_path(), mapper->grid(), mapper->model().params());
-  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
+  throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
   save.commit();
   const double write_seconds = seconds_since(start);

@@ -87,8 +87,8 @@ Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine
   return source;
 }
 
-Source map_from_file(const std::string& path) {
-  LoadedMap loaded = load_map(path);
+Source map_from_file(const std::string& path, const ToolOptions& options) {
+  LoadedMap loaded = load_tool_map(path, options);
   Source source;
   source.mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
   source.returns = std::move(loaded.returns);
@@ -133,7 +133,7 @@ int run(const CommandLine& command_line) {
 
   const auto start = std::chrono::steady_clock::now();
   ProgressLine progress(command_line, "frame");
-  const Source source = load_path.empty() ? map_from_frames(options, use_sample, progress) : map_from_file(load_path);
+  const Source source = load_path.empty() ? map_from_frames(options, use_sample, progress) : map_from_file(load_path, options);
   const auto planned = std::chrono::steady_clock::now();
   const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
   const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
@@ -146,7 +146,7 @@ int run(const CommandLine& command_line) {
   std::ofstream plan(out.file("plan.txt"));
   if (!(plan << summary) || !plan.flush()) throw IoError("cannot write '" + out.file("plan.txt") + "'");
   plan.close();
-  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
+  throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
   std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt\n",
               source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,

@@ -43,14 +43,14 @@ int run(const CommandLine& command_line) {
   const InputScope scope(frame.name);
   if (frame.cloud.height <= 1)
     throw InvalidInput("'" + frame.name + "' is not organized (height 1): the segmentation needs a range image");
-  throw_if_interrupted();
+  throw_if_stop_requested();
   const SensorPreset preset = options.preset_for_camera(frame.camera);
   std::printf("%s\n", describe_camera(frames).c_str());
   SegmentationParams params = segmentation_defaults(preset);
   apply_segmentation_flags(command_line, params);
 
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
-  throw_if_interrupted();
+  throw_if_stop_requested();
 
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
   labelled.width = frame.cloud.width;
@@ -83,7 +83,7 @@ int run(const CommandLine& command_line) {
         << s.centroid_m.y() << ',' << s.centroid_m.z() << ',' << s.mean_depth_m << ',' << (s.plane ? 1 : 0) << '\n';
   csv.close();
   if (!csv) throw IoError("cannot write '" + csv_path + "'");
-  throw_if_interrupted();  // before anything is committed: an interrupted run leaves nothing behind
+  throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
 
   const Segmentation& seg = result.segmentation;

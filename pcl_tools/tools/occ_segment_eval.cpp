@@ -106,12 +106,12 @@ int run(const CommandLine& command_line) {
   ProgressLine progress(command_line, "cloud");
   try {
     for (const std::string& file : files) {
-      throw_if_interrupted();
+      throw_if_stop_requested();
       evaluate_cloud(file, preset_name, ours, pcl_params, ours_total, pcl_total, progress);
       progress.update(ours_total.clouds, files.size());
     }
     progress.finish();
-  } catch (const Interrupted&) {
+  } catch (const Cancelled&) {
     progress.finish();
     std::printf("interrupted after %zu of %zu clouds; means so far:\n", ours_total.clouds, files.size());
     print_mean("ours", ours_total);

@@ -182,6 +182,7 @@ public:
     double next_checkpoint = checkpoint_every, expected_since = 0;
     std::size_t good_before = 0;
     while (strategy_ == full ? shots_ < kReferenceFrames : static_cast<double>(rays_asked_) < limit - 0.5) {
+      throw_if_stop_requested();  // a run is thousands of shots; the library polls within each
       const Shot shot = next_shot();
       if (shot.stop && stop_rays_ == 0) stop_rays_ = rays_asked_;
       acquire(shot.columns);
@@ -360,7 +361,7 @@ int run(const CommandLine& command_line) {
   OutputFolder out = open_output_folder(command_line);
   std::vector<SummaryRow> all;
   for (const std::string& input : scenes) {
-    throw_if_interrupted();
+    throw_if_stop_requested();
     const InputScope scope(input);
     const Scene scene = load_scene(input, frame_options);
     std::fprintf(stderr, "%s: %d x %d, fx %.1f\n", scene.name.c_str(), scene.intrinsics.width, scene.intrinsics.height,

@@ -113,10 +113,10 @@ std::vector<Eigen::Isometry3d> parse_poses(const CommandLine& command_line, std:
   return poses;
 }
 
-Source load_saved_map(const std::string& path, std::size_t memory_cap_bytes) {
-  throw_if_interrupted();
+Source load_saved_map(const std::string& path, const ToolOptions& options) {
+  throw_if_stop_requested();
   const InputScope scope(path);
-  LoadedMap loaded = load_map(path, memory_cap_bytes);
+  LoadedMap loaded = load_tool_map(path, options);
   Source source;
   source.grid.emplace(std::move(loaded.grid));
   source.model = loaded.model;
@@ -165,7 +165,7 @@ int run(const CommandLine& command_line) {
   // Every source is read before the first export, so a bad map fails before any work.
   auto start = std::chrono::steady_clock::now();
   std::vector<Source> grids;
-  for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options.grid.memory_cap_bytes));
+  for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options));
   ProgressLine progress(command_line, "frame");
   if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample, progress));
   if (!command_line.has("-pose") && grids.front().world_from_grid) poses.front() = *grids.front().world_from_grid;
@@ -180,10 +180,10 @@ int run(const CommandLine& command_line) {
 
   const auto tree = make_octree(*grids.front().grid, resolution);
   const OctomapExportReport report = export_grids(grids, poses, *tree);
-  throw_if_interrupted();  // before the output is written: an interrupted run leaves nothing behind
+  throw_if_stop_requested();  // before the output is written: an interrupted run leaves nothing behind
   start = std::chrono::steady_clock::now();
   write_octree(*tree, tree_file->staged());
-  throw_if_interrupted();
+  throw_if_stop_requested();
   save.commit();
   tree_file->commit();
   const double write_seconds = seconds_since(start);

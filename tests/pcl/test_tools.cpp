@@ -70,6 +70,43 @@ protected:
     EXPECT_EQ(pcl::io::savePCDFileBinary(path, cloud), 0);
     return path;
   }
+  // Runs a tool in the background, sends `signal` after `delay_ms`, and waits up to 10 s for its exit:
+  // the exit code (-1 when it was still running, then killed), the seconds from the signal to the exit,
+  // and its output.
+  struct SignalledRun {
+    int exit_code = -1;
+    double seconds_to_exit = 0;
+    std::string out;
+  };
+  SignalledRun run_and_signal(const std::string& executable, const std::string& arguments, int delay_ms, int signal) {
+    fs::remove(folder_ / "rc");
+    const std::string command = "cd " + folder_.string() + " && (" + executable + " " + arguments +
+                                " > stdout.log 2> stderr.log & echo $! > pid; wait $!; echo $? > rc.tmp; mv rc.tmp rc)"
+                                " > /dev/null 2>&1 &";
+    EXPECT_EQ(std::system(command.c_str()), 0);
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+    const pid_t pid = static_cast<pid_t>(std::stol(contents(folder_ / "pid")));
+    EXPECT_FALSE(fs::exists(folder_ / "rc")) << "finished before the signal: " << contents(folder_ / "stderr.log");
+    const auto sent = std::chrono::steady_clock::now();
+    ::kill(pid, signal);
+    SignalledRun r;
+    for (int i = 0; i < 1000 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    r.seconds_to_exit = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
+    if (fs::exists(folder_ / "rc")) {
+      r.exit_code = std::stoi(contents(folder_ / "rc"));
+    } else {
+      ::kill(pid, SIGKILL);
+      for (int i = 0; i < 100 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    r.out = contents(folder_ / "stdout.log") + contents(folder_ / "stderr.log");
+    return r;
+  }
+  // Whether a staging folder or file of an output (".NAME.tmp-PID") is left in the test folder.
+  bool staging_left() const {
+    for (const auto& entry : fs::directory_iterator(folder_))
+      if (entry.path().filename().string().find(".tmp-") != std::string::npos) return true;
+    return false;
+  }
   // Exactly one "error: " line, naming `name`, as the last line on stderr; the only line at all for the
   // batch tools (occ_improve_live also reports rejected frames and progress there).
   static void expect_one_error_line_naming(const ToolRun& r, const std::string& name, const std::string& what,
@@ -454,6 +491,92 @@ TEST_F(Tools, SegmentRemovesTheTableByDefaultOnARealTableScene) {
   EXPECT_LT(kept.rows.size(), segments.rows.size());
   for (std::size_t i = 0; i < kept.rows.size(); ++i) EXPECT_EQ(kept.value(i, "plane"), 0);
   EXPECT_EQ(run(OCC_SEGMENT_EXECUTABLE, cloud_path + " -plane -o old").exit_code, 1);
+
+// occ_select_eval ignored SIGINT and SIGTERM for its whole run (53-59 s) and exited 0, or left
+// .sel.tmp-PID: the library's loops and each shot now poll the stop request.
+TEST_F(Tools, SelectEvalStopsWithinASecondOfSigintAndLeavesNothing) {
+  for (const int signal : {SIGINT, SIGTERM}) {
+    const SignalledRun r = run_and_signal(OCC_SELECT_EVAL_EXECUTABLE, "sample -o sel", 2000, signal);
+    EXPECT_EQ(r.exit_code, 128 + signal) << r.out;
+    EXPECT_LT(r.seconds_to_exit, 1.0) << r.out;
+    EXPECT_NE(r.out.find(signal == SIGINT ? "interrupted by SIGINT" : "interrupted by SIGTERM"), std::string::npos)
+        << r.out;
+    EXPECT_FALSE(staging_left());
+    EXPECT_FALSE(fs::exists(folder_ / "sel"));
+  }
+}
+
+// -sigma_angle 0.1 ran 4 minutes and 3.2 never finished (tens of columns per point and per ray): refused
+// at once, naming the flag, the value and the bound.
+TEST_F(Tools, AngularSigmaBeyondTheBinningIsRefusedNamingTheBound) {
+  const auto start = std::chrono::steady_clock::now();
+  const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -sigma_angle 0.1 -o out");  // ran 4 minutes
+  EXPECT_LT(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count(), 5.0);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("sigma_u_px = 52.6"), std::string::npos) << r.err;  // tan(0.1) x 525 px
+  EXPECT_NE(r.err.find("<= 4 bin widths = 4 px"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-sigma_angle 0.1"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(folder_ / "out"));
+  // Beyond pi/2 the angle in pixels wrapped (3.2 rad was 30 px, pi nearly 0 px).
+  for (const char* angle : {"3.2", "3.14159"}) {
+    const ToolRun wrapped = run(OCC_IMPROVE_MAP_EXECUTABLE, std::string("-sample -sigma_angle ") + angle + " -o out");
+    EXPECT_EQ(wrapped.exit_code, 1);
+    EXPECT_NE(wrapped.err.find("below pi/2 rad"), std::string::npos) << wrapped.err;
+  }
+  // The same for a depth sigma beyond the depth range.
+  const ToolRun depth = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -sigma_depth 100 -o out");
+  EXPECT_EQ(depth.exit_code, 1);
+  EXPECT_NE(depth.err.find("support_k x sigma_rho(depth_max) = 200"), std::string::npos) << depth.err;
+  EXPECT_NE(depth.err.find("-sigma_depth 100"), std::string::npos) << depth.err;
+}
+
+// SIGINT was ignored for over a minute inside the insertion and the improvement map: the widest sigmas
+// the bounds allow (a window of 17 x 17 columns) on the sample frame stop within a second, leaving nothing.
+TEST_F(Tools, ImproveMapStopsWithinASecondOfSigtermInsideTheLibrary) {
+  const SignalledRun r =
+      run_and_signal(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -sigma_angle 0.0068 -o out", 700, SIGTERM);  // 3.98 px: 15 s
+  EXPECT_EQ(r.exit_code, 128 + SIGTERM) << r.out;
+  EXPECT_LT(r.seconds_to_exit, 1.0) << r.out;
+  EXPECT_NE(r.out.find("interrupted by SIGTERM"), std::string::npos) << r.out;
+  EXPECT_FALSE(staging_left());
+  EXPECT_FALSE(fs::exists(folder_ / "out"));
+}
+
+// The OctoMap export at 1.5 cm visits ~1e8 leaves (21 s on the sample): a signal stops it, and no .bt is
+// written. The exit includes freeing the tree built so far.
+TEST_F(Tools, OctomapExportStopsPromptlyOnSigint) {
+  const SignalledRun r = run_and_signal(OCC_TO_OCTOMAP_EXECUTABLE, "-sample -resolution 0.015 -o fine.bt", 4000, SIGINT);
+  EXPECT_EQ(r.exit_code, 128 + SIGINT) << r.out;
+  EXPECT_LT(r.seconds_to_exit, 1.5) << r.out;
+  EXPECT_FALSE(fs::exists(folder_ / "fine.bt"));
+  EXPECT_FALSE(staging_left());
+}
+
+// A 172-byte map claiming 10000 x 10000 columns took 7.2 GB before SIGTERM was obeyed after 135 s; a
+// 1280 x 1024 cloud was refused without naming the input or -depth_bins. Both now name the input, the
+// claimed size and the flags (-memory_cap 8: the machine-independent cap of before).
+TEST_F(Tools, HugeClaimsAreRefusedNamingTheInputTheSizeAndTheFlag) {
+  const fs::path corpus = fs::path(OCC_IMPROVE_SOURCE_DIR) / "tests/fuzz/corpus/map";
+  for (const auto& [name, claim] : {std::pair<std::string, std::string>{"columns_100000000_depth_bins_16.occmap",
+                                                                        "10000 x 10000 x 16 bins"},
+                                    {"depth_bins_134217728_valid_model.occmap", "1 x 1 x 134217728 bins"}}) {
+    const ToolRun loaded = run(OCC_TO_OCTOMAP_EXECUTABLE, "-load " + (corpus / name).string() + " -memory_cap 8 -o out.bt");
+    expect_one_error_line_naming(loaded, name, "the map claiming " + claim, true);
+    EXPECT_NE(loaded.err.find(claim), std::string::npos) << loaded.err;
+    EXPECT_NE(loaded.err.find("above memory_cap_bytes = 8192 MiB; raise the cap with -memory_cap GIB"), std::string::npos)
+        << loaded.err;
+    EXPECT_FALSE(fs::exists(folder_ / "out.bt"));
+  }
+  pcl::PointCloud<pcl::PointXYZ> big(1280, 1024);
+  for (int v = 0; v < 1024; ++v)
+    for (int u = 0; u < 1280; ++u) big.at(u, v) = pcl::PointXYZ((u - 640) * 2.0f / 1050, (v - 512) * 2.0f / 1050, 2.0f);
+  ASSERT_EQ(pcl::io::savePCDFileBinary(file("big.pcd"), big), 0);
+  const ToolRun cloud = run(OCC_IMPROVE_MAP_EXECUTABLE, "big.pcd -memory_cap 8 -o out");
+  expect_one_error_line_naming(cloud, "big.pcd", "the 1280 x 1024 cloud", true);
+  EXPECT_NE(cloud.err.find("1280 x 1024 x 2048 bins"), std::string::npos) << cloud.err;
+  EXPECT_NE(cloud.err.find("-depth_bins"), std::string::npos) << cloud.err;
+  EXPECT_NE(cloud.err.find("-memory_cap"), std::string::npos) << cloud.err;
+  EXPECT_FALSE(fs::exists(folder_ / "out"));
 }
 
 // occ_improve_live -simulate: the closed loop against the virtual sensor over a frame, until the plan

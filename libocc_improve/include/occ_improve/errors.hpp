@@ -43,6 +43,18 @@ public:
   using Error::Error;
 };
 
+/// A call stopped because a stop was requested (cancel.hpp: request_stop, e.g. from a SIGINT handler).
+/// Nothing is wrong with the input; reason() is what request_stop was given (the tools: the signal
+/// number), and the message says "interrupted by SIGINT" / "SIGTERM" for those two.
+class Cancelled : public Error {
+public:
+  explicit Cancelled(int reason);
+  int reason() const { return reason_; }
+
+private:
+  int reason_;
+};
+
 namespace detail {
 /// Throws InvalidParameter("<name> = <value> is invalid: must be <requirement>") unless `ok`.
 void require_parameter(bool ok, const char* name, double value, const char* requirement);

@@ -22,23 +22,37 @@ enum class UpdateMode {
   exact,    ///< eq. 2 exactly: log-odds summed without bounds
 };
 
+/// The default memory cap: half of the machine's physical memory (sysconf on POSIX systems), or 8 GiB
+/// where it cannot be read. Physical, not available, memory: the same machine refuses the same inputs.
+std::size_t default_memory_cap_bytes();
+
 struct GridOptions {
   UpdateMode mode = UpdateMode::clamped;
   double probability_min = 0.001;  ///< clamp (clamped mode); OctoMap's default is 0.1192
   double probability_max = 0.999;  ///< clamp (clamped mode); OctoMap's default is 0.971
-  /// Refuse a geometry whose worst case (every voxel stored as a float) exceeds this.
-  std::size_t memory_cap_bytes = std::size_t{8} << 30;
+  /// Refuse a geometry whose worst case (grid_worst_case_bytes) exceeds this.
+  std::size_t memory_cap_bytes = default_memory_cap_bytes();
 
   void validate() const;
   /// OctoMap's clamping thresholds (0.1192 / 0.971).
   static GridOptions octomap_clamping();
 };
 
-/// The most memory a grid of geometry `g` may need: every voxel stored as a float, plus the depth axis's
-/// tables (two doubles per bin). Computed from the parameters, before anything is allocated.
+/// Dense bytes per column besides its voxels: the column record, its change flag, the surface map
+/// (depth, probability, bin, unknown), the improvement map, and the per-column outputs and analyses the
+/// tools build (region and segment labels, rendered images, predicted depth, rankings).
+constexpr double kWorstCaseBytesPerColumn = 32 + 1 + 13 + 4 + 64;
+/// Insertion scratch rows per worker thread: one float per depth bin each (integrate.hpp).
+constexpr double kInsertionScratchRowsPerThread = 64;
+
+/// The most memory a run on a grid of geometry `g` may need, computed from the parameters before
+/// anything is allocated: per column, every voxel stored as a float plus kWorstCaseBytesPerColumn (an
+/// empty grid is legal, but the dense per-column maps are not free); per depth bin, the depth axis's
+/// tables (two doubles) and the insertion's scratch rows of every hardware thread.
 double grid_worst_case_bytes(const GeometryParams& g);
 
-/// Throws ResourceLimit naming the bins and the cap when grid_worst_case_bytes(g) > memory_cap_bytes.
+/// Throws ResourceLimit naming the bins, the worst case and the cap when grid_worst_case_bytes(g) >
+/// memory_cap_bytes.
 /// Called before a geometry is built, since building it allocates the depth axis.
 void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_bytes);
 

@@ -24,7 +24,22 @@ struct SensorModelParams {
 
   /// Throws InvalidParameter naming the first bad field.
   void validate() const;
+
+  /// validate(), then the bounds that tie the sigmas to a grid's binning (docs/METHOD.md, "Sigma bounds"),
+  /// each in the binning's own unit: the angular sigma of each axis at most kMaxAngularSigmaBins bin
+  /// widths, the region of support k sigma at most kMaxSupportBins bin widths, and the depth support
+  /// k sigma_rho(depth_max) at most the depth range. Beyond them the model says nothing the binning can
+  /// show (a spread over many columns means the grid is finer than the sensor resolves), while insertion
+  /// and improvement cost grow with the square of the window (an angle of 3.2 rad ran for hours).
+  /// Throws InvalidParameter naming the field, its value and the bound.
+  void validate_for(const GeometryParams& geometry) const;
 };
+
+/// Angular sigma bound of SensorModelParams::validate_for, in bin widths of its axis.
+constexpr double kMaxAngularSigmaBins = 4.0;
+/// Region-of-support bound (support_k x angular sigma) of validate_for, in bin widths: a window of at
+/// most 17 x 17 columns per measurement and per ray.
+constexpr double kMaxSupportBins = 8.0;
 
 class SensorModel {
 public:

@@ -1,6 +1,7 @@
 #include "occ_improve/octomap/export.hpp"
 
 #include "occ_improve/atomic_file.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/sensor_model.hpp"
 
@@ -289,6 +290,7 @@ public:
   LeafMarks mark() {
     first_run_.reserve(g_.column_count() + 1);
     for (int v = 0; v < g_.height(); ++v) {
+      throw_if_stop_requested();  // a row of columns per poll
       for (int h = 0; h < g_.width(); ++h) {
         first_run_.push_back(static_cast<std::uint32_t>(runs_.size()));
         if (const ColumnData* column = grid_.find(g_.column(h, v))) scan_column(h, v, *column);
@@ -412,10 +414,12 @@ private:
   void mark_lateral_faces() {
     Strip strip;
     for (int h = 0; h <= g_.width(); ++h) {  // edges between columns h - 1 and h, along v
+      throw_if_stop_requested();
       for (int v = 0; v < g_.height(); ++v) add_face(strip, free_runs(h - 1, v), free_runs(h, v), corner(h, v), corner(h, v + 1));
       close_strip(strip);
     }
     for (int v = 0; v <= g_.height(); ++v) {  // edges between rows v - 1 and v, along h
+      throw_if_stop_requested();
       for (int h = 0; h < g_.width(); ++h) add_face(strip, free_runs(h, v - 1), free_runs(h, v), corner(h, v), corner(h + 1, v));
       close_strip(strip);
     }
@@ -540,6 +544,7 @@ void write_free_leaves(const octomap::OcTree& tree, const SphericalGrid& grid, c
   for (unsigned ko = key_lo[outer]; ko <= key_hi[outer]; ++ko) {
     key[outer] = static_cast<octomap::key_type>(ko);
     for (unsigned km = key_lo[middle]; km <= key_hi[middle]; ++km) {
+      throw_if_stop_requested();  // a line of leaves per poll
       key[middle] = static_cast<octomap::key_type>(km);
       key[inner] = key_lo[inner];
       const Eigen::Vector3d first(tree.keyToCoord(key[0]), tree.keyToCoord(key[1]), tree.keyToCoord(key[2]));

@@ -107,7 +107,9 @@ std::vector<FlagSpec> sensor_flags() {
                          "the preset's"),
               0),
       bounded(value_flag("-sigma_angle", K::number, "RAD", kSensor,
-                         "angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre)", "",
+                         "angular sigma [rad] (pixel-native grids: the same angle in pixels at the centre);\n"
+                         "at most 4 bin widths, and support_k x sigma at most 8 (docs/METHOD.md)",
+                         "",
                          "the preset's"),
               0, kInf, true),
       bounded(value_flag("-support_k", K::number, "K", kSensor, "region of support in standard deviations", "",
@@ -122,6 +124,11 @@ std::vector<FlagSpec> sensor_flags() {
              "clamp the log-odds after each update, or sum them as eq. 2 does", "clamped"),
       choice("-clamp", {"paper", "octomap"}, kSensor,
              "clamping thresholds: 0.001/0.999, or OctoMap's 0.1192/0.971", "paper"),
+      bounded(value_flag("-memory_cap", K::number, "GIB", kSensor,
+                         "refuse a grid or map whose worst case (voxels, per-column maps, per-bin tables)\n"
+                         "exceeds this [GiB]",
+                         "", "half of the physical memory"),
+              0, kInf, true),
   };
 }
 
@@ -364,7 +371,7 @@ const FlagSpec& flag_spec(const std::string& name) {
 
 std::vector<std::string> sensor_flag_names() {
   return {"-preset", "-sigma_depth", "-sigma_depth_quadratic", "-sigma_angle", "-support_k",
-          "-depth_bins", "-depth_max", "-fov", "-mode", "-clamp"};
+          "-depth_bins", "-depth_max", "-fov", "-mode", "-clamp", "-memory_cap"};
 }
 
 std::vector<std::string> camera_flag_names() { return {"-intrinsics", "-intrinsics_file", "-depth_encoding"}; }

@@ -64,12 +64,31 @@ std::optional<double> declared_number(const CommandLine& c, const std::string& f
   return c.declares(flag) ? c.number(flag) : std::nullopt;
 }
 
+// " and -sigma_angle 3.2 -support_k 2": the flags a preset's validation error may come from.
+std::string describe_overrides(const PresetOverrides& o) {
+  std::ostringstream s;
+  const auto add = [&](const char* flag, const auto& value) {
+    if (value) s << ' ' << flag << ' ' << *value;
+  };
+  add("-sigma_depth", o.sigma_depth_m);
+  add("-sigma_depth_quadratic", o.sigma_depth_per_m2);
+  add("-sigma_angle", o.sigma_angle_rad);
+  add("-support_k", o.support_k);
+  add("-depth_bins", o.depth_bins);
+  add("-depth_max", o.depth_max_m);
+  add("-fov", o.fov_horizontal_deg);
+  return s.str().empty() ? std::string() : " and" + s.str();
+}
+
 }  // namespace
 
 SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
   if (o.sigma_depth_m) p.model.sigma_depth_m = *o.sigma_depth_m;
   if (o.sigma_depth_per_m2) p.model.sigma_depth_per_m2 = *o.sigma_depth_per_m2;
   if (o.sigma_angle_rad) {
+    // tan() below wraps past pi/2 (3.2 rad became 30 px, pi nearly 0 px): an angular sigma is far below that.
+    if (!(*o.sigma_angle_rad < kPi / 2))
+      bad_flag("-sigma_angle", std::to_string(*o.sigma_angle_rad), "below pi/2 rad (an angle from the optical axis)");
     p.model.sigma_azimuth_rad = p.model.sigma_elevation_rad = *o.sigma_angle_rad;
     // The pixel-native binning's sigmas are in pixels: the same angle at the image centre.
     if (p.camera) {
@@ -97,9 +116,9 @@ SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
   // for example, only shows here. The message names the field; say which flags set it.
   try {
     p.geometry.validate();
-    p.model.validate();
+    p.model.validate_for(p.geometry);
   } catch (const InvalidParameter& e) {
-    throw InvalidParameter(std::string(e.what()) + " (after -preset " + p.name + " and the overrides)");
+    throw InvalidParameter(std::string(e.what()) + " (after -preset " + p.name + describe_overrides(o) + ")");
   }
   return p;
 }
@@ -166,7 +185,7 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
 }
 
 ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
-  throw_if_interrupted();
+  throw_if_stop_requested();
   const InputScope scope(source.path);
   return load_tool_frame(options, source);
 }
@@ -223,16 +242,21 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     fused.camera = describe_camera({*frame});
     fused.colour = frame->colour;
   }
-  prepare(frame);
+  try {  // the first frame's camera sizes the grid: a grid beyond the cap is refused naming the frame
+    prepare(frame);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what() + ";" +
+                        memory_cap_hint(true));
+  }
   try {
     for (; frame; frame = frames.next()) {
-      throw_if_interrupted();
+      throw_if_stop_requested();
       const InputScope scope(frame->name);
       fused.insertion += insert(*frame);
       fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
       progress.update(++fused.frames, frames.count(), fused.insertion.points_received);
     }
-  } catch (const Interrupted&) {
+  } catch (const Cancelled&) {
     progress.finish();
     std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n%s\n", fused.frames,
                 frames.count(), describe_points(fused.insertion).c_str());
@@ -335,14 +359,29 @@ ToolOptions parse_tool_options(const CommandLine& c) {
     t.grid.mode = mode;
   }
 
+  if (const auto gib = declared_number(c, "-memory_cap"))
+    t.grid.memory_cap_bytes = static_cast<std::size_t>(std::min(*gib * double(1 << 30), 1e18));
   try {
     require_within_memory_cap(t.preset.geometry, t.grid.memory_cap_bytes);
   } catch (const ResourceLimit& e) {
-    throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov)");
+    throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov;" +
+                        memory_cap_hint(true) + ")");
   }
   if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);
   t.use_poses = !(c.declares("-no_poses") && c.has("-no_poses"));
   return t;
+}
+
+std::string memory_cap_hint(bool with_depth_bins) {
+  return with_depth_bins ? " raise the cap with -memory_cap GIB, or lower -depth_bins" : " raise the cap with -memory_cap GIB";
+}
+
+LoadedMap load_tool_map(const std::string& path, const ToolOptions& options) {
+  try {
+    return load_map(path, options.grid.memory_cap_bytes);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit(std::string(e.what()) + ";" + memory_cap_hint(false));  // the map fixes its own bins
+  }
 }
 
 void create_parent_folders(const std::string& path) {
@@ -379,8 +418,7 @@ std::string frame_inputs_help() {
 
 namespace {
 
-volatile std::sig_atomic_t g_stop_signal = 0;
-extern "C" void record_stop_signal(int signal) { g_stop_signal = signal; }
+extern "C" void record_stop_signal(int signal) { request_stop(signal); }
 
 void install_stop_signals() {
   struct sigaction action {};
@@ -422,13 +460,10 @@ InputScope::~InputScope() {
   current_input() = previous_;
 }
 
-Interrupted::Interrupted(int signal)
-    : std::runtime_error(std::string("interrupted by ") + (signal == SIGTERM ? "SIGTERM" : "SIGINT")), signal_(signal) {}
-
-int stop_signal_received() { return static_cast<int>(g_stop_signal); }
-
-void throw_if_interrupted() {
-  if (const int signal = stop_signal_received()) throw Interrupted(signal);
+int take_stop_request() {
+  const int signal = stop_requested();
+  clear_stop_request();
+  return signal;
 }
 
 namespace {
@@ -449,10 +484,17 @@ int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const Com
   }
   install_stop_signals();
   try {
-    return run(parse_command_line(flags, argc, argv));
-  } catch (const Interrupted& e) {
+    const int code = run(parse_command_line(flags, argc, argv));
+    // A signal that came too late for any poll (during the final renames, say) still ends in 128 + signal,
+    // as the README promises; the run had finished, so what it wrote is in place.
+    if (const int signal = stop_requested()) {
+      std::fprintf(stderr, "%s after the run had finished (its outputs are committed)\n", Cancelled(signal).what());
+      return 128 + signal;
+    }
+    return code;
+  } catch (const Cancelled& e) {
     std::fprintf(stderr, "%s\n", e.what());
-    return 128 + e.signal();
+    return 128 + e.reason();
   } catch (const std::bad_alloc&) {
     return report_failure("out of memory (std::bad_alloc)");
   } catch (const std::exception& e) {

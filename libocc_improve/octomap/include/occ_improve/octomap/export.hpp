@@ -69,7 +69,8 @@ std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double r
 /// resolution; inner nodes are updated and equal children pruned before returning (as insertPointCloud
 /// leaves its tree). Throws InvalidParameter for a pose that is
 /// not a finite rigid transform or a frustum outside the tree's addressable range, ResourceLimit when the
-/// estimated memory exceeds options.memory_cap_bytes. The tree is unchanged when it throws.
+/// estimated memory exceeds options.memory_cap_bytes. The tree is unchanged when it throws,
+/// except for Cancelled (cancel.hpp): a stop request leaves it partly updated, for the caller to discard.
 OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& grid,
                                   const Eigen::Isometry3d& world_from_sensor,
                                   const OctomapExportOptions& options = {});

@@ -2,9 +2,11 @@
 // What the occ_improve tools share beyond their flag table (flags.hpp): the sensor preset and grid built
 // from the common flags, the frames read from the inputs, the output folder, the progress line, and the
 // main() that turns every failure into one error line.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/atomic_file.hpp"
 #include "occ_improve/grid.hpp"
 #include "occ_improve/integrate.hpp"
+#include "occ_improve/map_io.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
@@ -123,7 +125,7 @@ std::string describe_camera(const std::vector<ToolFrame>& frames);
 /// argument at all (exit 1), otherwise parses the command line against `flags`, installs the stop-signal
 /// handlers and runs `run`. Any exception, a refused flag, std::bad_alloc and non-standard ones included,
 /// becomes ONE line "error: ..." on stderr naming the input being worked on (InputScope) and exit code 1;
-/// Interrupted becomes "interrupted by SIG..." and exit code 128 + the signal number.
+/// Cancelled becomes "interrupted by SIG..." and exit code 128 + the signal number.
 int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const CommandLine& command_line));
 
 /// -h text of the positional frame inputs every frame-reading tool takes.
@@ -168,7 +170,7 @@ struct FusedFrames {
 
 /// Reads every frame (ToolFrameReader), calls `prepare` with the first one (its camera sets the grid), then
 /// `insert` on each, one frame in memory at a time, with the progress line. Refuses a run whose points all
-/// miss the grid. Interrupted: prints how many frames were inserted ("nothing written") and rethrows.
+/// miss the grid. Cancelled: prints how many frames were inserted ("nothing written") and rethrows.
 FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
                              const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
                              const std::function<InsertionReport(const ToolFrame& frame)>& insert);
@@ -191,29 +193,28 @@ private:
   int uncaught_;
 };
 
-/// A tool stopped by SIGINT or SIGTERM. Not an occ_improve::Error: nothing is wrong with the input.
-class Interrupted : public std::runtime_error {
-public:
-  explicit Interrupted(int signal);
-  int signal() const { return signal_; }
+// Stopping on SIGINT/SIGTERM: run_tool's handlers call the library's request_stop(signal) (cancel.hpp),
+// so the library's long loops and the tools' own (frames, files, shots; throw_if_stop_requested) stop
+// within milliseconds with Cancelled, which run_tool reports as "interrupted by SIG..." and exit code
+// 128 + the signal. stop_requested() is the signal received, or 0. The handlers reset themselves, so a
+// second signal ends the process at once.
 
-private:
-  int signal_;
-};
-
-/// The first SIGINT/SIGTERM received since run_tool installed its handlers, or 0. The handlers only
-/// record the signal (so that the tool can stop between steps, remove its staging files and print what
-/// it did); they reset themselves, so a second signal ends the process at once.
-int stop_signal_received();
-
-/// Throws Interrupted when a stop signal was received; tools call it between steps (frames, files).
-void throw_if_interrupted();
+/// For a tool that still writes what it has after a stop (occ_improve_live): the signal received, or 0,
+/// and the request withdrawn so that the writing is not cancelled too; the tool then ends with
+/// throw Cancelled(signal). The frame or shot in flight when the signal came is left partly inserted.
+int take_stop_request();
 
 /// The sensor preset, grid options, camera and inputs from a parsed command line (the flags of
 /// sensor_flag_names() and camera_flag_names() the tool declares; the others keep their defaults).
 /// Throws InvalidParameter naming the flag when flags conflict or the preset they build is invalid,
 /// IoError/FormatError for an unreadable -intrinsics_file.
 ToolOptions parse_tool_options(const CommandLine& command_line);
+
+/// load_map under the tool's cap; a ResourceLimit says how to raise it (-memory_cap).
+LoadedMap load_tool_map(const std::string& path, const ToolOptions& options);
+
+/// " raise the cap with -memory_cap GIB[, or lower -depth_bins]": the end of a tool's ResourceLimit message.
+std::string memory_cap_hint(bool with_depth_bins);
 
 /// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
 SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
