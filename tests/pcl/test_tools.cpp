@@ -491,6 +491,7 @@ TEST_F(Tools, SegmentRemovesTheTableByDefaultOnARealTableScene) {
   EXPECT_LT(kept.rows.size(), segments.rows.size());
   for (std::size_t i = 0; i < kept.rows.size(); ++i) EXPECT_EQ(kept.value(i, "plane"), 0);
   EXPECT_EQ(run(OCC_SEGMENT_EXECUTABLE, cloud_path + " -plane -o old").exit_code, 1);
+}
 
 // occ_select_eval ignored SIGINT and SIGTERM for its whole run (53-59 s) and exited 0, or left
 // .sel.tmp-PID: the library's loops and each shot now poll the stop request.
