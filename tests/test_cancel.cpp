@@ -89,10 +89,11 @@ TEST_F(Cancel, ARequestDuringALongCallStopsItPromptly) {
     stopper.join();
     FAIL() << "1000 improvement maps finished before the request";
   } catch (const Cancelled& e) {
-    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - requested).count();
-    stopper.join();
+    const auto stopped = std::chrono::steady_clock::now();
+    stopper.join();  // before reading `requested`: the join orders the stopper's write before this read
+    const double seconds = std::chrono::duration<double>(stopped - requested).count();
     EXPECT_EQ(e.reason(), SIGINT);
-    EXPECT_LT(seconds, 0.2) << "the request was obeyed after " << seconds << " s";
+    EXPECT_LT(seconds, 1.0) << "the request was obeyed after " << seconds << " s";
   }
 }
 

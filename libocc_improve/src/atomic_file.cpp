@@ -219,7 +219,8 @@ void OutputFile::commit() {
   if (ec) throw IoError("cannot move the new '" + shown_ + "' into place: " + ec.message());
 }
 
-OutputFolder::OutputFolder(const std::string& target, const std::string& tool, bool overwrite)
+OutputFolder::OutputFolder(const std::string& target, const std::string& tool, bool overwrite,
+                           const std::vector<std::string>& inputs)
     : target_(resolved_target(target, "output folder")), shown_(target), tool_(tool), overwrite_(overwrite) {
   const fs::path parent = target_.parent_path();
   require_writable_folder(parent, "output folder", shown_);
@@ -227,14 +228,31 @@ OutputFolder::OutputFolder(const std::string& target, const std::string& tool, b
   if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
     throw IoError("output folder '" + shown_ + "' exists and is not a folder");
   recover_interrupted_commit();
+  require_no_input_inside(inputs);
   if (!overwrite_ && !target_is_own())
     throw IoError("output folder '" + shown_ + "' already holds files " + tool_ +
                   " did not write: choose another -o, or give -overwrite to write into it (files of the "
                   "same names are replaced, nothing else is touched)");
   staging_ = parent / ("." + target_.filename().string() + ".tmp-" + std::to_string(::getpid()));
+  // Entries named by this PID are a dead run's whose PID was reused (the old output, if needed, was moved
+  // back above): they must not be published with this run's files or block its rename.
+  fs::remove_all(staging_, ec);
+  fs::remove_all(fs::path(staging_.string() + ".old"), ec);
   fs::create_directory(staging_, ec);
   if (ec) throw IoError("cannot write output folder '" + shown_ + "': cannot create '" + staging_.string() + "': " +
                         ec.message());
+}
+
+void OutputFolder::require_no_input_inside(const std::vector<std::string>& inputs) const {
+  if (!target_is_own()) return;  // not replaced as a whole: refused, or written into file by file
+  std::error_code ec;
+  const fs::path folder = fs::weakly_canonical(target_, ec);
+  for (const std::string& input : inputs) {
+    const fs::path relative = fs::weakly_canonical(fs::absolute(input), ec).lexically_relative(folder);
+    if (!relative.empty() && *relative.begin() != "..")
+      throw IoError("output folder '" + shown_ + "' holds the input '" + input +
+                    "', which replacing the folder would delete: choose another -o");
+  }
 }
 
 // A run killed between replace_whole's two renames left the previous output as ".<name>.tmp-<pid>.old" and
@@ -307,6 +325,8 @@ void OutputFolder::replace_whole() {
     old += ".old";
     fs::rename(target_, old, ec);
     if (ec) throw IoError("cannot replace output folder '" + shown_ + "': " + ec.message());
+    // Dated now, so that a concurrent run does not judge it a dead run's leftover by the old output's date.
+    fs::last_write_time(old, fs::file_time_type::clock::now(), ec);
   }
   fs::rename(staging_, target_, ec);
   if (ec) {

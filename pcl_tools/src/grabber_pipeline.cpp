@@ -174,6 +174,10 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
   result.frame_index = index;
   try {
     result.report = mapper_->insert(frame.points, options_.insertion);
+  } catch (const Cancelled&) {  // the user's stop, not a bad frame: counted apart, no warning
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++stats_.interrupted;
+    return;
   } catch (const std::exception& e) {
     return reject(index, std::string("the mapper refused it: ") + e.what());
   }
@@ -190,6 +194,8 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
   if (on_result) {
     try {
       on_result(result);
+    } catch (const Cancelled&) {
+      // A stop during an intermediate write: the final write after stop() publishes the map.
     } catch (const std::exception& e) {
       emit({PipelineEvent::Kind::grabber_error, index, std::string("result callback threw: ") + e.what()});
     }

@@ -265,10 +265,11 @@ void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, 
   else
     pcl::console::print_info("Stopped: %s\n", stop_reason);
   pcl::console::print_info(
-      "Frames: %llu received, %llu processed, %llu dropped, %llu rejected, %llu source errors in %.2f s "
-      "(%.1f frames/s)\n",
+      "Frames: %llu received, %llu processed, %llu dropped, %llu rejected, %llu cut short by the stop, %llu source "
+      "errors in %.2f s (%.1f frames/s)\n",
       static_cast<unsigned long long>(s.received), static_cast<unsigned long long>(s.processed),
       static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
+      static_cast<unsigned long long>(s.interrupted),
       static_cast<unsigned long long>(s.grabber_errors), s.wall_seconds, s.processed_per_second());
   pcl::console::print_info("Per frame [ms]: convert %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
                            s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms),

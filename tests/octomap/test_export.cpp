@@ -258,17 +258,32 @@ TEST_F(OctomapExport, WritingLeavesTheCallersTreeUnchanged) {
   EXPECT_NE(digest(copy), before);
 }
 
-// write_octree writes the .bt header itself (OctoMap's writer prints " done." to stderr): the same bytes
-// as OctoMap's writeBinaryConst.
-TEST_F(OctomapExport, BinaryFilesHoldOctomapsOwnBytes) {
+// write_octree writes the headers itself (OctoMap's writer prints " done." to stderr): OctoMap's own bytes
+// but for the line that says occ_improve wrote the file, which OctoMap's readers skip.
+TEST_F(OctomapExport, TreeFilesHoldOctomapsOwnBytesAndSayWhoWroteThem) {
   const auto tree = to_octree(sample_grid(UpdateMode::clamped), Eigen::Isometry3d::Identity(), 0.05);
-  write_octree(*tree, file("a.bt"));
-  std::ostringstream expected;
-  ASSERT_TRUE(tree->writeBinaryConst(expected));
-  std::ifstream in(file("a.bt"), std::ios::binary);
-  const std::string written{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  EXPECT_GT(written.size(), 1000u);
-  EXPECT_TRUE(written == expected.str()) << written.size() << " bytes against " << expected.str().size();
+  for (const bool full : {false, true}) {
+    const std::string path = file(full ? "a.ot" : "a.bt");
+    write_octree(*tree, path);
+    std::ostringstream expected;
+    ASSERT_TRUE(full ? tree->write(expected) : tree->writeBinaryConst(expected));
+    std::string octomaps = expected.str();
+    octomaps.insert(octomaps.find('\n') + 1, "# written by occ_improve\n");
+    std::ifstream in(path, std::ios::binary);
+    const std::string written{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    EXPECT_GT(written.size(), 1000u);
+    EXPECT_TRUE(written == octomaps) << path << ": " << written.size() << " bytes against " << octomaps.size();
+    EXPECT_TRUE(is_octomap_file(path));
+    if (full) {
+      std::unique_ptr<octomap::AbstractOcTree> back(octomap::AbstractOcTree::read(path));
+      ASSERT_NE(back, nullptr) << path;
+      EXPECT_EQ(back->size(), tree->size()) << path;
+    } else {
+      EXPECT_EQ(octomap::OcTree(path).size(), tree->size()) << path;
+    }
+  }
+  ASSERT_TRUE(tree->writeBinary(file("octomaps.bt")));  // a tree another program wrote
+  EXPECT_FALSE(is_octomap_file(file("octomaps.bt")));
 }
 
 TEST_F(OctomapExport, BadResolutionPoseAndPathsAreRefused) {

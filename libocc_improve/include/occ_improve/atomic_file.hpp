@@ -81,8 +81,11 @@ inline constexpr const char* kOutputMarkerName = ".occ_improve_output";
 class OutputFolder {
 public:
   /// Throws IoError when the parent folder does not exist, `target` is not a folder, the staging folder
-  /// cannot be created, or the folder is not the tool's own and `overwrite` is false.
-  OutputFolder(const std::string& target, const std::string& tool, bool overwrite);
+  /// cannot be created, or the folder is not the tool's own and `overwrite` is false; and when it is the
+  /// tool's own (so would be replaced as a whole) but holds one of `inputs`, the paths the run reads (a map
+  /// an earlier run saved there): replacing the folder would delete it.
+  OutputFolder(const std::string& target, const std::string& tool, bool overwrite,
+               const std::vector<std::string>& inputs = {});
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
   ~OutputFolder();
@@ -100,6 +103,7 @@ public:
 private:
   bool target_is_own() const;
   void recover_interrupted_commit();
+  void require_no_input_inside(const std::vector<std::string>& inputs) const;
   void replace_whole();
   void move_files_in();
 

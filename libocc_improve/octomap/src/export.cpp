@@ -574,16 +574,24 @@ void write_free_leaves(const octomap::OcTree& tree, const SphericalGrid& grid, c
   }
 }
 
-// OcTree::writeBinaryConst, whose header is written here: Debian's liboctomap is built with its debug
-// output on and prints " done." to stderr after every binary write (issue 18: before a tool's error line).
-// The header is AbstractOccupancyOcTree::writeBinaryConst's, byte for byte; the data is OctoMap's own.
-bool write_binary(const octomap::OcTree& tree, std::ostream& out) {
-  out << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+// The line by which a tree file says occ_improve wrote it (is_octomap_file), right after OctoMap's first
+// line: OctoMap's readers skip comment lines there, so every OctoMap reader still reads the file.
+constexpr const char* kWrittenByLine = "# written by occ_improve";
+
+// OcTree::writeBinaryConst / AbstractOcTree::write, whose headers are written here: with our line, and
+// because Debian's liboctomap prints " done." to stderr after every binary write (issue 18: before a tool's
+// error line). The headers are OctoMap's, byte for byte, but for that line; the data is OctoMap's own.
+bool write_tree(const octomap::OcTree& tree, bool full, std::ostream& out) {
+  out << (full ? "# Octomap OcTree file" : "# Octomap OcTree binary file") << "\n" << kWrittenByLine
+      << "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
   out << "id " << tree.getTreeType() << std::endl;
   out << "size " << tree.size() << std::endl;
   out << "res " << tree.getResolution() << std::endl;
   out << "data" << std::endl;
-  tree.writeBinaryData(out);
+  if (full)
+    tree.writeData(out);
+  else
+    tree.writeBinaryData(out);
   return out.good();
 }
 
@@ -682,15 +690,16 @@ void require_octomap_output_path(const std::string& path) {
 
 bool is_octomap_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  std::string first_line;
-  return std::getline(in, first_line) && first_line.rfind("# Octomap OcTree", 0) == 0;
+  std::string first_line, second_line;
+  return std::getline(in, first_line) && first_line.rfind("# Octomap OcTree", 0) == 0 &&
+         std::getline(in, second_line) && second_line == kWrittenByLine;
 }
 
 void write_octree(const octomap::OcTree& tree, const std::string& path) {
   require_octomap_output_path(path);
   const bool full = std::filesystem::path(path).extension() == ".ot";
   write_file_atomically(path, "OctoMap file", [&](std::ostream& out) {
-    return full ? tree.write(out) : write_binary(tree, out);
+    return write_tree(tree, full, out);
   });
 }
 

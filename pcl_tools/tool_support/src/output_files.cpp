@@ -9,9 +9,7 @@
 
 namespace occ_improve {
 namespace fs = std::filesystem;
-namespace {
 
-// Every path the run reads from, as given.
 std::vector<std::string> run_inputs(const CommandLine& c) {
   std::vector<std::string> inputs = c.positionals();
   for (const char* flag : {"-load", "-intrinsics_file", "-oni", "-pcd_dir", "-depth_dir", "-simulate"})
@@ -20,6 +18,8 @@ std::vector<std::string> run_inputs(const CommandLine& c) {
         if (!value.empty()) inputs.push_back(value);
   return inputs;
 }
+
+namespace {
 
 // `path` absolute, normal, with the symbolic links of its existing part resolved.
 fs::path comparable(const std::string& path) {
@@ -42,7 +42,7 @@ void require_not_an_input(const CommandLine& command_line, const std::string& pa
     std::error_code ec;
     const fs::path source = comparable(input);
     const bool folder = fs::is_directory(source, ec);
-    if (target == source || (folder && is_within(target, source)))
+    if (target == source || fs::equivalent(target, source, ec) || (folder && is_within(target, source)))
       throw InvalidParameter(flag + " '" + path + "' would overwrite " + (folder ? "a file in the input folder '" : "the input '") +
                              input + "': choose an output outside the inputs");
   }
@@ -67,7 +67,12 @@ std::unique_ptr<OutputFile> open_output_file(const CommandLine& command_line, co
 MapSaveTarget::MapSaveTarget(const CommandLine& command_line, OutputFolder* folder)
     : shown_(command_line.text("-save").value_or("")) {
   if (shown_.empty()) return;
-  if (folder && comparable(shown_).parent_path() == comparable(folder->resolved().string())) {
+  const fs::path target = comparable(shown_);
+  if (folder && is_within(target, comparable(folder->resolved().string()))) {
+    // Written with the folder's files and listed in its marker: directly in it, and named so that it can
+    // replace none of the tool's outputs (nor the marker).
+    if (target.parent_path() != comparable(folder->resolved().string()) || target.extension() != ".occmap")
+      throw InvalidParameter("-save '" + shown_ + "' inside the -o folder must be a NAME.occmap directly in it");
     require_not_an_input(command_line, shown_, "-save");
     folder_ = folder;
     return;

@@ -3,6 +3,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/sample_scene.hpp"
+#include "occ_improve/tools/output_files.hpp"
 
 #include <pcl/common/transforms.h>
 
@@ -403,7 +404,7 @@ OutputFolder open_output_folder(const CommandLine& c) {
   const auto folder = c.text("-o");
   if (!folder) throw InvalidParameter("-o OUTDIR is required (see -h)");
   create_parent_folders(*folder);  // the folder itself is staged and moved into place
-  return OutputFolder(*folder, c.tool().tool, c.has("-overwrite"));
+  return OutputFolder(*folder, c.tool().tool, c.has("-overwrite"), run_inputs(c));
 }
 
 std::string frame_inputs_help() {

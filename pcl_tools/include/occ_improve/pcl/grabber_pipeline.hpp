@@ -75,6 +75,7 @@ struct PipelineStatistics {
   std::uint64_t processed = 0;  ///< frames inserted
   std::uint64_t dropped = 0;    ///< replaced by a newer frame before the worker took them
   std::uint64_t rejected = 0;   ///< bad frames (see the header comment)
+  std::uint64_t interrupted = 0;  ///< frames whose insertion a stop request (Ctrl-C) cut short: partly inserted
   std::uint64_t grabber_errors = 0;  ///< start/stop failures and errors reported by the source
   std::uint64_t in_flight = 0;  ///< waiting or being processed (0 once stopped)
   /// Summed milliseconds over processed frames, per stage (insert_ms includes the surface update).

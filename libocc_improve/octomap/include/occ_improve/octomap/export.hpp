@@ -86,8 +86,9 @@ std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eige
 /// half-written file. Throws InvalidParameter for another extension, IoError when it cannot write.
 void write_octree(const octomap::OcTree& tree, const std::string& path);
 
-/// Whether `path` starts with the first line OctoMap writes in a .bt or .ot file ("# Octomap OcTree ...").
-/// What occ_to_octomap checks before it replaces a file with -o.
+/// Whether `path` is a tree write_octree wrote: OctoMap's first line ("# Octomap OcTree ...") and then
+/// "# written by occ_improve" (a comment every OctoMap reader skips). What occ_to_octomap checks before it
+/// replaces a file with -o: a tree from octomap_server or elsewhere is replaced only with -overwrite.
 bool is_octomap_file(const std::string& path);
 
 /// The extension check of write_octree alone, for tools to fail before any work.

@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace occ_improve {
 
@@ -19,6 +20,10 @@ namespace occ_improve {
 /// input, -load, -intrinsics_file, -oni, -pcd_dir, -depth_dir or -simulate, or a file inside one of those
 /// that is a folder.
 void require_not_an_input(const CommandLine& command_line, const std::string& path, const std::string& flag);
+
+/// Every path the run reads from, as given: the positional inputs, -load, -intrinsics_file, -oni,
+/// -pcd_dir, -depth_dir and -simulate.
+std::vector<std::string> run_inputs(const CommandLine& command_line);
 
 /// Refuses (InvalidParameter naming both flags) two outputs of one run that name the same file: the second
 /// would silently replace the first.
@@ -32,7 +37,7 @@ std::unique_ptr<OutputFile> open_output_file(const CommandLine& command_line, co
                                              const std::string& kind);
 
 /// Where -save writes the grid. Nothing when -save was not given; a file staged with the -o folder when
-/// -save names a file directly inside it; otherwise an OutputFile beside its target. Everything is checked
+/// -save names a NAME.occmap directly inside it (anything else inside it is refused); otherwise an OutputFile beside its target. Everything is checked
 /// at construction, before any work.
 class MapSaveTarget {
 public:
