@@ -69,8 +69,10 @@ bool no_room_left(const fs::path& path) {
 
 std::string describe_write_failure(const std::string& path) {
   const int error = errno;
-  if (error == ENOSPC || no_room_left(path)) return "no space left on device";
-  return error != 0 ? std::generic_category().message(error) : std::string("write failed");
+  if (error == ENOSPC) return "no space left on device";
+  if (error != 0) return std::generic_category().message(error);
+  // No errno (a stream that failed without saying why): a full file system is the usual cause.
+  return no_room_left(path) ? "no space left on device" : "write failed";
 }
 
 void remove_stale_leftovers(const std::string& folder, const std::string& prefix) {

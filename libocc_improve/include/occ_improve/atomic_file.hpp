@@ -23,9 +23,9 @@ void write_file_atomically(const std::string& path, const std::string& what,
 /// write_file_atomically of a text held in memory (CSV tables, plan summaries).
 void write_text_file(const std::string& path, const std::string& what, const std::string& text);
 
-/// Why writing `path` failed, for an error message: "no space left on device" when errno says so or the
-/// file system of `path` has no room left, else strerror(errno) ("permission denied", ...). Call it right
-/// after the failed operation, before errno changes.
+/// Why writing `path` failed, for an error message: "no space left on device" when errno says so,
+/// strerror(errno) for another errno ("permission denied", ...), and without errno "no space left on
+/// device" when the file system of `path` has no room left. Call it right after the failed operation.
 std::string describe_write_failure(const std::string& path);
 
 /// Removes the entries of `folder` named "<prefix><pid>..." that a writer killed mid-write left behind:
