@@ -58,6 +58,15 @@ bool is_stale(const fs::path& leftover, long pid) {
   return modified_since_epoch + std::chrono::seconds(1) < *started;
 }
 
+// The PID in a leftover's name "<prefix><pid>...", or nullopt when the name is not one (not ours to judge).
+std::optional<long> leftover_pid(const std::string& name, const std::string& prefix) {
+  if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return std::nullopt;
+  const std::size_t end_of_pid = std::min(name.find_first_not_of("0123456789", prefix.size()), name.size());
+  const std::size_t length = end_of_pid - prefix.size();
+  if (length == 0 || length > 9) return std::nullopt;
+  return std::stol(name.substr(prefix.size(), length));
+}
+
 // Whether the file system holding `path` (or its folder, for a file not yet there) has no block left.
 bool no_room_left(const fs::path& path) {
   struct statvfs info {};
@@ -78,14 +87,9 @@ std::string describe_write_failure(const std::string& path) {
 void remove_stale_leftovers(const std::string& folder, const std::string& prefix) {
   std::error_code ec;
   for (fs::directory_iterator it(folder.empty() ? "." : folder, ec), end; it != end && !ec; it.increment(ec)) {
-    const std::string name = it->path().filename().string();
-    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-    const std::size_t end_of_pid = std::min(name.find_first_not_of("0123456789", prefix.size()), name.size());
-    const std::size_t length = end_of_pid - prefix.size();
-    if (length == 0 || length > 9) continue;  // not named by a PID: not ours to judge
-    const long pid = std::stol(name.substr(prefix.size(), length));
+    const auto pid = leftover_pid(it->path().filename().string(), prefix);
     std::error_code ignored;
-    if (is_stale(it->path(), pid)) fs::remove_all(it->path(), ignored);
+    if (pid && is_stale(it->path(), *pid)) fs::remove_all(it->path(), ignored);
   }
 }
 
@@ -184,6 +188,17 @@ fs::path staged_name(const fs::path& target) {
 
 }  // namespace
 
+fs::path comparable_path(const std::string& path) {
+  std::error_code ec;
+  const fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
+  return ec ? fs::absolute(path).lexically_normal() : resolved;
+}
+
+bool path_is_within(const std::string& inner, const std::string& outer) {
+  const fs::path relative = comparable_path(inner).lexically_relative(comparable_path(outer));
+  return !relative.empty() && *relative.begin() != "..";
+}
+
 void write_text_file(const std::string& path, const std::string& what, const std::string& text) {
   write_file_atomically(path, what, [&](std::ostream& out) {
     return static_cast<bool>(out.write(text.data(), static_cast<std::streamsize>(text.size())));
@@ -247,11 +262,8 @@ OutputFolder::OutputFolder(const std::string& target, const std::string& tool, b
 
 void OutputFolder::require_no_input_inside(const std::vector<std::string>& inputs) const {
   if (!target_is_own()) return;  // not replaced as a whole: refused, or written into file by file
-  std::error_code ec;
-  const fs::path folder = fs::weakly_canonical(target_, ec);
   for (const std::string& input : inputs) {
-    const fs::path relative = fs::weakly_canonical(fs::absolute(input), ec).lexically_relative(folder);
-    if (!relative.empty() && *relative.begin() != "..")
+    if (path_is_within(input, target_.string()))
       throw IoError("output folder '" + shown_ + "' holds the input '" + input +
                     "', which replacing the folder would delete: choose another -o");
   }
@@ -267,14 +279,11 @@ void OutputFolder::recover_interrupted_commit() {
   fs::file_time_type newest_time{};
   for (fs::directory_iterator it(target_.parent_path(), ec), end; it != end && !ec; it.increment(ec)) {
     const std::string name = it->path().filename().string();
-    if (name.size() <= prefix.size() + 4 || name.compare(0, prefix.size(), prefix) != 0 ||
-        name.compare(name.size() - 4, 4, ".old") != 0)
-      continue;
-    const std::string pid = name.substr(prefix.size(), name.size() - 4 - prefix.size());
-    if (pid.empty() || pid.size() > 9 || pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    const auto pid = leftover_pid(name, prefix);
+    if (!pid || name != prefix + std::to_string(*pid) + ".old") continue;
     std::error_code time_error;
     const fs::file_time_type time = fs::last_write_time(it->path(), time_error);
-    if (time_error || !is_stale(it->path(), std::stol(pid)) || (!newest.empty() && time <= newest_time)) continue;
+    if (time_error || !is_stale(it->path(), *pid) || (!newest.empty() && time <= newest_time)) continue;
     newest = it->path();
     newest_time = time;
   }

@@ -20,6 +20,14 @@ namespace occ_improve {
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write);
 
+/// `path` absolute and normal, with the symbolic links of its existing part resolved: two names of one
+/// file compare equal.
+std::filesystem::path comparable_path(const std::string& path);
+
+/// Whether `inner` is `outer` or lies below it, both made absolute with the symbolic links of their
+/// existing parts resolved (an output against the run's inputs, an input against an output folder).
+bool path_is_within(const std::string& inner, const std::string& outer);
+
 /// write_file_atomically of a text held in memory (CSV tables, plan summaries).
 void write_text_file(const std::string& path, const std::string& what, const std::string& text);
 

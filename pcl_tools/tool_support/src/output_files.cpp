@@ -19,30 +19,13 @@ std::vector<std::string> run_inputs(const CommandLine& c) {
   return inputs;
 }
 
-namespace {
-
-// `path` absolute, normal, with the symbolic links of its existing part resolved.
-fs::path comparable(const std::string& path) {
-  std::error_code ec;
-  fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
-  return ec ? fs::absolute(path).lexically_normal() : resolved;
-}
-
-// Whether `inner` is `outer` or lies below it.
-bool is_within(const fs::path& inner, const fs::path& outer) {
-  const fs::path relative = inner.lexically_relative(outer);
-  return !relative.empty() && *relative.begin() != "..";
-}
-
-}  // namespace
-
 void require_not_an_input(const CommandLine& command_line, const std::string& path, const std::string& flag) {
-  const fs::path target = comparable(path);
+  const fs::path target = comparable_path(path);
   for (const std::string& input : run_inputs(command_line)) {
     std::error_code ec;
-    const fs::path source = comparable(input);
+    const fs::path source = comparable_path(input);
     const bool folder = fs::is_directory(source, ec);
-    if (target == source || fs::equivalent(target, source, ec) || (folder && is_within(target, source)))
+    if (target == source || fs::equivalent(target, source, ec) || (folder && path_is_within(path, input)))
       throw InvalidParameter(flag + " '" + path + "' would overwrite " + (folder ? "a file in the input folder '" : "the input '") +
                              input + "': choose an output outside the inputs");
   }
@@ -50,7 +33,7 @@ void require_not_an_input(const CommandLine& command_line, const std::string& pa
 
 void require_distinct_outputs(const std::string& path_a, const std::string& flag_a, const std::string& path_b,
                               const std::string& flag_b) {
-  if (comparable(path_a) == comparable(path_b))
+  if (comparable_path(path_a) == comparable_path(path_b))
     throw InvalidParameter(flag_a + " '" + path_a + "' and " + flag_b + " '" + path_b +
                            "' name the same file: give each output its own name");
 }
@@ -67,11 +50,12 @@ std::unique_ptr<OutputFile> open_output_file(const CommandLine& command_line, co
 MapSaveTarget::MapSaveTarget(const CommandLine& command_line, OutputFolder* folder)
     : shown_(command_line.text("-save").value_or("")) {
   if (shown_.empty()) return;
-  const fs::path target = comparable(shown_);
-  if (folder && is_within(target, comparable(folder->resolved().string()))) {
+  const std::string folder_path = folder ? folder->resolved().string() : std::string();
+  if (folder && path_is_within(shown_, folder_path)) {
     // Written with the folder's files and listed in its marker: directly in it, and named so that it can
     // replace none of the tool's outputs (nor the marker).
-    if (target.parent_path() != comparable(folder->resolved().string()) || target.extension() != ".occmap")
+    const fs::path target = comparable_path(shown_);
+    if (target.parent_path() != comparable_path(folder_path) || target.extension() != ".occmap")
       throw InvalidParameter("-save '" + shown_ + "' inside the -o folder must be a NAME.occmap directly in it");
     require_not_an_input(command_line, shown_, "-save");
     folder_ = folder;
