@@ -24,6 +24,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <unistd.h>
 
 namespace occ_improve {
 namespace {
@@ -151,17 +152,27 @@ void expect_view_shows_written_map(const fs::path& screenshot, const fs::path& o
               shot.width, shot.height, mad, flipped, depth, differ, compared, boxes.size());
 }
 
+constexpr const char* kNoXvfb =
+    "xvfb-run, Xvfb or xauth not found: install xvfb and xauth (scripts/install-deps.sh) to run the headless view test";
+
 class LiveView : public test::TempFolderTest {
 protected:
   void SetUp() override {
     TempFolderTest::SetUp();
     if (!OCC_IMPROVE_VIEW_BUILT) GTEST_SKIP() << "this build has no -view (VTK or pcl_visualization not found)";
   }
-  static bool have_xvfb() { return std::system("command -v xvfb-run > /dev/null 2>&1") == 0; }
-  // The tool under a fresh virtual X server (a 24-bit screen, as a desktop has).
+  // xvfb-run needs Xvfb and xauth besides itself.
+  static bool have_xvfb() {
+    return std::system("command -v xvfb-run && command -v Xvfb && command -v xauth > /dev/null 2>&1") == 0;
+  }
+  // A fresh virtual X server (a 24-bit screen, as a desktop has). -a takes the first free server number
+  // from -n on; tests running in parallel start from different numbers, since two that pick the same
+  // one at once fail to start.
+  static std::string xvfb_run() {
+    return "xvfb-run -a -n " + std::to_string(100 + ::getpid() % 800) + " -s '-screen 0 1280x1024x24' ";
+  }
   test::ToolRun run_headless(const std::string& arguments) {
-    return test::run_tool_command("cd " + folder_.string() + " && xvfb-run -a -s '-screen 0 1280x1024x24' " +
-                                      OCC_IMPROVE_LIVE_EXECUTABLE,
+    return test::run_tool_command("cd " + folder_.string() + " && " + xvfb_run() + OCC_IMPROVE_LIVE_EXECUTABLE,
                                   arguments, folder_ / "run.log");
   }
   test::ToolRun run_without_display(const std::string& arguments) {
@@ -188,7 +199,7 @@ protected:
 };
 
 TEST_F(LiveView, ScreenshotOfTheSampleShowsTheWrittenImprovementMapAndRegions) {
-  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not found: install xvfb and xauth (scripts/install-deps.sh) to run the headless view test";
+  if (!have_xvfb()) GTEST_SKIP() << kNoXvfb;
   write_sample_frames(3);
   const test::ToolRun r = run_headless("-pcd_dir frames -view -view_screenshot shot.png -o out");
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -207,7 +218,7 @@ TEST_F(LiveView, ScreenshotOfTheSampleShowsTheWrittenImprovementMapAndRegions) {
 
 TEST_F(LiveView, ScreenshotOfRealKinectFramesShowsTheWrittenImprovementMap) {
   OCC_REQUIRE_DATA(frames, "sequences/7scenes_redkitchen/frames");
-  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not found: install xvfb and xauth (scripts/install-deps.sh) to run the headless view test";
+  if (!have_xvfb()) GTEST_SKIP() << kNoXvfb;
   const test::ToolRun r = run_headless("-depth_dir " + frames + " -max_frames 3 -view -view_screenshot shot.png -o out");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   expect_view_shows_written_map(folder_ / "shot.png", folder_ / "out");
@@ -215,9 +226,9 @@ TEST_F(LiveView, ScreenshotOfRealKinectFramesShowsTheWrittenImprovementMap) {
 
 // Ctrl-C while the window is up: the run stops within a second, as without -view, and writes the map so far.
 TEST_F(LiveView, CtrlCEndsAViewedStreamWithinASecondAndWritesTheMaps) {
-  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not found: install xvfb and xauth (scripts/install-deps.sh) to run the headless view test";
+  if (!have_xvfb()) GTEST_SKIP() << kNoXvfb;
   write_sample_frames(20);
-  const std::string command = "cd " + folder_.string() + " && (xvfb-run -a -s '-screen 0 1280x1024x24' sh -c '" +
+  const std::string command = "cd " + folder_.string() + " && (" + xvfb_run() + "sh -c '" +
                               OCC_IMPROVE_LIVE_EXECUTABLE +
                               " -pcd_dir frames -fps 2 -view -o out > tool.log 2>&1 & echo $! > pid; wait $!; "
                               "echo $? > rc.tmp; mv rc.tmp rc') > /dev/null 2>&1 &";
@@ -249,9 +260,9 @@ TEST_F(LiveView, CtrlCEndsAViewedStreamWithinASecondAndWritesTheMaps) {
 // Closing the window (its close button: WM_DELETE_WINDOW) ends the run as the end of the source does:
 // the maps written, exit code 0.
 TEST_F(LiveView, ClosingTheWindowEndsTheRunCleanly) {
-  if (!have_xvfb()) GTEST_SKIP() << "xvfb-run not found: install xvfb and xauth (scripts/install-deps.sh) to run the headless view test";
+  if (!have_xvfb()) GTEST_SKIP() << kNoXvfb;
   write_sample_frames(20);
-  const std::string command = "cd " + folder_.string() + " && xvfb-run -a -s '-screen 0 1280x1024x24' sh -c '" +
+  const std::string command = "cd " + folder_.string() + " && " + xvfb_run() + "sh -c '" +
                               OCC_IMPROVE_LIVE_EXECUTABLE + " -pcd_dir frames -fps 2 -view -o out > tool.log 2>&1 & " +
                               X11_CLOSE_WINDOW_EXECUTABLE + " occ_improve_live 30 > closer.log 2>&1; wait $!; echo $? > rc'";
   ASSERT_EQ(std::system(command.c_str()), 0);
