@@ -6,7 +6,9 @@ set -euo pipefail
 packages=(cmake g++ make pkg-config libeigen3-dev liboctomap-dev libpcl-dev libopenni2-dev
           libgtest-dev libbenchmark-dev zlib1g-dev libpng-dev libtiff-dev
           # Python bindings (python/): the module, its tests, the sample, and the wheel check's venv.
-          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib python3-venv)
+          python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib python3-venv
+          # occ_improve_live -view's headless test: a virtual X server (xvfb-run needs xauth).
+          xvfb xauth)
 # `install-deps.sh fuzz` (make fuzz) also installs clang, libFuzzer and the sanitizer runtimes it links.
 if [ "${1:-}" = "fuzz" ]; then
   packages+=(clang libfuzzer-14-dev libclang-rt-14-dev)

@@ -9,6 +9,7 @@
 #include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
+#include "occ_improve/tools/live_view.hpp"
 #include "occ_improve/tools/tool_frame_grabber.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planner.hpp"
@@ -41,11 +42,12 @@ const ToolFlags kFlags{
     "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
     "-simulate or positional inputs (below). With poses, every frame is moved into the FIRST frame's sensor\n"
     "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
-    "shot against rays asked). Ctrl-C stops cleanly and still writes the maps.\n",
+    "shot against rays asked). -view shows the improvement map and the top regions as frames arrive.\n"
+    "Ctrl-C stops cleanly and still writes the maps.\n",
     joined({output_folder_flag_names(),
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
              "-stop_on_signal", "-simulate", "-budget", "-max_shots", "-load", "-save", "-threads", "-k",
-             "-min_improvement"},
+             "-min_improvement", "-view", "-view_screenshot"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
     {{"-o", "occ_improve_live_out"}},
     {},
@@ -230,17 +232,56 @@ std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOpti
 
 constexpr const char* kStopSignalReason = "stop signal";
 
+// ---- -view: the window is opened (its display checked) before any work, and refreshed by follow_stream.
+
+std::unique_ptr<LiveView> open_view(const CommandLine& command_line) {
+  if (!command_line.has("-view")) return nullptr;
+  if (command_line.has("-simulate")) throw InvalidParameter("-view shows a stream of frames: not with -simulate");
+  return std::make_unique<LiveView>("occ_improve_live");
+}
+
+// -view_screenshot FILE: an output file as -save is (checked now, written after the maps), never inside the
+// -o folder, which a run replaces as a whole.
+std::unique_ptr<OutputFile> open_screenshot(const CommandLine& command_line, const OutputFolder& out,
+                                            const MapSaveTarget& save) {
+  if (!command_line.has("-view_screenshot")) return nullptr;
+  const std::string path = *command_line.text("-view_screenshot");
+  if (!command_line.has("-view")) throw InvalidParameter("-view_screenshot " + path + " needs -view");
+  if (path_is_within(path, out.resolved().string()))
+    throw InvalidParameter("-view_screenshot '" + path + "' is inside the -o folder '" + out.path() +
+                           "': write it beside the folder");
+  if (save.requested()) require_distinct_outputs(save.path(), "-save", path, "-view_screenshot");
+  return open_output_file(command_line, "-view_screenshot", is_live_view_screenshot, "a screenshot");
+}
+
+// The final map in the window (the maps just written), then its pixels into the screenshot file.
+void finish_view(LiveView& view, OutputFile* screenshot, const Mapper& mapper, const std::optional<FrameResult>& last,
+                 std::uint64_t processed) {
+  view.post(mapper.improvement(), last ? last->top_regions : std::vector<Region>{}, processed);
+  if (!screenshot) return;
+  if (!view.save_screenshot(screenshot->staged())) {
+    pcl::console::print_warn("The window was closed: no screenshot written to %s\n", screenshot->path().c_str());
+    return;
+  }
+  screenshot->commit();
+  pcl::console::print_info("Wrote the view to %s\n", screenshot->path().c_str());
+}
+
 // When the run ends, besides the source finishing.
 struct StreamLimits {
   bool stop_on_signal;
   int max_frames;
 };
 
-// Polls the running pipeline, showing its counters, until the source is done or a limit is reached.
+// Polls the running pipeline, showing its counters (and keeping the -view window live), until the source
+// is done or a limit is reached.
 const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const StreamLimits& limits,
-                          const std::atomic<bool>& stop_signalled, ProgressLine& progress) {
+                          const std::atomic<bool>& stop_signalled, ProgressLine& progress, LiveView* view) {
   for (;;) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    if (!view)
+      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    else if (!view->spin_for(std::chrono::milliseconds(200)))
+      return "view window closed";
     const PipelineStatistics s = pipeline.statistics();
     char line[200];
     std::snprintf(line, sizeof line, "frames %llu, processed %llu, dropped %llu, rejected %llu, %.1f frames/s",
@@ -314,6 +355,8 @@ int run(const CommandLine& command_line) {
     throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, input files or -simulate); see -h");
   OutputFolder out = open_output_folder(command_line);
   MapSaveTarget save(command_line, &out);
+  const std::unique_ptr<OutputFile> screenshot = open_screenshot(command_line, out, save);
+  const std::unique_ptr<LiveView> view = open_view(command_line);
   if (simulate) return run_simulation(command_line, options, region_options, out, save);
 
   StreamSource source = device || !oni.empty() ? open_device(options, device, oni)
@@ -323,6 +366,7 @@ int run(const CommandLine& command_line) {
   PipelineOptions pipeline_options;
   pipeline_options.insertion.threads = *command_line.integer("-threads");
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
+  pipeline_options.regions = region_options;  // the regions shown by -view are regions.csv's
   pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
   Pipeline pipeline(make_mapper(load_path, options, source.preset), with_camera(pipeline_options, source.preset));
 
@@ -338,7 +382,9 @@ int run(const CommandLine& command_line) {
       if (r.stop.stop && !fired) fired = r;
     }
     if (r.stop.stop) stop_signalled = true;
-    if (save_every > 0 && ++frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
+    ++frames_seen;
+    if (view) view->post(pipeline.mapper().improvement(), r.top_regions, frames_seen);
+    if (save_every > 0 && frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
       write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
       ++maps_written;
     }
@@ -358,7 +404,7 @@ int run(const CommandLine& command_line) {
                            source.preset.name.c_str(), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_max_m);
   pipeline.start();
   const char* stop_reason =
-      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signalled, progress);
+      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signalled, progress, view.get());
   pipeline.stop();
   progress.finish();
   const int signal = take_stop_request();  // the maps so far are still written below
@@ -368,6 +414,7 @@ int run(const CommandLine& command_line) {
                        std::to_string(s.grabber_errors) + " unreadable)");
   const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
   if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
+  if (view) finish_view(*view, screenshot.get(), pipeline.mapper(), last, pipeline.statistics().processed);
   print_stream_summary(pipeline.statistics(), stop_reason, fired, last);
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());

@@ -188,6 +188,11 @@ std::vector<FlagSpec> stream_flags() {
                  "(organized PCD or depth image): plan a shot, acquire its rays, insert, learn which rays\n"
                  "never return, until the plan says stop. Pixel-native presets only", "", "none"),
       bounded(value_flag("-max_shots", K::integer, "N", kStream, "-simulate: stop after N shots at the latest", "1000"), 1),
+      switch_flag("-view", kStream,
+                  "show the improvement map and the top regions' boxes in a window as frames arrive (PCL's\n"
+                  "ImageViewer; needs an X display, headless: xvfb-run -a). Closing the window ends the run"),
+      value_flag("-view_screenshot", K::text, "FILE", kStream,
+                 "-view: at the end, write the window's pixels to FILE (PNG), beside the -o folder", "", "none"),
   };
 }
 
