@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace occ_improve {
@@ -50,48 +51,114 @@ PredictedDepth nearest_fill(const std::vector<float>& sparse, int w, int h, int 
   return out;
 }
 
+/// Chessboard distance to the nearest sample and that sample's depth, for every column, by the two-pass
+/// distance transform (exact for the chessboard metric, a fraction of the breadth-first search's time); of
+/// equidistant samples the first found by the passes wins. Beyond `radius`: distance -1, depth 0.
+PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h, int radius) {
+  constexpr std::int32_t kFar = std::numeric_limits<std::int32_t>::max() / 2;  // + 1 never overflows
+  const std::size_t n = sparse.size();
+  PredictedDepth out{w, h, std::vector<float>(n, 0.0f), std::vector<std::int32_t>(n, kFar)};
+  for (std::size_t c = 0; c < n; ++c)
+    if (sparse[c] > 0.0f) {
+      out.depth_m[c] = sparse[c];
+      out.distance[c] = 0;
+    }
+  // Forward pass: left, up-left, up, up-right; backward pass: the mirror. Row pointers, no bounds checks
+  // inside a row (the passes run over every pixel: this is most of their time).
+  std::int32_t* d = out.distance.data();
+  float* z = out.depth_m.data();
+  const auto relax = [&](std::size_t c, std::size_t o) {  // branch-free: the comparison is unpredictable
+    const std::int32_t via = d[o] + 1;
+    const bool better = via < d[c];
+    d[c] = better ? via : d[c];
+    z[c] = better ? z[o] : z[c];
+  };
+  const auto W = static_cast<std::size_t>(w);
+  for (int y = 0; y < h; ++y) {
+    throw_if_stop_requested();
+    const std::size_t row = static_cast<std::size_t>(y) * W;
+    for (std::size_t x = 0; x < W; ++x) {
+      const std::size_t c = row + x;
+      if (d[c] == 0) continue;
+      if (x > 0) relax(c, c - 1);
+      if (y == 0) continue;
+      if (x > 0) relax(c, c - W - 1);
+      relax(c, c - W);
+      if (x + 1 < W) relax(c, c - W + 1);
+    }
+  }
+  for (int y = h - 1; y >= 0; --y) {
+    throw_if_stop_requested();
+    const std::size_t row = static_cast<std::size_t>(y) * W;
+    for (std::size_t x = W; x-- > 0;) {
+      const std::size_t c = row + x;
+      if (d[c] == 0) continue;
+      if (x + 1 < W) relax(c, c + 1);
+      if (y == h - 1) continue;
+      if (x + 1 < W) relax(c, c + W + 1);
+      relax(c, c + W);
+      if (x > 0) relax(c, c + W - 1);
+    }
+  }
+  for (std::size_t c = 0; c < n; ++c)
+    if (out.distance[c] > radius) {
+      out.distance[c] = -1;
+      out.depth_m[c] = 0.0f;
+    }
+  return out;
+}
+
 /// Calls f(column, e0, e1, e2) for every pixel inside triangle t or on its edges, e_i >= 0 being twice the
-/// area of the sub-triangle opposite vertex i (barycentric weights x twice the area).
+/// area of the sub-triangle opposite vertex i (barycentric weights x twice the area). The edge functions
+/// step by one addition per pixel.
 template <class F>
 void for_each_pixel(const SampleTriangulation& s, std::size_t t, F&& f) {
   const auto& v = s.triangles[t];
   const int x0 = s.x(v[0]), y0 = s.y(v[0]), x1 = s.x(v[1]), y1 = s.y(v[1]), x2 = s.x(v[2]), y2 = s.y(v[2]);
-  const auto edge = [](int ax, int ay, int bx, int by, int px, int py) {
+  const int xmin = std::min({x0, x1, x2}), xmax = std::max({x0, x1, x2});
+  const int ymin = std::min({y0, y1, y2}), ymax = std::max({y0, y1, y2});
+  // e(a, b, p) = (bx - ax)(py - ay) - (by - ay)(px - ax): + (bx - ax) per row, - (by - ay) per column.
+  const auto at = [](int ax, int ay, int bx, int by, int px, int py) {
     return static_cast<std::int64_t>(bx - ax) * (py - ay) - static_cast<std::int64_t>(by - ay) * (px - ax);
   };
-  for (int y = std::min({y0, y1, y2}); y <= std::max({y0, y1, y2}); ++y)
-    for (int x = std::min({x0, x1, x2}); x <= std::max({x0, x1, x2}); ++x) {
-      const std::int64_t e0 = edge(x1, y1, x2, y2, x, y), e1 = edge(x2, y2, x0, y0, x, y), e2 = edge(x0, y0, x1, y1, x, y);
-      if (e0 >= 0 && e1 >= 0 && e2 >= 0)
-        f(static_cast<std::size_t>(y) * static_cast<std::size_t>(s.width) + static_cast<std::size_t>(x), e0, e1, e2);
+  std::int64_t r0 = at(x1, y1, x2, y2, xmin, ymin), r1 = at(x2, y2, x0, y0, xmin, ymin), r2 = at(x0, y0, x1, y1, xmin, ymin);
+  const std::int64_t sx0 = -(y2 - y1), sx1 = -(y0 - y2), sx2 = -(y1 - y0);
+  const std::int64_t sy0 = x2 - x1, sy1 = x0 - x2, sy2 = x1 - x0;
+  for (int y = ymin; y <= ymax; ++y, r0 += sy0, r1 += sy1, r2 += sy2) {
+    std::int64_t e0 = r0, e1 = r1, e2 = r2;
+    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(s.width);
+    bool entered = false;
+    for (int x = xmin; x <= xmax; ++x, e0 += sx0, e1 += sx1, e2 += sx2) {
+      if ((e0 | e1 | e2) >= 0) {  // all three non-negative
+        f(row + static_cast<std::size_t>(x), e0, e1, e2);
+        entered = true;
+      } else if (entered) {
+        break;  // a triangle's row is one run of pixels
+      }
     }
+  }
 }
 
-/// Whether column c may take a value from a triangle: predicted by the nearest rule, not a sample, not
-/// yet written by another triangle.
-bool open_column(const PredictedDepth& out, const std::vector<std::uint8_t>& written, std::size_t c) {
-  return out.distance[c] > 0 && !written[c];
-}
-
-/// Interpolable triangles: barycentric in inverse depth.
-void interpolate(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& written) {
+/// Interpolable triangles: barycentric in inverse depth. `open`: columns still to be written.
+void interpolate(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& open) {
   const auto& v = s.triangles[t];
-  double w[3];
-  for (int i = 0; i < 3; ++i) w[i] = 1.0 / s.vertex_depth_m[static_cast<std::size_t>(v[static_cast<std::size_t>(i)])];
+  // Barycentric weights e_i / (2 area): pre-scale the vertices' inverse depths once per triangle.
+  const double twice_area = 2.0 * s.area_px2(t);
+  float w[3];
+  for (int i = 0; i < 3; ++i)
+    w[i] = static_cast<float>(1.0 / (twice_area * s.vertex_depth_m[static_cast<std::size_t>(v[static_cast<std::size_t>(i)])]));
   for_each_pixel(s, t, [&](std::size_t c, std::int64_t e0, std::int64_t e1, std::int64_t e2) {
-    if (!open_column(out, written, c)) return;
-    const double sum = static_cast<double>(e0 + e1 + e2);  // twice the area
-    out.depth_m[c] = static_cast<float>(sum / (static_cast<double>(e0) * w[0] + static_cast<double>(e1) * w[1] +
-                                               static_cast<double>(e2) * w[2]));
-    written[c] = 1;
+    if (!open[c]) return;
+    out.depth_m[c] = 1.0f / (static_cast<float>(e0) * w[0] + static_cast<float>(e1) * w[1] + static_cast<float>(e2) * w[2]);
+    open[c] = 0;
   });
 }
 
 /// Triangles across a discontinuity: the nearest vertex, the nearer surface on a tie.
-void nearest_vertex(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& written) {
+void nearest_vertex(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& open) {
   const auto& v = s.triangles[t];
   for_each_pixel(s, t, [&](std::size_t c, std::int64_t, std::int64_t, std::int64_t) {
-    if (!open_column(out, written, c)) return;
+    if (!open[c]) return;
     const int x = static_cast<int>(c % static_cast<std::size_t>(s.width)), y = static_cast<int>(c / static_cast<std::size_t>(s.width));
     long best_d2 = -1;
     float best_z = 0.0f;
@@ -104,26 +171,27 @@ void nearest_vertex(const SampleTriangulation& s, std::size_t t, PredictedDepth&
       }
     }
     out.depth_m[c] = best_z;
-    written[c] = 1;
+    open[c] = 0;
   });
 }
 
-/// The linear rule (header) on top of the nearest rule's result.
+/// The linear rule (header) on top of the distance transform's nearest samples.
 void linear_fill(const std::vector<float>& sparse, const SensorModel& model, const DepthPredictionParams& params,
                  PredictedDepth& out) {
   TriangulationParams tp;
   tp.discontinuity_sigmas = params.discontinuity_sigmas;
   tp.max_edge_columns = std::max(1, 2 * params.radius_columns);
   const SampleTriangulation s = triangulate_samples(sparse, out.width, out.height, model, tp);
-  std::vector<std::uint8_t> written(sparse.size(), 0);
+  std::vector<std::uint8_t> open(sparse.size());
+  for (std::size_t c = 0; c < open.size(); ++c) open[c] = out.distance[c] > 0;  // predicted, not a sample
   for (std::size_t t = 0; t < s.triangles.size(); ++t) {
     poll_stop(t, 1024);
-    if (s.interpolable[t]) interpolate(s, t, out, written);
+    if (s.interpolable[t]) interpolate(s, t, out, open);
   }
   // Shared edges: an interpolable neighbour wrote them first, with the values of the two continuous ends.
   for (std::size_t t = 0; t < s.triangles.size(); ++t) {
     poll_stop(t, 1024);
-    if (!s.interpolable[t] && s.longest_edge_columns(t) <= tp.max_edge_columns) nearest_vertex(s, t, out, written);
+    if (!s.interpolable[t] && s.longest_edge_columns(t) <= tp.max_edge_columns) nearest_vertex(s, t, out, open);
   }
 }
 
@@ -148,8 +216,9 @@ PredictedDepth predict_dense_depth(const std::vector<float>& sparse_depth_m, int
                                    const SensorModel& model, const DepthPredictionParams& params) {
   params.validate();
   check_sparse_depth_image(sparse_depth_m, width, height);
-  PredictedDepth out = nearest_fill(sparse_depth_m, width, height, params.radius_columns);
-  if (params.rule == DepthPredictionRule::linear) linear_fill(sparse_depth_m, model, params, out);
+  if (params.rule == DepthPredictionRule::nearest) return nearest_fill(sparse_depth_m, width, height, params.radius_columns);
+  PredictedDepth out = distance_transform(sparse_depth_m, width, height, params.radius_columns);
+  linear_fill(sparse_depth_m, model, params, out);
   return out;
 }
 

@@ -66,6 +66,8 @@ class Delaunay {
 public:
   Delaunay(std::vector<Point> points, bool small) : points_(std::move(points)), small_(small) {
     const auto s = static_cast<std::int32_t>(points_.size());
+    tris_.reserve(2 * points_.size());  // 2 n + 1 triangles in the end
+    mark_.reserve(2 * points_.size());
     tris_.push_back({{s - 3, s - 2, s - 1}, {-1, -1, -1}});
     mark_.push_back(-1);
     first_of_.assign(points_.size(), -1);
@@ -242,71 +244,57 @@ void flag_interpolable(SampleTriangulation& s, const SensorModel& model, const T
   }
 }
 
-/// Delaunay neighbours of every vertex, as offsets into one array (CSR), sorted and without repeats.
-void neighbours(const SampleTriangulation& s, std::vector<std::size_t>& offset, std::vector<std::int32_t>& list) {
-  const std::size_t n = s.vertex_count();
-  std::vector<std::size_t> count(n + 1, 0);
-  for (const auto& t : s.triangles)
-    for (const std::int32_t v : t) count[static_cast<std::size_t>(v) + 1] += 2;
-  for (std::size_t v = 0; v < n; ++v) count[v + 1] += count[v];
-  list.assign(count[n], 0);
-  std::vector<std::size_t> fill(count.begin(), count.end() - 1);
-  for (const auto& t : s.triangles)
-    for (int i = 0; i < 3; ++i) {
-      const auto v = static_cast<std::size_t>(t[static_cast<std::size_t>(i)]);
-      list[fill[v]++] = t[static_cast<std::size_t>((i + 1) % 3)];
-      list[fill[v]++] = t[static_cast<std::size_t>((i + 2) % 3)];
-    }
-  offset.assign(n + 1, 0);
-  std::size_t out = 0;
-  for (std::size_t v = 0; v < n; ++v) {
-    const auto first = list.begin() + static_cast<std::ptrdiff_t>(count[v]);
-    std::sort(first, list.begin() + static_cast<std::ptrdiff_t>(count[v + 1]));
-    const auto last = std::unique(first, list.begin() + static_cast<std::ptrdiff_t>(count[v + 1]));
-    offset[v] = out;
-    for (auto it = first; it != last; ++it) list[out++] = *it;
+/// Normal equations of the least-squares plane w = a + b dx + c dy (w = 1/z, (dx, dy) the offset from the
+/// vertex, so that a is the fit at the vertex) through a vertex's Delaunay neighbours, gathered triangle by
+/// triangle: a neighbour counts once per triangle the two share, i.e. twice for every neighbour of an
+/// interior vertex (the same fit as once each) and once for the two hull neighbours of a hull vertex.
+struct PlaneSums {
+  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
+  void add(double dx, double dy, double w) {
+    m00 += 1;
+    m01 += dx;
+    m02 += dy;
+    m11 += dx * dx;
+    m12 += dx * dy;
+    m22 += dy * dy;
+    r0 += w;
+    r1 += dx * w;
+    r2 += dy * w;
   }
-  offset[n] = out;
-  list.resize(out);
-}
+  /// The fit at the vertex (Cramer's rule for a); false when the neighbours are collinear (or fewer than
+  /// 3): the sums of integer offsets are exact, so the determinant is then exactly 0 and otherwise >= 1.
+  bool intercept(double& a) const {
+    const double c0 = m11 * m22 - m12 * m12, c1 = m01 * m22 - m12 * m02, c2 = m01 * m12 - m11 * m02;
+    const double det = m00 * c0 - m01 * c1 + m02 * c2;
+    if (det < 0.5) return false;
+    a = (r0 * c0 - m01 * (r1 * m22 - m12 * r2) + m02 * (r1 * m12 - m11 * r2)) / det;
+    return true;
+  }
+};
 
-/// Leave-one-out residual of vertex v from the least-squares plane (in inverse depth) of its neighbours.
-float plane_residual_sigmas(const SampleTriangulation& s, std::int32_t v, const std::int32_t* first,
-                            const std::int32_t* last, const SensorModel& model) {
-  // Normal equations of w = a + b dx + c dy about the vertex (a is the fit at the vertex). Sums of integer
-  // offsets are exact, so collinear neighbours give a determinant of exactly 0 and any other >= 1.
-  double m[3][3] = {}, r[3] = {};
-  for (const std::int32_t* j = first; j != last; ++j) {
-    const double row[3] = {1.0, static_cast<double>(s.x(*j) - s.x(v)), static_cast<double>(s.y(*j) - s.y(v))};
-    const double w = 1.0 / s.vertex_depth_m[static_cast<std::size_t>(*j)];
-    for (int a = 0; a < 3; ++a) {
-      r[a] += row[a] * w;
-      for (int b = 0; b < 3; ++b) m[a][b] += row[a] * row[b];
-    }
-  }
-  const auto det3 = [](const double (&k)[3][3]) {
-    return k[0][0] * (k[1][1] * k[2][2] - k[1][2] * k[2][1]) - k[0][1] * (k[1][0] * k[2][2] - k[1][2] * k[2][0]) +
-           k[0][2] * (k[1][0] * k[2][1] - k[1][1] * k[2][0]);
-  };
-  const double det = det3(m);
-  if (last - first < 3 || det < 0.5) return 0.0f;
-  double ma[3][3];
-  for (int a = 0; a < 3; ++a)
-    for (int b = 0; b < 3; ++b) ma[a][b] = b == 0 ? r[a] : m[a][b];
-  const double w_fit = det3(ma) / det;  // Cramer's rule for the intercept
-  const double z = s.vertex_depth_m[static_cast<std::size_t>(v)];
+/// Leave-one-out residual of vertex v (header) from its plane sums.
+float plane_residual_sigmas(const PlaneSums& sums, double z, const SensorModel& model) {
+  double w_fit;
+  if (!sums.intercept(w_fit)) return 0.0f;
   if (w_fit > 0) return static_cast<float>(std::abs(z - 1.0 / w_fit) / model.sigma_depth_at(1.0 / w_fit));
   return static_cast<float>(std::abs(1.0 / z - w_fit) * z * z / model.sigma_depth_at(z));  // plane behind the camera
 }
 
 void measure_non_planarity(SampleTriangulation& s, const SensorModel& model) {
-  std::vector<std::size_t> offset;
-  std::vector<std::int32_t> list;
-  neighbours(s, offset, list);
+  std::vector<PlaneSums> sums(s.vertex_count());
+  std::vector<double> inverse(s.vertex_count());
+  for (std::size_t v = 0; v < inverse.size(); ++v) inverse[v] = 1.0 / s.vertex_depth_m[v];
+  for (const auto& t : s.triangles)
+    for (int i = 0; i < 3; ++i) {
+      const std::int32_t v = t[static_cast<std::size_t>(i)];
+      for (const int k : {1, 2}) {
+        const std::int32_t j = t[static_cast<std::size_t>((i + k) % 3)];
+        sums[static_cast<std::size_t>(v)].add(s.x(j) - s.x(v), s.y(j) - s.y(v), inverse[static_cast<std::size_t>(j)]);
+      }
+    }
   s.residual_sigmas.assign(s.vertex_count(), 0.0f);
   for (std::size_t v = 0; v < s.vertex_count(); ++v)
-    s.residual_sigmas[v] =
-        plane_residual_sigmas(s, static_cast<std::int32_t>(v), list.data() + offset[v], list.data() + offset[v + 1], model);
+    s.residual_sigmas[v] = plane_residual_sigmas(sums[v], s.vertex_depth_m[v], model);
 }
 
 }  // namespace
@@ -359,6 +347,8 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
   for (std::size_t c = 0; c < sparse_depth_m.size(); ++c)
     if (sparse_depth_m[c] > 0.0f) {  // NaN fails the test: no sample
       s.vertex_column.push_back(static_cast<ColumnIndex>(c));
+      s.vertex_x.push_back(static_cast<std::int32_t>(c % static_cast<std::size_t>(width)));
+      s.vertex_y.push_back(static_cast<std::int32_t>(c / static_cast<std::size_t>(width)));
       s.vertex_depth_m.push_back(sparse_depth_m[c]);
     }
   if (s.vertex_count() >= (std::size_t{1} << 22))

@@ -23,7 +23,9 @@
 //  - inside a triangle across a discontinuity (neither test holds) nothing is interpolated: a column
 //    takes the depth of the triangle's nearest vertex (Euclidean, in pixels), and of equidistant vertices
 //    the nearer surface (smaller depth) wins, since a foreground edge hides what lies behind it;
-//  - elsewhere (outside the samples' convex hull, in triangles with a longer edge) the nearest rule.
+//  - elsewhere (outside the samples' convex hull, in triangles with a longer edge) the depth of a nearest
+//    sample in chessboard distance (a two-pass distance transform: of equidistant samples it may pick
+//    another than `nearest` does).
 // Depths are in the surface's own convention (SurfaceMap::depth_m; z for a pinhole binning).
 #include "occ_improve/sample_triangulation.hpp"
 #include "occ_improve/sensor_model.hpp"

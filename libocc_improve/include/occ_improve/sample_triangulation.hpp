@@ -44,7 +44,8 @@ struct TriangulationParams {
 struct SampleTriangulation {
   int width = 0, height = 0;
   std::vector<ColumnIndex> vertex_column;  ///< the sample's column (y x width + x), ascending column order
-  std::vector<float> vertex_depth_m;       ///< its depth
+  std::vector<std::int32_t> vertex_x, vertex_y;  ///< its pixel (column % width, column / width)
+  std::vector<float> vertex_depth_m;             ///< its depth
   std::vector<float> residual_sigmas;      ///< leave-one-out non-planarity (header comment), >= 0
   /// Vertex indices, counter-clockwise in (x, y) with y down the image as the second coordinate (i.e. a
   /// positive cross product (b - a) x (c - a)).
@@ -52,8 +53,8 @@ struct SampleTriangulation {
   std::vector<std::uint8_t> interpolable;  ///< per triangle: depth spread and edge lengths within the params
 
   std::size_t vertex_count() const { return vertex_column.size(); }
-  int x(std::int32_t v) const { return static_cast<int>(vertex_column[static_cast<std::size_t>(v)] % static_cast<ColumnIndex>(width)); }
-  int y(std::int32_t v) const { return static_cast<int>(vertex_column[static_cast<std::size_t>(v)] / static_cast<ColumnIndex>(width)); }
+  int x(std::int32_t v) const { return vertex_x[static_cast<std::size_t>(v)]; }
+  int y(std::int32_t v) const { return vertex_y[static_cast<std::size_t>(v)]; }
   /// Area of triangle t in pixels^2.
   double area_px2(std::size_t t) const;
   /// Longest edge of t in columns (chessboard distance).
