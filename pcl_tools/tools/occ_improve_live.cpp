@@ -42,12 +42,13 @@ const ToolFlags kFlags{
     "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
     "-simulate or positional inputs (below). With poses, every frame is moved into the FIRST frame's sensor\n"
     "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
-    "shot against rays asked). -view shows the improvement map and the top regions as frames arrive.\n"
-    "Ctrl-C stops cleanly and still writes the maps.\n",
+    "shot against rays asked), and with -predicted_depth nearest|linear predicted_depth.png (the map's dense\n"
+    "depth from its samples, 16-bit mm, 0 = none within -radius). -view shows the improvement map and the\n"
+    "top regions as frames arrive. Ctrl-C stops cleanly and still writes the maps.\n",
     joined({output_folder_flag_names(),
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
              "-stop_on_signal", "-simulate", "-budget", "-max_shots", "-load", "-save", "-threads", "-k",
-             "-min_improvement", "-view", "-view_screenshot"},
+             "-min_improvement", "-predicted_depth", "-radius", "-view", "-view_screenshot"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
     {{"-o", "occ_improve_live_out"}},
     {},
@@ -140,14 +141,16 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
     gain.push_back(s.expected_gain);
   }
   if (shots.size() >= 2) write_png(out.file("gain.png"), render_curve(asked, gain));
+  const std::string predicted =
+      write_predicted_depth(out, mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
   const std::vector<std::string> names = write_maps(mapper, out, save, regions, options.top_k);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   std::printf("%zu shots, %zu rays asked (%.2f frames), %zu returned, in %.2f s; stopped: %s\n", shots.size(),
               shots.empty() ? 0 : shots.back().rays_asked_total,
               shots.empty() ? 0.0 : static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),
               returns.total_returned(), seconds, why.c_str());
-  std::printf("wrote %s/: shots.csv%s %s\n", out.path().c_str(), shots.size() >= 2 ? " gain.png" : "",
-              join_names(names).c_str());
+  std::printf("wrote %s/: shots.csv%s%s %s\n", out.path().c_str(), shots.size() >= 2 ? " gain.png" : "",
+              predicted.empty() ? "" : " predicted_depth.png", join_names(names).c_str());
   if (signal) throw Cancelled(signal);
   return 0;
 }
@@ -355,6 +358,8 @@ int run(const CommandLine& command_line) {
     throw InvalidParameter("give exactly one source (-device, -oni, -pcd_dir, -depth_dir, input files or -simulate); see -h");
   OutputFolder out = open_output_folder(command_line);
   MapSaveTarget save(command_line, &out);
+  if (!simulate && *command_line.text("-predicted_depth") != "none")
+    throw InvalidParameter("-predicted_depth is written by -simulate runs only");
   const std::unique_ptr<OutputFile> screenshot = open_screenshot(command_line, out, save);
   const std::unique_ptr<LiveView> view = open_view(command_line);
   if (simulate) return run_simulation(command_line, options, region_options, out, save);

@@ -6,6 +6,7 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planner.hpp"
 #include "occ_improve/render.hpp"
@@ -32,9 +33,11 @@ const ToolFlags kFlags{
     "                         kinect_v1 preset it is aligned with the depth image\n"
     "  OUTDIR/shot_rays.csv   the shot's rays: rank, column, azimuth/elevation bin, improvement,\n"
     "                         return probability, score, surface depth, reacquisition\n"
-    "  OUTDIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n",
+    "  OUTDIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n"
+    "  OUTDIR/predicted_depth.png  with -predicted_depth nearest|linear: the map's dense depth from its\n"
+    "                         samples, 16-bit grey in millimetres (0 = none within -radius)\n",
     joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
-                                         "-stop_gain"},
+                                         "-stop_gain", "-predicted_depth", "-radius"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
     {},
     {},
@@ -140,6 +143,8 @@ int run(const CommandLine& command_line) {
 
   write_mask(out.file("shot_mask.png"), source.mapper->geometry(), shot);
   write_rays(out.file("shot_rays.csv"), *source.mapper, source.returns, shot, request.return_model);
+  const std::string predicted =
+      write_predicted_depth(out, *source.mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
   char summary[512];
   std::snprintf(summary, sizeof summary, "expected_gain %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n",
                 shot.expected_gain, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
@@ -148,9 +153,9 @@ int run(const CommandLine& command_line) {
   plan.close();
   throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
-  std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt\n",
+  std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt%s%s\n",
               source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,
-              out.path().c_str());
+              out.path().c_str(), predicted.empty() ? "" : " ", predicted.c_str());
   return 0;
 }
 

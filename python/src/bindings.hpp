@@ -20,6 +20,7 @@ void bind_mapper(py::module_& m);
 void bind_analysis(py::module_& m);
 void bind_io(py::module_& m);
 void bind_internals(py::module_& m);
+void bind_prediction(py::module_& m);
 
 /// The Python `Mapper`: the C++ Mapper plus a mutex. Calls release the GIL (so a grabber thread keeps
 /// running) and then take the mutex, so two Python threads never modify one Mapper at the same time.

@@ -10,4 +10,5 @@ PYBIND11_MODULE(_core, m) {
   bind_analysis(m);
   bind_io(m);
   bind_internals(m);
+  bind_prediction(m);
 }

@@ -1,14 +1,18 @@
 // occ_plan end to end: the next shot from the sample and from a saved map with its return record, and
 // bad requests giving a one-line error naming the value and a non-zero exit.
+#include "occ_improve/depth_prediction.hpp"
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/mapper.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include "support/tool_run.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
+#include <random>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -85,6 +89,53 @@ TEST_F(OccPlanTool, SavedMapBringsItsReturnRecord) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("3 rays asked, 1 returned"), std::string::npos) << r.output;
   EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 33u);
+}
+
+// -predicted_depth RULE writes the map's dense predicted depth as 16-bit millimetres: read back, every
+// pixel is the library's prediction from the same map (rounded to the millimetre, 0 = none); linear and
+// nearest differ between the 5 % samples.
+TEST_F(OccPlanTool, PredictedDepthIsWrittenInMillimetres) {
+  occ_improve::Mapper mapper(occ_improve::kinect_v1());
+  std::vector<Eigen::Vector3f> points;
+  std::mt19937 rng(4);
+  std::bernoulli_distribution keep(0.05);
+  for (const auto& p : occ_improve::sample::generate_scene().points())
+    if (std::isfinite(p.z()) && keep(rng)) points.push_back(p);
+  mapper.insert(occ_improve::PointSpan::from(points));
+  occ_improve::save_map((dir_ / "map.occmap").string(), mapper.grid(), mapper.model().params());
+  std::vector<double> mean_mm;
+  for (const std::string rule : {"nearest", "linear"}) {
+    const fs::path out = dir_ / rule;
+    const ToolRun r = run("-load " + (dir_ / "map.occmap").string() + " -budget 100 -predicted_depth " + rule +
+                          " -radius 8 -o " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("predicted_depth.png"), std::string::npos) << r.output;
+    occ_improve::DepthPredictionParams params;
+    params.rule = rule == "linear" ? occ_improve::DepthPredictionRule::linear : occ_improve::DepthPredictionRule::nearest;
+    params.radius_columns = 8;
+    const occ_improve::PredictedDepth expected = occ_improve::predict_depth(mapper.surface(), mapper.model(), params);
+    const occ_improve::LoadedFrame read = occ_improve::load_depth_frame(
+        (out / "predicted_depth.png").string(), occ_improve::kinect_v1_intrinsics(), occ_improve::DepthEncoding::millimetres);
+    ASSERT_EQ(read.cloud.width, 640u);
+    ASSERT_EQ(read.cloud.height, 480u);
+    std::size_t predicted = 0, mismatched = 0;
+    double sum_mm = 0;
+    for (std::size_t c = 0; c < expected.depth_m.size(); ++c) {
+      const float z = read.cloud[c].z;
+      const bool has = std::isfinite(z) && z > 0;
+      const double want_mm = expected.distance[c] >= 0 ? std::round(1000.0 * expected.depth_m[c]) : 0.0;
+      if (has != (want_mm > 0) || (has && std::abs(1000.0 * z - want_mm) > 0.01)) ++mismatched;
+      if (has) {
+        ++predicted;
+        sum_mm += 1000.0 * z;
+      }
+    }
+    EXPECT_EQ(mismatched, 0u) << rule;
+    EXPECT_GT(predicted, expected.depth_m.size() / 2) << rule;
+    mean_mm.push_back(sum_mm / static_cast<double>(predicted));
+  }
+  EXPECT_NE(mean_mm[0], mean_mm[1]);
+  EXPECT_EQ(run("-load " + (dir_ / "map.occmap").string() + " -predicted_depth cubic -o " + (dir_ / "bad").string()).exit_code, 1);
 }
 
 TEST_F(OccPlanTool, BadRequestsNameTheValue) {

@@ -50,13 +50,17 @@ struct PngWriter {
 
 // Every libpng call that may fail, in a function that owns no C++ object: an error's longjmp back to the
 // setjmp skips no destructor. Returns false on a libpng error (the message is in the error pointer's state).
-bool run_libpng(png_structp png, png_infop info, EncodeState* state, const Image& image, png_bytep* rows,
+struct Layout {
+  int width, height, bit_depth, colour_type;
+};
+
+bool run_libpng(png_structp png, png_infop info, EncodeState* state, const Layout& layout, png_bytep* rows,
                 int compression_level) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_set_write_fn(png, state, &append_bytes, &flush_nothing);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(image.width), static_cast<png_uint_32>(image.height), 8,
-               image.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
-               PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(layout.width), static_cast<png_uint_32>(layout.height),
+               layout.bit_depth, layout.colour_type, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, compression_level);
   png_write_info(png, info);
   png_write_image(png, rows);
@@ -73,33 +77,59 @@ void require_encodable(const Image& image) {
                        " bytes (need width, height > 0 and 1 or 3 channels)");
 }
 
-}  // namespace
-
-std::vector<std::uint8_t> encode_png(const Image& image, int compression_level) {
-  require_encodable(image);
+/// PNG bytes of rows of `row_bytes` bytes each, laid out as `layout` says.
+std::vector<std::uint8_t> encode_rows(const Layout& layout, const std::uint8_t* pixels, std::size_t row_bytes,
+                                      int compression_level) {
   detail::require_parameter(compression_level >= 0 && compression_level <= 9, "compression_level",
                             compression_level, "in [0, 9]");
   // libpng takes non-const row pointers but only reads them when writing.
-  const std::size_t row_bytes = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels);
-  std::vector<png_bytep> rows(static_cast<std::size_t>(image.height));
-  for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = const_cast<png_bytep>(image.pixels.data() + y * row_bytes);
+  std::vector<png_bytep> rows(static_cast<std::size_t>(layout.height));
+  for (std::size_t y = 0; y < rows.size(); ++y) rows[y] = const_cast<png_bytep>(pixels + y * row_bytes);
 
   EncodeState state;
   PngWriter writer;
   writer.png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &state, &keep_message_and_jump, &ignore_warning);
   writer.info = writer.png ? png_create_info_struct(writer.png) : nullptr;
   if (!writer.png || !writer.info) throw IoError("libpng could not be initialised to encode a PNG");
-  if (!run_libpng(writer.png, writer.info, &state, image, rows.data(), compression_level))
+  if (!run_libpng(writer.png, writer.info, &state, layout, rows.data(), compression_level))
     throw IoError(std::string("libpng failed to encode a PNG: ") + state.message);
   return std::move(state.bytes);
 }
 
-void write_png(const std::string& path, const Image& image) {
-  const std::vector<std::uint8_t> bytes = encode_png(image);
+void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
   write_file_atomically(path, "PNG image", [&](std::ostream& out) {
     return static_cast<bool>(out.write(reinterpret_cast<const char*>(bytes.data()),
                                        static_cast<std::streamsize>(bytes.size())));
   });
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> encode_png(const Image& image, int compression_level) {
+  require_encodable(image);
+  const std::size_t row_bytes = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels);
+  return encode_rows({image.width, image.height, 8, image.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB},
+                     image.pixels.data(), row_bytes, compression_level);
+}
+
+void write_png(const std::string& path, const Image& image) { write_bytes(path, encode_png(image)); }
+
+std::vector<std::uint8_t> encode_png16(int width, int height, const std::vector<std::uint16_t>& grey,
+                                       int compression_level) {
+  if (width <= 0 || height <= 0 || grey.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+    throw InvalidInput("16-bit image of " + std::to_string(width) + " x " + std::to_string(height) + " holds " +
+                       std::to_string(grey.size()) + " values (need width, height > 0)");
+  std::vector<std::uint8_t> big_endian(2 * grey.size());  // PNG stores 16-bit samples most significant first
+  for (std::size_t i = 0; i < grey.size(); ++i) {
+    big_endian[2 * i] = static_cast<std::uint8_t>(grey[i] >> 8);
+    big_endian[2 * i + 1] = static_cast<std::uint8_t>(grey[i] & 0xff);
+  }
+  return encode_rows({width, height, 16, PNG_COLOR_TYPE_GRAY}, big_endian.data(), 2 * static_cast<std::size_t>(width),
+                     compression_level);
+}
+
+void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& grey) {
+  write_bytes(path, encode_png16(width, height, grey));
 }
 
 }  // namespace occ_improve

@@ -206,6 +206,10 @@ std::vector<FlagSpec> plan_and_octomap_flags() {
       bounded(value_flag("-negative_share", K::number, "S", kPlan, "share of a shot re-acquiring negative rays", "0"), 0,
               1, false, true),
       bounded(value_flag("-stop_gain", K::number, "G", kPlan, "stop below G expected gain per ray", "0.1"), 0),
+      choice("-predicted_depth", {"none", "nearest", "linear"}, kPlan,
+             "also write predicted_depth.png: the map's dense depth from its samples (16-bit mm) by this rule "
+             "(docs/SELECTIVE.md \"Predicted depth\"; radius: -radius)",
+             "none"),
       bounded(value_flag("-resolution", K::number, "R", kOctomap, "OcTree leaf size [m]", "0.02"), 0, kInf, true),
       value_flag("-pose", K::text, "x,y,z,qx,qy,qz,qw", kOctomap,
                  "sensor pose in the world (world <- optical sensor frame, unit quaternion); one per -load", "",

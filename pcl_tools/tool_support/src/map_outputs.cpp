@@ -1,10 +1,13 @@
 #include "occ_improve/tools/map_outputs.hpp"
 
 #include "occ_improve/atomic_file.hpp"
+#include "occ_improve/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/map_cloud.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace occ_improve {
@@ -84,6 +87,21 @@ std::string join_names(const std::vector<std::string>& names) {
   std::string text;
   for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
   return text;
+}
+
+std::string write_predicted_depth(OutputFolder& out, const Mapper& mapper, const std::string& rule, int radius_columns) {
+  if (rule == "none") return "";
+  if (rule != "nearest" && rule != "linear")
+    throw InvalidParameter("-predicted_depth " + rule + " is invalid: must be none, nearest or linear");
+  DepthPredictionParams params;
+  params.rule = rule == "linear" ? DepthPredictionRule::linear : DepthPredictionRule::nearest;
+  params.radius_columns = radius_columns;
+  const PredictedDepth p = predict_depth(mapper.surface(), mapper.model(), params);
+  std::vector<std::uint16_t> mm(p.depth_m.size(), 0);
+  for (std::size_t c = 0; c < mm.size(); ++c)
+    if (p.distance[c] >= 0) mm[c] = static_cast<std::uint16_t>(std::min(65535.0, std::round(1000.0 * p.depth_m[c])));
+  write_png16(out.file("predicted_depth.png"), p.width, p.height, mm);
+  return "predicted_depth.png";
 }
 
 }  // namespace occ_improve

@@ -29,6 +29,13 @@ MapSummary summarize_map(const Mapper& mapper, const RegionOptions& regions, int
 std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapper, const MapSummary& summary,
                                            const std::optional<Image>& colour);
 
+/// -predicted_depth RULE (none, nearest, linear) with -radius R: the map's dense predicted depth from its
+/// surface samples (depth_prediction.hpp) into `out` as predicted_depth.png, 16-bit grey in millimetres
+/// (rounded; 0 = no prediction within the radius; depths beyond 65.535 m are written as 65535), one pixel
+/// per column, so aligned with the depth image for the pixel-native presets. Returns the file name, or ""
+/// for none.
+std::string write_predicted_depth(OutputFolder& out, const Mapper& mapper, const std::string& rule, int radius_columns);
+
 /// "a b c" for a list of file names.
 std::string join_names(const std::vector<std::string>& names);
 
