@@ -71,7 +71,13 @@ from ._core import (  # noqa: F401  (re-exported)
     segmentation_defaults,
     shot_scores,
 )
-from .frames import depth_to_points, read_depth_png, read_intrinsics  # noqa: F401
+from .frames import (  # noqa: F401
+    depth_to_points,
+    intrinsics_from_matrix,
+    intrinsics_from_open3d,
+    read_depth_png,
+    read_intrinsics,
+)
 
 if HAS_OCTOMAP:
     from ._core import OctomapExportOptions, OctomapExportReport  # noqa: F401
