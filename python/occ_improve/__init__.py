@@ -78,6 +78,7 @@ from .frames import (  # noqa: F401
     read_depth_png,
     read_intrinsics,
 )
+from .pcd import PcdCloud, read_pcd  # noqa: F401
 
 if HAS_OCTOMAP:
     from ._core import OctomapExportOptions, OctomapExportReport  # noqa: F401
