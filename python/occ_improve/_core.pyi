@@ -28,8 +28,8 @@ class PinholeIntrinsics:
     cy: float
     width: int
     height: int
-    def __init__(self, *, fx: float = ..., fy: float = ..., cx: float = ..., cy: float = ...,
-                 width: int = ..., height: int = ...) -> None: ...
+    def __init__(self, *, fx: float = 525.0, fy: float = 525.0, cx: float = 319.5, cy: float = 239.5,
+                 width: int = 640, height: int = 480) -> None: ...
     def validate(self) -> None: ...
 
 def kinect_v1_intrinsics() -> PinholeIntrinsics: ...
@@ -55,7 +55,13 @@ class GeometryParams:
     depth_binning: DepthBinning
     depth_min_m: float
     depth_max_m: float
-    def __init__(self, **fields: object) -> None: ...
+    def __init__(self, *, angular_binning: AngularBinning = AngularBinning.spherical,
+                 camera: Optional[PinholeIntrinsics] = None, azimuth_bins: int = 640, elevation_bins: int = 480,
+                 depth_bins: int = 512, azimuth_min_rad: float = -0.497418836818384,
+                 azimuth_max_rad: float = 0.497418836818384, elevation_min_rad: float = -0.375245789179833,
+                 elevation_max_rad: float = 0.375245789179833, depth_binning: DepthBinning = DepthBinning.uniform,
+                 depth_min_m: float = 0.0, depth_max_m: float = 5.0) -> None:
+        """The paper's Kinect v1 grid (57 x 43 deg, 640 x 480 x 512 bins, [0, 5 m))."""
     def validate(self) -> None: ...
 
 class SensorModelParams:
@@ -67,7 +73,11 @@ class SensorModelParams:
     sigma_depth_per_m2: float
     sigma_depth_floor_m: float
     support_k: float
-    def __init__(self, **fields: float) -> None: ...
+    def __init__(self, *, sigma_azimuth_rad: float = 0.000433589667773576,
+                 sigma_elevation_rad: float = 0.000433589667773576, sigma_u_px: float = 0.288675134594813,
+                 sigma_v_px: float = 0.288675134594813, sigma_depth_m: float = 0.0472228758124704,
+                 sigma_depth_per_m2: float = 0.0, sigma_depth_floor_m: float = 0.001, support_k: float = 2.0) -> None:
+        """The paper's noise model (sigma_u_px = 1 / sqrt(12): a pixel's quantisation)."""
     def validate(self) -> None: ...
 
 class SensorPreset:
@@ -87,7 +97,10 @@ class PinholePresetOptions:
     sigma_depth_per_m2: float
     sigma_depth_floor_m: float
     support_k: float
-    def __init__(self, **fields: object) -> None: ...
+    def __init__(self, *, angular_binning: AngularBinning = AngularBinning.pinhole, depth_bins: int = 2048,
+                 depth_binning: DepthBinning = DepthBinning.inverse_depth, depth_min_m: float = 0.5,
+                 depth_max_m: float = 8.0, sigma_depth_m: float = 0.0, sigma_depth_per_m2: float = 0.001425,
+                 sigma_depth_floor_m: float = 0.0005, support_k: float = 2.0) -> None: ...
 
 def kinect_v1_paper() -> SensorPreset: ...
 def kinect_v1(intrinsics: PinholeIntrinsics) -> SensorPreset: ...
@@ -109,7 +122,9 @@ class GridOptions:
     probability_min: float
     probability_max: float
     memory_cap_bytes: int
-    def __init__(self, **fields: object) -> None: ...
+    def __init__(self, *, mode: UpdateMode = UpdateMode.clamped, probability_min: float = 0.001,
+                 probability_max: float = 0.999, memory_cap_bytes: int = ...) -> None:
+        """memory_cap_bytes defaults to a share of this machine's memory."""
     def validate(self) -> None: ...
     @staticmethod
     def octomap_clamping() -> GridOptions: ...
@@ -146,7 +161,7 @@ class MapperReport:
 class RegionOptions:
     min_improvement: float
     min_area_columns: int
-    def __init__(self, *, min_improvement: float = 0.05, min_area_columns: int = 4) -> None: ...
+    def __init__(self, *, min_improvement: float = 0.2, min_area_columns: int = 4) -> None: ...
     def validate(self) -> None: ...
 
 class Region:
@@ -222,7 +237,10 @@ class SegmentationParams:
     plane_min_columns: int
     plane_ransac_iterations: int
     plane_seed: int
-    def __init__(self, **fields: object) -> None: ...
+    def __init__(self, *, contour_improvement_below: float = -0.02, min_segment_columns: int = 200,
+                 remove_dominant_plane: bool = True, plane_distance_m: float = 0.01, plane_min_columns: int = 3000,
+                 plane_ransac_iterations: int = 200, plane_seed: int = 1) -> None:
+        """Generic defaults; segmentation_defaults(preset) scales them to a preset's noise model."""
     def validate(self) -> None: ...
 
 def segmentation_defaults(preset: SensorPreset) -> SegmentationParams: ...
@@ -357,7 +375,8 @@ class OctomapExportOptions:
     occupancy_threshold: float
     unknown_band_probability: float
     memory_cap_bytes: int
-    def __init__(self, **fields: float) -> None: ...
+    def __init__(self, *, occupancy_threshold: float = 0.5, unknown_band_probability: float = 0.01,
+                 memory_cap_bytes: int = 2147483648) -> None: ...
     def validate(self) -> None: ...
 
 class OctomapExportReport:
