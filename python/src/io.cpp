@@ -46,16 +46,23 @@ std::string lzf_decompress(const std::string& in, std::size_t expected_bytes) {
       ip += ctrl;
       continue;
     }
-    std::size_t length = ctrl >> 5;  // a back reference: length + 2 bytes from `distance` + 1 back
+    std::size_t length = ctrl >> 5;  // a back reference: length + 2 bytes copied from `distance` bytes back
     if (ip >= in_end) corrupt("a back reference cut short");
     if (length == 7) {
       length += *ip++;
       if (ip >= in_end) corrupt("a back reference cut short");
     }
     const std::size_t distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
-    if (length + 2 > static_cast<std::size_t>(out_end - op)) corrupt("more bytes than declared");
+    const std::size_t bytes = length + 2;
+    if (bytes > static_cast<std::size_t>(out_end - op)) corrupt("more bytes than declared");
     if (distance > static_cast<std::size_t>(op - out_start)) corrupt("a back reference before the start");
-    for (std::size_t i = 0; i < length + 2; ++i, ++op) *op = *(op - distance);  // may overlap: byte by byte
+    if (distance >= bytes) {
+      std::memcpy(op, op - distance, bytes);
+    } else {  // the copy overlaps what it writes (a run): byte by byte, as the format means it
+      const unsigned char* from = op - distance;
+      for (std::size_t i = 0; i < bytes; ++i) op[i] = from[i];
+    }
+    op += bytes;
   }
   if (op != out_end) corrupt("fewer bytes than declared");
   return out;
