@@ -100,10 +100,29 @@ def same_value(stub, runtime):
 
 
 def signature_default(function, name):
-    """The default pybind11 reports for argument `name` in the function's signature line."""
-    match = re.search(rf"\b{name}: [^=,()]+ = ([^,()]+)", function.__doc__ or "")
-    assert match, f"{function.__name__}: no default for '{name}' in {(function.__doc__ or '').splitlines()[:1]}"
-    return ast.literal_eval(match.group(1))
+    """The default pybind11 reports for argument `name` in the function's signature line. The type may
+    hold commas and brackets (pybind11 3: `typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None`),
+    so the text is scanned with the bracket depth rather than matched by a pattern."""
+    doc = function.__doc__ or ""
+    match = re.search(rf"[(,] ?{name}: ", doc)
+    assert match, f"{function.__name__}: no argument '{name}' in {doc.splitlines()[:1]}"
+    depth, i, start = 0, match.end(), None
+    while i < len(doc):
+        c = doc[i]
+        if c in "([{":
+            depth += 1
+        elif c in ")]}":
+            if depth == 0:
+                break
+            depth -= 1
+        elif depth == 0 and c == ",":
+            break
+        elif depth == 0 and start is None and doc.startswith(" = ", i):
+            start = i + 3
+            i += 2
+        i += 1
+    assert start is not None, f"{function.__name__}: no default for '{name}' in {doc.splitlines()[:1]}"
+    return ast.literal_eval(doc[start:i])
 
 
 def test_every_default_the_stub_documents_is_the_runtime_default():
