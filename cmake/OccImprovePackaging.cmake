@@ -17,13 +17,19 @@ set(occ_improve_pcl_uses_octomap OFF)
 if(TARGET occ_improve_pcl AND TARGET occ_improve_octomap)
   set(occ_improve_pcl_uses_octomap ON)
 endif()
+# The same targets exported from the build tree beside the config file below, so that a downstream
+# project finds this build without installing it: cmake -Docc_improve_DIR=<this build folder>.
 foreach(component ${occ_improve_components})
   install(EXPORT occ_improve_${component}_targets
           NAMESPACE occ_improve::
           FILE occ_improve-${component}-targets.cmake
           DESTINATION ${occ_improve_cmake_dir})
+  export(EXPORT occ_improve_${component}_targets
+         NAMESPACE occ_improve::
+         FILE ${PROJECT_BINARY_DIR}/occ_improve-${component}-targets.cmake)
 endforeach()
 
+# One config for both: it loads the targets files found beside it (build folder or installed cmake folder).
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/occ_improve-config.cmake.in
                               ${PROJECT_BINARY_DIR}/occ_improve-config.cmake
                               INSTALL_DESTINATION ${occ_improve_cmake_dir})

@@ -1,4 +1,5 @@
-"""Reading real frames without PCL: 16-bit depth PNGs (7-Scenes, TUM, SUN3D) and intrinsics files.
+"""Reading real frames without PCL: 16-bit depth PNGs (7-Scenes, TUM, SUN3D), intrinsics files, a 3 x 3 K
+and Open3D's PinholeCameraIntrinsic (organized PCD files: occ_improve.pcd).
 
 PNG decoding uses Pillow (installed with matplotlib), imported only when a PNG is read, so the core
 module needs numpy alone.
@@ -47,8 +48,11 @@ def read_intrinsics(path: PathLike, width: int = 640, height: int = 480) -> Pinh
     except ValueError as e:
         raise InvalidInput(f"intrinsics '{os.fspath(path)}' hold something other than numbers") from e
     if len(numbers) == 9:
-        fx, _, cx, _, fy, cy = numbers[:6]
-    elif len(numbers) in (4, 6):
+        try:
+            return intrinsics_from_matrix(np.reshape(numbers, (3, 3)), width, height)
+        except InvalidInput as e:
+            raise InvalidInput(f"intrinsics '{os.fspath(path)}': {e}") from e
+    if len(numbers) in (4, 6):
         fx, fy, cx, cy = numbers[:4]
         if len(numbers) == 6:
             width, height = int(numbers[4]), int(numbers[5])
@@ -57,6 +61,34 @@ def read_intrinsics(path: PathLike, width: int = 640, height: int = 480) -> Pinh
     k = PinholeIntrinsics(fx=fx, fy=fy, cx=cx, cy=cy, width=width, height=height)
     k.validate()
     return k
+
+
+def intrinsics_from_matrix(k, width: int, height: int) -> PinholeIntrinsics:
+    """PinholeIntrinsics from a 3 x 3 camera matrix K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] and the image size.
+
+    The image size is not in K, so it is asked for. Raises InvalidInput for another shape, a skew or a
+    last row other than (0, 0, 1) (the library's pinhole has neither), InvalidParameter for bad values.
+    """
+    k = np.asarray(k, dtype=np.float64)
+    if k.shape != (3, 3):
+        raise InvalidInput(f"K must be a 3 x 3 matrix, got shape {k.shape}")
+    if k[0, 1] != 0 or k[1, 0] != 0 or not np.array_equal(k[2], [0.0, 0.0, 1.0]):
+        raise InvalidInput(f"K must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew), got {k.tolist()}")
+    intrinsics = PinholeIntrinsics(fx=float(k[0, 0]), fy=float(k[1, 1]), cx=float(k[0, 2]), cy=float(k[1, 2]),
+                                   width=int(width), height=int(height))
+    intrinsics.validate()
+    return intrinsics
+
+
+def intrinsics_from_open3d(camera) -> PinholeIntrinsics:
+    """PinholeIntrinsics from an Open3D ``PinholeCameraIntrinsic``, or any object with its attributes
+    ``intrinsic_matrix`` (3 x 3), ``width`` and ``height`` (duck-typed: Open3D itself is not imported).
+    """
+    missing = [a for a in ("intrinsic_matrix", "width", "height") if not hasattr(camera, a)]
+    if missing:
+        raise TypeError(f"{type(camera).__name__} is not a pinhole camera like Open3D's PinholeCameraIntrinsic: "
+                        f"no {', '.join(missing)}")
+    return intrinsics_from_matrix(camera.intrinsic_matrix, camera.width, camera.height)
 
 
 def depth_to_points(depth: np.ndarray, intrinsics: PinholeIntrinsics) -> np.ndarray:

@@ -18,6 +18,7 @@ void bind_errors(py::module_& m);
 void bind_presets(py::module_& m);
 void bind_mapper(py::module_& m);
 void bind_analysis(py::module_& m);
+void bind_planner(py::module_& m);
 void bind_io(py::module_& m);
 void bind_internals(py::module_& m);
 void bind_prediction(py::module_& m);

@@ -9,6 +9,9 @@
 
 #include <Eigen/Geometry>
 
+#include <cstring>
+#include <string>
+
 #ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
 #include "occ_improve/octomap/export.hpp"
 #endif
@@ -19,6 +22,50 @@ namespace {
 /// Accepts str and os.PathLike (pathlib.Path), as Python's own file functions do.
 std::string path_string(const py::object& path) {
   return py::str(py::module_::import("os").attr("fspath")(path));
+}
+
+/// LZF decompression (liblzf's format, as PCL's binary_compressed PCD data uses it), so that the
+/// package reads those files without PCL: exactly `expected_bytes` must come out, every back reference
+/// must stay inside what was already decoded, else FormatError. Runs without the GIL.
+std::string lzf_decompress(const std::string& in, std::size_t expected_bytes) {
+  std::string out(expected_bytes, '\0');
+  const auto* ip = reinterpret_cast<const unsigned char*>(in.data());
+  const auto* const in_end = ip + in.size();
+  auto* const out_start = reinterpret_cast<unsigned char*>(out.data());
+  unsigned char* op = out_start;
+  unsigned char* const out_end = out_start + expected_bytes;
+  const auto corrupt = [](const char* why) { throw FormatError(std::string("LZF data corrupt: ") + why); };
+  while (ip < in_end) {
+    std::size_t ctrl = *ip++;
+    if (ctrl < (1u << 5)) {  // a run of ctrl + 1 literal bytes
+      ++ctrl;
+      if (ctrl > static_cast<std::size_t>(out_end - op)) corrupt("more bytes than declared");
+      if (ctrl > static_cast<std::size_t>(in_end - ip)) corrupt("a literal run past the end of the input");
+      std::memcpy(op, ip, ctrl);
+      op += ctrl;
+      ip += ctrl;
+      continue;
+    }
+    std::size_t length = ctrl >> 5;  // a back reference: length + 2 bytes copied from `distance` bytes back
+    if (ip >= in_end) corrupt("a back reference cut short");
+    if (length == 7) {
+      length += *ip++;
+      if (ip >= in_end) corrupt("a back reference cut short");
+    }
+    const std::size_t distance = ((ctrl & 0x1f) << 8) + *ip++ + 1;
+    const std::size_t bytes = length + 2;
+    if (bytes > static_cast<std::size_t>(out_end - op)) corrupt("more bytes than declared");
+    if (distance > static_cast<std::size_t>(op - out_start)) corrupt("a back reference before the start");
+    if (distance >= bytes) {
+      std::memcpy(op, op - distance, bytes);
+    } else {  // the copy overlaps what it writes (a run): byte by byte, as the format means it
+      const unsigned char* from = op - distance;
+      for (std::size_t i = 0; i < bytes; ++i) op[i] = from[i];
+    }
+    op += bytes;
+  }
+  if (op != out_end) corrupt("fewer bytes than declared");
+  return out;
 }
 
 void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
@@ -97,6 +144,16 @@ void bind_io(py::module_& m) {
 #else
   m.attr("HAS_OCTOMAP") = false;
 #endif
+  m.def("_lzf_decompress", [](const py::bytes& data, std::size_t expected_bytes) {
+    std::string in = data;
+    std::string out;
+    {
+      py::gil_scoped_release release;
+      out = lzf_decompress(in, expected_bytes);
+    }
+    return py::bytes(out);
+  }, py::arg("data"), py::arg("expected_bytes"),
+        "LZF-decompresses exactly expected_bytes (the reader of binary_compressed PCD files); FormatError otherwise.");
 }
 
 }  // namespace occ_improve::python

@@ -8,6 +8,7 @@ PYBIND11_MODULE(_core, m) {
   bind_presets(m);
   bind_mapper(m);
   bind_analysis(m);
+  bind_planner(m);
   bind_io(m);
   bind_internals(m);
   bind_prediction(m);

@@ -1,7 +1,8 @@
 # ctest's consumer test: installs the build into a scratch prefix, then configures, builds and runs
 # tests/consumer against it three times: asking for the core alone with PCL, OctoMap and libpng made
 # unfindable (a core user needs none of them), for io with PCL and OctoMap unfindable (libpng is found
-# through the config's find_dependency), and for every component.
+# through the config's find_dependency), and for every component; then twice against the build folder
+# itself (its exported targets, occ_improve_DIR=<build>): the core alone and every component.
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DLINKER_FLAGS=...] -P run_consumer.cmake
 # LINKER_FLAGS are the build's own (a sanitizer build's static libraries need its runtime to link).
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
@@ -22,16 +23,24 @@ set(prefix ${WORK_DIR}/prefix)
 file(REMOVE_RECURSE ${WORK_DIR})
 run(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 set(without_pcl_and_octomap -DCMAKE_DISABLE_FIND_PACKAGE_PCL=TRUE -DCMAKE_DISABLE_FIND_PACKAGE_octomap=TRUE)
-foreach(case core io all)
+# The build_tree_* cases find the build folder itself (README: "from a build tree"), not the install,
+# and check that the library they link is the build folder's.
+foreach(case core io all build_tree_core build_tree_all)
   set(build ${WORK_DIR}/${case})
-  if(case STREQUAL "core")
+  if(case MATCHES "core$")
     set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=core ${without_pcl_and_octomap} -DCMAKE_DISABLE_FIND_PACKAGE_PNG=TRUE)
   elseif(case STREQUAL "io")
     set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=io ${without_pcl_and_octomap})
   else()
     set(options -DCMAKE_DISABLE_FIND_PACKAGE_VTK=TRUE)
   endif()
-  run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${build} -DCMAKE_PREFIX_PATH=${prefix} ${options}
+  if(case MATCHES "^build_tree")
+    # The build folder's own library, not the scratch install (which lies inside the build folder too).
+    list(APPEND options -Docc_improve_DIR=${BUILD_DIR} -DOCC_IMPROVE_CONSUMER_EXPECT_DIR=${BUILD_DIR}/libocc_improve)
+  else()
+    list(APPEND options -DCMAKE_PREFIX_PATH=${prefix} -DOCC_IMPROVE_CONSUMER_EXPECT_DIR=${prefix})
+  endif()
+  run(${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${build} ${options}
       "-DCMAKE_EXE_LINKER_FLAGS=${LINKER_FLAGS}")
   run(${CMAKE_COMMAND} --build ${build})
   run(${build}/occ_improve_consumer)

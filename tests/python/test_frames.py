@@ -45,3 +45,48 @@ def test_back_projection_matches_the_pinhole_model(sample):
     assert np.isnan(points[depth == 0]).all()
     with pytest.raises(oi.InvalidInput):
         oi.depth_to_points(depth[:10], k)
+
+
+class PinholeCameraIntrinsicStandIn:
+    """The attributes of Open3D's o3d.camera.PinholeCameraIntrinsic (Open3D is not installed here):
+    intrinsic_matrix a 3 x 3 float64 array, width and height ints."""
+
+    def __init__(self, width, height, fx, fy, cx, cy):
+        self.width, self.height = width, height
+        self.intrinsic_matrix = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
+
+
+def test_intrinsics_from_a_camera_matrix():
+    k = oi.intrinsics_from_matrix([[585.0, 0, 320.5], [0, 584.0, 240.25], [0, 0, 1]], 640, 480)
+    assert (k.fx, k.fy, k.cx, k.cy, k.width, k.height) == (585.0, 584.0, 320.5, 240.25, 640, 480)
+    # A K that is not a skew-free pinhole, or a bad value, is refused with what is wrong.
+    with pytest.raises(oi.InvalidInput, match="3 x 3"):
+        oi.intrinsics_from_matrix(np.eye(4), 640, 480)
+    with pytest.raises(oi.InvalidInput, match="skew"):
+        oi.intrinsics_from_matrix([[585.0, 2.0, 320], [0, 585, 240], [0, 0, 1]], 640, 480)
+    with pytest.raises(oi.InvalidInput, match="skew"):
+        oi.intrinsics_from_matrix([[585.0, 0, 320], [0, 585, 240], [0, 0, 2]], 640, 480)
+    with pytest.raises(oi.InvalidParameter, match="fx"):
+        oi.intrinsics_from_matrix([[-585.0, 0, 320], [0, 585, 240], [0, 0, 1]], 640, 480)
+
+
+def test_intrinsics_from_an_open3d_camera_build_the_same_grid(sample):
+    depth, k = sample
+    camera = PinholeCameraIntrinsicStandIn(k.width, k.height, k.fx, k.fy, k.cx, k.cy)
+    from_o3d = oi.intrinsics_from_open3d(camera)
+    assert (from_o3d.fx, from_o3d.fy, from_o3d.cx, from_o3d.cy) == (k.fx, k.fy, k.cx, k.cy)
+    assert (from_o3d.width, from_o3d.height) == (k.width, k.height)
+    # Accepted wherever the camera's intrinsics are: the preset from it takes the sample frame.
+    a, b = oi.Mapper(oi.kinect_v1(from_o3d)), oi.Mapper(oi.kinect_v1(k))
+    a.insert_depth(depth, from_o3d)
+    b.insert_depth(depth, k)
+    np.testing.assert_array_equal(a.improvement(), b.improvement())
+    with pytest.raises(TypeError, match="intrinsic_matrix"):
+        oi.intrinsics_from_open3d(k)  # a PinholeIntrinsics has no intrinsic_matrix
+
+
+def test_intrinsics_file_with_a_skewed_matrix_names_the_file(tmp_path):
+    path = tmp_path / "skewed.txt"
+    path.write_text("585 1 320\n0 585 240\n0 0 1\n")
+    with pytest.raises(oi.InvalidInput, match="skewed.txt.*skew"):
+        oi.read_intrinsics(path)

@@ -1,6 +1,8 @@
 """The .pyi stubs describe the module as built: every public name and member, both ways round, and
 every binding has a docstring where it does work."""
 import ast
+import math
+import re
 import inspect
 from pathlib import Path
 
@@ -69,3 +71,89 @@ def test_functions_and_methods_have_docstrings():
 def test_the_package_re_exports_every_public_name():
     public = {n for n in dir(_core) if not n.startswith("_")}
     assert public - set(dir(oi)) == set()
+
+
+def stub_default(node):
+    """A default the stub spells out: a literal, or an enum value like ShotShape.rays; None for `...`."""
+    if isinstance(node, ast.Constant) and node.value is Ellipsis:
+        return None
+    if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+        return (getattr(getattr(_core, node.value.id), node.attr),)
+    return (ast.literal_eval(node),)
+
+
+def documented_defaults(function):
+    """(name, value) of every argument of a stub function whose default is spelled out."""
+    args = function.args
+    positional = list(zip(args.args[len(args.args) - len(args.defaults):], args.defaults))
+    keyword = [(a, d) for a, d in zip(args.kwonlyargs, args.kw_defaults) if d is not None]
+    for arg, node in positional + keyword:
+        value = stub_default(node)
+        if value is not None:
+            yield arg.arg, value[0]
+
+
+def same_value(stub, runtime):
+    if isinstance(stub, float) and isinstance(runtime, float):
+        return math.isclose(stub, runtime, rel_tol=1e-6)  # float32 fields come back widened
+    return stub == runtime and type(stub) is type(runtime)
+
+
+def signature_default(function, name):
+    """The default pybind11 reports for argument `name` in the function's signature line. The type may
+    hold commas and brackets (pybind11 3: `typing.Annotated[numpy.typing.ArrayLike, numpy.float64] | None`),
+    so the text is scanned with the bracket depth rather than matched by a pattern."""
+    doc = function.__doc__ or ""
+    match = re.search(rf"[(,] ?{name}: ", doc)
+    assert match, f"{function.__name__}: no argument '{name}' in {doc.splitlines()[:1]}"
+    depth, i, start = 0, match.end(), None
+    while i < len(doc):
+        c = doc[i]
+        if c in "([{":
+            depth += 1
+        elif c in ")]}":
+            if depth == 0:
+                break
+            depth -= 1
+        elif depth == 0 and c == ",":
+            break
+        elif depth == 0 and start is None and doc.startswith(" = ", i):
+            start = i + 3
+            i += 2
+        i += 1
+    assert start is not None, f"{function.__name__}: no default for '{name}' in {doc.splitlines()[:1]}"
+    return ast.literal_eval(doc[start:i])
+
+
+def test_every_default_the_stub_documents_is_the_runtime_default():
+    """RegionOptions once said 0.05 where the runtime said 0.2: the stub's defaults are checked against a
+    default-constructed object (keyword constructors) or the signature pybind11 reports (functions)."""
+    tree = ast.parse(STUB.read_text())
+    checked, wrong = 0, []
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef) and hasattr(_core, node.name):
+            cls = getattr(_core, node.name)
+            for method in (n for n in node.body if isinstance(n, ast.FunctionDef)):
+                for name, value in documented_defaults(method):
+                    if method.name == "__init__" and method.args.kwonlyargs:  # keyword constructor: a field
+                        runtime = getattr(cls(), name)
+                    else:
+                        runtime = signature_default(getattr(cls, method.name), name)
+                    checked += 1
+                    if not same_value(value, runtime):
+                        wrong.append(f"{node.name}.{method.name}({name}): stub {value!r}, runtime {runtime!r}")
+        elif isinstance(node, ast.FunctionDef) and hasattr(_core, node.name):
+            for name, value in documented_defaults(node):
+                runtime = signature_default(getattr(_core, node.name), name)
+                checked += 1
+                if not same_value(value, runtime):
+                    wrong.append(f"{node.name}({name}): stub {value!r}, runtime {runtime!r}")
+    assert wrong == []
+    print(f"{checked} defaults checked")
+    assert checked >= 60, f"only {checked} defaults checked: the stub lost its defaults"
+
+
+def test_the_default_check_sees_a_wrong_default():
+    fake = ast.parse("def f(*, min_improvement: float = 0.05) -> None: ...").body[0]
+    (name, value), = documented_defaults(fake)
+    assert not same_value(value, _core.RegionOptions().min_improvement)

@@ -1,0 +1,225 @@
+// The selective sensor's next shot (planner.hpp), the return model (return_model.hpp) and the intrinsics
+// of an organized cloud (intrinsics_fit.hpp). Thin: every array is converted once and handed to the
+// library, which checks sizes and values itself. Column indices are row-major (v * width + u), as in C++.
+#include "arrays.hpp"
+#include "bindings.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/planner.hpp"
+#include "occ_improve/return_model.hpp"
+
+#include <pybind11/stl.h>
+
+#include <cstring>
+
+namespace occ_improve::python {
+namespace {
+
+template <class T>
+using Array = py::array_t<T, py::array::c_style | py::array::forcecast>;
+
+/// A fresh writable H x W array holding `values` (row-major, as the library's maps).
+template <class T>
+py::array grid_array(const std::vector<T>& values, int height, int width) {
+  Array<T> out({height, width});
+  std::memcpy(out.mutable_data(), values.data(), values.size() * sizeof(T));
+  return out;
+}
+
+/// A 1-D array of `values` (copied).
+template <class T>
+py::array flat_array(const std::vector<T>& values) {
+  Array<T> out(static_cast<py::ssize_t>(values.size()));
+  if (!values.empty()) std::memcpy(out.mutable_data(), values.data(), values.size() * sizeof(T));
+  return out;
+}
+
+/// Any array-like as a vector of T (flattened in C order: an H x W mask is row-major, as columns are).
+template <class T>
+std::vector<T> to_vector(const py::handle& values) {
+  const auto a = Array<T>::ensure(values);
+  if (!a) throw py::error_already_set();
+  return std::vector<T>(a.data(), a.data() + a.size());
+}
+
+/// An improvement map: a Mapper's own, or an H x W array (copied once into the library's type).
+ImprovementMap improvement_from(const py::handle& source) {
+  if (py::isinstance<PyMapper>(source)) {
+    return with_mapper(source.cast<PyMapper&>(), [](Mapper& mp) { return mp.improvement(); });
+  }
+  const auto a = Array<float>::ensure(source);
+  if (!a) throw py::error_already_set();
+  if (a.ndim() != 2) throw InvalidInput("improvement must be an H x W array or a Mapper, got " +
+                                        std::to_string(a.ndim()) + " dimensions");
+  ImprovementMap map;
+  map.height = static_cast<int>(a.shape(0));
+  map.width = static_cast<int>(a.shape(1));
+  map.value.assign(a.data(), a.data() + a.size());
+  return map;
+}
+
+void bind_return_model(py::module_& m) {
+  py::class_<ReturnModelParams> p(m, "ReturnModelParams", "Weight of the neighbourhood prior of the return model.");
+  def_keyword_init<ReturnModelParams>(p);
+  p.def_readwrite("prior_strength_shots", &ReturnModelParams::prior_strength_shots)
+      .def("validate", &ReturnModelParams::validate, "Raises InvalidParameter unless finite and > 0.");
+  def_fields_repr(p, {"prior_strength_shots"});
+
+  py::class_<ReturnRecord> r(m, "ReturnRecord",
+                             "Per ray: the shots that asked for it and those that got a return. Counts are H x W "
+                             "uint32 arrays (copies).");
+  r.def(py::init<>(), "An empty record of no grid (use for_grid).")
+      .def_static("for_grid", &ReturnRecord::for_grid, py::arg("width"), py::arg("height"),
+                  "An empty record for width x height columns.")
+      .def_static("from_counts", [](int width, int height, const py::object& asked, const py::object& returned) {
+        return ReturnRecord::from_counts(width, height, to_vector<std::uint32_t>(asked),
+                                         to_vector<std::uint32_t>(returned));
+      }, py::arg("width"), py::arg("height"), py::arg("asked"), py::arg("returned"),
+                  "A record from saved counts (H x W or flat, row-major). Raises InvalidInput for other sizes or "
+                  "more returns than asks.")
+      .def_property_readonly("width", &ReturnRecord::width)
+      .def_property_readonly("height", &ReturnRecord::height)
+      .def_property_readonly("size", &ReturnRecord::size)
+      .def_property_readonly("empty", &ReturnRecord::empty)
+      .def_property_readonly("total_asked", &ReturnRecord::total_asked)
+      .def_property_readonly("total_returned", &ReturnRecord::total_returned);
+  const auto counts = [&r](const char* name, const std::vector<std::uint32_t>& (ReturnRecord::*get)() const,
+                           const char* doc) {
+    r.def_property_readonly(name, [get](const ReturnRecord& x) { return grid_array((x.*get)(), x.height(), x.width()); },
+                            doc);
+  };
+  counts("asked", &ReturnRecord::asked, "H x W uint32: shots that asked for the ray.");
+  counts("returned", &ReturnRecord::returned, "H x W uint32: shots in which the ray returned.");
+  counts("asked_nearby", &ReturnRecord::asked_nearby, "H x W uint32: asks summed over the 8 neighbours.");
+  counts("returned_nearby", &ReturnRecord::returned_nearby, "H x W uint32: returns summed over the 8 neighbours.");
+  r.def("check_matches", &ReturnRecord::check_matches, py::arg("grid_width"), py::arg("grid_height"),
+        "Raises InvalidInput naming both sizes unless the record is of this grid.");
+  r.def("record_shot", [](ReturnRecord& record, const py::object& columns, const py::object& got_return) {
+    record.record_shot(to_vector<ColumnIndex>(columns), to_vector<std::uint8_t>(got_return));
+  }, py::arg("columns"), py::arg("got_return"),
+        "Adds one shot: got_return[i] (bool) says whether ray columns[i] (row-major index v * width + u) returned. "
+        "Checked before anything is counted: InvalidInput for different lengths, InvalidParameter for a column "
+        "outside the grid.");
+  def_fields_repr(r, {"width", "height", "total_asked", "total_returned"});
+
+  m.def("record_return_rate", &record_return_rate, py::arg("record"),
+        "Returns / asks over the whole record (1 for an empty record).");
+  m.def("return_probability_map", [](const ReturnRecord& record, const ReturnModelParams& params) {
+    return grid_array(return_probability_map(record, params), record.height(), record.width());
+  }, py::arg("record"), py::arg("params") = ReturnModelParams{},
+        "The return probability of every ray, H x W float32 (the Beta-Bernoulli posterior mean).");
+}
+
+void bind_plan_request(py::module_& m) {
+  py::enum_<ShotShape>(m, "ShotShape", "What a shot takes.")
+      .value("rays", ShotShape::rays, "any budget_rays rays, highest score first")
+      .value("window", ShotShape::window, "the window of largest summed score (ROI readout)")
+      .value("decimation", ShotShape::decimation, "every step-th column and row, at the best offset");
+  py::class_<PlanRequest> q(m, "PlanRequest", "Budget, shape, re-acquisition share, stop level, candidate mask.");
+  def_keyword_init<PlanRequest>(q);
+  q.def_readwrite("budget_rays", &PlanRequest::budget_rays)
+      .def_readwrite("shape", &PlanRequest::shape)
+      .def_readwrite("window_width_columns", &PlanRequest::window_width_columns)
+      .def_readwrite("window_height_columns", &PlanRequest::window_height_columns)
+      .def_readwrite("negative_share", &PlanRequest::negative_share)
+      .def_readwrite("stop_gain_per_ray_below", &PlanRequest::stop_gain_per_ray_below)
+      .def_readwrite("return_model", &PlanRequest::return_model)
+      .def_property("candidates", [](const PlanRequest& r) -> py::object {
+        if (r.candidates.empty()) return py::none();
+        return flat_array(r.candidates).attr("astype")("?");
+      }, [](PlanRequest& r, const py::object& mask) {
+        r.candidates = mask.is_none() ? std::vector<std::uint8_t>{} : to_vector<std::uint8_t>(mask);
+      }, "rays shape: which rays the sensor may take, an H x W bool mask (stored flat, row-major; read back as "
+         "a 1-D bool array), or None for every ray.")
+      .def("validate", &PlanRequest::validate, py::arg("grid_width"), py::arg("grid_height"),
+           "Raises InvalidParameter naming the bad value, InvalidInput for a mask of the wrong size.");
+  def_fields_repr(q, {"budget_rays", "shape", "window_width_columns", "window_height_columns", "negative_share",
+                      "stop_gain_per_ray_below", "return_model"});
+}
+
+void bind_shot(py::module_& m) {
+  py::class_<Shot> s(m, "Shot", "The next shot (read-only).");
+  s.def_property_readonly("columns", [](const Shot& x) { return flat_array(x.columns); },
+                          "uint32 row-major ray indices (v, u = divmod(columns, width)): rays shape by rank, then "
+                          "the re-acquisitions; other shapes ascending.")
+      .def_readonly("expected_gain", &Shot::expected_gain, "Sum of the scores of the rays taken by rank.")
+      .def_readonly("ranked_rays", &Shot::ranked_rays, "Rays taken by rank (the rest are re-acquisitions).")
+      .def_readonly("stop", &Shot::stop, "expected_gain < stop_gain_per_ray_below * ranked_rays.")
+      .def_readonly("reason", &Shot::reason)
+      .def("__len__", [](const Shot& x) { return x.columns.size(); });
+  def_fields_repr(s, {"expected_gain", "ranked_rays", "stop", "reason"});
+}
+
+void bind_planning(py::module_& m) {
+  m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request) {
+    const ImprovementMap map = improvement_from(improvement);
+    py::gil_scoped_release release;
+    return plan_next_shot(map, returns, request);
+  }, py::arg("improvement"), py::arg("returns"), py::arg("request") = PlanRequest{},
+        "The next shot over a Mapper's improvement map (or an H x W float32 improvement array). returns: "
+        "ReturnRecord.for_grid(width, height) when nothing was shot yet. Raises as PlanRequest.validate, and "
+        "InvalidInput when returns is of another grid.");
+  m.def("shot_scores", [](const py::object& improvement, const ReturnRecord& returns, const ReturnModelParams& params) {
+    const ImprovementMap map = improvement_from(improvement);
+    std::vector<float> scores;
+    {
+      py::gil_scoped_release release;
+      scores = shot_scores(map, returns, params);
+    }
+    return grid_array(scores, map.height, map.width);
+  }, py::arg("improvement"), py::arg("returns"), py::arg("params") = ReturnModelParams{},
+        "improvement x return probability, H x W float32: the ranking plan_next_shot uses.");
+  m.def("decimation_step", &decimation_step, py::arg("width"), py::arg("height"), py::arg("budget_rays"),
+        "The smallest step whose pattern (every step-th column and row) has at most budget_rays rays.");
+  m.def("decimation_pattern", [](int width, int height, int step, int offset_x, int offset_y) {
+    return flat_array(decimation_pattern(width, height, step, offset_x, offset_y));
+  }, py::arg("width"), py::arg("height"), py::arg("step"), py::arg("offset_x"), py::arg("offset_y"),
+        "Row-major ray indices (ascending, uint32) of the pattern of `step` at the offset, each in [0, step).");
+}
+
+/// An organized cloud (H x W x 3) as the library's fit reads it: the pixel (u, v) at xyz[(v W + u) stride].
+template <class Fit>
+IntrinsicsFit fit_organized(const py::object& points, Fit&& fit) {
+  const PointsInput in = points_from_array(points);
+  const py::array a = py::reinterpret_borrow<py::array>(py::module_::import("numpy").attr("asarray")(points));
+  if (a.ndim() != 3) throw InvalidInput("points must be an organized H x W x 3 cloud to fit intrinsics");
+  const int height = static_cast<int>(a.shape(0)), width = static_cast<int>(a.shape(1));
+  py::gil_scoped_release release;
+  return fit(in.span.xyz, width, height, in.span.stride_floats);
+}
+
+void bind_intrinsics_fit(py::module_& m) {
+  py::class_<IntrinsicsFit> f(m, "IntrinsicsFit", "Pinhole intrinsics fitted to an organized cloud (read-only).");
+  f.def_readonly("intrinsics", &IntrinsicsFit::intrinsics)
+      .def_readonly("rms_residual_px", &IntrinsicsFit::rms_residual_px)
+      .def_readonly("max_residual_px", &IntrinsicsFit::max_residual_px)
+      .def_readonly("points_used", &IntrinsicsFit::points_used);
+  def_fields_repr(f, {"intrinsics", "rms_residual_px", "max_residual_px", "points_used"});
+  m.attr("MAX_INTRINSICS_FIT_RESIDUAL_PX") = kMaxIntrinsicsFitResidualPx;
+  m.def("fit_intrinsics", [](const py::object& points) {
+    return fit_organized(points, [](const float* xyz, int w, int h, std::size_t s) { return fit_intrinsics(xyz, w, h, s); });
+  }, py::arg("points"),
+        "Fits fx, fy, cx, cy to an organized H x W x 3 cloud (NaN / z <= 0 points left out). Raises InvalidInput "
+        "when fewer than 100 points are valid or they do not span the image; the fit may be poor (see "
+        "rms_residual_px).");
+  m.def("fit_intrinsics_checked", [](const py::object& points, double max_rms_px) {
+    return fit_organized(points, [max_rms_px](const float* xyz, int w, int h, std::size_t s) {
+      return fit_intrinsics_checked(xyz, w, h, s, max_rms_px);
+    });
+  }, py::arg("points"), py::arg("max_rms_px") = kMaxIntrinsicsFitResidualPx,
+        "fit_intrinsics that also raises InvalidInput naming the residual when the RMS exceeds max_rms_px (the "
+        "cloud is not a pinhole range image: give the intrinsics instead).");
+}
+
+}  // namespace
+
+void bind_planner(py::module_& m) {
+  bind_return_model(m);
+  bind_plan_request(m);
+  bind_shot(m);
+  bind_planning(m);
+  bind_intrinsics_fit(m);
+}
+
+}  // namespace occ_improve::python

@@ -1,0 +1,179 @@
+"""The planner, the return model and the intrinsics fit from Python: values checked against their
+definitions (planner.hpp, return_model.hpp, intrinsics_fit.hpp), recomputed here with numpy."""
+import numpy as np
+import pytest
+
+import occ_improve as oi
+
+
+@pytest.fixture(scope="module")
+def pixel_mapper(sample):
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mapper.insert_depth(depth, intrinsics)
+    return mapper
+
+
+def empty_record(mapper):
+    return oi.ReturnRecord.for_grid(mapper.width, mapper.height)
+
+
+def neighbour_sums(counts):
+    """Sum over each cell's 8 neighbours (the cell itself left out), zero beyond the border."""
+    padded = np.pad(counts.astype(np.int64), 1)
+    h, w = counts.shape
+    total = sum(padded[1 + dv:1 + dv + h, 1 + du:1 + du + w] for dv in (-1, 0, 1) for du in (-1, 0, 1))
+    return total - counts
+
+
+def test_rays_shot_takes_the_best_scores_and_sums_them(pixel_mapper):
+    record = empty_record(pixel_mapper)
+    shot = oi.plan_next_shot(pixel_mapper, record, oi.PlanRequest(budget_rays=500))
+    scores = oi.shot_scores(pixel_mapper, record).ravel()
+    assert shot.columns.dtype == np.uint32 and len(shot) == 500 == shot.ranked_rays
+    assert len(set(shot.columns.tolist())) == 500
+    taken = scores[shot.columns]
+    assert np.all(np.diff(taken) <= 0), "ranked best first"
+    others = np.delete(scores, shot.columns)
+    assert taken.min() >= np.nanmax(others)
+    assert shot.expected_gain == pytest.approx(float(taken.astype(np.float64).sum()), rel=1e-5)
+    assert shot.stop == (shot.expected_gain < 0.1 * shot.ranked_rays)
+    # An empty record discounts nothing: the scores are the improvement map itself.
+    np.testing.assert_array_equal(oi.shot_scores(pixel_mapper, record), pixel_mapper.improvement())
+
+
+def test_an_array_plans_as_the_mapper_does(pixel_mapper):
+    record = empty_record(pixel_mapper)
+    a = oi.plan_next_shot(pixel_mapper, record, oi.PlanRequest(budget_rays=300))
+    b = oi.plan_next_shot(pixel_mapper.improvement(), record, oi.PlanRequest(budget_rays=300))
+    np.testing.assert_array_equal(a.columns, b.columns)
+    assert a.expected_gain == b.expected_gain
+
+
+def test_silent_rays_are_discounted_and_not_asked_again(pixel_mapper):
+    record = empty_record(pixel_mapper)
+    request = oi.PlanRequest(budget_rays=200)
+    first = oi.plan_next_shot(pixel_mapper, record, request)
+    record.record_shot(first.columns, np.zeros(len(first), dtype=bool))
+    assert record.total_asked == 200 and record.total_returned == 0 and oi.record_return_rate(record) == 0.0
+    asked = record.asked
+    assert asked.shape == (pixel_mapper.height, pixel_mapper.width) and asked.dtype == np.uint32
+    assert asked.sum() == 200 and np.all(asked.ravel()[first.columns] == 1)
+    second = oi.plan_next_shot(pixel_mapper, record, request)
+    assert set(first.columns.tolist()).isdisjoint(second.columns.tolist())
+    p = oi.return_probability_map(record)
+    assert p.dtype == np.float32 and p.ravel()[first.columns].max() < 0.7
+    np.testing.assert_allclose(oi.shot_scores(pixel_mapper, record), pixel_mapper.improvement() * p, rtol=1e-6)
+
+
+def test_return_probability_is_the_beta_bernoulli_mean():
+    rng = np.random.default_rng(3)
+    w, h = 13, 9
+    record = oi.ReturnRecord.for_grid(w, h)
+    for _ in range(20):
+        columns = rng.integers(0, w * h, size=30)
+        record.record_shot(columns, rng.random(30) < 0.6)
+    asked, returned = record.asked.astype(np.int64), record.returned.astype(np.int64)
+    np.testing.assert_array_equal(record.asked_nearby, neighbour_sums(asked))
+    np.testing.assert_array_equal(record.returned_nearby, neighbour_sums(returned))
+    s = 3.5
+    prior = (neighbour_sums(returned) + 1.0) / (neighbour_sums(asked) + 1.0)
+    expected = (s * prior + returned) / (s + asked)
+    got = oi.return_probability_map(record, oi.ReturnModelParams(prior_strength_shots=s))
+    np.testing.assert_allclose(got, expected, rtol=1e-6)
+    assert oi.record_return_rate(record) == pytest.approx(returned.sum() / asked.sum())
+    again = oi.ReturnRecord.from_counts(w, h, record.asked, record.returned)
+    np.testing.assert_array_equal(again.asked_nearby, record.asked_nearby)
+    assert again.total_returned == record.total_returned
+
+
+def test_return_record_refuses_bad_shots_and_counts_nothing():
+    record = oi.ReturnRecord.for_grid(4, 3)
+    with pytest.raises(oi.InvalidInput):
+        record.record_shot([0, 1], [True])
+    with pytest.raises(oi.InvalidParameter, match="12"):
+        record.record_shot([0, 12], [True, True])
+    assert record.empty and record.total_asked == 0
+    with pytest.raises(oi.InvalidInput):
+        oi.ReturnRecord.from_counts(4, 3, np.ones(12), np.full(12, 2))  # more returns than asks
+    with pytest.raises(oi.InvalidInput):
+        oi.ReturnRecord.from_counts(4, 3, np.ones(11), np.ones(11))
+    with pytest.raises(oi.InvalidInput):
+        record.check_matches(640, 480)
+    with pytest.raises(oi.InvalidParameter):
+        oi.ReturnModelParams(prior_strength_shots=0).validate()
+
+
+def test_window_and_decimation_shapes(pixel_mapper):
+    w, h = pixel_mapper.width, pixel_mapper.height
+    record = empty_record(pixel_mapper)
+    window = oi.plan_next_shot(pixel_mapper, record, oi.PlanRequest(
+        budget_rays=40 * 30, shape=oi.ShotShape.window, window_width_columns=40, window_height_columns=30))
+    v, u = np.divmod(window.columns.astype(np.int64), w)
+    assert len(window) == 1200 and np.ptp(u) == 39 and np.ptp(v) == 29
+    scores = oi.shot_scores(pixel_mapper, record)
+    box = scores[v.min():v.max() + 1, u.min():u.max() + 1]
+    assert window.expected_gain == pytest.approx(float(np.nansum(box, dtype=np.float64)), rel=1e-4)
+
+    budget = 5000
+    step = oi.decimation_step(w, h, budget)
+    assert len(oi.decimation_pattern(w, h, step, 0, 0)) <= budget < len(oi.decimation_pattern(w, h, step - 1, 0, 0))
+    shot = oi.plan_next_shot(pixel_mapper, record, oi.PlanRequest(budget_rays=budget, shape=oi.ShotShape.decimation))
+    v, u = np.divmod(shot.columns.astype(np.int64), w)
+    pattern = oi.decimation_pattern(w, h, step, int(u[0] % step), int(v[0] % step))
+    np.testing.assert_array_equal(shot.columns, pattern)
+
+
+def test_candidates_restrict_the_shot(pixel_mapper):
+    w, h = pixel_mapper.width, pixel_mapper.height
+    mask = np.zeros((h, w), dtype=bool)
+    mask[:, : w // 4] = True  # the left quarter only
+    request = oi.PlanRequest(budget_rays=400, candidates=mask)
+    assert request.candidates.shape == (w * h,) and request.candidates.dtype == np.bool_
+    shot = oi.plan_next_shot(pixel_mapper, empty_record(pixel_mapper), request)
+    assert len(shot) == 400 and np.all(shot.columns % w < w // 4)
+    request.candidates = None
+    assert request.candidates is None
+    request.candidates = np.ones(10, dtype=bool)
+    with pytest.raises(oi.InvalidInput):
+        oi.plan_next_shot(pixel_mapper, empty_record(pixel_mapper), request)
+
+
+def test_plan_errors_name_the_problem(pixel_mapper):
+    with pytest.raises(oi.InvalidParameter, match="budget"):
+        oi.plan_next_shot(pixel_mapper, empty_record(pixel_mapper), oi.PlanRequest(budget_rays=0))
+    with pytest.raises(oi.InvalidInput):
+        oi.plan_next_shot(pixel_mapper, oi.ReturnRecord.for_grid(10, 10))
+    with pytest.raises(oi.InvalidInput):
+        oi.plan_next_shot(np.zeros(5, np.float32), oi.ReturnRecord.for_grid(5, 1))
+    with pytest.raises(TypeError):
+        oi.PlanRequest(budget=3)
+
+
+def test_fit_intrinsics_recovers_the_camera(sample):
+    depth, k = sample
+    cloud = oi.depth_to_points(depth, k)
+    fit = oi.fit_intrinsics(cloud)
+    for name in ("fx", "fy", "cx", "cy"):
+        assert getattr(fit.intrinsics, name) == pytest.approx(getattr(k, name), abs=1e-3)
+    assert (fit.intrinsics.width, fit.intrinsics.height) == (k.width, k.height)
+    assert fit.points_used == int(np.count_nonzero(depth > 0))
+    assert fit.rms_residual_px < oi.MAX_INTRINSICS_FIT_RESIDUAL_PX
+    # PCL-style padding (H x W x 4, read with a stride of 4 floats) and float64 give the same fit.
+    padded = np.concatenate([cloud, np.ones(cloud.shape[:2] + (1,), np.float32)], axis=-1)
+    assert oi.fit_intrinsics(padded[..., :3]).intrinsics.fx == fit.intrinsics.fx
+    assert oi.fit_intrinsics(cloud.astype(np.float64)).intrinsics.cx == pytest.approx(fit.intrinsics.cx, abs=1e-9)
+
+
+def test_fit_intrinsics_refuses_what_is_no_pinhole_image(sample):
+    depth, k = sample
+    cloud = oi.depth_to_points(depth, k)
+    shifted = cloud.copy()
+    shifted[::2, :, 0] += 0.01  # every other row moved sideways: no single pinhole explains it
+    assert oi.fit_intrinsics(shifted).rms_residual_px > oi.MAX_INTRINSICS_FIT_RESIDUAL_PX
+    with pytest.raises(oi.InvalidInput, match="residual|RMS|rms"):
+        oi.fit_intrinsics_checked(shifted)
+    with pytest.raises(oi.InvalidInput, match="organized"):
+        oi.fit_intrinsics(cloud.reshape(-1, 3))
+    with pytest.raises(oi.InvalidInput):
+        oi.fit_intrinsics(np.full((20, 20, 3), np.nan, np.float32))
