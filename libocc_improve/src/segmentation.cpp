@@ -1,5 +1,6 @@
 #include "occ_improve/segmentation.hpp"
 
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <Eigen/Dense>
@@ -22,6 +23,17 @@ void SegmentationParams::validate() const {
   require_parameter(plane_min_columns >= 3, "plane_min_columns", static_cast<double>(plane_min_columns), ">= 3");
   require_parameter(plane_ransac_iterations >= 1 && plane_ransac_iterations <= 100000, "plane_ransac_iterations",
                     plane_ransac_iterations, "in [1, 100000]");
+  require_parameter(std::isfinite(crease_arm_m) && crease_arm_m > 0 && crease_arm_m <= 1, "crease_arm_m", crease_arm_m,
+                    "in (0, 1]");
+  require_parameter(std::isfinite(crease_smoothing_share) && crease_smoothing_share >= 0 && crease_smoothing_share <= 1,
+                    "crease_smoothing_share", crease_smoothing_share, "in [0, 1]");
+  require_parameter(std::isfinite(crease_min_bend_deg) && crease_min_bend_deg > 0 && crease_min_bend_deg < 180,
+                    "crease_min_bend_deg", crease_min_bend_deg, "in (0, 180)");
+  require_parameter(std::isfinite(crease_min_view_angle_deg) && crease_min_view_angle_deg >= 0 &&
+                        crease_min_view_angle_deg < 90,
+                    "crease_min_view_angle_deg", crease_min_view_angle_deg, "in [0, 90)");
+  require_parameter(crease_max_arm_px >= 2 && crease_max_arm_px <= 256, "crease_max_arm_px", crease_max_arm_px,
+                    "in [2, 256]");
 }
 
 SegmentationParams segmentation_defaults(const SensorPreset& preset) {
@@ -120,6 +132,144 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
   for (std::uint32_t c : candidates)
     if (std::abs(normal.dot(points[c]) + offset) < band) plane[c] = 1, ++count;
   return count >= params.plane_min_columns ? count : 0;
+}
+
+// Summed-area tables of the surface points over the member rays, so a ray's neighbourhood mean costs four
+// look-ups whatever its radius (which follows the ray's depth). Only member rays (valid, not contour) are
+// summed, so a mean never mixes the two sides of a depth step.
+class PointMeans {
+public:
+  PointMeans(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint8_t>& member, int width, int height)
+      : width_(width), height_(height), sum_(static_cast<std::size_t>(width + 1) * (height + 1), Eigen::Vector4d::Zero()) {
+    for (int e = 0; e < height; ++e) {
+      Eigen::Vector4d row = Eigen::Vector4d::Zero();
+      for (int a = 0; a < width; ++a) {
+        const std::size_t c = static_cast<std::size_t>(e) * width + a;
+        if (member[c]) row += Eigen::Vector4d(points[c].x(), points[c].y(), points[c].z(), 1.0);
+        at(a + 1, e + 1) = at(a + 1, e) + row;
+      }
+    }
+  }
+  /// Mean of the member points in the square of radius r around (a, e), clipped to the image.
+  Eigen::Vector3f mean(int a, int e, int r) const {
+    const int a0 = std::max(a - r, 0), a1 = std::min(a + r + 1, width_);
+    const int e0 = std::max(e - r, 0), e1 = std::min(e + r + 1, height_);
+    const Eigen::Vector4d s = at(a1, e1) - at(a0, e1) - at(a1, e0) + at(a0, e0);
+    return (s.head<3>() / std::max(s.w(), 1.0)).cast<float>();
+  }
+
+private:
+  Eigen::Vector4d& at(int a, int e) { return sum_[static_cast<std::size_t>(e) * (width_ + 1) + a]; }
+  const Eigen::Vector4d& at(int a, int e) const { return sum_[static_cast<std::size_t>(e) * (width_ + 1) + a]; }
+  int width_, height_;
+  std::vector<Eigen::Vector4d> sum_;
+};
+
+// The angle between the rays of two neighbouring columns at the image centre: converts the crease arm
+// from metres on the surface to pixels.
+double column_angle_rad(const SphericalGeometry& geometry) {
+  const int a = std::max(0, geometry.width() / 2 - 1), e = geometry.height() / 2;
+  if (geometry.width() < 2) return 1.0;
+  const double cosine = geometry.direction(a, e).dot(geometry.direction(a + 1, e));
+  return std::acos(std::clamp(cosine, -1.0, 1.0));
+}
+
+// Counts of non-member rays along the image's lines in one direction (du, dv), cumulative from the line's
+// start, so whether a straight section between two rays stays on member rays costs two look-ups.
+class LineGaps {
+public:
+  LineGaps(const std::vector<std::uint8_t>& member, int width, int height, int du, int dv)
+      : width_(width), du_(du), dv_(dv), count_(member.size(), 0) {
+    for (int e = 0; e < height; ++e)
+      for (int a = 0; a < width; ++a) {
+        const std::size_t c = static_cast<std::size_t>(e) * width + a;
+        const int pa = a - du, pe = e - dv;  // the previous ray on this ray's line
+        const bool inside = pa >= 0 && pa < width && pe >= 0 && pe < height;
+        // Lines run towards +dv (dv >= 0 in every direction used), so the previous ray is already done.
+        count_[c] = (member[c] ? 0u : 1u) + (inside ? count_[static_cast<std::size_t>(pe) * width + pa] : 0u);
+      }
+  }
+  /// True when every ray from (a, e) to (a + steps du, e + steps dv), both ends included, is a member.
+  bool clear(int a, int e, int steps) const {
+    const std::uint32_t before = (a - du_ >= 0 && a - du_ < width_ && e - dv_ >= 0) ? count_[index(a - du_, e - dv_)] : 0u;
+    return count_[index(a + steps * du_, e + steps * dv_)] == before;  // counts only grow along a line
+  }
+
+private:
+  std::size_t index(int a, int e) const { return static_cast<std::size_t>(e) * width_ + a; }
+  int width_, du_, dv_;
+  std::vector<std::uint32_t> count_;
+};
+
+// The crease arm in pixels at a ray of the given range (step 3), and the smoothing radius that goes with it.
+struct ArmPixels {
+  int arm = 2, radius = 1;
+};
+ArmPixels arm_pixels(double range_m, double pixel_rad, const SegmentationParams& params) {
+  ArmPixels out;
+  out.arm = std::clamp(static_cast<int>(std::lround(params.crease_arm_m / (range_m * pixel_rad))), 2,
+                       params.crease_max_arm_px);
+  out.radius = static_cast<int>(std::lround(params.crease_smoothing_share * out.arm));
+  return out;
+}
+
+// A section bends wherever one arm reaches across the crease, so crease rays form a band up to an arm wide
+// on either side of it: wide enough to close around a box where a thin ridge breaks up in the noise (a
+// ridge-only crease, tried, leaves gaps through which the boxes join again). The attachment by depth then
+// splits the band along its middle.
+//
+// Concave creases (step 3 of the header): at each member ray (valid, not contour, not plane), the
+// smoothed surface points an arm to either side in 4 image directions; the ray is a crease ray when, in
+// any direction, the section bends by at least the minimum angle and its chord passes between the ray's
+// point and the sensor (concave; a convex edge's chord passes behind the point). A section is skipped
+// where it crosses a hole or the removed plane (the table's edge is the plane's business) or where an arm
+// runs nearly along the line of sight: that is a depth step, not a crease between two faces both seen.
+// Contour rays may lie on the section: the improvement's band often lines a crease too.
+std::vector<std::uint8_t> concave_creases(const SphericalGeometry& geometry, const std::vector<Eigen::Vector3f>& points,
+                                          const PointMeans& means, const std::vector<std::uint8_t>& member,
+                                          const std::vector<std::uint8_t>& passable, const SegmentationParams& params) {
+  const int width = geometry.width(), height = geometry.height();
+  std::vector<std::uint8_t> crease(member.size(), 0);
+  const double pixel_rad = column_angle_rad(geometry);
+  const float max_cosine = static_cast<float>(std::cos(M_PI - params.crease_min_bend_deg * M_PI / 180.0));
+  const float step_cosine = static_cast<float>(std::cos(params.crease_min_view_angle_deg * M_PI / 180.0));
+  // Directions with dv >= 0, so each line is counted from its top end (LineGaps).
+  constexpr std::array<std::array<int, 2>, 4> kDirections{{{1, 0}, {0, 1}, {1, 1}, {-1, 1}}};
+  const std::array<LineGaps, 4> gaps{LineGaps(passable, width, height, 1, 0), LineGaps(passable, width, height, 0, 1),
+                                     LineGaps(passable, width, height, 1, 1), LineGaps(passable, width, height, -1, 1)};
+  for (int e = 0; e < height; ++e) {
+    throw_if_stop_requested();
+    for (int a = 0; a < width; ++a) {
+      const std::size_t c = static_cast<std::size_t>(e) * width + a;
+      if (!member[c]) continue;
+      const auto [arm, radius] = arm_pixels(points[c].norm(), pixel_rad, params);
+      const Eigen::Vector3f centre = means.mean(a, e, radius);
+      const float centre_range = centre.norm();
+      for (std::size_t d = 0; d < kDirections.size(); ++d) {
+        const int du = kDirections[d][0], dv = kDirections[d][1];
+        // Diagonal steps are sqrt(2) longer: fewer of them for the same arm.
+        const int steps = du != 0 && dv != 0 ? std::max(1, static_cast<int>(std::lround(arm / std::sqrt(2.0)))) : arm;
+        const int a0 = a - du * steps, e0 = e - dv * steps, a1 = a + du * steps, e1 = e + dv * steps;
+        if (std::min(a0, a1) < 0 || std::max(a0, a1) >= width || e0 < 0 || e1 >= height) continue;
+        if (!member[static_cast<std::size_t>(e0) * width + a0] || !member[static_cast<std::size_t>(e1) * width + a1] ||
+            !gaps[d].clear(a0, e0, 2 * steps))
+          continue;
+        const Eigen::Vector3f before = means.mean(a0, e0, radius) - centre, after = means.mean(a1, e1, radius) - centre;
+        const float before_norm = before.norm(), after_norm = after.norm();
+        if (!(before_norm > 0 && after_norm > 0)) continue;
+        if (std::abs(before.dot(centre)) > step_cosine * before_norm * centre_range ||
+            std::abs(after.dot(centre)) > step_cosine * after_norm * centre_range)
+          continue;  // an arm along the line of sight: a depth step
+        if ((before + after).dot(centre) >= 0) continue;  // convex: the chord's midpoint lies behind the point
+        // Flat: the arms point in opposite directions (cosine -1); the bend is 180 deg minus their angle.
+        if (before.dot(after) > max_cosine * before_norm * after_norm) {
+          crease[c] = 1;
+          break;
+        }
+      }
+    }
+  }
+  return crease;
 }
 
 // Labels 4-connected components of rays where `member` is set; returns each component's size
@@ -227,6 +377,20 @@ Segmentation segment_improvement(const SphericalGeometry& geometry, const Surfac
   std::vector<std::uint8_t> plane(n, 0);
   if (params.remove_dominant_plane) out.plane_columns = find_dominant_plane(points, valid, params, plane);
   if (out.plane_columns == 0) std::fill(plane.begin(), plane.end(), 0);
+  out.crease.assign(n, 0);
+  if (params.split_concave_creases) {
+    // The plane is a segment already: no crease in or across it.
+    std::vector<std::uint8_t> member(n, 0), passable(n, 0);
+    for (std::size_t c = 0; c < n; ++c) {
+      member[c] = interior[c] && !plane[c];
+      passable[c] = valid[c] && !plane[c];
+    }
+    out.crease = concave_creases(geometry, points, PointMeans(points, member, width, height), member, passable, params);
+    for (std::size_t c = 0; c < n; ++c) {
+      out.crease_columns += out.crease[c];
+      if (out.crease[c]) interior[c] = 0;
+    }
+  }
 
   // Working labels: kNone where no surface, kUnassigned where valid but not yet in a segment.
   std::vector<std::uint32_t> label(n, kUnassigned);
