@@ -25,7 +25,7 @@ const ToolFlags kFlags{
     "table, 20+ objects): ours (negative-improvement contours, intrinsics fitted to the cloud) and PCL's\n"
     "OrganizedMultiPlaneSegmentation + OrganizedConnectedComponentSegmentation with\n"
     "EuclideanClusterComparator, the dominant plane left out in both unless -no_plane.\n",
-    {"-q", "-preset", "-contour", "-min_segment", "-no_plane", "-plane_distance", "-pcl_min_inliers", "-pcl_distance",
+    {"-q", "-preset", "-contour", "-min_segment", "-no_plane", "-no_crease", "-plane_distance", "-pcl_min_inliers", "-pcl_distance",
      "-pcl_min_cluster"},
     {},
     {},
@@ -130,8 +130,8 @@ int run(const CommandLine& command_line) {
   const std::vector<std::string>& files = command_line.positionals();
   if (files.empty()) throw InvalidParameter("no labelled .pcd file given (see -h)");
 
-  std::printf("ours: %s dominant-plane removal; PCL: dominant plane left out\n",
-              ours.remove_dominant_plane ? "with" : "without");
+  std::printf("ours: %s dominant-plane removal, %s concave creases; PCL: dominant plane left out\n",
+              ours.remove_dominant_plane ? "with" : "without", ours.split_concave_creases ? "with" : "without");
   MethodRuns ours_runs, pcl_runs;
   ProgressLine progress(command_line, "cloud");
   try {
