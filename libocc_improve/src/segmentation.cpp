@@ -142,21 +142,30 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
 // summed, so a mean never mixes the two sides of a depth step.
 class PointMeans {
 public:
-  PointMeans(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint8_t>& member, int width, int height)
-      : width_(width), height_(height), sum_(static_cast<std::size_t>(width + 1) * (height + 1), Eigen::Vector4d::Zero()) {
-    for (int e = 0; e < height; ++e) {
+  PointMeans(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint8_t>& member, int width, int height) {
+    // The tables cover only the box around the member rays (the objects, a fraction of a table-top frame).
+    int a_min = width, a_max = -1, e_min = height, e_max = -1;
+    for (int e = 0; e < height; ++e)
+      for (int a = 0; a < width; ++a)
+        if (member[static_cast<std::size_t>(e) * width + a])
+          a_min = std::min(a_min, a), a_max = std::max(a_max, a), e_min = std::min(e_min, e), e_max = std::max(e_max, e);
+    if (a_max < 0) return;
+    a0_ = a_min, e0_ = e_min, width_ = a_max - a_min + 1, height_ = e_max - e_min + 1;
+    sum_.assign(static_cast<std::size_t>(width_ + 1) * (height_ + 1), Eigen::Vector4d::Zero());
+    for (int e = 0; e < height_; ++e) {
       Eigen::Vector4d row = Eigen::Vector4d::Zero();
-      for (int a = 0; a < width; ++a) {
-        const std::size_t c = static_cast<std::size_t>(e) * width + a;
+      for (int a = 0; a < width_; ++a) {
+        const std::size_t c = static_cast<std::size_t>(e + e0_) * width + a + a0_;
         if (member[c]) row += Eigen::Vector4d(points[c].x(), points[c].y(), points[c].z(), 1.0);
         at(a + 1, e + 1) = at(a + 1, e) + row;
       }
     }
   }
-  /// Mean of the member points in the square of radius r around (a, e), clipped to the image.
+  /// Mean of the member points in the square of radius r around (a, e) (zero when it holds none).
   Eigen::Vector3f mean(int a, int e, int r) const {
-    const int a0 = std::max(a - r, 0), a1 = std::min(a + r + 1, width_);
-    const int e0 = std::max(e - r, 0), e1 = std::min(e + r + 1, height_);
+    if (sum_.empty()) return Eigen::Vector3f::Zero();
+    const int a0 = std::clamp(a - r - a0_, 0, width_), a1 = std::clamp(a + r + 1 - a0_, 0, width_);
+    const int e0 = std::clamp(e - r - e0_, 0, height_), e1 = std::clamp(e + r + 1 - e0_, 0, height_);
     const Eigen::Vector4d s = at(a1, e1) - at(a0, e1) - at(a1, e0) + at(a0, e0);
     return (s.head<3>() / std::max(s.w(), 1.0)).cast<float>();
   }
@@ -164,7 +173,7 @@ public:
 private:
   Eigen::Vector4d& at(int a, int e) { return sum_[static_cast<std::size_t>(e) * (width_ + 1) + a]; }
   const Eigen::Vector4d& at(int a, int e) const { return sum_[static_cast<std::size_t>(e) * (width_ + 1) + a]; }
-  int width_, height_;
+  int a0_ = 0, e0_ = 0, width_ = 0, height_ = 0;  // the member rays' bounding box
   std::vector<Eigen::Vector4d> sum_;
 };
 
