@@ -250,15 +250,11 @@ std::vector<std::uint8_t> concave_creases(const SphericalGeometry& geometry, con
     }
     return false;
   };
-  // The band is an arm wide (>= 2 rays) on either side of a crease, so testing every second ray each way
-  // and marking its 2 x 2 block keeps the band closed at a quarter of the cost.
-  for (int e = 0; e < height; e += 2) {
+  // Every ray is tested: testing every second ray each way (2 x 2 blocks) was a third cheaper, but left
+  // the band closing around a stack only at the defaults (a 0.5 cm change of the arm joined learn17's boxes).
+  for (int e = 0; e < height; ++e) {
     throw_if_stop_requested();
-    for (int a = 0; a < width; a += 2) {
-      if (!member[ray(a, e)] || !folds(a, e)) continue;
-      for (int y = e; y < std::min(e + 2, height); ++y)
-        for (int x = a; x < std::min(a + 2, width); ++x) crease[ray(x, y)] = member[ray(x, y)];
-    }
+    for (int a = 0; a < width; ++a) crease[ray(a, e)] = member[ray(a, e)] && folds(a, e);
   }
   return crease;
 }
