@@ -138,7 +138,7 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
 }
 
 // Summed-area tables of the surface points over the member rays, so a ray's neighbourhood mean costs four
-// look-ups whatever its radius (which follows the ray's depth). Only member rays (valid, not contour) are
+// look-ups whatever its radius (which follows the ray's depth). Only member rays (valid, not contour, not plane) are
 // summed, so a mean never mixes the two sides of a depth step.
 class PointMeans {
 public:
