@@ -6,9 +6,101 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
 
 namespace occ_improve {
 namespace {
+
+
+// A table top seen by a Kinect v1 from 0.7 m above it, pitched down 45 deg, with axis-aligned boxes on it,
+// ray-cast per pixel with the Kinect's axial noise (sigma = 1.425e-3 z^2). World axes relative to the
+// camera: X right, Y up, Z forward along the table; the table is Y = -0.7, cropped like mOSD's tables.
+struct Box {
+  Eigen::Vector3d min, max;  // world corners
+};
+
+class TableScene {
+public:
+  explicit TableScene(const std::vector<Box>& boxes) : intrinsics_(kinect_v1_intrinsics()) {
+    const double pitch = 45.0 * M_PI / 180.0;
+    right_ = {1, 0, 0};
+    up_ = {0, -std::cos(pitch), -std::sin(pitch)};  // world up in the camera's optical frame (y down)
+    forward_ = {0, -std::sin(pitch), std::cos(pitch)};
+    std::mt19937 random(7);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    for (int v = 0; v < intrinsics_.height; ++v)
+      for (int u = 0; u < intrinsics_.width; ++u) {
+        const Eigen::Vector3d ray((u - intrinsics_.cx) / intrinsics_.fx, (v - intrinsics_.cy) / intrinsics_.fy, 1.0);
+        const double t = nearest_hit(ray, boxes);  // t = z along this ray
+        if (!std::isfinite(t)) {
+          points_.emplace_back(nan, nan, nan);
+          continue;
+        }
+        const double z = t + 1.425e-3 * t * t * unit(random);
+        points_.push_back((ray * z).cast<float>());
+      }
+  }
+  const std::vector<Eigen::Vector3f>& points() const { return points_; }
+  /// A world point in the camera's optical frame.
+  Eigen::Vector3d camera_point(const Eigen::Vector3d& world) const {
+    return world.x() * right_ + world.y() * up_ + world.z() * forward_;
+  }
+
+private:
+  static constexpr double kTableY = -0.7;
+  // The nearest intersection's z (the ray has z = 1), or infinity.
+  double nearest_hit(const Eigen::Vector3d& ray, const std::vector<Box>& boxes) const {
+    const Eigen::Vector3d direction(ray.dot(right_), ray.dot(up_), ray.dot(forward_));  // world axes
+    double best = std::numeric_limits<double>::infinity();
+    if (direction.y() < 0) {  // the table, cropped to 1.2 m x 1.5 m
+      const double t = kTableY / direction.y();
+      const Eigen::Vector3d hit = t * direction;
+      if (std::abs(hit.x()) < 0.6 && hit.z() > 0.4 && hit.z() < 1.9) best = t;
+    }
+    for (const Box& box : boxes) {  // slab test
+      double enter = 0, leave = std::numeric_limits<double>::infinity();
+      for (int k = 0; k < 3; ++k) {
+        if (std::abs(direction[k]) < 1e-12) {
+          if (0 < box.min[k] || 0 > box.max[k]) leave = -1;
+          continue;
+        }
+        const double a = box.min[k] / direction[k], b = box.max[k] / direction[k];
+        enter = std::max(enter, std::min(a, b));
+        leave = std::min(leave, std::max(a, b));
+      }
+      if (enter <= leave && enter > 0) best = std::min(best, enter);
+    }
+    return best;
+  }
+  PinholeIntrinsics intrinsics_;
+  Eigen::Vector3d right_, up_, forward_;
+  std::vector<Eigen::Vector3f> points_;
+};
+
+struct SegmentedTable {
+  Mapper mapper;
+  Segmentation segmentation;
+  const TableScene& scene;
+  SegmentedTable(const TableScene& s, const SegmentationParams& params)
+      : mapper(kinect_v1()), scene(s) {
+    mapper.insert(PointSpan::from(s.points()));
+    segmentation = segment_improvement(mapper.geometry(), mapper.surface(), mapper.improvement(), params);
+  }
+  std::uint32_t label_at(const Eigen::Vector3d& world) const {
+    const Eigen::Vector3d p = scene.camera_point(world);
+    ColumnIndex c = 0;
+    EXPECT_TRUE(mapper.geometry().column_of(p.x(), p.y(), p.z(), c));
+    return segmentation.label[c];
+  }
+};
+
+constexpr double kTable = -0.7;
 
 struct Scene {
   SensorPreset preset;
@@ -46,6 +138,79 @@ TEST(Segmentation, OccludersAreCutFromTheBackground) {
   std::size_t in_segments = 0;
   for (const Segment& seg : s.segments) in_segments += seg.columns;
   EXPECT_EQ(in_segments, labelled);
+}
+
+// A box standing on a larger one, set back from its front edge: where the upper box's front face meets
+// the lower box's top there is no depth step, only a concave crease. The crease cue splits them; the
+// improvement contours alone do not.
+TEST(Segmentation, ConcaveCreaseSplitsABoxStandingOnAnother) {
+  const TableScene scene({Box{{-0.15, kTable, 0.95}, {0.15, kTable + 0.06, 1.3}},
+                          Box{{-0.09, kTable + 0.06, 1.05}, {0.09, kTable + 0.13, 1.22}}});
+  SegmentationParams params = segmentation_defaults(kinect_v1());
+  const SegmentedTable with(scene, params);
+  const Eigen::Vector3d lower_top(0.0, kTable + 0.06, 0.99), upper_top(0.0, kTable + 0.13, 1.14),
+      upper_front(0.0, kTable + 0.095, 1.05);
+  const std::uint32_t lower = with.label_at(lower_top), upper = with.label_at(upper_top);
+  ASSERT_NE(lower, 0u);
+  ASSERT_NE(upper, 0u);
+  EXPECT_NE(lower, upper) << "the crease between the boxes separates them";
+  EXPECT_EQ(with.label_at(upper_front), upper) << "the upper box's front face stays with its top";
+  EXPECT_GT(with.segmentation.crease_columns, 0u);
+  params.split_concave_creases = false;
+  const SegmentedTable without(scene, params);
+  EXPECT_EQ(without.label_at(lower_top), without.label_at(upper_top)) << "without creases they are one segment";
+  EXPECT_EQ(without.segmentation.crease_columns, 0u);
+}
+
+// Two boxes side by side, touching, the right one lower and set back: the left box's side face meets the
+// right box's top and front in concave creases. They come out as two segments.
+TEST(Segmentation, ConcaveCreaseSplitsTwoTouchingBoxes) {
+  const TableScene scene({Box{{-0.30, kTable, 1.0}, {-0.12, kTable + 0.14, 1.25}},
+                          Box{{-0.12, kTable, 1.05}, {0.08, kTable + 0.08, 1.30}}});
+  const SegmentedTable s(scene, segmentation_defaults(kinect_v1()));
+  const std::uint32_t left = s.label_at({-0.21, kTable + 0.14, 1.12}), right = s.label_at({-0.02, kTable + 0.08, 1.17});
+  ASSERT_NE(left, 0u);
+  ASSERT_NE(right, 0u);
+  EXPECT_NE(left, right);
+  EXPECT_NE(left, s.label_at({0.3, kTable, 1.5})) << "and the table is a segment of its own";
+}
+
+// One box seen across its convex edges (top, front and right faces in view): one segment, no crease ray
+// on it.
+TEST(Segmentation, ConvexEdgesOfOneBoxDoNotSplitIt) {
+  // Far enough left that its right face is seen at ~20 deg from grazing.
+  const TableScene scene({Box{{-0.47, kTable, 0.85}, {-0.29, kTable + 0.12, 1.05}}});
+  const SegmentedTable s(scene, segmentation_defaults(kinect_v1()));
+  const std::uint32_t top = s.label_at({-0.38, kTable + 0.12, 0.95}), front = s.label_at({-0.38, kTable + 0.06, 0.85}),
+                      side = s.label_at({-0.29, kTable + 0.06, 0.95});
+  ASSERT_NE(top, 0u);
+  EXPECT_EQ(front, top);
+  EXPECT_EQ(side, top);
+  std::size_t box_rays = 0, box_creases = 0;
+  for (std::size_t c = 0; c < s.segmentation.label.size(); ++c)
+    if (s.segmentation.label[c] == top) box_rays += 1, box_creases += s.segmentation.crease[c];
+  EXPECT_GT(box_rays, 2000u);
+  EXPECT_LT(box_creases, box_rays / 50) << "convex edges are no creases";
+}
+
+TEST(Segmentation, CreaseParametersAreValidated) {
+  const auto refused = [](auto&& change) {
+    SegmentationParams p;
+    change(p);
+    try {
+      p.validate();
+    } catch (const InvalidParameter& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(refused([](SegmentationParams& p) { p.crease_arm_m = 0; }).find("crease_arm_m"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.crease_arm_m = std::nan(""); }).find("crease_arm_m"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.crease_min_bend_deg = 180; }).find("crease_min_bend_deg"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.crease_smoothing_share = 1.5; }).find("crease_smoothing_share"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.crease_min_view_angle_deg = 90; }).find("crease_min_view_angle_deg"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.crease_max_arm_px = 1; }).find("crease_max_arm_px"), std::string::npos);
+  EXPECT_EQ(refused([](SegmentationParams&) {}), "accepted");
 }
 
 TEST(Segmentation, EmptyMapGivesNoSegmentsAndBadParamsThrow) {

@@ -69,13 +69,15 @@ std::vector<std::uint8_t> dilate(const std::vector<std::uint8_t>& mask, int widt
   return out;
 }
 
-// Share of the set pixels of `a` that lie in `b_dilated` (1 when `a` is empty: nothing claimed, nothing wrong).
-double matched_share(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b_dilated) {
+// Share of the set pixels of `a` that lie in `b_dilated` and are labelled in `labelled` (1 when `a` is
+// empty: nothing claimed, nothing wrong).
+double matched_share(const std::vector<std::uint8_t>& a, const std::vector<std::uint8_t>& b_dilated,
+                     const std::vector<std::uint32_t>& labelled) {
   std::size_t total = 0, matched = 0;
   for (std::size_t i = 0; i < a.size(); ++i)
     if (a[i]) {
       ++total;
-      matched += b_dilated[i];
+      matched += b_dilated[i] && labelled[i] != 0;
     }
   return total == 0 ? 1.0 : static_cast<double>(matched) / static_cast<double>(total);
 }
@@ -174,10 +176,29 @@ SegmentationScore evaluate_segmentation(const std::vector<std::uint32_t>& ground
 
   const auto truth_edges = boundary_mask(regions, valid, width, height);
   const auto predicted_edges = boundary_mask(predicted, valid, width, height);
+  // Predicted edges are labelled by construction; a ground-truth edge left unlabelled is a miss.
   score.boundary_precision =
-      matched_share(predicted_edges, dilate(truth_edges, width, height, options.boundary_tolerance_px));
-  score.boundary_recall = matched_share(truth_edges, dilate(predicted_edges, width, height, options.boundary_tolerance_px));
+      matched_share(predicted_edges, dilate(truth_edges, width, height, options.boundary_tolerance_px), predicted);
+  score.boundary_recall =
+      matched_share(truth_edges, dilate(predicted_edges, width, height, options.boundary_tolerance_px), predicted);
   return score;
+}
+
+PooledScore pool_scores(const std::vector<SegmentationScore>& clouds, const EvaluationOptions& options) {
+  options.validate();
+  PooledScore pooled;
+  for (const SegmentationScore& cloud : clouds)
+    for (const ObjectScore& object : cloud.objects) {
+      if (object.points < options.min_object_points) continue;
+      ++pooled.objects;
+      pooled.mean_f += object.f;
+      pooled.well_segmented_share += object.f >= options.well_segmented_f ? 1 : 0;
+    }
+  if (pooled.objects > 0) {
+    pooled.mean_f /= static_cast<double>(pooled.objects);
+    pooled.well_segmented_share /= static_cast<double>(pooled.objects);
+  }
+  return pooled;
 }
 
 void PclSegmentationParams::validate() const {

@@ -231,6 +231,8 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
               1),
       switch_flag("-no_plane", kSegmentation,
                   "keep the dominant plane (table, floor); by default it is taken out first, as PCL does"),
+      switch_flag("-no_crease", kSegmentation,
+                  "cut along the improvement contours only, not along concave creases of the surface"),
       bounded(value_flag("-plane_distance", K::number, "D", kSegmentation, "plane inlier band [m]", "",
                          "0.006 pixel-native, 0.01 spherical"),
               0, kInf, true),

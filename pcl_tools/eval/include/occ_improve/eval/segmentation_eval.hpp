@@ -11,7 +11,11 @@
 //    ground-truth region (another object, or the table taken as one region), counted relative to the
 //    smaller of the two regions, so a merge into the much larger table counts too;
 //  - boundary precision / recall: boundary pixels (a 4-neighbour with another label, both valid) of the
-//    prediction within boundary_tolerance_px (Chebyshev) of a ground-truth boundary pixel, and back.
+//    prediction within boundary_tolerance_px (Chebyshev) of a ground-truth boundary pixel, and back. Like for
+//    like between methods: a ground-truth boundary pixel the method leaves unlabelled is a miss, even when a
+//    predicted boundary lies within the tolerance (a method that leaves edges unlabelled gains nothing);
+//  - pooled over clouds (pool_scores): the mean F over all objects of at least min_object_points points and
+//    the share of them at F >= well_segmented_f, so every object weighs the same whatever its cloud holds.
 // Only points valid in the ground truth (label != 0) count; a predicted label 0 means "no segment".
 
 #include <pcl/point_cloud.h>
@@ -32,6 +36,7 @@ struct EvaluationOptions {
   double well_segmented_f = 0.75;         ///< an object counts as well segmented from this F on
   double fragment_share = 0.10;           ///< over/under-segmentation threshold (share of a region)
   int boundary_tolerance_px = 2;
+  std::size_t min_object_points = 100;    ///< smaller ground-truth objects are left out of the pooled scores
   void validate() const;
 };
 
@@ -56,6 +61,14 @@ struct SegmentationScore {
 SegmentationScore evaluate_segmentation(const std::vector<std::uint32_t>& ground_truth,
                                         const std::vector<std::uint32_t>& predicted, int width, int height,
                                         const EvaluationOptions& options = {});
+
+/// Objects of all clouds pooled: every ground-truth object of at least options.min_object_points points.
+struct PooledScore {
+  std::size_t objects = 0;
+  double mean_f = 0;                ///< 0 when there are no objects
+  double well_segmented_share = 0;  ///< share of objects with F >= options.well_segmented_f
+};
+PooledScore pool_scores(const std::vector<SegmentationScore>& clouds, const EvaluationOptions& options = {});
 
 /// PCL's organized segmentation recipe (pcl/apps organized_segmentation_demo): integral-image normals,
 /// OrganizedMultiPlaneSegmentation, then OrganizedConnectedComponentSegmentation with an
