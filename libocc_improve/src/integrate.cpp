@@ -34,9 +34,15 @@ using detail::fast_log;
 //   the step term deviates from 1/2 by < eps/8 once u > log(4/eps), the peak term is < eps/8 once
 //   t^2 + B > log(8/(3 eps)), and |logit(1/2 + d)| < 4.001 |d|. (Half the allowed epsilon: the residues
 //   summed over a column's measurements stay well inside the surface's 1e-5 tie tolerance.)
+//   Where B >= log(8/(3 eps)) (14.8: a pixel-native return's diagonal neighbours, B = 24) the peak term is
+//   below eps/8 at every depth, so the offset is the step term's alone, (log(4/eps) - 4 - B)/2 (-6.4
+//   sigmas at B = 24): such a neighbour only carves free space, and its update stops 6.4 sigmas in front
+//   of its return instead of at it.
 double skip_offset_sigmas(double angular_term) {
   static const double step_limit = std::log(4.0 / kSkipEpsilon), peak_limit = std::log(8.0 / (3.0 * kSkipEpsilon));
-  return std::max((step_limit - 4.0 - angular_term) / 2.0, std::sqrt(std::max(0.0, peak_limit - angular_term)));
+  const double step_offset = (step_limit - 4.0 - angular_term) / 2.0;
+  if (angular_term >= peak_limit) return step_offset;
+  return std::max(step_offset, std::sqrt(peak_limit - angular_term));
 }
 
 // In exact mode, bins with u < kLinearU take logit P_s = log(1/2) + u: there log(1 + e^u) < 2.1e-9 and the

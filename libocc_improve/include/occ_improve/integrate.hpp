@@ -3,7 +3,10 @@
 // column whose angular extent overlaps its +-k sigma box, along the whole ray in front of it.
 //
 // Documented approximations of this fast path (all bounded; tests/reference checks them):
-//  - voxels behind a measurement whose |logit P_s| < kSkipEpsilon (1e-6) are not updated (SPEC 4);
+//  - voxels behind a measurement whose |logit P_s| < kSkipEpsilon (1e-6) are not updated (SPEC 4); where
+//    the angular term B >= log(8 / (3 eps)) = 14.8 (a pixel-native return's diagonal neighbours, B = 24)
+//    the peak term is below eps/8 at every depth, so the update ends where the step term's deviation from
+//    1/2 falls below eps/8: (log(4/eps) - 4 - B)/2 sigmas (-6.4 at B = 24), in front of the return;
 //  - logit P_s is evaluated in float with polynomial exp/log (fast_math.hpp; |error| < 2e-6 against the
 //    double logit_opdf, tests/test_fast_math.cpp);
 //  - exact mode: far in front (u < -20) logit P_s is taken as log(1/2) + u (error < 1e-8);
