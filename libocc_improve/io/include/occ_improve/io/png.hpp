@@ -17,4 +17,17 @@ std::vector<std::uint8_t> encode_png(const Image& image, int compression_level =
 /// file as it was). Throws IoError when the file cannot be written, InvalidInput for an inconsistent image.
 void write_png(const std::string& path, const Image& image);
 
+/// A 16-bit grey image: label ids (regions.png, labels.png) or depth in millimetres (depth_mm.png), row-major.
+struct Image16 {
+  int width = 0, height = 0;
+  std::vector<std::uint16_t> pixels;
+};
+
+/// The PNG file bytes of a 16-bit grey image (PNG stores 16-bit samples big-endian; readers such as
+/// OpenCV's imread(..., IMREAD_UNCHANGED), PIL and PCL's PNG reader give back the values). Throws as
+/// encode_png.
+std::vector<std::uint8_t> encode_png(const Image16& image, int compression_level = 6);
+/// Writes encode_png(image) to `path` atomically, as write_png.
+void write_png(const std::string& path, const Image16& image);
+
 }  // namespace occ_improve
