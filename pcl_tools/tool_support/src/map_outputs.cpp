@@ -5,6 +5,8 @@
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/map_cloud.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 
 namespace occ_improve {
@@ -54,9 +56,30 @@ MapSummary summarize_map(const Mapper& mapper, const RegionOptions& region_optio
   s.all_regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface(), region_options);
   s.rays = top_rays(mapper.improvement(), mapper.surface(), top_k);
   s.stop = stop_signal(mapper.improvement(), s.all_regions);
+  s.region_options = region_options;
   const std::size_t k = std::min(s.all_regions.size(), static_cast<std::size_t>(top_k));
   s.regions.assign(s.all_regions.begin(), s.all_regions.begin() + static_cast<std::ptrdiff_t>(k));
   return s;
+}
+
+Image16 depth_millimetres(const SurfaceMap& surface) {
+  Image16 image{surface.width, surface.height, std::vector<std::uint16_t>(surface.size(), 0)};
+  for (std::size_t c = 0; c < surface.size(); ++c) {
+    const double mm = std::round(static_cast<double>(surface.depth_m[c]) * 1000.0);
+    if (!surface.unknown[c] && mm > 0) image.pixels[c] = static_cast<std::uint16_t>(std::min(mm, 65535.0));
+  }
+  return image;
+}
+
+Image16 region_id_image(const Mapper& mapper, const MapSummary& summary) {
+  if (summary.regions.size() > 65535)
+    throw InvalidParameter("regions.png holds 16-bit region ids: " + std::to_string(summary.regions.size()) +
+                           " regions are too many (lower -k to at most 65535)");
+  const std::vector<std::uint32_t> labels =
+      region_labels(mapper.geometry(), mapper.improvement(), summary.regions, summary.region_options);
+  Image16 image{mapper.geometry().width(), mapper.geometry().height(), std::vector<std::uint16_t>(labels.size())};
+  std::copy(labels.begin(), labels.end(), image.pixels.begin());
+  return image;
 }
 
 std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapper, const MapSummary& summary,
@@ -67,6 +90,8 @@ std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapp
     names.push_back(name);
   };
   png("depth.png", render_depth(mapper.surface(), mapper.geometry().depth().max()));
+  write_png(out.file("depth_mm.png"), depth_millimetres(mapper.surface()));
+  names.push_back("depth_mm.png");
   png("occupancy.png", render_occupancy(mapper.surface()));
   png("improvement.png", render_improvement(mapper.improvement()));
   png("legend.png", render_improvement_legend());
@@ -75,8 +100,9 @@ std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapp
   save_improvement_cloud(out.file("surface.pcd"),
                          to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
   write_regions_csv(out.file("regions.csv"), summary.regions);
+  write_png(out.file("regions.png"), region_id_image(mapper, summary));
   write_rays_csv(out.file("rays.csv"), mapper.geometry(), summary.rays);
-  names.insert(names.end(), {"surface.pcd", "regions.csv", "rays.csv"});
+  names.insert(names.end(), {"surface.pcd", "regions.csv", "regions.png", "rays.csv"});
   return names;
 }
 
