@@ -35,7 +35,7 @@ const ToolFlags kFlags{
     "  OUTDIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n",
     joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
                                          "-stop_gain"},
-            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {},
     {},
     frame_inputs_help()};
@@ -67,9 +67,11 @@ struct Source {
   std::optional<Mapper> mapper;
   ReturnRecord returns;
   std::string description;
+  std::string mask;  ///< the mask's summary line, "" without -mask
 };
 
-Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine& progress) {
+Source map_from_frames(const CommandLine& command_line, const ToolOptions& options, bool use_sample,
+                       ProgressLine& progress) {
   ToolFrameReader frames(options, use_sample);  // intrinsics from flags, the dataset or fitted; never assumed
   Source source;
   SensorPreset preset;
@@ -78,6 +80,7 @@ Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
         source.mapper.emplace(preset, options.grid);
+        source.mask = apply_tool_mask(command_line, *source.mapper, first ? &*first : nullptr);
       },
       [&](const ToolFrame& frame) { return source.mapper->insert(span_of(frame.cloud)).insertion; });
   source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
@@ -87,10 +90,11 @@ Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine
   return source;
 }
 
-Source map_from_file(const std::string& path, const ToolOptions& options) {
+Source map_from_file(const CommandLine& command_line, const std::string& path, const ToolOptions& options) {
   LoadedMap loaded = load_tool_map(path, options);
   Source source;
   source.mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+  source.mask = apply_tool_mask(command_line, *source.mapper, nullptr);
   source.returns = std::move(loaded.returns);
   char record[128];
   std::snprintf(record, sizeof record, " (return record: %llu rays asked, %llu returned, rate %.3f)",
@@ -127,13 +131,15 @@ int run(const CommandLine& command_line) {
   const bool use_sample = command_line.has("-sample");
   const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
-  const PlanRequest request = parse_request(command_line);
+  PlanRequest request = parse_request(command_line);
   // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
   OutputFolder out = open_output_folder(command_line);
 
   const auto start = std::chrono::steady_clock::now();
   ProgressLine progress(command_line, "frame");
-  const Source source = load_path.empty() ? map_from_frames(options, use_sample, progress) : map_from_file(load_path, options);
+  const Source source = load_path.empty() ? map_from_frames(command_line, options, use_sample, progress)
+                                          : map_from_file(command_line, load_path, options);
+  request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
   const auto planned = std::chrono::steady_clock::now();
   const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
   const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
@@ -148,6 +154,7 @@ int run(const CommandLine& command_line) {
   plan.close();
   throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
+  if (!source.mask.empty()) std::printf("%s\n", source.mask.c_str());
   std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt\n",
               source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,
               out.path().c_str());

@@ -25,7 +25,7 @@ const ToolFlags kFlags{
     "colours), label_ids.png (16-bit label per ray, 0 = none: what pcl_pcd2png --field label writes),\n"
     "contours.png, segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
     joined({output_folder_flag_names(), {"-contour", "-min_segment", "-no_plane", "-plane_distance"}, sensor_flag_names(),
-            camera_flag_names()}),
+            camera_flag_names(), {"-mask"}}),
     {},
     {},
     frame_inputs_help()};
@@ -60,7 +60,9 @@ int run(const CommandLine& command_line) {
   SegmentationParams params = segmentation_defaults(preset);
   apply_segmentation_flags(command_line, params);
 
-  const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
+  const std::optional<PixelMask> mask = read_tool_mask(command_line, &frame);
+  if (mask) tool_mask_columns(command_line, SphericalGeometry(preset.geometry), *mask);  // refused naming -mask
+  const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid, mask ? &*mask : nullptr);
   throw_if_stop_requested();
 
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
@@ -84,9 +86,9 @@ int run(const CommandLine& command_line) {
   }
   save_pcd_binary(out.file("labels.pcd"), labelled);
   write_png(out.file("labels.png"), render_segmentation(result.segmentation));
+  write_png(out.file("label_ids.png"), label_id_image(result.segmentation));
   write_png(out.file("contours.png"), render_contours(result.segmentation));
   const std::string csv_path = out.file("segments.csv");
-  write_png(out.file("label_ids.png"), label_id_image(result.segmentation));
   std::ofstream csv(csv_path);
   if (!csv) throw IoError("cannot write '" + csv_path + "'");
   csv << "label,rays,points,centroid_x_m,centroid_y_m,centroid_z_m,mean_depth_m,plane\n";
@@ -107,6 +109,10 @@ int run(const CommandLine& command_line) {
               result.points_outside_grid);
   std::printf("time [ms]: map %.1f, segmentation %.1f, labelling %.1f, total %.1f\n", 1e3 * result.mapping_seconds,
               1e3 * result.segmentation_seconds, 1e3 * result.labelling_seconds, 1e3 * result.total_seconds());
+  if (mask)
+    std::printf("mask %s: %zu of %zu pixels valid; %zu valid points outside it left out\n",
+                command_line.text("-mask")->c_str(), mask->valid_count(), mask->valid.size(),
+                result.mapping.points_masked);
   std::printf("wrote %s/: labels.pcd labels.png label_ids.png contours.png segments.csv\n", out.path().c_str());
   return 0;
 }

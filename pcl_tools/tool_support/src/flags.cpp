@@ -90,6 +90,13 @@ std::vector<FlagSpec> input_flags() {
                   "ignore the frames' poses (.pose.txt, groundtruth.txt, a PCD's VIEWPOINT); by default every\n"
                   "frame is moved into the first frame's sensor frame"),
       switch_flag("-sample", kInput, "use the built-in generated Kinect-like frame instead of input files"),
+      value_flag("-mask", K::text, "PNG|finite", kInput,
+                 "validity / region-of-interest mask over the camera's pixels: an 8- or 16-bit grey PNG of the\n"
+                 "camera's size, nonzero = valid. Rays outside it are not observable: their points are left\n"
+                 "out, they are never ranked, in a region or planned, and drawn grey. finite: the first\n"
+                 "frame's valid pixels (for clouds cropped to NaN, as mOSD's; on a raw frame it also hides the\n"
+                 "holes and shadows the map is there to find)",
+                 "", "none: every ray"),
   };
 }
 

@@ -7,6 +7,8 @@
 #include "occ_improve/grid.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/map_io.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/mask.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
@@ -174,6 +176,19 @@ struct FusedFrames {
 FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
                              const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
                              const std::function<InsertionReport(const ToolFrame& frame)>& insert);
+
+/// The -mask of a frame-reading tool (nullopt without it): the PNG (read_mask_png), or for "finite" the
+/// valid pixels of `first`, which must be an organized frame of its camera's size. Refusals are one line
+/// naming -mask and the file.
+std::optional<PixelMask> read_tool_mask(const CommandLine& command_line, const ToolFrame* first);
+/// read_tool_mask set on the mapper (Mapper::set_mask); refusals (another size than the camera, a grid
+/// without a camera) name -mask and the file. Returns the summary line ("mask FILE: N of M pixels valid"),
+/// "" without -mask.
+std::string apply_tool_mask(const CommandLine& command_line, Mapper& mapper, const ToolFrame* first);
+/// mask_columns(geometry, mask) with refusals naming -mask and the file: for a tool that checks the mask
+/// before its mapper exists (occ_segment) or fills a grid itself (occ_to_octomap).
+std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const SphericalGeometry& geometry,
+                                            const PixelMask& mask);
 
 /// The points line of a tool's summary: read, used, skipped and beyond the depth range.
 std::string describe_points(const InsertionReport& report);
