@@ -184,7 +184,7 @@ std::map<std::string, std::string> help_entries(const std::string& help) {
   std::istringstream lines(help);
   std::string current;
   for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("  -", 0) == 0 && line.rfind("  -h, --help", 0) != 0) {
+    if (line.rfind("  -", 0) == 0 && line.rfind("  -h, -help, --help", 0) != 0) {
       current = line.substr(2, line.find(' ', 2) - 2);
       entries[current] = line;
     } else if (!current.empty() && line.rfind(std::string(28, ' '), 0) == 0) {
@@ -214,7 +214,7 @@ TEST_F(Tools, EveryToolsHelpListsExactlyTheFlagsItAcceptsAndTheSameFlagReadsTheS
     const std::map<std::string, std::string> entries = help_entries(help.out);
     EXPECT_GE(entries.size(), 3u) << tool << help.out;
     for (const FlagSpec& f : flag_registry()) {
-      if (f.name == "-h" || f.name == "--help") continue;
+      if (f.name == "-h" || f.name == "-help" || f.name == "--help") continue;
       const bool listed = entries.count(f.name) != 0;
       if (!listed) {
         if (f.name.size() % 4 != 0) continue;  // a sample of the unlisted: each run costs a process start
@@ -394,6 +394,33 @@ TEST_F(Tools, NoArgumentsPrintsTheUsageAndFails) {
     EXPECT_EQ(r.exit_code, 1) << tool;
     EXPECT_EQ(r.err.rfind("Usage: ", 0), 0u) << tool << ": " << r.err;
   }
+}
+
+// PCL's tools take -h, -help and --help, and -v for verbose output: so does every tool here (issue 24).
+TEST_F(Tools, EveryToolTakesHelpAndVerboseAsPclToolsDo) {
+  for (const std::string& tool : kAllTools) {
+    const ToolRun h = run(tool, "-h");
+    for (const char* flag : {"-help", "--help"}) {
+      const ToolRun r = run(tool, flag);
+      EXPECT_EQ(r.exit_code, 0) << tool << " " << flag << ": " << r.err;
+      EXPECT_EQ(r.out, h.out) << tool << " " << flag;
+    }
+    EXPECT_NE(h.out.find("\n  -h, -help, --help "), std::string::npos) << tool;
+    EXPECT_NE(h.out.find("\n  -v "), std::string::npos) << tool;
+    // -v is a switch every tool takes: with an unknown flag after it, that flag is what is refused.
+    const ToolRun v = run(tool, "-v -zz_unknown");
+    EXPECT_EQ(v.exit_code, 1) << tool;
+    EXPECT_NE(v.err.find("unknown option -zz_unknown"), std::string::npos) << tool << ": " << v.err;
+  }
+  // -v prints the values the run uses, defaults included, on stderr before the run; stdout is unchanged.
+  const ToolRun quiet = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -k 3 -o quiet");
+  const ToolRun verbose = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -k 3 -v -o verbose");
+  ASSERT_EQ(verbose.exit_code, 0) << verbose.err;
+  for (const char* line : {"occ_improve_map with:\n", "\n  -k 3\n", "\n  -min_improvement 0.2 (default)\n",
+                           "\n  -preset kinect_v1 (default)\n", "\n  -sample (given)\n", "\n  -overwrite (not given)\n"})
+    EXPECT_NE(verbose.err.find(line), std::string::npos) << line << " not in:\n" << verbose.err;
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_NE(verbose.out.find("top 3 of"), std::string::npos);
 }
 
 // Ctrl-C on occ_improve_live left an empty staging folder and lost the summary.

@@ -6,6 +6,7 @@
 #include "occ_improve/tools/output_files.hpp"
 
 #include <pcl/common/transforms.h>
+#include <pcl/console/print.h>
 
 #include <unistd.h>
 
@@ -519,7 +520,8 @@ namespace {
 
 bool help_requested(int argc, const char* const* argv) {
   for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) return true;
+    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "-help") == 0 || std::strcmp(argv[i], "--help") == 0)
+      return true;
   return false;
 }
 
@@ -533,7 +535,12 @@ int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const Com
   }
   install_stop_signals();
   try {
-    const int code = run(parse_command_line(flags, argc, argv));
+    const CommandLine command_line = parse_command_line(flags, argc, argv);
+    if (command_line.has("-v")) {
+      pcl::console::setVerbosityLevel(pcl::console::L_DEBUG);
+      std::fprintf(stderr, "%s with:\n%s", program.c_str(), resolved_flags(command_line).c_str());
+    }
+    const int code = run(command_line);
     // A signal that came too late for any poll (during the final renames, say) still ends in 128 + signal,
     // as the README promises; the run had finished, so what it wrote is in place.
     if (const int signal = stop_requested()) {

@@ -123,7 +123,7 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
 
-/// The shared main() of the command-line tools: prints usage_text on -h/--help (exit 0) and on no
+/// The shared main() of the command-line tools: prints usage_text on -h/-help/--help (exit 0) and on no
 /// argument at all (exit 1), otherwise parses the command line against `flags`, installs the stop-signal
 /// handlers and runs `run`. Any exception, a refused flag, std::bad_alloc and non-standard ones included,
 /// becomes ONE line "error: ..." on stderr naming the input being worked on (InputScope) and exit code 1;
