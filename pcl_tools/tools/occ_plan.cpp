@@ -63,6 +63,24 @@ PlanRequest parse_request(const CommandLine& command_line) {
   return request;
 }
 
+// The checks of PlanRequest::validate that depend on the grid, made first with the flags' names (the
+// library's message names its struct fields).
+void require_plan_fits(const CommandLine& command_line, const PlanRequest& request, int width, int height) {
+  const long long columns = static_cast<long long>(width) * height;
+  const std::string grid = std::to_string(width) + " x " + std::to_string(height);
+  if (request.budget_rays > columns)
+    throw InvalidParameter("-budget " + std::to_string(request.budget_rays) + " is more than the grid's " + grid +
+                           " = " + std::to_string(columns) + " rays");
+  if (request.shape != ShotShape::window) return;
+  const std::string window = "-window " + *command_line.text("-window");
+  if (request.window_width_columns > width || request.window_height_columns > height)
+    throw InvalidParameter(window + " does not fit in the grid of " + grid + " columns");
+  const long long area = static_cast<long long>(request.window_width_columns) * request.window_height_columns;
+  if (area > request.budget_rays)
+    throw InvalidParameter(window + " covers " + std::to_string(area) + " rays, more than -budget " +
+                           std::to_string(request.budget_rays) + ": raise -budget or shrink -window");
+}
+
 struct Source {
   std::optional<Mapper> mapper;
   ReturnRecord returns;
@@ -139,6 +157,7 @@ int run(const CommandLine& command_line) {
   ProgressLine progress(command_line, "frame");
   const Source source = load_path.empty() ? map_from_frames(command_line, options, use_sample, progress)
                                           : map_from_file(command_line, load_path, options);
+  require_plan_fits(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
   request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
   const auto planned = std::chrono::steady_clock::now();
   const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
