@@ -1,6 +1,7 @@
 // Every command-line tool, run as a user runs it: the same outcome for the same bad input (exit code 1
 // and one error line naming the file), no crash on malformed files, and a clean stop on SIGINT/SIGTERM.
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "support/csv_table.hpp"
@@ -421,6 +422,35 @@ TEST_F(Tools, EveryToolTakesHelpAndVerboseAsPclToolsDo) {
     EXPECT_NE(verbose.err.find(line), std::string::npos) << line << " not in:\n" << verbose.err;
   EXPECT_EQ(quiet.err, "");
   EXPECT_NE(verbose.out.find("top 3 of"), std::string::npos);
+}
+
+// Inputs of different scenes fused without poses make a map of neither: one warning line says so. The
+// test: over 50% of the pixels valid in both frames differ in depth by more than 3 sigma (issue 24).
+TEST_F(Tools, FusingDifferentScenesWithoutPosesWarnsInOneLine) {
+  const auto wall = [&](const std::string& name, std::uint16_t mm, int bumps) {
+    occ_improve::Image16 depth{64, 48, std::vector<std::uint16_t>(64 * 48, mm)};
+    for (int i = 0; i < bumps; ++i) depth.pixels[static_cast<std::size_t>(i) * 37 % depth.pixels.size()] += 200;
+    occ_improve::write_png(file(name), depth);
+    return file(name);
+  };
+  const std::string camera = " -intrinsics 60,60,31.5,23.5,64,48 -depth_encoding mm -o ";
+  // One scene twice, 10% of its pixels changed: no warning.
+  const ToolRun same = run(OCC_IMPROVE_MAP_EXECUTABLE, wall("a.png", 2000, 0) + " " + wall("b.png", 2000, 300) + camera + "same");
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_EQ(same.err.find("warning"), std::string::npos) << same.err;
+  // A wall at 2 m and one at 3 m: every common pixel disagrees.
+  for (const std::string& tool : {std::string(OCC_IMPROVE_MAP_EXECUTABLE), std::string(OCC_PLAN_EXECUTABLE)}) {
+    const ToolRun r = run(tool, wall("a.png", 2000, 0) + " " + wall("c.png", 3000, 0) + " " + wall("d.png", 2000, 0) +
+                                    (tool == OCC_PLAN_EXECUTABLE ? " -budget 100" : "") + camera + "different_" +
+                                    fs::path(tool).filename().string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("warning: 1 frame(s) fused without poses disagree in depth with the first frame"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("up to 100% of their common valid pixels"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("c.png"), std::string::npos) << r.err;
+  }
 }
 
 // Ctrl-C on occ_improve_live left an empty staging folder and lost the summary.
