@@ -37,7 +37,8 @@ const ToolFlags kFlags{
     "occ_improve_live",
     {"SOURCE [options]"},
     "Fuses a stream of range frames into the occupancy grid and writes the maps, the same files as\n"
-    "occ_improve_map (depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv),\n"
+    "occ_improve_map (depth.png depth_mm.png occupancy.png improvement.png legend.png surface.pcd regions.csv\n"
+    "regions.png rays.csv),\n"
     "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
     "-simulate or positional inputs (below). With poses, every frame is moved into the FIRST frame's sensor\n"
     "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"

@@ -33,9 +33,11 @@ const ToolFlags kFlags{
     "writes the improvement map (where one more measurement would change the map most) to OUTDIR:\n"
     "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
     "                pixel-aligned with the input depth image; grey = columns no pixel can see)\n"
+    "  depth_mm.png  the surface depth as 16-bit millimetres (0 = unknown)\n"
     "  overlay.png   the improvement colours over the frame's colour (inputs with colour)\n"
     "  surface.pcd   organized PointImprovement cloud (x y z surface_depth probability improvement)\n"
     "  regions.csv   the K best connected regions, ranked by summed improvement\n"
+    "  regions.png   16-bit region ids per ray: regions.csv's rank, 0 = none\n"
     "  rays.csv      the K best single rays\n"
     "README.md \"Output files\" lists every column.\n",
     joined({output_folder_flag_names(), {"-q", "-sample", "-load", "-save", "-threads", "-k", "-min_improvement"},
