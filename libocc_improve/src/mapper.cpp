@@ -26,8 +26,33 @@ Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(g
   improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
 }
 
+MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options, const PixelMask& mask) {
+  set_mask(mask);
+  return insert(points, options);
+}
+
+void Mapper::set_mask(const PixelMask& mask) {
+  std::vector<std::uint8_t> columns = mask_columns(grid_.geometry(), mask);
+  const bool widened = !column_mask_.empty() && columns != column_mask_;
+  column_mask_ = std::move(columns);
+  // Columns the old mask hid may now be inside: their values come back only from a full computation.
+  if (widened) improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+  mask_improvement(column_mask_, improvement_);
+}
+
+void Mapper::clear_mask() {
+  if (column_mask_.empty()) return;
+  column_mask_.clear();
+  improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+}
+
 MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
   MapperReport report;
+  std::vector<float> kept;  // the points inside the mask, when there is one
+  if (!column_mask_.empty()) {
+    report.points_masked = drop_masked_points(grid_.geometry(), column_mask_, points, kept);
+    points = PointSpan{kept.data(), kept.size() / 3, 3};
+  }
   // The surface is updated inside the insertion (its time is part of the insertion's).
   std::vector<ColumnIndex> changed;
   report.insertion = insert_points(grid_, model_, points, surface_, changed, options);
@@ -35,6 +60,7 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
   report.surface_columns_changed = changed.size();
   const auto start = std::chrono::steady_clock::now();
   report.rays_recomputed = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_).size();
+  mask_improvement(column_mask_, improvement_);  // the recomputed rays outside the mask stay NaN
   report.improvement_seconds = seconds_since(start);
   return report;
 }

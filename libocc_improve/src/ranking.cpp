@@ -151,49 +151,66 @@ void describe_columns(const SphericalGeometry& geometry, const ImprovementMap& m
 
 }  // namespace
 
-std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
-                                 const SurfaceMap& surface, const RegionOptions& options) {
-  options.validate();
-  require_same_size(map, surface);
+namespace {
+
+// The 8-connected columns of improvement >= threshold reachable from `seed` (which must qualify) and not
+// yet visited, marked visited, into `members`: the one region rule of find_regions and region_labels.
+void grow_region(const SphericalGeometry& geometry, const ImprovementMap& map, float threshold, ColumnIndex seed,
+                 std::vector<std::uint8_t>& visited, std::vector<ColumnIndex>& stack,
+                 std::vector<ColumnIndex>& members) {
+  const int w = map.width, h = map.height;
+  visited[seed] = 1;
+  stack.assign(1, seed);
+  members.clear();
+  while (!stack.empty()) {
+    const ColumnIndex c = stack.back();
+    stack.pop_back();
+    members.push_back(c);
+    const int a = geometry.azimuth_bin_of(c), e = geometry.elevation_bin_of(c);
+    for (int de = -1; de <= 1; ++de)
+      for (int da = -1; da <= 1; ++da) {
+        const int na = a + da, ne = e + de;
+        if (na < 0 || na >= w || ne < 0 || ne >= h) continue;
+        const ColumnIndex n = geometry.column(na, ne);
+        if (visited[n] || !(map.value[n] >= threshold)) continue;
+        visited[n] = 1;
+        stack.push_back(n);
+      }
+  }
+}
+
+void require_matching_grid(const SphericalGeometry& geometry, const ImprovementMap& map) {
   if (map.width != geometry.width() || map.height != geometry.height())
     throw InvalidInput("improvement map (" + std::to_string(map.width) + " x " + std::to_string(map.height) +
                        ") does not match the grid (" + std::to_string(geometry.width()) + " x " +
                        std::to_string(geometry.height()) + ")");
-  const int w = map.width, h = map.height;
+}
+
+}  // namespace
+
+std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
+                                 const SurfaceMap& surface, const RegionOptions& options) {
+  options.validate();
+  require_same_size(map, surface);
+  require_matching_grid(geometry, map);
   std::vector<std::uint8_t> visited(map.value.size(), 0);
   std::vector<ColumnIndex> stack, members;
   std::vector<Region> regions;
   for (std::size_t seed = 0; seed < map.value.size(); ++seed) {
     if (visited[seed] || !(map.value[seed] >= options.min_improvement)) continue;
-    // Flood fill, 8-connected.
+    grow_region(geometry, map, options.min_improvement, static_cast<ColumnIndex>(seed), visited, stack, members);
+    if (members.size() < options.min_area_columns) continue;
     Region r;
     double depth_sum = 0;
     std::size_t known = 0;
-    visited[seed] = 1;
-    stack.assign(1, static_cast<ColumnIndex>(seed));
-    members.clear();
-    while (!stack.empty()) {
-      const ColumnIndex c = stack.back();
-      stack.pop_back();
-      members.push_back(c);
+    for (const ColumnIndex c : members) {
       r.summed_improvement += map.value[c];
       if (!surface.unknown[c]) {
         depth_sum += surface.depth_m[c];
         ++known;
       }
-      const int a = geometry.azimuth_bin_of(c), e = geometry.elevation_bin_of(c);
-      for (int de = -1; de <= 1; ++de)
-        for (int da = -1; da <= 1; ++da) {
-          const int na = a + da, ne = e + de;
-          if (na < 0 || na >= w || ne < 0 || ne >= h) continue;
-          const ColumnIndex n = geometry.column(na, ne);
-          if (visited[n] || !(map.value[n] >= options.min_improvement)) continue;
-          visited[n] = 1;
-          stack.push_back(n);
-        }
     }
     r.area_columns = members.size();
-    if (r.area_columns < options.min_area_columns) continue;
     describe_columns(geometry, map, members, r);
     r.mean_depth_m = known ? depth_sum / static_cast<double>(known) : 0.0;
     regions.push_back(r);
@@ -201,6 +218,30 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
   std::stable_sort(regions.begin(), regions.end(),
                    [](const Region& a, const Region& b) { return a.summed_improvement > b.summed_improvement; });
   return regions;
+}
+
+std::vector<std::uint32_t> region_labels(const SphericalGeometry& geometry, const ImprovementMap& map,
+                                         const std::vector<Region>& regions, const RegionOptions& options) {
+  options.validate();
+  require_matching_grid(geometry, map);
+  std::vector<std::uint32_t> label(map.value.size(), 0);
+  std::vector<std::uint8_t> visited(map.value.size(), 0);
+  std::vector<ColumnIndex> stack, members;
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const Region& r = regions[i];
+    // The peak is a column of the region: growing from it gives the region's columns again.
+    const bool inside = r.peak_u >= 0 && r.peak_u < map.width && r.peak_v >= 0 && r.peak_v < map.height;
+    const ColumnIndex seed = inside ? geometry.column(r.peak_u, r.peak_v) : 0;
+    if (!inside || visited[seed] || !(map.value[seed] >= options.min_improvement))
+      throw InvalidInput("region " + std::to_string(i + 1) + " (peak " + std::to_string(r.peak_u) + "," +
+                         std::to_string(r.peak_v) + ") is not a region of this map under these options");
+    grow_region(geometry, map, options.min_improvement, seed, visited, stack, members);
+    if (members.size() != r.area_columns)
+      throw InvalidInput("region " + std::to_string(i + 1) + " has " + std::to_string(r.area_columns) +
+                         " columns, the map's region at its peak " + std::to_string(members.size()));
+    for (const ColumnIndex c : members) label[c] = static_cast<std::uint32_t>(i + 1);
+  }
+  return label;
 }
 
 void StopCriteria::validate() const {

@@ -350,7 +350,11 @@ Segmentation segment_improvement(const SphericalGeometry& geometry, const Surfac
   out.width = width;
   out.height = height;
   out.contour.assign(n, 0);
-  const std::vector<std::uint8_t> valid = valid_rays(geometry, surface);
+  std::vector<std::uint8_t> valid = valid_rays(geometry, surface);
+  // Columns that are not observable (NaN: outside the camera or a mask) take no part, even where a
+  // neighbour's measurement gave them a surface.
+  for (std::size_t c = 0; c < n; ++c)
+    if (std::isnan(improvement.value[c])) valid[c] = 0;
   std::vector<std::uint8_t> interior(n, 0);  // valid, not contour, not plane: where segments grow
   for (std::size_t c = 0; c < n; ++c) {
     if (!valid[c]) continue;

@@ -37,7 +37,8 @@ std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& clou
 
 template <typename PointT>
 CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const SensorPreset& preset,
-                                const SegmentationParams& params, const GridOptions& grid_options) {
+                                const SegmentationParams& params, const GridOptions& grid_options,
+                                const PixelMask* mask) {
   if (!cloud.isOrganized() || cloud.height <= 1)
     throw InvalidInput("the cloud is not organized (height 1): segmentation from the improvement map needs a "
                        "range image, i.e. an organized cloud");
@@ -46,6 +47,7 @@ CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const Sens
   CloudSegmentation result;
   auto start = Clock::now();
   Mapper mapper(preset, grid_options);
+  if (mask) mapper.set_mask(*mask);
   result.mapping = mapper.insert(span_of(cloud));
   result.mapping_seconds = seconds_since(start);
 
@@ -55,13 +57,16 @@ CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const Sens
 
   start = Clock::now();
   result.point_labels = labels_for_points(cloud, mapper.geometry(), result.segmentation, result.points_outside_grid);
+  if (mask && mask->valid.size() == result.point_labels.size())  // organized at the camera's size: pixel = point
+    for (std::size_t i = 0; i < mask->valid.size(); ++i)
+      if (!mask->valid[i]) result.point_labels[i] = 0;
   result.labelling_seconds = seconds_since(start);
   return result;
 }
 
 #define OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(T)                                                                  \
   template CloudSegmentation segment_cloud(const pcl::PointCloud<T>&, const SensorPreset&,                        \
-                                           const SegmentationParams&, const GridOptions&);                        \
+                                           const SegmentationParams&, const GridOptions&, const PixelMask*);                         \
   template std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<T>&, const SphericalGeometry&,     \
                                                         const Segmentation&, std::size_t&);
 OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZ)

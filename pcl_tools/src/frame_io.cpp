@@ -62,9 +62,11 @@ struct PngReader {
   ~PngReader() { png_destroy_read_struct(&png, &info, nullptr); }
 };
 
-DepthImage16 read_png16(const std::string& path) {
+// A grey PNG's values widened to 16 bits: 16-bit only for depth images, also 8-bit (and 1/2/4-bit,
+// expanded) for masks. `what` names the file's role in messages ("depth image", "mask").
+DepthImage16 read_grey_png(const std::string& path, const std::string& what, bool accept_8bit) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!file) throw IoError("cannot open depth image '" + path + "'");
+  if (!file) throw IoError("cannot open " + what + " '" + path + "'");
   unsigned char signature[8];
   if (std::fread(signature, 1, 8, file.get()) != 8 || png_sig_cmp(signature, 0, 8) != 0)
     throw FormatError("'" + path + "' is not a PNG file");
@@ -78,33 +80,56 @@ DepthImage16 read_png16(const std::string& path) {
   png_structp png = reader.png;
   png_infop info = reader.info;
   DepthImage16 image;
+  std::vector<std::uint8_t> narrow;  // 8-bit samples, widened after reading
   std::vector<png_bytep> rows;
   if (setjmp(png_jmpbuf(png))) throw FormatError("'" + path + "' is a corrupt or truncated PNG (" + png_message + ")");
   png_init_io(png, file.get());
   png_set_sig_bytes(png, 8);
   png_read_info(png, info);
   const int bit_depth = png_get_bit_depth(png, info), colour = png_get_color_type(png, info);
-  if (bit_depth != 16 || (colour != PNG_COLOR_TYPE_GRAY)) {
+  if ((bit_depth != 16 && !accept_8bit) || colour != PNG_COLOR_TYPE_GRAY) {
     std::ostringstream m;
-    m << "'" << path << "' is a " << bit_depth << "-bit PNG of colour type " << colour
-      << ": a depth image must be 16-bit single-channel";
+    m << "'" << path << "' is a " << bit_depth << "-bit PNG of colour type " << colour << ": a " << what
+      << " must be " << (accept_8bit ? "8-bit or 16-bit" : "16-bit") << " single-channel (grey)";
     throw FormatError(m.str());
   }
   // Deflate expands at most ~1032-fold: a file cannot hold more 2-byte pixels than that.
-  detail::require_image_size("depth image", path, png_get_image_width(png, info), png_get_image_height(png, info),
-                     ec ? kMaxDepthImagePixels : file_size * 1032 / 2);
-  png_set_swap(png);  // PNG is big-endian; we read host-order uint16
+  detail::require_image_size(what, path, png_get_image_width(png, info), png_get_image_height(png, info),
+                             ec ? kMaxDepthImagePixels : file_size * 1032 / 2);
+  if (bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
+  if (bit_depth == 16) png_set_swap(png);  // PNG is big-endian; we read host-order uint16
   image.width = static_cast<int>(png_get_image_width(png, info));
   image.height = static_cast<int>(png_get_image_height(png, info));
-  image.values.resize(static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height));
+  const std::size_t pixels = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height);
+  image.values.resize(pixels);
+  if (bit_depth < 16) narrow.resize(pixels);
   rows.resize(static_cast<std::size_t>(image.height));
-  for (int v = 0; v < image.height; ++v)
+  for (int v = 0; v < image.height; ++v) {
+    const std::size_t offset = static_cast<std::size_t>(v) * static_cast<std::size_t>(image.width);
     rows[static_cast<std::size_t>(v)] =
-        reinterpret_cast<png_bytep>(image.values.data() + static_cast<std::size_t>(v) * image.width);
+        bit_depth == 16 ? reinterpret_cast<png_bytep>(image.values.data() + offset) : narrow.data() + offset;
+  }
   png_read_image(png, rows.data());
   png_read_end(png, nullptr);
+  if (bit_depth < 16) std::copy(narrow.begin(), narrow.end(), image.values.begin());
   return image;
 }
+
+DepthImage16 read_png16(const std::string& path) { return read_grey_png(path, "depth image", false); }
+
+}  // namespace
+
+PixelMask read_mask_png(const std::string& path) {
+  const DepthImage16 image = read_grey_png(path, "mask", true);
+  PixelMask mask;
+  mask.width = image.width;
+  mask.height = image.height;
+  mask.valid.resize(image.values.size());
+  for (std::size_t i = 0; i < image.values.size(); ++i) mask.valid[i] = image.values[i] != 0;
+  return mask;
+}
+
+namespace {
 
 DepthImage16 read_pgm16(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

@@ -38,7 +38,8 @@ const ToolFlags kFlags{
     "occ_improve_live",
     {"SOURCE [options]"},
     "Fuses a stream of range frames into the occupancy grid and writes the maps, the same files as\n"
-    "occ_improve_map (depth.png occupancy.png improvement.png legend.png surface.pcd regions.csv rays.csv),\n"
+    "occ_improve_map (depth.png depth_mm.png occupancy.png improvement.png legend.png surface.pcd regions.csv\n"
+    "regions.png rays.csv),\n"
     "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
     "-simulate or positional inputs (below). With poses, every frame is moved into the FIRST frame's sensor\n"
     "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
@@ -49,7 +50,7 @@ const ToolFlags kFlags{
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
              "-stop_on_signal", "-simulate", "-budget", "-max_shots", "-load", "-save", "-threads", "-k",
              "-min_improvement", "-predicted_depth", "-radius", "-view", "-view_screenshot"},
-            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {{"-o", "occ_improve_live_out"}},
     {},
     frame_inputs_help()};
@@ -106,9 +107,12 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   std::printf("%s\npreset %s, %d rays per shot\n", describe_camera({frame}).c_str(), preset.name.c_str(), budget);
   VirtualSensor sensor(depth_of_organized(frame.cloud), *frame.camera);
   Mapper mapper(preset, options.grid);
+  const std::string mask_line = apply_tool_mask(command_line, mapper, &frame);
+  if (!mask_line.empty()) std::printf("%s\n", mask_line.c_str());
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
   PlanRequest request;
   request.budget_rays = budget;
+  request.candidates = mapper.column_mask();  // rays outside -mask are never asked for
   std::vector<SimulatedShot> shots;
   std::string why = "reached -max_shots " + std::to_string(max_shots);
   ProgressLine progress(command_line, "shot");
@@ -373,7 +377,10 @@ int run(const CommandLine& command_line) {
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
   pipeline_options.regions = region_options;  // the regions shown by -view are regions.csv's
   pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
-  Pipeline pipeline(make_mapper(load_path, options, source.preset), with_camera(pipeline_options, source.preset));
+  const std::shared_ptr<Mapper> mapper = make_mapper(load_path, options, source.preset);
+  // A stream has no first frame yet: -mask finite is refused here, a PNG mask applies to every frame.
+  const std::string mask_line = apply_tool_mask(command_line, *mapper, nullptr);
+  Pipeline pipeline(mapper, with_camera(pipeline_options, source.preset));
 
   std::mutex report_mutex;
   std::optional<FrameResult> last, fired;
@@ -405,6 +412,7 @@ int run(const CommandLine& command_line) {
 
   const GeometryParams& g = source.preset.geometry;
   pcl::console::print_info("%s\n", source.camera.c_str());
+  if (!mask_line.empty()) pcl::console::print_info("%s\n", mask_line.c_str());
   pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source.text.c_str(),
                            source.preset.name.c_str(), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_max_m);
   pipeline.start();

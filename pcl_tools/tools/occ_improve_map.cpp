@@ -33,13 +33,15 @@ const ToolFlags kFlags{
     "writes the improvement map (where one more measurement would change the map most) to OUTDIR:\n"
     "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
     "                pixel-aligned with the input depth image; grey = columns no pixel can see)\n"
+    "  depth_mm.png  the surface depth as 16-bit millimetres (0 = unknown)\n"
     "  overlay.png   the improvement colours over the frame's colour (inputs with colour)\n"
     "  surface.pcd   organized PointImprovement cloud (x y z surface_depth probability improvement)\n"
     "  regions.csv   the K best connected regions, ranked by summed improvement\n"
+    "  regions.png   16-bit region ids per ray: regions.csv's rank, 0 = none\n"
     "  rays.csv      the K best single rays\n"
     "README.md \"Output files\" lists every column.\n",
     joined({output_folder_flag_names(), {"-q", "-sample", "-load", "-save", "-threads", "-k", "-min_improvement"},
-            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {{"-o", "occ_improve_out"}},
     {},
     frame_inputs_help()};
@@ -70,20 +72,27 @@ int run(const CommandLine& command_line) {
   SensorPreset preset;
   std::optional<Mapper> mapper;
   double improvement_seconds = 0;
+  std::string mask_line;
+  std::size_t points_masked = 0;
   const FusedFrames fused = fuse_tool_frames(
       frames, progress,
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
-        if (load_path.empty()) return void(mapper.emplace(preset, options.grid));
-        LoadedMap loaded = load_tool_map(load_path, options);
-        preset.name = "loaded from " + load_path;
-        preset.geometry = loaded.grid.geometry().params();
-        preset.model = loaded.model;
-        mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+        if (load_path.empty()) {
+          mapper.emplace(preset, options.grid);
+        } else {
+          LoadedMap loaded = load_tool_map(load_path, options);
+          preset.name = "loaded from " + load_path;
+          preset.geometry = loaded.grid.geometry().params();
+          preset.model = loaded.model;
+          mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+        }
+        mask_line = apply_tool_mask(command_line, *mapper, first ? &*first : nullptr);
       },
       [&](const ToolFrame& frame) {
         const MapperReport r = mapper->insert(span_of(frame.cloud), insertion);
         improvement_seconds += r.improvement_seconds;
+        points_masked += r.points_masked;
         return r.insertion;
       });
 
@@ -114,6 +123,7 @@ int run(const CommandLine& command_line) {
   for (const std::string& line : fused.frame_lines) std::printf("%s\n", line.c_str());
   if (fused.frames > 0) std::printf("%s\n", fused.poses.c_str());
   std::printf("%s\n", describe_points(in).c_str());
+  if (!mask_line.empty()) std::printf("%s; %zu valid points outside it left out\n", mask_line.c_str(), points_masked);
   std::printf("time [s]: read %.3f, insert+surface %.3f, improvement %.3f, ranking %.3f, write %.3f\n",
               frames.read_seconds(), in.seconds, improvement_seconds, ranking_seconds,
               write_seconds);

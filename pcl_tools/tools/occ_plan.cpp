@@ -38,7 +38,7 @@ const ToolFlags kFlags{
     "                         samples, 16-bit grey in millimetres (0 = none within -radius)\n",
     joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
                                          "-stop_gain", "-predicted_depth", "-radius"},
-            sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
+            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {},
     {},
     frame_inputs_help()};
@@ -66,13 +66,33 @@ PlanRequest parse_request(const CommandLine& command_line) {
   return request;
 }
 
+// The checks of PlanRequest::validate that depend on the grid, made first with the flags' names (the
+// library's message names its struct fields).
+void require_plan_fits(const CommandLine& command_line, const PlanRequest& request, int width, int height) {
+  const long long columns = static_cast<long long>(width) * height;
+  const std::string grid = std::to_string(width) + " x " + std::to_string(height);
+  if (request.budget_rays > columns)
+    throw InvalidParameter("-budget " + std::to_string(request.budget_rays) + " is more than the grid's " + grid +
+                           " = " + std::to_string(columns) + " rays");
+  if (request.shape != ShotShape::window) return;
+  const std::string window = "-window " + *command_line.text("-window");
+  if (request.window_width_columns > width || request.window_height_columns > height)
+    throw InvalidParameter(window + " does not fit in the grid of " + grid + " columns");
+  const long long area = static_cast<long long>(request.window_width_columns) * request.window_height_columns;
+  if (area > request.budget_rays)
+    throw InvalidParameter(window + " covers " + std::to_string(area) + " rays, more than -budget " +
+                           std::to_string(request.budget_rays) + ": raise -budget or shrink -window");
+}
+
 struct Source {
   std::optional<Mapper> mapper;
   ReturnRecord returns;
   std::string description;
+  std::string mask;  ///< the mask's summary line, "" without -mask
 };
 
-Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine& progress) {
+Source map_from_frames(const CommandLine& command_line, const ToolOptions& options, bool use_sample,
+                       ProgressLine& progress) {
   ToolFrameReader frames(options, use_sample);  // intrinsics from flags, the dataset or fitted; never assumed
   Source source;
   SensorPreset preset;
@@ -81,6 +101,7 @@ Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
         source.mapper.emplace(preset, options.grid);
+        source.mask = apply_tool_mask(command_line, *source.mapper, first ? &*first : nullptr);
       },
       [&](const ToolFrame& frame) { return source.mapper->insert(span_of(frame.cloud)).insertion; });
   source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
@@ -90,10 +111,11 @@ Source map_from_frames(const ToolOptions& options, bool use_sample, ProgressLine
   return source;
 }
 
-Source map_from_file(const std::string& path, const ToolOptions& options) {
+Source map_from_file(const CommandLine& command_line, const std::string& path, const ToolOptions& options) {
   LoadedMap loaded = load_tool_map(path, options);
   Source source;
   source.mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+  source.mask = apply_tool_mask(command_line, *source.mapper, nullptr);
   source.returns = std::move(loaded.returns);
   char record[128];
   std::snprintf(record, sizeof record, " (return record: %llu rays asked, %llu returned, rate %.3f)",
@@ -130,13 +152,16 @@ int run(const CommandLine& command_line) {
   const bool use_sample = command_line.has("-sample");
   const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
-  const PlanRequest request = parse_request(command_line);
+  PlanRequest request = parse_request(command_line);
   // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
   OutputFolder out = open_output_folder(command_line);
 
   const auto start = std::chrono::steady_clock::now();
   ProgressLine progress(command_line, "frame");
-  const Source source = load_path.empty() ? map_from_frames(options, use_sample, progress) : map_from_file(load_path, options);
+  const Source source = load_path.empty() ? map_from_frames(command_line, options, use_sample, progress)
+                                          : map_from_file(command_line, load_path, options);
+  require_plan_fits(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
+  request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
   const auto planned = std::chrono::steady_clock::now();
   const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
   const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
@@ -153,6 +178,7 @@ int run(const CommandLine& command_line) {
   plan.close();
   throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
+  if (!source.mask.empty()) std::printf("%s\n", source.mask.c_str());
   std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt%s%s\n",
               source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,
               out.path().c_str(), predicted.empty() ? "" : " ", predicted.c_str());

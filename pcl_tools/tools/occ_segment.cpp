@@ -21,13 +21,24 @@ const ToolFlags kFlags{
     "occ_segment",
     {"INPUT -o OUTDIR [options]"},
     "Segments one organized frame along its negative-improvement contours (the paper's closing remark).\n"
-    "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png, contours.png,\n"
-    "segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
+    "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png (the segments'\n"
+    "colours), label_ids.png (16-bit label per ray, 0 = none: what pcl_pcd2png --field label writes),\n"
+    "contours.png, segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
     joined({output_folder_flag_names(), {"-contour", "-min_segment", "-no_plane", "-plane_distance"}, sensor_flag_names(),
-            camera_flag_names()}),
+            camera_flag_names(), {"-mask"}}),
     {},
     {},
     frame_inputs_help()};
+
+// The label of each ray as a 16-bit id (0 = no segment), as PCL's pcl_pcd2png writes a label field ("mono").
+Image16 label_id_image(const Segmentation& segmentation) {
+  if (segmentation.segments.size() > 65535)
+    throw InvalidParameter("label_ids.png holds 16-bit labels: " + std::to_string(segmentation.segments.size()) +
+                           " segments are too many (raise -min_segment)");
+  Image16 image{segmentation.width, segmentation.height, std::vector<std::uint16_t>(segmentation.label.size())};
+  std::copy(segmentation.label.begin(), segmentation.label.end(), image.pixels.begin());
+  return image;
+}
 
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
@@ -49,7 +60,9 @@ int run(const CommandLine& command_line) {
   SegmentationParams params = segmentation_defaults(preset);
   apply_segmentation_flags(command_line, params);
 
-  const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid);
+  const std::optional<PixelMask> mask = read_tool_mask(command_line, &frame);
+  if (mask) tool_mask_columns(command_line, SphericalGeometry(preset.geometry), *mask);  // refused naming -mask
+  const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid, mask ? &*mask : nullptr);
   throw_if_stop_requested();
 
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
@@ -73,6 +86,7 @@ int run(const CommandLine& command_line) {
   }
   save_pcd_binary(out.file("labels.pcd"), labelled);
   write_png(out.file("labels.png"), render_segmentation(result.segmentation));
+  write_png(out.file("label_ids.png"), label_id_image(result.segmentation));
   write_png(out.file("contours.png"), render_contours(result.segmentation));
   const std::string csv_path = out.file("segments.csv");
   std::ofstream csv(csv_path);
@@ -95,7 +109,11 @@ int run(const CommandLine& command_line) {
               result.points_outside_grid);
   std::printf("time [ms]: map %.1f, segmentation %.1f, labelling %.1f, total %.1f\n", 1e3 * result.mapping_seconds,
               1e3 * result.segmentation_seconds, 1e3 * result.labelling_seconds, 1e3 * result.total_seconds());
-  std::printf("wrote %s/: labels.pcd labels.png contours.png segments.csv\n", out.path().c_str());
+  if (mask)
+    std::printf("mask %s: %zu of %zu pixels valid; %zu valid points outside it left out\n",
+                command_line.text("-mask")->c_str(), mask->valid_count(), mask->valid.size(),
+                result.mapping.points_masked);
+  std::printf("wrote %s/: labels.pcd labels.png label_ids.png contours.png segments.csv\n", out.path().c_str());
   return 0;
 }
 

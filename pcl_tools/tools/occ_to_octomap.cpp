@@ -38,7 +38,7 @@ const ToolFlags kFlags{
     "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
     "are added, then clamped.\n",
     joined({{"-o", "-overwrite", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame"}, sensor_flag_names(),
-            camera_flag_names(), {"-no_poses"}}),
+            camera_flag_names(), {"-no_poses", "-mask"}}),
     {},
     {"-load", "-pose"},
     frame_inputs_help()};
@@ -76,11 +76,15 @@ struct Source {
   std::optional<Eigen::Isometry3d> world_from_grid;  ///< the first frame's pose, when the frames have poses
 };
 
-Source build_from_frames(const ToolOptions& options, bool use_sample, ProgressLine& progress) {
+Source build_from_frames(const CommandLine& command_line, const ToolOptions& options, bool use_sample,
+                         ProgressLine& progress) {
   ToolFrameReader frames(options, use_sample);
   Source source;
   SensorPreset preset;
   std::optional<SensorModel> model;
+  std::vector<std::uint8_t> mask_columns;  // -mask: the points outside it are left out (empty: none)
+  std::vector<float> kept;
+  std::size_t masked = 0;
   const FusedFrames fused = fuse_tool_frames(
       frames, progress,
       [&](const std::optional<ToolFrame>& first) {
@@ -88,12 +92,22 @@ Source build_from_frames(const ToolOptions& options, bool use_sample, ProgressLi
         source.model = preset.model;
         source.grid.emplace(SphericalGeometry(preset.geometry), options.grid);
         model.emplace(preset.model);
+        const ToolFrame* first_frame = first ? &*first : nullptr;
+        if (const std::optional<PixelMask> mask = read_tool_mask(command_line, first_frame))
+          mask_columns = tool_mask_columns(command_line, source.grid->geometry(), *mask);
       },
-      [&](const ToolFrame& frame) { return insert_points(*source.grid, *model, span_of(frame.cloud)); });
+      [&](const ToolFrame& frame) {
+        if (mask_columns.empty()) return insert_points(*source.grid, *model, span_of(frame.cloud));
+        masked += drop_masked_points(source.grid->geometry(), mask_columns, span_of(frame.cloud), kept);
+        return insert_points(*source.grid, *model, PointSpan{kept.data(), kept.size() / 3, 3});
+      });
   source.insertion = fused.insertion;
   source.world_from_grid = fused.first_pose;
   source.description = (use_sample ? std::string("built-in sample frame") : std::to_string(fused.frames) + " frame(s)") +
                        ", preset " + preset.name + ", " + fused.camera + ", " + fused.poses;
+  if (!mask_columns.empty())
+    source.description += "; -mask " + *command_line.text("-mask") + ": " + std::to_string(masked) +
+                          " valid points outside it left out";
   return source;
 }
 
@@ -163,11 +177,13 @@ int run(const CommandLine& command_line) {
     std::cerr << "warning: preset flags are ignored with -load: a saved map carries its own geometry and model\n";
 
   // Every source is read before the first export, so a bad map fails before any work.
+  if (!load_paths.empty() && command_line.has("-mask"))
+    throw InvalidParameter("-mask applies to input frames; a saved map (-load) is exported as it is");
   auto start = std::chrono::steady_clock::now();
   std::vector<Source> grids;
   for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options));
   ProgressLine progress(command_line, "frame");
-  if (load_paths.empty()) grids.push_back(build_from_frames(options, use_sample, progress));
+  if (load_paths.empty()) grids.push_back(build_from_frames(command_line, options, use_sample, progress));
   if (!command_line.has("-pose") && grids.front().world_from_grid) poses.front() = *grids.front().world_from_grid;
   const double read_seconds = seconds_since(start);
 

@@ -76,6 +76,58 @@ TEST(Png, GreyAndRgbRoundTripExactlyAtEveryLevel) {
     }
 }
 
+// A 16-bit grey PNG as libpng's classic reader gives it back (big-endian samples swapped to host order).
+struct MemoryReader {
+  const std::vector<std::uint8_t>* bytes;
+  std::size_t at = 0;
+};
+void read_from_memory(png_structp png, png_bytep out, png_size_t length) {
+  auto* m = static_cast<MemoryReader*>(png_get_io_ptr(png));
+  if (m->at + length > m->bytes->size()) png_error(png, "read past the end");
+  std::copy(m->bytes->begin() + static_cast<std::ptrdiff_t>(m->at),
+            m->bytes->begin() + static_cast<std::ptrdiff_t>(m->at + length), out);
+  m->at += length;
+}
+Image16 decode16(const std::vector<std::uint8_t>& bytes) {
+  Image16 im;
+  png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png_create_info_struct(png);
+  MemoryReader reader{&bytes};
+  if (setjmp(png_jmpbuf(png))) {
+    ADD_FAILURE() << "libpng cannot read the 16-bit PNG";
+    png_destroy_read_struct(&png, &info, nullptr);
+    return im;
+  }
+  png_set_read_fn(png, &reader, &read_from_memory);
+  png_read_png(png, info, PNG_TRANSFORM_SWAP_ENDIAN, nullptr);
+  EXPECT_EQ(png_get_bit_depth(png, info), 16);
+  EXPECT_EQ(png_get_color_type(png, info), PNG_COLOR_TYPE_GRAY);
+  im.width = static_cast<int>(png_get_image_width(png, info));
+  im.height = static_cast<int>(png_get_image_height(png, info));
+  png_bytepp rows = png_get_rows(png, info);
+  for (int y = 0; y < im.height; ++y) {
+    const auto* row = reinterpret_cast<const std::uint16_t*>(rows[y]);
+    im.pixels.insert(im.pixels.end(), row, row + im.width);
+  }
+  png_destroy_read_struct(&png, &info, nullptr);
+  return im;
+}
+
+TEST(Png, SixteenBitGreyRoundTripsEveryValue) {
+  Image16 im;
+  im.width = 257;
+  im.height = 255;  // 65535 values: every 16-bit value but one, 0 and 65535 included
+  for (int i = 0; i < im.width * im.height; ++i) im.pixels.push_back(static_cast<std::uint16_t>(i * 65535L / (im.width * im.height - 1)));
+  for (const int level : {0, 6}) {
+    const Image16 back = decode16(encode_png(im, level));
+    EXPECT_EQ(back.width, im.width);
+    EXPECT_EQ(back.height, im.height);
+    EXPECT_EQ(back.pixels, im.pixels) << "level " << level;
+  }
+  im.pixels.pop_back();
+  EXPECT_THROW(encode_png(im), InvalidInput);
+}
+
 TEST(Png, RefusesInconsistentImagesAndLevels) {
   Image im = pattern(2, 2, 1);
   EXPECT_THROW(encode_png(im, -1), InvalidParameter);

@@ -145,13 +145,23 @@ TEST_F(OccPlanTool, BadRequestsNameTheValue) {
   EXPECT_NE(r.output.find("-budget 0 is invalid"), std::string::npos) << r.output;
   r = run("-sample -budget 400000" + out);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("budget_rays = 400000"), std::string::npos) << r.output;
+  // Named by the flags, not the library's struct fields (issue 24).
+  EXPECT_NE(r.output.find("error: -budget 400000 is more than the grid's 640 x 480 = 307200 rays"), std::string::npos)
+      << r.output;
   r = run("-sample -shape spiral" + out);
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.output.find("-shape spiral"), std::string::npos) << r.output;
   r = run("-sample -shape window -window 64x64 -budget 100" + out);
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_NE(r.output.find("<= budget_rays"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("error: -window 64x64 covers 4096 rays, more than -budget 100: raise -budget or shrink -window"),
+            std::string::npos)
+      << r.output;
+  r = run("-sample -shape window -window 700x10 -budget 7000" + out);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("error: -window 700x10 does not fit in the grid of 640 x 480 columns"), std::string::npos)
+      << r.output;
+  for (const char* field : {"budget_rays", "window_width_columns", "window_height_columns"})
+    EXPECT_EQ(r.output.find(field), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "out"));
 }
 

@@ -4,6 +4,7 @@
 #include "occ_improve/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/sample_scene.hpp"
@@ -188,7 +189,7 @@ std::map<std::string, std::string> help_entries(const std::string& help) {
   std::istringstream lines(help);
   std::string current;
   for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("  -", 0) == 0 && line.rfind("  -h, --help", 0) != 0) {
+    if (line.rfind("  -", 0) == 0 && line.rfind("  -h, -help, --help", 0) != 0) {
       current = line.substr(2, line.find(' ', 2) - 2);
       entries[current] = line;
     } else if (!current.empty() && line.rfind(std::string(28, ' '), 0) == 0) {
@@ -218,7 +219,7 @@ TEST_F(Tools, EveryToolsHelpListsExactlyTheFlagsItAcceptsAndTheSameFlagReadsTheS
     const std::map<std::string, std::string> entries = help_entries(help.out);
     EXPECT_GE(entries.size(), 3u) << tool << help.out;
     for (const FlagSpec& f : flag_registry()) {
-      if (f.name == "-h" || f.name == "--help") continue;
+      if (f.name == "-h" || f.name == "-help" || f.name == "--help") continue;
       const bool listed = entries.count(f.name) != 0;
       if (!listed) {
         if (f.name.size() % 4 != 0) continue;  // a sample of the unlisted: each run costs a process start
@@ -397,6 +398,62 @@ TEST_F(Tools, NoArgumentsPrintsTheUsageAndFails) {
     const ToolRun r = run(tool, "");
     EXPECT_EQ(r.exit_code, 1) << tool;
     EXPECT_EQ(r.err.rfind("Usage: ", 0), 0u) << tool << ": " << r.err;
+  }
+}
+
+// PCL's tools take -h, -help and --help, and -v for verbose output: so does every tool here (issue 24).
+TEST_F(Tools, EveryToolTakesHelpAndVerboseAsPclToolsDo) {
+  for (const std::string& tool : kAllTools) {
+    const ToolRun h = run(tool, "-h");
+    for (const char* flag : {"-help", "--help"}) {
+      const ToolRun r = run(tool, flag);
+      EXPECT_EQ(r.exit_code, 0) << tool << " " << flag << ": " << r.err;
+      EXPECT_EQ(r.out, h.out) << tool << " " << flag;
+    }
+    EXPECT_NE(h.out.find("\n  -h, -help, --help "), std::string::npos) << tool;
+    EXPECT_NE(h.out.find("\n  -v "), std::string::npos) << tool;
+    // -v is a switch every tool takes: with an unknown flag after it, that flag is what is refused.
+    const ToolRun v = run(tool, "-v -zz_unknown");
+    EXPECT_EQ(v.exit_code, 1) << tool;
+    EXPECT_NE(v.err.find("unknown option -zz_unknown"), std::string::npos) << tool << ": " << v.err;
+  }
+  // -v prints the values the run uses, defaults included, on stderr before the run; stdout is unchanged.
+  const ToolRun quiet = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -k 3 -o quiet");
+  const ToolRun verbose = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -k 3 -v -o verbose");
+  ASSERT_EQ(verbose.exit_code, 0) << verbose.err;
+  for (const char* line : {"occ_improve_map with:\n", "\n  -k 3\n", "\n  -min_improvement 0.2 (default)\n",
+                           "\n  -preset kinect_v1 (default)\n", "\n  -sample (given)\n", "\n  -overwrite (not given)\n"})
+    EXPECT_NE(verbose.err.find(line), std::string::npos) << line << " not in:\n" << verbose.err;
+  EXPECT_EQ(quiet.err, "");
+  EXPECT_NE(verbose.out.find("top 3 of"), std::string::npos);
+}
+
+// Inputs of different scenes fused without poses make a map of neither: one warning line says so. The
+// test: over 50% of the pixels valid in both frames differ in depth by more than 3 sigma (issue 24).
+TEST_F(Tools, FusingDifferentScenesWithoutPosesWarnsInOneLine) {
+  const auto wall = [&](const std::string& name, std::uint16_t mm, int bumps) {
+    occ_improve::Image16 depth{64, 48, std::vector<std::uint16_t>(64 * 48, mm)};
+    for (int i = 0; i < bumps; ++i) depth.pixels[static_cast<std::size_t>(i) * 37 % depth.pixels.size()] += 200;
+    occ_improve::write_png(file(name), depth);
+    return file(name);
+  };
+  const std::string camera = " -intrinsics 60,60,31.5,23.5,64,48 -depth_encoding mm -o ";
+  // One scene twice, 10% of its pixels changed: no warning.
+  const ToolRun same = run(OCC_IMPROVE_MAP_EXECUTABLE, wall("a.png", 2000, 0) + " " + wall("b.png", 2000, 300) + camera + "same");
+  ASSERT_EQ(same.exit_code, 0) << same.err;
+  EXPECT_EQ(same.err.find("warning"), std::string::npos) << same.err;
+  // A wall at 2 m and one at 3 m: every common pixel disagrees.
+  for (const std::string& tool : {std::string(OCC_IMPROVE_MAP_EXECUTABLE), std::string(OCC_PLAN_EXECUTABLE)}) {
+    const ToolRun r = run(tool, wall("a.png", 2000, 0) + " " + wall("c.png", 3000, 0) + " " + wall("d.png", 2000, 0) +
+                                    (tool == OCC_PLAN_EXECUTABLE ? " -budget 100" : "") + camera + "different_" +
+                                    fs::path(tool).filename().string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    EXPECT_NE(r.err.find("warning: 1 frame(s) fused without poses disagree in depth with the first frame"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("up to 100% of their common valid pixels"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("c.png"), std::string::npos) << r.err;
   }
 }
 

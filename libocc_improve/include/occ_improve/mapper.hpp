@@ -5,6 +5,7 @@
 #include "occ_improve/grid.hpp"
 #include "occ_improve/improvement.hpp"
 #include "occ_improve/integrate.hpp"
+#include "occ_improve/mask.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/sensor_model.hpp"
 #include "occ_improve/surface.hpp"
@@ -17,6 +18,7 @@ struct MapperReport {
   InsertionReport insertion;  ///< its seconds include the surface update, done column by column inside it
   double improvement_seconds = 0;
   std::size_t surface_columns_changed = 0, rays_recomputed = 0;
+  std::size_t points_masked = 0;  ///< valid points outside the mask, left out before the insertion
 };
 
 class Mapper {
@@ -27,6 +29,18 @@ public:
 
   /// Insertion with the surface kept current + incremental improvement.
   MapperReport insert(PointSpan points, const InsertionOptions& options = {});
+  /// set_mask(mask), then insert(points, options).
+  MapperReport insert(PointSpan points, const InsertionOptions& options, const PixelMask& mask);
+
+  /// A validity / region-of-interest mask (mask.hpp) for the map from now on: later insertions leave out
+  /// the points in pixels outside it (MapperReport::points_masked), and the improvement there is NaN (not
+  /// observable: never ranked, in a region, planned or counted by the stop signal; grey in pictures).
+  /// Replaces an earlier mask. Throws as mask_columns (no camera, another size).
+  void set_mask(const PixelMask& mask);
+  /// Every column observable again (the improvement is recomputed).
+  void clear_mask();
+  /// One byte per column, 1 = inside the mask; empty without a mask.
+  const std::vector<std::uint8_t>& column_mask() const { return column_mask_; }
 
   const SphericalGeometry& geometry() const { return grid_.geometry(); }
   const SensorModel& model() const { return model_; }
@@ -39,6 +53,7 @@ private:
   SensorModel model_;
   SurfaceMap surface_;
   ImprovementMap improvement_;
+  std::vector<std::uint8_t> column_mask_;  ///< empty: no mask
 };
 
 }  // namespace occ_improve

@@ -75,6 +75,13 @@ struct Region {
 std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
                                  const SurfaceMap& surface, const RegionOptions& options = {});
 
+/// The columns of `regions` (find_regions' result on this map with these options, or its first K):
+/// label i + 1 for the columns of regions[i], 0 elsewhere. Each region is grown again from its peak by
+/// find_regions' rule. Throws InvalidInput for a region that is not one of this map's (its peak below the
+/// threshold, or another area), and as find_regions.
+std::vector<std::uint32_t> region_labels(const SphericalGeometry& geometry, const ImprovementMap& map,
+                                         const std::vector<Region>& regions, const RegionOptions& options = {});
+
 /// When to stop acquiring. Defaults are scaled for a 640 x 480 map with the paper's model, where one
 /// unknown ray is worth ~0.32 and a ray observed once ~0.13 (docs/METHOD.md):
 ///  - total: 10 = about 30 unknown rays or 75 once-seen rays left in the whole view;

@@ -41,6 +41,11 @@ void append_bytes(png_structp png, png_bytep data, png_size_t length) {
 }
 void flush_nothing(png_structp) {}
 
+bool is_big_endian() {
+  const std::uint16_t probe = 1;
+  return *reinterpret_cast<const std::uint8_t*>(&probe) == 0;
+}
+
 // Frees libpng's write and info structs on every way out, exceptions included.
 struct PngWriter {
   png_structp png = nullptr;
@@ -48,13 +53,14 @@ struct PngWriter {
   ~PngWriter() { png_destroy_write_struct(&png, &info); }
 };
 
-// Every libpng call that may fail, in a function that owns no C++ object: an error's longjmp back to the
-// setjmp skips no destructor. Returns false on a libpng error (the message is in the error pointer's state).
-struct Layout {
+// The PNG header fields of an image.
+struct PngLayout {
   int width, height, bit_depth, colour_type;
 };
 
-bool run_libpng(png_structp png, png_infop info, EncodeState* state, const Layout& layout, png_bytep* rows,
+// Every libpng call that may fail, in a function that owns no C++ object: an error's longjmp back to the
+// setjmp skips no destructor. Returns false on a libpng error (the message is in the error pointer's state).
+bool run_libpng(png_structp png, png_infop info, EncodeState* state, const PngLayout& layout, png_bytep* rows,
                 int compression_level) {
   if (setjmp(png_jmpbuf(png))) return false;
   png_set_write_fn(png, state, &append_bytes, &flush_nothing);
@@ -63,22 +69,15 @@ bool run_libpng(png_structp png, png_infop info, EncodeState* state, const Layou
                PNG_FILTER_TYPE_DEFAULT);
   png_set_compression_level(png, compression_level);
   png_write_info(png, info);
+  // Our 16-bit samples are in host order; PNG's are big-endian.
+  if (layout.bit_depth == 16 && !is_big_endian()) png_set_swap(png);
   png_write_image(png, rows);
   png_write_end(png, nullptr);
   return true;
 }
 
-void require_encodable(const Image& image) {
-  if (image.width <= 0 || image.height <= 0 || (image.channels != 1 && image.channels != 3) ||
-      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) *
-                                 static_cast<std::size_t>(image.channels))
-    throw InvalidInput("image of " + std::to_string(image.width) + " x " + std::to_string(image.height) + " x " +
-                       std::to_string(image.channels) + " holds " + std::to_string(image.pixels.size()) +
-                       " bytes (need width, height > 0 and 1 or 3 channels)");
-}
-
-/// PNG bytes of rows of `row_bytes` bytes each, laid out as `layout` says.
-std::vector<std::uint8_t> encode_rows(const Layout& layout, const std::uint8_t* pixels, std::size_t row_bytes,
+// The encoding shared by 8-bit and 16-bit images: `pixels` holds height rows of row_bytes bytes.
+std::vector<std::uint8_t> encode_rows(const PngLayout& layout, const std::uint8_t* pixels, std::size_t row_bytes,
                                       int compression_level) {
   detail::require_parameter(compression_level >= 0 && compression_level <= 9, "compression_level",
                             compression_level, "in [0, 9]");
@@ -103,33 +102,37 @@ void write_bytes(const std::string& path, const std::vector<std::uint8_t>& bytes
   });
 }
 
+void require_encodable(const Image& image) {
+  if (image.width <= 0 || image.height <= 0 || (image.channels != 1 && image.channels != 3) ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) *
+                                 static_cast<std::size_t>(image.channels))
+    throw InvalidInput("image of " + std::to_string(image.width) + " x " + std::to_string(image.height) + " x " +
+                       std::to_string(image.channels) + " holds " + std::to_string(image.pixels.size()) +
+                       " bytes (need width, height > 0 and 1 or 3 channels)");
+}
+
 }  // namespace
 
 std::vector<std::uint8_t> encode_png(const Image& image, int compression_level) {
   require_encodable(image);
-  const std::size_t row_bytes = static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels);
-  return encode_rows({image.width, image.height, 8, image.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB},
-                     image.pixels.data(), row_bytes, compression_level);
+  const PngLayout layout{image.width, image.height, 8, image.channels == 1 ? PNG_COLOR_TYPE_GRAY : PNG_COLOR_TYPE_RGB};
+  return encode_rows(layout, image.pixels.data(),
+                     static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.channels),
+                     compression_level);
 }
 
 void write_png(const std::string& path, const Image& image) { write_bytes(path, encode_png(image)); }
 
-std::vector<std::uint8_t> encode_png16(int width, int height, const std::vector<std::uint16_t>& grey,
-                                       int compression_level) {
-  if (width <= 0 || height <= 0 || grey.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
-    throw InvalidInput("16-bit image of " + std::to_string(width) + " x " + std::to_string(height) + " holds " +
-                       std::to_string(grey.size()) + " values (need width, height > 0)");
-  std::vector<std::uint8_t> big_endian(2 * grey.size());  // PNG stores 16-bit samples most significant first
-  for (std::size_t i = 0; i < grey.size(); ++i) {
-    big_endian[2 * i] = static_cast<std::uint8_t>(grey[i] >> 8);
-    big_endian[2 * i + 1] = static_cast<std::uint8_t>(grey[i] & 0xff);
-  }
-  return encode_rows({width, height, 16, PNG_COLOR_TYPE_GRAY}, big_endian.data(), 2 * static_cast<std::size_t>(width),
-                     compression_level);
+std::vector<std::uint8_t> encode_png(const Image16& image, int compression_level) {
+  if (image.width <= 0 || image.height <= 0 ||
+      image.pixels.size() != static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height))
+    throw InvalidInput("16-bit image of " + std::to_string(image.width) + " x " + std::to_string(image.height) +
+                       " holds " + std::to_string(image.pixels.size()) + " values (need width, height > 0)");
+  const PngLayout layout{image.width, image.height, 16, PNG_COLOR_TYPE_GRAY};
+  return encode_rows(layout, reinterpret_cast<const std::uint8_t*>(image.pixels.data()),
+                     static_cast<std::size_t>(image.width) * sizeof(std::uint16_t), compression_level);
 }
 
-void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& grey) {
-  write_bytes(path, encode_png16(width, height, grey));
-}
+void write_png(const std::string& path, const Image16& image) { write_bytes(path, encode_png(image)); }
 
 }  // namespace occ_improve

@@ -90,6 +90,13 @@ std::vector<FlagSpec> input_flags() {
                   "ignore the frames' poses (.pose.txt, groundtruth.txt, a PCD's VIEWPOINT); by default every\n"
                   "frame is moved into the first frame's sensor frame"),
       switch_flag("-sample", kInput, "use the built-in generated Kinect-like frame instead of input files"),
+      value_flag("-mask", K::text, "PNG|finite", kInput,
+                 "validity / region-of-interest mask over the camera's pixels: an 8- or 16-bit grey PNG of the\n"
+                 "camera's size, nonzero = valid. Rays outside it are not observable: their points are left\n"
+                 "out, they are never ranked, in a region or planned, and drawn grey. finite: the first\n"
+                 "frame's valid pixels (for clouds cropped to NaN, as mOSD's; on a raw frame it also hides the\n"
+                 "holes and shadows the map is there to find)",
+                 "", "none: every ray"),
   };
 }
 
@@ -258,13 +265,20 @@ std::vector<FlagSpec> build_registry() {
                     segmentation_and_evaluation_flags()})
     all.insert(all.end(), part.begin(), part.end());
   all.push_back(switch_flag("-h", kGeneral, "this help"));
+  all.push_back(switch_flag("-help", kGeneral, "this help"));
   all.push_back(switch_flag("--help", kGeneral, "this help"));
+  all.push_back(switch_flag("-v", kGeneral,
+                            "verbose: every flag's value (defaults included) on stderr first, and PCL's own\n"
+                            "messages at debug level (pcl::console::L_DEBUG), as PCL's tools take -v"));
   return all;
 }
 
 bool contains(const std::vector<std::string>& list, const std::string& s) {
   return std::find(list.begin(), list.end(), s) != list.end();
 }
+
+// Flags every tool takes without listing them, as PCL's tools do: help and verbosity.
+bool is_general_flag(const std::string& name) { return name == "-h" || name == "-help" || name == "--help" || name == "-v"; }
 
 // A flag is a dash and a letter ("-o", "--help"); a dash and a digit or point starts a value: a negative
 // number ("-0.5") or a list of them ("-intrinsics -585,585,320,240").
@@ -414,11 +428,13 @@ CommandLine::CommandLine(const ToolFlags& tool, std::map<std::string, std::vecto
     : tool_(&tool), given_(std::move(given)), positionals_(std::move(positionals)) {}
 
 const FlagSpec& CommandLine::declared(const std::string& flag) const {
-  if (!contains(tool_->flags, flag)) throw std::logic_error(tool_->tool + " does not declare " + flag);
+  if (!contains(tool_->flags, flag) && !is_general_flag(flag)) throw std::logic_error(tool_->tool + " does not declare " + flag);
   return flag_spec(flag);
 }
 
-bool CommandLine::declares(const std::string& flag) const { return contains(tool_->flags, flag); }
+bool CommandLine::declares(const std::string& flag) const {
+  return contains(tool_->flags, flag) || is_general_flag(flag);
+}
 
 bool CommandLine::has(const std::string& flag) const {
   declared(flag);
@@ -465,7 +481,7 @@ CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* cons
       positionals.push_back(arg);
       continue;
     }
-    if (!contains(tool.flags, arg) && arg != "-h" && arg != "--help")
+    if (!contains(tool.flags, arg) && !is_general_flag(arg))
       throw InvalidParameter("unknown option " + arg + " for " + tool.tool + " (see -h)");
     const FlagSpec& f = flag_spec(arg);
     std::vector<std::string>& values = given[arg];
@@ -505,7 +521,29 @@ std::string usage_text(const ToolFlags& tool, const std::string& program) {
     for (const std::string& name : tool.flags)
       if (flag_spec(name).group == group) out += usage_entry(flag_spec(name), tool);
   }
-  out += "  -h, --help                this help\n";
+  out += "  -h, -help, --help         this help\n";
+  out += usage_entry(flag_spec("-v"), tool);
+  return out;
+}
+
+std::string resolved_flags(const CommandLine& command_line) {
+  std::string out;
+  for (const std::string& name : command_line.tool().flags) {
+    const FlagSpec& f = flag_spec(name);
+    if (f.kind == FlagKind::switch_flag) {
+      out += "  " + name + (command_line.has(name) ? " (given)" : " (not given)") + "\n";
+      continue;
+    }
+    const std::vector<std::string> given = command_line.values(name);
+    if (!given.empty()) {
+      for (const std::string& v : given) out += "  " + name + " " + (v.empty() ? "(no value)" : v) + "\n";
+    } else if (const auto value = command_line.text(name)) {
+      out += "  " + name + " " + *value + " (default)\n";
+    } else {
+      out += "  " + name + " (unset" + (f.default_note.empty() ? "" : ": " + f.default_note) + ")\n";
+    }
+  }
+  for (const std::string& p : command_line.positionals()) out += "  input " + p + "\n";
   return out;
 }
 

@@ -50,6 +50,18 @@ void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, 
   write_text_file(path, "CSV file", out);
 }
 
+// Depths in metres as 16-bit millimetres, rounded: 0 where `known(column)` is false or the depth rounds to
+// 0; depths beyond 65.535 m saturate at 65535 (depth_mm.png, predicted_depth.png).
+template <typename Known>
+Image16 millimetres_image(int width, int height, const std::vector<float>& depth_m, const Known& known) {
+  Image16 image{width, height, std::vector<std::uint16_t>(depth_m.size(), 0)};
+  for (std::size_t c = 0; c < depth_m.size(); ++c) {
+    const double mm = std::round(static_cast<double>(depth_m[c]) * 1000.0);
+    if (known(c) && mm > 0) image.pixels[c] = static_cast<std::uint16_t>(std::min(mm, 65535.0));
+  }
+  return image;
+}
+
 }  // namespace
 
 MapSummary summarize_map(const Mapper& mapper, const RegionOptions& region_options, int top_k) {
@@ -57,9 +69,26 @@ MapSummary summarize_map(const Mapper& mapper, const RegionOptions& region_optio
   s.all_regions = find_regions(mapper.geometry(), mapper.improvement(), mapper.surface(), region_options);
   s.rays = top_rays(mapper.improvement(), mapper.surface(), top_k);
   s.stop = stop_signal(mapper.improvement(), s.all_regions);
+  s.region_options = region_options;
   const std::size_t k = std::min(s.all_regions.size(), static_cast<std::size_t>(top_k));
   s.regions.assign(s.all_regions.begin(), s.all_regions.begin() + static_cast<std::ptrdiff_t>(k));
   return s;
+}
+
+Image16 depth_millimetres(const SurfaceMap& surface) {
+  return millimetres_image(surface.width, surface.height, surface.depth_m,
+                           [&](std::size_t c) { return surface.unknown[c] == 0; });
+}
+
+Image16 region_id_image(const Mapper& mapper, const MapSummary& summary) {
+  if (summary.regions.size() > 65535)
+    throw InvalidParameter("regions.png holds 16-bit region ids: " + std::to_string(summary.regions.size()) +
+                           " regions are too many (lower -k to at most 65535)");
+  const std::vector<std::uint32_t> labels =
+      region_labels(mapper.geometry(), mapper.improvement(), summary.regions, summary.region_options);
+  Image16 image{mapper.geometry().width(), mapper.geometry().height(), std::vector<std::uint16_t>(labels.size())};
+  std::copy(labels.begin(), labels.end(), image.pixels.begin());
+  return image;
 }
 
 std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapper, const MapSummary& summary,
@@ -70,6 +99,8 @@ std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapp
     names.push_back(name);
   };
   png("depth.png", render_depth(mapper.surface(), mapper.geometry().depth().max()));
+  write_png(out.file("depth_mm.png"), depth_millimetres(mapper.surface()));
+  names.push_back("depth_mm.png");
   png("occupancy.png", render_occupancy(mapper.surface()));
   png("improvement.png", render_improvement(mapper.improvement()));
   png("legend.png", render_improvement_legend());
@@ -78,8 +109,9 @@ std::vector<std::string> write_map_outputs(OutputFolder& out, const Mapper& mapp
   save_improvement_cloud(out.file("surface.pcd"),
                          to_improvement_cloud(mapper.geometry(), mapper.surface(), mapper.improvement()));
   write_regions_csv(out.file("regions.csv"), summary.regions);
+  write_png(out.file("regions.png"), region_id_image(mapper, summary));
   write_rays_csv(out.file("rays.csv"), mapper.geometry(), summary.rays);
-  names.insert(names.end(), {"surface.pcd", "regions.csv", "rays.csv"});
+  names.insert(names.end(), {"surface.pcd", "regions.csv", "regions.png", "rays.csv"});
   return names;
 }
 
@@ -97,10 +129,8 @@ std::string write_predicted_depth(OutputFolder& out, const Mapper& mapper, const
   params.rule = rule == "linear" ? DepthPredictionRule::linear : DepthPredictionRule::nearest;
   params.radius_columns = radius_columns;
   const PredictedDepth p = predict_depth(mapper.surface(), mapper.model(), params);
-  std::vector<std::uint16_t> mm(p.depth_m.size(), 0);
-  for (std::size_t c = 0; c < mm.size(); ++c)
-    if (p.distance[c] >= 0) mm[c] = static_cast<std::uint16_t>(std::min(65535.0, std::round(1000.0 * p.depth_m[c])));
-  write_png16(out.file("predicted_depth.png"), p.width, p.height, mm);
+  write_png(out.file("predicted_depth.png"),
+            millimetres_image(p.width, p.height, p.depth_m, [&](std::size_t c) { return p.distance[c] >= 0; }));
   return "predicted_depth.png";
 }
 

@@ -6,6 +6,7 @@
 #include "occ_improve/tools/output_files.hpp"
 
 #include <pcl/common/transforms.h>
+#include <pcl/console/print.h>
 
 #include <unistd.h>
 
@@ -234,6 +235,60 @@ std::optional<Eigen::Isometry3d> ToolFrameReader::first_pose() const {
   return first_->pose;
 }
 
+FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& first, const pcl::PointCloud<pcl::PointXYZ>& frame,
+                               const SensorModelParams& model, double k_sigma) {
+  FrameDepthAgreement a;
+  if (first.height <= 1 || frame.width != first.width || frame.height != first.height) return a;
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    const pcl::PointXYZ &p = first[i], &q = frame[i];
+    if (!is_valid_point(p.x, p.y, p.z) || !is_valid_point(q.x, q.y, q.z)) continue;
+    ++a.co_valid;
+    const double z = p.z;
+    const double sigma = std::max(model.sigma_depth_floor_m, model.sigma_depth_m + model.sigma_depth_per_m2 * z * z);
+    a.disagreeing += std::abs(static_cast<double>(q.z) - z) > k_sigma * sigma;
+  }
+  return a;
+}
+
+namespace {
+
+// Collects the frames that disagree with the first one (frame_depth_agreement) when no poses place them, and
+// warns once at the end: fusing different scenes as one view makes a map of neither.
+class SceneCheck {
+public:
+  SceneCheck(const SensorModelParams& model, bool poses_applied) : model_(model), active_(!poses_applied) {}
+  void add(const ToolFrame& frame) {
+    if (!active_ || frame.cloud.height <= 1) return;
+    if (!first_) {
+      first_ = frame.cloud;
+      first_name_ = frame.name;
+      return;
+    }
+    const FrameDepthAgreement a = frame_depth_agreement(*first_, frame.cloud, model_);
+    if (a.co_valid < 1000 || a.disagreeing_share() <= kDifferentSceneShare) return;
+    names_.push_back(frame.name);
+    worst_share_ = std::max(worst_share_, a.disagreeing_share());
+  }
+  void warn_if_needed() const {
+    if (names_.empty()) return;
+    std::fprintf(stderr,
+                 "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to "
+                 "%.0f%% of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes "
+                 "or viewpoints? Give their poses, or map them one by one\n",
+                 names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str());
+  }
+
+private:
+  SensorModelParams model_;
+  bool active_;
+  std::optional<pcl::PointCloud<pcl::PointXYZ>> first_;
+  std::string first_name_;
+  std::vector<std::string> names_;
+  double worst_share_ = 0;
+};
+
+}  // namespace
+
 FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
                              const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
                              const std::function<InsertionReport(const ToolFrame& frame)>& insert) {
@@ -249,10 +304,13 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what() + ";" +
                         memory_cap_hint(true));
   }
+  // Poses move every frame into the first one's view; without them, frames of other scenes go unnoticed.
+  SceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose);
   try {
     for (; frame; frame = frames.next()) {
       throw_if_stop_requested();
       const InputScope scope(frame->name);
+      scenes.add(*frame);
       fused.insertion += insert(*frame);
       fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
       progress.update(++fused.frames, frames.count(), fused.insertion.points_received);
@@ -264,11 +322,60 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw;
   }
   progress.finish();
+  scenes.warn_if_needed();
   fused.first_pose = frames.first_pose();
   fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
   if (fused.frames > 0 && fused.insertion.points_inserted == 0)
     throw InvalidInput("no point of the input lies inside the grid's field of view");
   return fused;
+}
+
+std::optional<PixelMask> read_tool_mask(const CommandLine& command_line, const ToolFrame* first) {
+  if (!command_line.declares("-mask") || !command_line.has("-mask")) return std::nullopt;
+  const std::string value = *command_line.text("-mask");
+  if (value != "finite") {
+    try {
+      return read_mask_png(value);
+    } catch (const std::exception& e) {
+      throw InvalidParameter("-mask " + value + ": " + e.what());
+    }
+  }
+  if (!first) throw InvalidParameter("-mask finite needs an input frame (it is the first frame's valid pixels)");
+  const auto& cloud = first->cloud;
+  if (cloud.height <= 1)
+    throw InvalidParameter("-mask finite: '" + first->name + "' is not organized, so its points name no pixel");
+  return finite_pixel_mask(span_of(cloud), static_cast<int>(cloud.width), static_cast<int>(cloud.height));
+}
+
+namespace {
+// Runs `use` on the mask, naming -mask and its source in a refusal (the core's message names sizes only).
+template <typename Use>
+auto with_mask_named(const CommandLine& command_line, Use use) {
+  try {
+    return use();
+  } catch (const InvalidInput& e) {
+    throw InvalidParameter("-mask " + *command_line.text("-mask") + ": " + e.what());
+  } catch (const InvalidParameter& e) {
+    const std::string what = e.what();
+    if (what.rfind("-mask", 0) == 0) throw;
+    throw InvalidParameter("-mask " + *command_line.text("-mask") + ": " + what);
+  }
+}
+}  // namespace
+
+std::string apply_tool_mask(const CommandLine& command_line, Mapper& mapper, const ToolFrame* first) {
+  return with_mask_named(command_line, [&] {
+    const std::optional<PixelMask> mask = read_tool_mask(command_line, first);
+    if (!mask) return std::string();
+    mapper.set_mask(*mask);
+    return "mask " + *command_line.text("-mask") + ": " + std::to_string(mask->valid_count()) + " of " +
+           std::to_string(mask->valid.size()) + " pixels valid";
+  });
+}
+
+std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const SphericalGeometry& geometry,
+                                            const PixelMask& mask) {
+  return with_mask_named(command_line, [&] { return mask_columns(geometry, mask); });
 }
 
 std::string describe_points(const InsertionReport& in) {
@@ -472,7 +579,8 @@ namespace {
 
 bool help_requested(int argc, const char* const* argv) {
   for (int i = 1; i < argc; ++i)
-    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "--help") == 0) return true;
+    if (std::strcmp(argv[i], "-h") == 0 || std::strcmp(argv[i], "-help") == 0 || std::strcmp(argv[i], "--help") == 0)
+      return true;
   return false;
 }
 
@@ -486,7 +594,12 @@ int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const Com
   }
   install_stop_signals();
   try {
-    const int code = run(parse_command_line(flags, argc, argv));
+    const CommandLine command_line = parse_command_line(flags, argc, argv);
+    if (command_line.has("-v")) {
+      pcl::console::setVerbosityLevel(pcl::console::L_DEBUG);
+      std::fprintf(stderr, "%s with:\n%s", program.c_str(), resolved_flags(command_line).c_str());
+    }
+    const int code = run(command_line);
     // A signal that came too late for any poll (during the final renames, say) still ends in 128 + signal,
     // as the README promises; the run had finished, so what it wrote is in place.
     if (const int signal = stop_requested()) {

@@ -2,6 +2,7 @@
 // Segmenting an organized cloud through the occupancy grid: the cloud is inserted into a fresh map
 // (Mapper: insertion, surface, improvement), the map is segmented per ray (segmentation.hpp), and every
 // point takes the label of the ray (column) its direction falls in.
+#include "occ_improve/mask.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/segmentation.hpp"
@@ -26,10 +27,12 @@ struct CloudSegmentation {
 };
 
 /// Throws InvalidInput when the cloud is not organized (height <= 1): the method needs a range image.
-/// A cloud without valid points gives no segments (not an error).
+/// A cloud without valid points gives no segments (not an error). With a `mask` (mask.hpp, the camera's
+/// size), the points outside it are left out of the map (Mapper::set_mask) and labelled 0.
 template <typename PointT>
 CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const SensorPreset& preset,
-                                const SegmentationParams& params, const GridOptions& grid_options = {});
+                                const SegmentationParams& params, const GridOptions& grid_options = {},
+                                const PixelMask* mask = nullptr);
 
 /// The per-ray labels carried to the points of an organized cloud (the column each point's direction
 /// falls in). Counts valid points outside the grid in `outside`.

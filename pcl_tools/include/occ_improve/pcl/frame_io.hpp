@@ -2,6 +2,7 @@
 // Reading range frames from files: PCD and PLY (organized or not, any XYZ point type) and depth images
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
 // disparity PGM, PCL grabbers' 16-bit TIFF in millimetres). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
+#include "occ_improve/mask.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/render.hpp"
 
@@ -40,6 +41,11 @@ inline constexpr std::uint64_t kMaxDepthImagePixels = std::uint64_t{1} << 26;
 /// kMaxDepthImagePixels and against what the file can hold before any pixel buffer is allocated
 /// (FormatError naming the file and its width x height); any other pixel format is a FormatError.
 DepthImage16 read_depth_image16(const std::string& path);
+
+/// A validity / region-of-interest mask (mask.hpp): an 8-bit or 16-bit grey PNG (1, 2, 4-bit expanded),
+/// nonzero = valid. Size checks as read_depth_image16; any other pixel format is a FormatError naming the
+/// file.
+PixelMask read_mask_png(const std::string& path);
 
 /// True for the extensions read as depth images (.png, .pgm, .tif, .tiff, any case): these need camera
 /// intrinsics to become a cloud.

@@ -1,6 +1,5 @@
 #pragma once
-// PNG files of the core's images (render.hpp) and 16-bit grey images (depth in millimetres), written
-// through libpng (deflate, zlib levels 0-9).
+// PNG files of the core's images (render.hpp), written through libpng (deflate, zlib levels 0-9).
 #include "occ_improve/render.hpp"
 
 #include <cstdint>
@@ -18,11 +17,17 @@ std::vector<std::uint8_t> encode_png(const Image& image, int compression_level =
 /// file as it was). Throws IoError when the file cannot be written, InvalidInput for an inconsistent image.
 void write_png(const std::string& path, const Image& image);
 
-/// A 16-bit grey PNG (row-major, width x height values), e.g. a depth image in millimetres as Kinect
-/// datasets store it. Throws InvalidInput when `grey` does not hold width x height values, otherwise as
-/// encode_png / write_png.
-std::vector<std::uint8_t> encode_png16(int width, int height, const std::vector<std::uint16_t>& grey,
-                                       int compression_level = 6);
-void write_png16(const std::string& path, int width, int height, const std::vector<std::uint16_t>& grey);
+/// A 16-bit grey image: label ids (regions.png, labels.png) or depth in millimetres (depth_mm.png), row-major.
+struct Image16 {
+  int width = 0, height = 0;
+  std::vector<std::uint16_t> pixels;
+};
+
+/// The PNG file bytes of a 16-bit grey image (PNG stores 16-bit samples big-endian; readers such as
+/// OpenCV's imread(..., IMREAD_UNCHANGED), PIL and PCL's PNG reader give back the values). Throws as
+/// encode_png.
+std::vector<std::uint8_t> encode_png(const Image16& image, int compression_level = 6);
+/// Writes encode_png(image) to `path` atomically, as write_png.
+void write_png(const std::string& path, const Image16& image);
 
 }  // namespace occ_improve

@@ -40,7 +40,8 @@ struct FlagSpec {
   std::string group;            ///< the -h section
 };
 
-/// Every flag of every tool, -h and --help included. Names are unique.
+/// Every flag of every tool, the general ones every tool takes without listing them included (-h, -help,
+/// --help, -v: as PCL's tools take them). Names are unique.
 const std::vector<FlagSpec>& flag_registry();
 /// The registry's entry (std::logic_error for a name not in it: a programming error).
 const FlagSpec& flag_spec(const std::string& name);
@@ -91,6 +92,9 @@ CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* cons
 
 /// The -h text: usage lines, description, then every flag of the tool by group, with its default.
 std::string usage_text(const ToolFlags& tool, const std::string& program);
+
+/// For -v: one line per flag of the tool with the value it runs with ("-k 10 (default)"), then the inputs.
+std::string resolved_flags(const CommandLine& command_line);
 
 /// The names of the flag groups tools share, for ToolFlags::flags: the sensor preset and its overrides
 /// (-preset ... -clamp); the camera of depth images (-intrinsics, -intrinsics_file, -depth_encoding); the

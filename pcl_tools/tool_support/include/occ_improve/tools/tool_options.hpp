@@ -7,6 +7,8 @@
 #include "occ_improve/grid.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/map_io.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/mask.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
@@ -79,6 +81,7 @@ public:
   double read_seconds() const { return read_seconds_; }
   /// The first frame's camera-to-world when poses are applied (the grid's frame in the world), once read.
   std::optional<Eigen::Isometry3d> first_pose() const;
+  const ToolOptions& options() const { return options_; }
 
 private:
   std::optional<ToolFrame> read_next();
@@ -121,7 +124,7 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
 
-/// The shared main() of the command-line tools: prints usage_text on -h/--help (exit 0) and on no
+/// The shared main() of the command-line tools: prints usage_text on -h/-help/--help (exit 0) and on no
 /// argument at all (exit 1), otherwise parses the command line against `flags`, installs the stop-signal
 /// handlers and runs `run`. Any exception, a refused flag, std::bad_alloc and non-standard ones included,
 /// becomes ONE line "error: ..." on stderr naming the input being worked on (InputScope) and exit code 1;
@@ -157,6 +160,21 @@ private:
   double start_seconds_, last_draw_seconds_ = -1.0;
 };
 
+/// How two organized frames of one view agree in depth: of the pixels valid in both (`co_valid`), those
+/// whose z differ by more than k sigma (`disagreeing`), sigma the preset's depth noise at the first frame's
+/// z (SensorModelParams: max(floor, sigma_depth_m + sigma_depth_per_m2 z^2)). Frames of one scene from one
+/// viewpoint disagree only at depth edges and in noise (a few per cent of the pixels at k = 3); frames of
+/// different scenes or viewpoints on most pixels.
+struct FrameDepthAgreement {
+  std::size_t co_valid = 0, disagreeing = 0;
+  double disagreeing_share() const { return co_valid ? static_cast<double>(disagreeing) / co_valid : 0.0; }
+};
+/// The fusion's test (fuse_tool_frames): k = 3. Both frames must be organized and of one size (else all 0).
+FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& first, const pcl::PointCloud<pcl::PointXYZ>& frame,
+                               const SensorModelParams& model, double k_sigma = 3.0);
+/// Above this share of disagreeing co-valid pixels (over at least 1000 of them) fuse_tool_frames warns.
+inline constexpr double kDifferentSceneShare = 0.5;
+
 /// What fuse_tool_frames did, for a tool's summary.
 struct FusedFrames {
   InsertionReport insertion;
@@ -169,11 +187,26 @@ struct FusedFrames {
 };
 
 /// Reads every frame (ToolFrameReader), calls `prepare` with the first one (its camera sets the grid), then
-/// `insert` on each, one frame in memory at a time, with the progress line. Refuses a run whose points all
+/// `insert` on each, one frame in memory at a time, with the progress line. Frames fused without poses
+/// are compared with the first (frame_depth_agreement); when some disagree on more than kDifferentSceneShare of
+/// their co-valid pixels, one warning line on stderr names them: different scenes fused as one view. Refuses a run whose points all
 /// miss the grid. Cancelled: prints how many frames were inserted ("nothing written") and rethrows.
 FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
                              const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
                              const std::function<InsertionReport(const ToolFrame& frame)>& insert);
+
+/// The -mask of a frame-reading tool (nullopt without it): the PNG (read_mask_png), or for "finite" the
+/// valid pixels of `first`, which must be an organized frame of its camera's size. Refusals are one line
+/// naming -mask and the file.
+std::optional<PixelMask> read_tool_mask(const CommandLine& command_line, const ToolFrame* first);
+/// read_tool_mask set on the mapper (Mapper::set_mask); refusals (another size than the camera, a grid
+/// without a camera) name -mask and the file. Returns the summary line ("mask FILE: N of M pixels valid"),
+/// "" without -mask.
+std::string apply_tool_mask(const CommandLine& command_line, Mapper& mapper, const ToolFrame* first);
+/// mask_columns(geometry, mask) with refusals naming -mask and the file: for a tool that checks the mask
+/// before its mapper exists (occ_segment) or fills a grid itself (occ_to_octomap).
+std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const SphericalGeometry& geometry,
+                                            const PixelMask& mask);
 
 /// The points line of a tool's summary: read, used, skipped and beyond the depth range.
 std::string describe_points(const InsertionReport& report);

@@ -1,0 +1,118 @@
+// The validity / region-of-interest mask (mask.hpp) through the Mapper: rays outside it are not observable
+// (NaN improvement), never ranked, never in a region, never planned; their points are left out.
+#include "occ_improve/errors.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/mask.hpp"
+#include "occ_improve/planner.hpp"
+#include "occ_improve/presets.hpp"
+#include "occ_improve/ranking.hpp"
+#include "occ_improve/sample_scene.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace occ_improve {
+namespace {
+
+// The sample's left half of the image: a mask that cuts through data and no-data alike.
+PixelMask left_half(const PinholeIntrinsics& k) {
+  PixelMask mask;
+  mask.width = k.width;
+  mask.height = k.height;
+  mask.valid.assign(static_cast<std::size_t>(k.width) * k.height, 0);
+  for (int v = 0; v < k.height; ++v)
+    for (int u = 0; u < k.width / 2; ++u) mask.valid[static_cast<std::size_t>(v) * k.width + u] = 255;
+  return mask;
+}
+
+TEST(Mask, ColumnsOutsideAreNotObservableAndTheirPointsAreLeftOut) {
+  const sample::SampleFrame frame = sample::generate_scene();
+  const std::vector<Eigen::Vector3f> points = frame.points();
+  const PixelMask mask = left_half(frame.intrinsics);
+  Mapper masked(kinect_v1(frame.intrinsics)), plain(kinect_v1(frame.intrinsics));
+  const MapperReport r = masked.insert(PointSpan::from(points), {}, mask);
+  const MapperReport all = plain.insert(PointSpan::from(points));
+  // The valid points of the right half were left out, and only those.
+  std::size_t right_valid = 0;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    right_valid += !mask.valid[i] && is_valid_point(points[i].x(), points[i].y(), points[i].z());
+  EXPECT_GT(right_valid, 50000u);
+  EXPECT_EQ(r.points_masked, right_valid);
+  EXPECT_EQ(r.insertion.points_inserted + r.points_masked, all.insertion.points_inserted);
+
+  const int w = frame.intrinsics.width;
+  std::size_t nan = 0;
+  for (std::size_t c = 0; c < masked.improvement().value.size(); ++c) {
+    const bool inside = static_cast<int>(c % static_cast<std::size_t>(w)) < w / 2;
+    EXPECT_EQ(std::isnan(masked.improvement().value[c]), !inside) << "column " << c;
+    nan += std::isnan(masked.improvement().value[c]);
+  }
+  EXPECT_EQ(nan, mask.valid.size() - mask.valid_count());
+
+  // Never ranked, never in a region, never planned: everything lies in the left half.
+  for (const RankedRay& ray : top_rays(masked.improvement(), masked.surface(), 5000)) EXPECT_LT(ray.azimuth_bin, w / 2);
+  const std::vector<Region> regions = find_regions(masked.geometry(), masked.improvement(), masked.surface());
+  ASSERT_FALSE(regions.empty());
+  for (const Region& region : regions) EXPECT_LT(region.max_u, w / 2);
+  PlanRequest request;
+  request.budget_rays = 20000;
+  const Shot shot = plan_next_shot(masked.improvement(), ReturnRecord::for_grid(w, frame.intrinsics.height), request);
+  ASSERT_FALSE(shot.columns.empty());
+  for (const ColumnIndex c : shot.columns) EXPECT_LT(static_cast<int>(c % static_cast<ColumnIndex>(w)), w / 2);
+
+  // Clearing the mask brings the values back (the right half, never inserted, is unknown: the no-data level).
+  masked.clear_mask();
+  for (const float v : masked.improvement().value) ASSERT_FALSE(std::isnan(v));
+  EXPECT_GT(masked.improvement().value[static_cast<std::size_t>(240) * w + 600], 0.3f);
+}
+
+TEST(Mask, RefusesAnotherSizeAndAGridWithoutCamera) {
+  const PinholeIntrinsics k = kinect_v1_intrinsics();
+  Mapper mapper(kinect_v1(k));
+  PixelMask small = left_half(k);
+  small.width = 320;
+  small.valid.resize(320 * 480);
+  try {
+    mapper.set_mask(small);
+    FAIL() << "a 320 x 480 mask was taken for a 640 x 480 camera";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("mask is 320 x 480, the camera 640 x 480"), std::string::npos) << e.what();
+  }
+  Mapper paper(kinect_v1_paper());
+  EXPECT_THROW(paper.set_mask(left_half(k)), InvalidParameter);
+  PixelMask broken = left_half(k);
+  broken.valid.pop_back();
+  EXPECT_THROW(mapper.set_mask(broken), InvalidInput);
+}
+
+TEST(Mask, SphericalGridsMaskTheColumnsWhoseDirectionFallsInAMaskedPixel) {
+  const sample::SampleFrame frame = sample::generate_scene();
+  Mapper mapper(kinect_v1_spherical(frame.intrinsics));
+  mapper.set_mask(left_half(frame.intrinsics));
+  const SphericalGeometry& g = mapper.geometry();
+  std::size_t checked = 0;
+  for (int e = 0; e < g.height(); e += 7)
+    for (int a = 0; a < g.width(); a += 7) {
+      const Eigen::Vector3d d = g.direction(a, e);
+      const double u = frame.intrinsics.fx * d.x() / d.z() + frame.intrinsics.cx;
+      if (std::abs(u - (frame.intrinsics.width / 2 - 0.5)) < 1.0) continue;  // the cut itself
+      const bool inside = g.observable(g.column(a, e)) && u < frame.intrinsics.width / 2 - 0.5;
+      EXPECT_EQ(std::isnan(mapper.improvement().value[g.column(a, e)]), !inside) << a << "," << e;
+      ++checked;
+    }
+  EXPECT_GT(checked, 1000u);
+}
+
+TEST(Mask, FinitePixelMaskIsTheOrganizedFramesValidPoints) {
+  const sample::SampleFrame frame = sample::generate_scene();
+  const std::vector<Eigen::Vector3f> points = frame.points();
+  const PixelMask mask = finite_pixel_mask(PointSpan::from(points), frame.intrinsics.width, frame.intrinsics.height);
+  for (std::size_t i = 0; i < points.size(); i += 97)
+    EXPECT_EQ(mask.valid[i] != 0, frame.depth_m[i] > 0) << "pixel " << i;
+  EXPECT_LT(mask.valid_count(), points.size());
+  EXPECT_THROW(finite_pixel_mask(PointSpan::from(points), 100, 100), InvalidInput);
+}
+
+}  // namespace
+}  // namespace occ_improve
