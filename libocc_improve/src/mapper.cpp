@@ -24,6 +24,7 @@ Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(g
   grid_.take_changed_columns();  // the surface below already accounts for everything in the grid
   surface_ = compute_surface(grid_);
   improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+  pyramid_ = ImprovementPyramid(improvement_, surface_);
 }
 
 MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
@@ -34,7 +35,11 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
   grid_.take_changed_columns();  // accounted for by `changed`
   report.surface_columns_changed = changed.size();
   const auto start = std::chrono::steady_clock::now();
-  report.rays_recomputed = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_).size();
+  const std::vector<ColumnIndex> rays = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_);
+  report.rays_recomputed = rays.size();
+  // A block depends on its rays' improvement and its columns' surface: both lists (duplicates are merged).
+  changed.insert(changed.end(), rays.begin(), rays.end());
+  pyramid_.update(improvement_, surface_, changed);
   report.improvement_seconds = seconds_since(start);
   return report;
 }
