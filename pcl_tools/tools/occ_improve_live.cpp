@@ -44,7 +44,8 @@ const ToolFlags kFlags{
     "shot against rays asked). Ctrl-C stops cleanly and still writes the maps.\n",
     joined({output_folder_flag_names(),
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
-             "-stop_on_signal", "-simulate", "-budget", "-max_shots", "-load", "-save", "-threads", "-k",
+             "-stop_on_signal", "-simulate", "-budget", "-shape", "-refine", "-window",
+             "-negative_share", "-stop_gain", "-max_shots", "-load", "-save", "-threads", "-k",
              "-min_improvement"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses"}}),
     {{"-o", "occ_improve_live_out"}},
@@ -104,8 +105,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   VirtualSensor sensor(depth_of_organized(frame.cloud), *frame.camera);
   Mapper mapper(preset, options.grid);
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
-  PlanRequest request;
-  request.budget_rays = budget;
+  const PlanRequest request = plan_request_from_flags(command_line);
   std::vector<SimulatedShot> shots;
   std::string why = "reached -max_shots " + std::to_string(max_shots);
   ProgressLine progress(command_line, "shot");
@@ -113,7 +113,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   try {
     while (static_cast<int>(shots.size()) < max_shots) {
       throw_if_stop_requested();
-      const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+      const Shot shot = plan_next_shot(mapper, returns, request);
       if (shot.stop) {
         why = "the plan says stop: " + shot.reason;
         break;

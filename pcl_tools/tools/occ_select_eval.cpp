@@ -32,10 +32,11 @@ const ToolFlags kFlags{
     {"SCENE... [options]"},
     "For each scene and budget, strategies (a) full frames, (b) uniform random without replacement,\n"
     "(c) regular decimation, (d) improvement-guided, (e) (d) + return model, (f) (e) + re-acquisition of\n"
-    "negative rays acquire from a virtual Kinect v1 (virtual_sensor.hpp); quality = share of\n"
+    "negative rays, (g) coarse-to-fine (coverage pass, then one ray per block by the multi-scale improvement x\n"
+    "the predictor's residual; g_improvement / g_residual: by one of them) acquire from a virtual Kinect v1 (virtual_sensor.hpp); quality = share of\n"
     "scene-return rays whose predicted depth lies within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's.\n"
     "Writes OUTDIR/<scene>.csv per scene and OUTDIR/summary.csv.\n",
-    joined({output_folder_flag_names(), {"-budgets", "-frames", "-negative_share", "-radius", "-seed"},
+    joined({output_folder_flag_names(), {"-budgets", "-frames", "-negative_share", "-radius", "-seed", "-strategies"},
             camera_flag_names()}),
     {{"-o", "out/select"}, {"-negative_share", "0.1"}},
     {},
@@ -69,17 +70,24 @@ Scene load_scene(const std::string& input, const ToolOptions& options) {
   return s;
 }
 
+constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 full frames"
+
+enum Strategy { full, uniform, decimation, guided, guided_returns, guided_reacquire, coarse_both, coarse_improvement, coarse_residual };
+const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decimation",
+                                      "d_guided",    "e_returns",       "f_reacquire",
+                                      "g_coarse_to_fine", "g_improvement", "g_residual"};
+constexpr Strategy kCompared[] = {uniform, decimation, guided, guided_returns, guided_reacquire,
+                                  coarse_both, coarse_improvement, coarse_residual};
+
+bool is_coarse_to_fine(Strategy s) { return s == coarse_both || s == coarse_improvement || s == coarse_residual; }
+
 struct Options {
   std::vector<double> budgets;
   double frames = 5, share = 0.1;
   int radius = 16;
   std::uint64_t seed = 1;
+  std::vector<Strategy> strategies;  ///< besides (a), which is always run (the reference)
 };
-
-constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 full frames"
-
-enum Strategy { full, uniform, decimation, guided, guided_returns, guided_reacquire };
-const char* const kStrategyNames[] = {"a_full", "b_uniform", "c_decimation", "d_guided", "e_returns", "f_reacquire"};
 
 struct Quality {
   double within = 0, coverage = 0, mean_abs_error_m = 0;
@@ -235,7 +243,14 @@ private:
       request.budget_rays = budget_;
       request.negative_share = strategy_ == guided_reacquire ? options_.share : 0.0;
       request.candidates = map_.observable;
-      shot = plan_next_shot(mapper_.improvement(), returns_, request);
+      if (is_coarse_to_fine(strategy_)) {
+        request.shape = ShotShape::coarse_to_fine;
+        request.refine_by = strategy_ == coarse_both          ? RefineBy::both
+                            : strategy_ == coarse_improvement ? RefineBy::improvement
+                                                              : RefineBy::residual;
+        request.local_model = LocalModel::constant;  // predict_depth: the nearest sample
+      }
+      shot = plan_next_shot(mapper_, returns_, request);
     }
     return shot;
   }
@@ -247,7 +262,7 @@ private:
     const std::vector<float> depth = sensor_.shoot(pixels);
     const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
     mapper_.insert(PointSpan::from(points));
-    if (strategy_ == guided_returns || strategy_ == guided_reacquire) {
+    if (strategy_ == guided_returns || strategy_ == guided_reacquire || is_coarse_to_fine(strategy_)) {
       std::vector<std::uint8_t> got(depth.size());
       for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
       returns_.record_shot(columns, got);
@@ -321,7 +336,7 @@ std::vector<SummaryRow> evaluate_scene(const Scene& scene, const Options& option
   };
   add(reference, full, 1.0);
   for (double share : options.budgets)
-    for (Strategy s : {uniform, decimation, guided, guided_returns, guided_reacquire}) {
+    for (Strategy s : options.strategies) {
       Run run(scene, s, std::max(1, static_cast<int>(std::lround(share * n))), options);
       run.run(csv);
       add(run, s, share);
@@ -350,6 +365,14 @@ Options parse_options(const CommandLine& command_line) {
   o.share = *command_line.number("-negative_share");
   o.radius = *command_line.integer("-radius");
   o.seed = static_cast<std::uint64_t>(*command_line.integer("-seed"));
+  const std::string names = *command_line.text("-strategies");
+  for (Strategy s : kCompared)
+    if (names == "all" || ("," + names + ",").find("," + std::string(kStrategyNames[s]) + ",") != std::string::npos)
+      o.strategies.push_back(s);
+  std::size_t listed = names == "all" ? o.strategies.size() : static_cast<std::size_t>(std::count(names.begin(), names.end(), ',') + 1);
+  if (o.strategies.empty() || listed != o.strategies.size())
+    throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of b_uniform, "
+                           "c_decimation, d_guided, e_returns, f_reacquire, g_coarse_to_fine, g_improvement, g_residual");
   return o;
 }
 

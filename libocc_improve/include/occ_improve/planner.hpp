@@ -35,7 +35,7 @@
 //       residual:    min(r, residual_cap_sigmas) / residual_cap_sigmas x p x the share of the block's rays
 //                    that are not depth samples, r = ImprovementPyramid::residual_sigmas under the
 //                    predictor's local model; a block with too few samples inherits its parent's r, and
-//                    with none up to 16 columns r = the cap (no data is as bad as an edge)
+//                    with none up to 16 columns r = 0 (unseen: the coverage pass's; or silent)
 //       both:        |mean improvement| x p x min(r, cap) / cap
 //     with p the return probability of the block's best ray. Blocks whose best score is <= 0 have nothing
 //     to take. The expected gain is the sum of the taken rays' scores, the stop rule the one above.
