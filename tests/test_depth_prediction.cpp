@@ -1,8 +1,17 @@
-// predict_depth: nearest sample in chessboard distance within a radius.
+// predict_depth: nearest sample in chessboard distance within a radius; the linear rule over the samples'
+// Delaunay triangulation, never across a depth discontinuity; the triangulation itself.
 #include "occ_improve/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
+#include "occ_improve/sample_triangulation.hpp"
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
 
 namespace occ_improve {
 namespace {
@@ -85,6 +94,232 @@ TEST(DepthAgreement, BadInputThrows) {
   EXPECT_THROW(depth_agreement(reference, predict_depth(reference), kinect_noise(), 0.0), InvalidParameter);
   EXPECT_THROW(depth_agreement(reference, predict_depth(unknown_surface(2, 2)), kinect_noise()), InvalidInput);
   EXPECT_EQ(depth_agreement(reference, predict_depth(reference), kinect_noise()).share(), 0.0);
+}
+
+// A plane of the scene seen by a pinhole camera: inverse depth affine in the pixel, 2.0-2.15 m over the
+// image, 0.25-0.4 sigma per pixel (sigma(2 m) = 5.7 mm).
+float plane_z(int x, int y) { return static_cast<float>(1.0 / (0.5 - 0.0004 * x - 0.0003 * y)); }
+
+// 5 % of the pixels at random plus every 8th pixel of the border (so that the hull is the whole image).
+std::vector<float> sparse_plane(int w, int h, std::uint32_t seed) {
+  std::vector<float> image(static_cast<std::size_t>(w) * h, 0.0f);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const bool border = (x == 0 || y == 0 || x == w - 1 || y == h - 1) && (x % 8 == 0 || y % 8 == 0 || x == w - 1 || y == h - 1);
+      if (border || u(rng) < 0.05) image[static_cast<std::size_t>(y * w + x)] = plane_z(x, y);
+    }
+  return image;
+}
+
+TEST(LinearDepthPrediction, ReproducesASlantedPlaneWhereNearestIsOff) {
+  const int w = 64, h = 48;
+  const std::vector<float> sparse = sparse_plane(w, h, 7);
+  DepthPredictionParams p;
+  p.rule = DepthPredictionRule::linear;
+  const PredictedDepth linear = predict_dense_depth(sparse, w, h, kinect_noise(), p);
+  p.rule = DepthPredictionRule::nearest;
+  const PredictedDepth nearest = predict_dense_depth(sparse, w, h, kinect_noise(), p);
+  double worst_linear = 0, worst_nearest = 0, sum_nearest = 0;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const std::size_t c = static_cast<std::size_t>(y * w + x);
+      ASSERT_GE(linear.distance[c], 0);
+      EXPECT_EQ(linear.distance[c], nearest.distance[c]);  // the same columns, the same distances
+      const double sigma = kinect_noise().sigma_depth_at(plane_z(x, y));
+      worst_linear = std::max(worst_linear, std::abs(linear.depth_m[c] - plane_z(x, y)) / sigma);
+      const double e = std::abs(nearest.depth_m[c] - plane_z(x, y)) / sigma;
+      worst_nearest = std::max(worst_nearest, e);
+      sum_nearest += e;
+    }
+  EXPECT_LT(worst_linear, 0.02);  // float rounding only: 1/z is affine in the pixel
+  EXPECT_GT(worst_nearest, 1.0);
+  EXPECT_GT(sum_nearest / (w * h), 0.25);
+}
+
+TEST(LinearDepthPrediction, NeverInterpolatesAcrossADepthStep) {
+  // Columns 0-9 at 1 m, 10-18 at 2 m; samples at x = 3, 7 (1 m) and 11, 15 (2 m) on rows 0 and 4.
+  const int w = 19, h = 5;
+  std::vector<float> sparse(static_cast<std::size_t>(w * h), 0.0f);
+  for (const int y : {0, 4})
+    for (const int x : {3, 7, 11, 15}) sparse[static_cast<std::size_t>(y * w + x)] = x < 10 ? 1.0f : 2.0f;
+  DepthPredictionParams p;
+  p.rule = DepthPredictionRule::linear;
+  const PredictedDepth d = predict_dense_depth(sparse, w, h, kinect_noise(), p);
+  for (std::size_t c = 0; c < d.depth_m.size(); ++c) EXPECT_TRUE(d.depth_m[c] == 1.0f || d.depth_m[c] == 2.0f) << c;
+  EXPECT_FLOAT_EQ(d.depth_m[0 * w + 8], 1.0f);   // nearer to x = 7
+  EXPECT_FLOAT_EQ(d.depth_m[0 * w + 9], 1.0f);   // as near to 7 as to 11: the nearer surface wins
+  EXPECT_FLOAT_EQ(d.depth_m[2 * w + 9], 1.0f);   // equidistant from all four corners of the square
+  EXPECT_FLOAT_EQ(d.depth_m[2 * w + 10], 2.0f);  // nearer to x = 11
+  // A smaller threshold than the step's spread is still a step: 1 m apart is > 6 sigma(2 m) = 34 mm.
+  p.discontinuity_sigmas = 1000.0;  // 5.7 m: now the step is interpolated
+  const PredictedDepth smooth = predict_dense_depth(sparse, w, h, kinect_noise(), p);
+  EXPECT_GT(smooth.depth_m[2 * w + 9], 1.0f);
+  EXPECT_LT(smooth.depth_m[2 * w + 9], 2.0f);
+}
+
+TEST(LinearDepthPrediction, RespectsTheRadius) {
+  // One triangle with a 20-column edge: interpolated with radius 12 (edges up to 24), not with radius 4.
+  std::vector<float> sparse(21 * 11, 0.0f);
+  sparse[0] = 2.0f;
+  sparse[20] = 2.01f;
+  sparse[10 * 21] = 2.0f;
+  DepthPredictionParams p;
+  p.rule = DepthPredictionRule::linear;
+  p.radius_columns = 4;
+  const PredictedDepth short_reach = predict_dense_depth(sparse, 21, 11, kinect_noise(), p);
+  EXPECT_FLOAT_EQ(short_reach.depth_m[4], 2.0f);  // the nearest sample, 4 columns away
+  EXPECT_EQ(short_reach.distance[10], -1);         // 10 columns from any sample: no prediction
+  EXPECT_EQ(short_reach.depth_m[10], 0.0f);
+  p.radius_columns = 12;
+  const PredictedDepth long_reach = predict_dense_depth(sparse, 21, 11, kinect_noise(), p);
+  EXPECT_NEAR(long_reach.depth_m[4], 1.0 / (0.8 / 2.0 + 0.2 / 2.01), 1e-6);
+  EXPECT_NEAR(long_reach.depth_m[10], 1.0 / (0.5 / 2.0 + 0.5 / 2.01), 1e-6);
+  // Same coverage as nearest: a column is predicted by linear exactly when it is by nearest.
+  p.rule = DepthPredictionRule::nearest;
+  const PredictedDepth nearest = predict_dense_depth(sparse, 21, 11, kinect_noise(), p);
+  EXPECT_EQ(nearest.distance, long_reach.distance);
+}
+
+TEST(LinearDepthPrediction, SurfaceOverloadsAgreeWithTheSparseImage) {
+  SurfaceMap s = unknown_surface(10, 6);
+  measure(s, 1, 1, 1.0f);
+  measure(s, 8, 1, 1.02f);
+  measure(s, 4, 5, 1.01f);
+  measure(s, 5, 3, 3.0f, 0.5f);  // not a sample
+  const std::vector<float> image = sample_depth_image(s);
+  EXPECT_EQ(image[1 * 10 + 1], 1.0f);
+  EXPECT_EQ(image[3 * 10 + 5], 0.0f);
+  DepthPredictionParams p;
+  p.rule = DepthPredictionRule::linear;
+  const PredictedDepth a = predict_depth(s, kinect_noise(), p), b = predict_dense_depth(image, 10, 6, kinect_noise(), p);
+  EXPECT_EQ(a.depth_m, b.depth_m);
+  EXPECT_GT(a.depth_m[3 * 10 + 5], 1.0f);  // inside the triangle: between its vertices
+  EXPECT_LT(a.depth_m[3 * 10 + 5], 1.02f);
+  p.rule = DepthPredictionRule::nearest;
+  EXPECT_EQ(predict_depth(s, kinect_noise(), p).depth_m, predict_depth(s).depth_m);
+}
+
+template <class E>
+void expect_throw_naming(const std::function<void()>& f, const std::string& name) {
+  try {
+    f();
+    ADD_FAILURE() << "no exception, expected one naming " << name;
+  } catch (const E& e) {
+    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+  }
+}
+
+TEST(LinearDepthPrediction, BadInputThrowsNamingTheValue) {
+  const SensorModel m = kinect_noise();
+  std::vector<float> image(12, 0.0f);
+  DepthPredictionParams p;
+  p.rule = DepthPredictionRule::linear;
+  expect_throw_naming<InvalidParameter>([&] { predict_depth(unknown_surface(4, 3), p); }, "linear");
+  p.discontinuity_sigmas = 0.0;
+  expect_throw_naming<InvalidParameter>([&] { predict_dense_depth(image, 4, 3, m, p); }, "discontinuity_sigmas");
+  p.discontinuity_sigmas = std::numeric_limits<double>::quiet_NaN();
+  expect_throw_naming<InvalidParameter>([&] { predict_dense_depth(image, 4, 3, m, p); }, "discontinuity_sigmas");
+  p.discontinuity_sigmas = 6.0;
+  p.radius_columns = -2;
+  expect_throw_naming<InvalidParameter>([&] { predict_dense_depth(image, 4, 3, m, p); }, "radius_columns = -2");
+  p.radius_columns = 16;
+  p.rule = static_cast<DepthPredictionRule>(7);
+  expect_throw_naming<InvalidParameter>([&] { predict_dense_depth(image, 4, 3, m, p); }, "rule");
+  p.rule = DepthPredictionRule::linear;
+  expect_throw_naming<InvalidParameter>([&] { predict_dense_depth({}, 0, 3, m, p); }, "width = 0");
+  expect_throw_naming<InvalidInput>([&] { predict_dense_depth(image, 5, 3, m, p); }, "5 x 3");
+  image[6] = -1.0f;
+  expect_throw_naming<InvalidInput>([&] { predict_dense_depth(image, 4, 3, m, p); }, "pixel (2, 1)");
+  image[6] = std::numeric_limits<float>::infinity();
+  expect_throw_naming<InvalidInput>([&] { predict_dense_depth(image, 4, 3, m, p); }, "pixel (2, 1)");
+  image[6] = std::numeric_limits<float>::quiet_NaN();  // NaN: no sample, as 0
+  const PredictedDepth none = predict_dense_depth(image, 4, 3, m, p);
+  for (const std::int32_t d : none.distance) EXPECT_EQ(d, -1);
+}
+
+// Circumcircle test in double (exact for these small integer coordinates).
+bool strictly_in_circumcircle(const SampleTriangulation& s, const std::array<std::int32_t, 3>& t, int px, int py) {
+  double m[3][3];
+  for (int i = 0; i < 3; ++i) {
+    const double dx = s.x(t[static_cast<std::size_t>(i)]) - px, dy = s.y(t[static_cast<std::size_t>(i)]) - py;
+    m[i][0] = dx;
+    m[i][1] = dy;
+    m[i][2] = dx * dx + dy * dy;
+  }
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  return det > 0;
+}
+
+TEST(SampleTriangulation, IsDelaunayAndCoversTheHull) {
+  const int w = 64, h = 48;
+  for (std::uint32_t seed = 1; seed <= 20; ++seed) {
+    const SampleTriangulation s = triangulate_samples(sparse_plane(w, h, seed), w, h, kinect_noise());
+    ASSERT_GT(s.vertex_count(), 100u);
+    double area = 0;
+    std::vector<int> used(s.vertex_count(), 0);
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+      ASSERT_GT(s.area_px2(t), 0.0) << t;  // counter-clockwise, never degenerate
+      area += s.area_px2(t);
+      for (const std::int32_t v : s.triangles[t]) used[static_cast<std::size_t>(v)] = 1;
+      for (std::size_t v = 0; v < s.vertex_count(); ++v)
+        EXPECT_FALSE(strictly_in_circumcircle(s, s.triangles[t], s.x(static_cast<std::int32_t>(v)), s.y(static_cast<std::int32_t>(v))))
+            << "triangle " << t << " holds vertex " << v;
+    }
+    EXPECT_DOUBLE_EQ(area, (w - 1) * (h - 1));  // the samples' hull is the image (its four corners are samples)
+    EXPECT_EQ(std::count(used.begin(), used.end(), 1), static_cast<long>(s.vertex_count()));
+    EXPECT_TRUE(std::is_sorted(s.vertex_column.begin(), s.vertex_column.end()));
+  }
+}
+
+TEST(SampleTriangulation, GridOfSamplesAndTooFewSamples) {
+  std::vector<float> image(9 * 7, 0.0f);
+  for (int y = 0; y < 7; y += 2)
+    for (int x = 0; x < 9; x += 2) image[static_cast<std::size_t>(y * 9 + x)] = 2.0f;  // 5 x 4, all co-circular
+  const SampleTriangulation s = triangulate_samples(image, 9, 7, kinect_noise());
+  EXPECT_EQ(s.triangles.size(), 2u * 4u * 3u);
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) EXPECT_DOUBLE_EQ(s.area_px2(t), 2.0);
+  std::vector<float> line(9 * 7, 0.0f);
+  for (int x = 0; x < 9; ++x) line[static_cast<std::size_t>(3 * 9 + x)] = 1.0f;  // collinear: no triangle
+  EXPECT_TRUE(triangulate_samples(line, 9, 7, kinect_noise()).triangles.empty());
+  EXPECT_TRUE(triangulate_samples(std::vector<float>(4, 0.0f), 2, 2, kinect_noise()).triangles.empty());
+}
+
+TEST(SampleTriangulation, NonPlanarityIsTheLeaveOneOutResidualInSigmas) {
+  const int w = 64, h = 48;
+  std::vector<float> image = sparse_plane(w, h, 11);
+  // Lift one interior sample by 10 sigma from the plane.
+  std::size_t bump = static_cast<std::size_t>(20 * w + 30);
+  while (image[bump] == 0.0f) ++bump;
+  const double z = image[bump];
+  image[bump] = static_cast<float>(z + 10.0 * kinect_noise().sigma_depth_at(z));
+  const SampleTriangulation s = triangulate_samples(image, w, h, kinect_noise());
+  const auto v = static_cast<std::size_t>(std::find(s.vertex_column.begin(), s.vertex_column.end(), bump) - s.vertex_column.begin());
+  ASSERT_LT(v, s.vertex_count());
+  EXPECT_NEAR(s.residual_sigmas[v], 10.0, 0.01);  // sigma at the plane: exactly the lift
+  for (std::size_t u = 0; u < s.vertex_count(); ++u) {
+    if (u == v) continue;
+    const bool neighbour = std::any_of(s.triangles.begin(), s.triangles.end(), [&](const auto& t) {
+      return std::count(t.begin(), t.end(), static_cast<std::int32_t>(u)) && std::count(t.begin(), t.end(), static_cast<std::int32_t>(v));
+    });
+    if (!neighbour) {
+      EXPECT_LT(s.residual_sigmas[u], 0.02) << u;  // on the plane, and its neighbours too
+    }
+  }
+  const std::vector<std::size_t> top = top_scored_triangles(s, 3);
+  ASSERT_EQ(top.size(), 3u);
+  for (std::size_t k = 0; k < top.size(); ++k) {
+    if (k > 0) {
+      EXPECT_GE(s.score(top[k - 1]), s.score(top[k]));
+    }
+    EXPECT_GE(s.non_planarity_sigmas(top[k]), 1.0);
+    const ColumnIndex c = s.centroid_column(top[k]);
+    EXPECT_LT(c, static_cast<ColumnIndex>(w * h));
+  }
+  const SampleTriangulation flat = triangulate_samples(sparse_plane(w, h, 11), w, h, kinect_noise());
+  EXPECT_LT(*std::max_element(flat.residual_sigmas.begin(), flat.residual_sigmas.end()), 0.02);
 }
 
 }  // namespace
