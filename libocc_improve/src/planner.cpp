@@ -90,22 +90,36 @@ constexpr double kCoverageMinReturn = 0.5;
 constexpr std::size_t kBlocksPerRay = 4;
 constexpr ColumnIndex kNoColumn = std::numeric_limits<ColumnIndex>::max();
 
-// Per block of `level`: the eligible column of largest rank_key(score) (kNoColumn where none), one pass.
-std::vector<ColumnIndex> best_ray_per_block(const ImprovementPyramid& pyramid, int level, const std::vector<float>& score,
-                                            const std::uint8_t* eligible) {
-  std::vector<ColumnIndex> best(pyramid.block_count(level), kNoColumn);
-  std::vector<std::uint64_t> best_key(best.size(), 0);
+// Per block of `level`: the eligible column of largest rank_key(score) (kNoColumn where none) and the
+// block's return rate (R + 1) / (A + 1) over the asks the record holds for its columns, one pass. The rate
+// complements the per-ray return probability, whose neighbourhood prior only reaches 8 columns: a block of
+// a silent region (out of range, cropped, dark) falls after a few asks wherever they were.
+struct BlockBest {
+  std::vector<ColumnIndex> column;
+  std::vector<float> return_rate;
+};
+BlockBest best_ray_per_block(const ImprovementPyramid& pyramid, int level, const std::vector<float>& score,
+                             const std::uint8_t* eligible, const ReturnRecord& returns) {
+  BlockBest best;
+  best.column.assign(pyramid.block_count(level), kNoColumn);
+  std::vector<std::uint64_t> best_key(best.column.size(), 0);
+  std::vector<std::uint32_t> asked(best.column.size(), 0), returned(best.column.size(), 0);
   const int s = ImprovementPyramid::block_size(level), w = pyramid.width(), across = pyramid.blocks_x(level);
   for (int v = 0; v < pyramid.height(); ++v) {
     const std::size_t row = static_cast<std::size_t>(v / s) * static_cast<std::size_t>(across);
     for (int u = 0; u < w; ++u) {
       const auto c = static_cast<ColumnIndex>(v) * static_cast<ColumnIndex>(w) + static_cast<ColumnIndex>(u);
+      const std::size_t b = row + static_cast<std::size_t>(u / s);
+      asked[b] += returns.asked()[c];
+      returned[b] += returns.returned()[c];
       if ((eligible && !eligible[c]) || std::isnan(score[c])) continue;
       const std::uint64_t key = rank_key(score[c], c);
-      const std::size_t b = row + static_cast<std::size_t>(u / s);
-      if (best[b] == kNoColumn || key > best_key[b]) best[b] = c, best_key[b] = key;
+      if (best.column[b] == kNoColumn || key > best_key[b]) best.column[b] = c, best_key[b] = key;
     }
   }
+  best.return_rate.resize(best.column.size());
+  for (std::size_t b = 0; b < best.column.size(); ++b)
+    best.return_rate[b] = static_cast<float>((returned[b] + 1.0) / (asked[b] + 1.0));
   return best;
 }
 
@@ -155,12 +169,13 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
   // 1. Coverage: blocks without a sample, one jittered ray each, spread over the view by rank_key.
   const int coverage_level = ImprovementPyramid::level_of_block_size(request.coverage_block_columns);
   {
-    const std::vector<ColumnIndex> best = best_ray_per_block(pyramid, coverage_level, score, mask);
+    const BlockBest blocks = best_ray_per_block(pyramid, coverage_level, score, mask, returns);
+    const std::vector<ColumnIndex>& best = blocks.column;
     const int across = pyramid.blocks_x(coverage_level);
     std::vector<std::pair<std::uint64_t, std::size_t>> open;  // (rank_key over the block index, block)
     for (std::size_t b = 0; b < best.size(); ++b) {
       const ColumnIndex c = best[b];
-      if (c == kNoColumn || !(score[c] > 0) || probability[c] < kCoverageMinReturn) continue;
+      if (c == kNoColumn || !(score[c] > 0) || probability[c] * blocks.return_rate[b] < kCoverageMinReturn) continue;
       const BlockSummary& block = pyramid.block(coverage_level, static_cast<int>(b % static_cast<std::size_t>(across)),
                                                 static_cast<int>(b / static_cast<std::size_t>(across)));
       if (block.samples == 0) open.push_back({rank_key(score[c], static_cast<ColumnIndex>(b)), b});
@@ -184,11 +199,13 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
       eligible[shot.columns[i]] = 0;
       block_taken[pyramid.block_of_column(level, shot.columns[i])] = 1;
     }
-    const std::vector<ColumnIndex> best = best_ray_per_block(pyramid, level, score, eligible.data());
+    const BlockBest blocks = best_ray_per_block(pyramid, level, score, eligible.data(), returns);
+    const std::vector<ColumnIndex>& best = blocks.column;
     std::vector<std::pair<std::uint64_t, std::size_t>> ranked;
     for (std::size_t b = 0; b < best.size(); ++b) {
       if (best[b] == kNoColumn || block_taken[b] || !(score[best[b]] > 0)) continue;
-      const double priority = block_priority(pyramid, level, b, probability[best[b]], model, request);
+      const double p = static_cast<double>(probability[best[b]]) * blocks.return_rate[b];
+      const double priority = block_priority(pyramid, level, b, p, model, request);
       if (priority > 0) ranked.push_back({rank_key(static_cast<float>(priority), static_cast<ColumnIndex>(b)), b});
     }
     const std::size_t n = std::min(left, ranked.size());

@@ -238,6 +238,8 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
                  "0.01,0.05,0.2"),
       value_flag("-strategies", K::text, "LIST", kEvaluation,
                  "strategies besides a_full: all, or a comma-separated list of their names", "all"),
+      value_flag("-predictors", K::text, "LIST", kEvaluation,
+                 "predict_depth rules scoring every strategy: nearest, linear or both", "nearest,linear"),
       value_flag("-fractions", K::text, "LIST", kEvaluation, "shares of each frame to keep, in (0, 1]", "0.05,0.2"),
       bounded(value_flag("-frames", K::number, "N", kEvaluation, "points acquired per run, in full frames", "5"), 0, kInf,
               true),
