@@ -110,10 +110,10 @@ def target_rows(path):
     for budget in budgets:
         need = {s: first_reaching(runs[(s, budget)], target, frame_rays) for s in STYLE if (s, budget) in runs}
         pick = lambda names: min((s for s in names if need.get(s) is not None), key=lambda s: need[s], default=None)
-        best_uniform = pick(UNIFORM) or next(s for s in UNIFORM if (s, budget) in runs)
+        best_uniform = pick(UNIFORM) or next((s for s in UNIFORM if (s, budget) in runs), None)
         best = pick(GUIDED) or next((s for s in GUIDED if (s, budget) in runs), None)
-        if best is None:
-            continue
+        if best is None or best_uniform is None:
+            continue  # a partial run (-strategies without both kinds)
         uniform_at = {}
         for s in UNIFORM:
             for r in runs.get((s, budget), []):

@@ -32,7 +32,7 @@
 //       improvement: |the block's mean improvement| x p (no data 0.324 high, settled low, a depth transition
 //                    negative, hence re-acquired: the paper's "regions of negative improvement")
 //       residual:    min(r, residual_cap_sigmas) / residual_cap_sigmas x p x the share of the block's rays
-//                    that are not depth samples, r = ImprovementPyramid::residual_sigmas under the
+//                    without a return of their own in the record (no record: without a depth sample), r = ImprovementPyramid::residual_sigmas under the
 //                    predictor's local model; a block with too few samples inherits its parent's r, and
 //                    with none up to 16 columns r = 0 (unseen: the coverage pass's; or silent)
 //       both:        |mean improvement| x p x min(r, cap) / cap
