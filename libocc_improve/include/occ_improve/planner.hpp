@@ -35,7 +35,8 @@
 //                    without a return of their own in the record (no record: without a depth sample), r = ImprovementPyramid::residual_sigmas under the
 //                    predictor's local model; a block with too few samples inherits its parent's r, and
 //                    with none up to 16 columns r = 0 (unseen: the coverage pass's; or silent)
-//       both:        |mean improvement| x p x min(r, cap) / cap
+//       both:        the residual's priority x |mean improvement|
+//     (default residual: in the ablation the paper's measure made (g) slower on every scene)
 //     with p = the return probability of the block's best ray x the block's return rate (R + 1) / (A + 1)
 //     over the record's asks of its columns (the per-ray prior only reaches 8 neighbours; measured without
 //     it, (g) spent 40-45 % of its rays on silent ones on capture0001 and office1). Blocks whose best
@@ -78,7 +79,8 @@ struct PlanRequest {
   /// coarse_to_fine: side of the coverage pass's blocks, 2, 4, 8 or 16 columns. 16 = the evaluation's
   /// predictor radius (DepthPredictionParams::radius_columns).
   int coverage_block_columns = 16;
-  RefineBy refine_by = RefineBy::both;
+  /// Default residual: the best of the ablation (docs/SELECTIVE.md, "Issue 20 results").
+  RefineBy refine_by = RefineBy::residual;
   /// coarse_to_fine: the predictor's local model (nearest sample: constant; linear: plane).
   LocalModel local_model = LocalModel::constant;
   /// coarse_to_fine: residuals are capped here. 8 sigma: four times the metric's 2-sigma tolerance; a

@@ -554,8 +554,8 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
                                           : ShotShape::coarse_to_fine;
   const std::string refine = *command_line.text("-refine");
   request.refine_by = refine == "improvement" ? RefineBy::improvement
-                      : refine == "residual"  ? RefineBy::residual
-                                              : RefineBy::both;
+                      : refine == "both"      ? RefineBy::both
+                                              : RefineBy::residual;
   const std::string window = *command_line.text("-window");
   const auto x = window.find('x');
   try {
