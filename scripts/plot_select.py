@@ -7,7 +7,9 @@
 - OUT_DIR/targets.md: per scene and budget, the points (in full frames) each strategy needs to reach 95%
   of the quality of 5 full frames, the best of (d)-(f) against half of (b)'s, its smallest margin over
   (b) at equal points, its stop point against the knee (the first point within 99% of its best), and
-  the points (b) and the best need to reach the quality of 5 full frames itself.
+  the best guided run (any of (d)-(g), any predictor) against the best uniform run (any predictor):
+  the issue's targets (half of uniform's points, 0.3 frames), the smallest margin at equal points, the
+  stop against the knee and the calibration r (expected gain against the change of rays within 2 sigma).
 
 Usage: /usr/bin/python3 scripts/plot_select.py OUT_DIR   (reads OUT_DIR/*.csv except summary.csv)
 """
@@ -27,7 +29,14 @@ STYLE = {
     "d_guided": ("(d) improvement", "tab:blue", "-"),
     "e_returns": ("(e) + return model", "tab:orange", "-"),
     "f_reacquire": ("(f) + re-acquisition", "tab:green", "--"),
+    "g_coarse_to_fine": ("(g) coarse-to-fine", "tab:red", "-"),
+    "g_improvement": ("(g) by improvement only", "tab:purple", ":"),
+    "g_residual": ("(g) by residual only", "tab:pink", ":"),
 }
+# Runs scored with the linear predictor are named <strategy>_linear: same colour, dashed, thinner.
+STYLE.update({s + "_linear": (label + ", linear", colour, "--") for s, (label, colour, line) in list(STYLE.items())})
+GUIDED = [s for s in STYLE if s[0] in "defg"]
+UNIFORM = [s for s in STYLE if s.startswith("b_")]
 
 
 def read_runs(path):
@@ -61,7 +70,7 @@ def plot_scene(path):
             x = [int(r["rays_asked"]) / frame_rays for r in rows]
             ax.plot(x, [float(r["quality"]) for r in rows], line, color=colour, label=label)
             stops = [i for i, r in enumerate(rows) if r["plan_stop"] == "1"]
-            if stops and strategy != "d_guided":
+            if stops and not strategy.startswith("d_guided"):
                 ax.plot(x[stops[0]], float(rows[stops[0]]["quality"]), "v", color=colour, markersize=8)
         ax.axhline(target, color="k", linewidth=0.5, linestyle="--")
         ax.set_title(f"{scene}: {budget} rays per shot ({100 * budget / frame_rays:.0f}%)")
@@ -83,37 +92,54 @@ def first_reaching(rows, target, frame_rays):
     return None
 
 
+def pearson(xy):
+    n = len(xy)
+    if n < 2:
+        return None
+    mx, my = sum(x for x, _ in xy) / n, sum(y for _, y in xy) / n
+    vx, vy = sum((x - mx) ** 2 for x, _ in xy), sum((y - my) ** 2 for _, y in xy)
+    return sum((x - mx) * (y - my) for x, y in xy) / (vx * vy) ** 0.5 if vx > 0 and vy > 0 else None
+
+
 def target_rows(path):
-    """One markdown row per budget of a scene."""
+    """One markdown row per budget of a scene: the best uniform run (any predictor) against the best
+    guided run (any predictor), the issue's targets, the stop against the knee and the calibration."""
     runs, scene, full, frame_rays, budgets, target = load_scene(path)
     fmt = lambda v: "-" if v is None else f"{v:.2f}"
     out = []
     for budget in budgets:
-        need = {s: first_reaching(runs.get((s, budget), []), target, frame_rays) for s in STYLE}
-        guided = {s: need[s] for s in ("d_guided", "e_returns", "f_reacquire") if need[s] is not None}
-        best = min(guided, key=guided.get) if guided else "e_returns"
-        uniform = {int(r["rays_asked"]): float(r["quality"]) for r in runs[("b_uniform", budget)]}
-        margin = min(float(r["quality"]) - uniform[int(r["rays_asked"])] for r in runs[(best, budget)]
-                     if int(r["rays_asked"]) in uniform)
+        need = {s: first_reaching(runs[(s, budget)], target, frame_rays) for s in STYLE if (s, budget) in runs}
+        pick = lambda names: min((s for s in names if need.get(s) is not None), key=lambda s: need[s], default=None)
+        best_uniform = pick(UNIFORM) or next((s for s in UNIFORM if (s, budget) in runs), None)
+        best = pick(GUIDED) or next((s for s in GUIDED if (s, budget) in runs), None)
+        if best is None or best_uniform is None:
+            continue  # a partial run (-strategies without both kinds)
+        uniform_at = {}
+        for s in UNIFORM:
+            for r in runs.get((s, budget), []):
+                k = int(r["rays_asked"])
+                uniform_at[k] = max(uniform_at.get(k, 0.0), float(r["quality"]))
         rows = runs[(best, budget)]
+        margin = min((float(r["quality"]) - uniform_at[int(r["rays_asked"])] for r in rows
+                      if int(r["rays_asked"]) in uniform_at), default=float("nan"))
         stop = next((int(r["rays_asked"]) / frame_rays for r in rows if r["plan_stop"] == "1"), None)
-        top = max(float(r["quality"]) for r in rows)
-        knee = first_reaching(rows, 0.99 * top, frame_rays)
-        full_quality = float(full[-1]["quality"])
-        match = {s: first_reaching(runs.get((s, budget), []), full_quality, frame_rays) for s in ("b_uniform", best)}
-        met = need[best] is not None and need["b_uniform"] is not None and need[best] <= 0.5 * need["b_uniform"]
+        knee = first_reaching(rows, 0.99 * max(float(r["quality"]) for r in rows), frame_rays)
+        half = need.get(best) is not None and need.get(best_uniform) is not None and need[best] <= 0.5 * need[best_uniform]
+        small = need.get(best) is not None and need[best] <= 0.3
         stop_ok = stop is not None and knee is not None and abs(stop - knee) <= 0.1 * knee
-        out.append(f"| {scene} | {100 * budget / frame_rays:.0f}% | {target:.3f} | "
-                   + " | ".join(fmt(need[s]) for s in STYLE)
-                   + f" | {best[0]} | {'yes' if met else 'no'} | {margin:+.3f} | {fmt(stop)} / {fmt(knee)} | "
-                   + f"{'yes' if stop_ok else 'no'} | {fmt(match['b_uniform'])} / {fmt(match[best])} |")
+        r_cal = pearson([(float(r["expected_gain"]), float(r["realised_good_rays"])) for r in rows])
+        out.append(f"| {scene} | {100 * budget / frame_rays:.0f}% | {target:.3f} | {best_uniform} {fmt(need.get(best_uniform))} | "
+                   f"{best} {fmt(need.get(best))} | {'yes' if half else 'no'} | {'yes' if small else 'no'} | "
+                   f"{margin:+.3f} | {fmt(stop)} / {fmt(knee)} | {'yes' if stop_ok else 'no'} | "
+                   f"{'-' if r_cal is None else f'{r_cal:.2f}'} | "
+                   + " ".join(f"{s}={fmt(v)}" for s, v in sorted(need.items())) + " |")
     return out
 
 
 def write_targets(paths, out_dir):
-    header = ["| scene | budget | 95% of 5 frames | (b) | (c) | (d) | (e) | (f) | best | <= half of (b) | "
-              "min margin over (b) | stop / knee [frames] | stop within 10% | 100% of 5 frames: (b) / best |",
-              "|---|---:|---:|---:|---:|---:|---:|---:|---|---|---:|---:|---|---:|"]
+    header = ["| scene | budget | 95% of 5 frames | best uniform [frames] | best guided [frames] | <= half | <= 0.3 frames | "
+              "min margin over best uniform | stop / knee [frames] | stop within 10% | calibration r | every run [frames] |",
+              "|---|---:|---:|---|---|---|---|---:|---:|---|---:|---|"]
     lines = header + [row for p in paths for row in target_rows(p)]
     with open(os.path.join(out_dir, "targets.md"), "w") as f:
         f.write("\n".join(lines) + "\n")

@@ -9,7 +9,9 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <map>
 #include <set>
+#include <string>
 
 namespace occ_improve {
 namespace {
@@ -217,6 +219,127 @@ TEST(Planner, ClosedLoopWithTheReturnModelStopsAskingSilentRays) {
   std::printf("silent share of shots 50-59: %.3f without, %.3f with the return model\n", without, with);
   EXPECT_GT(without, 0.5) << "the sample's silent rays (poster, shadows: 3.7 %) should fill the plain plan";
   EXPECT_LT(with, 0.1);
+}
+
+// Strategy (g), coarse_to_fine, on a camera of 64 x 48 columns.
+PinholeIntrinsics small_camera() {
+  PinholeIntrinsics k;
+  k.width = 64;
+  k.height = 48;
+  k.fx = k.fy = 60;
+  k.cx = 31.5;
+  k.cy = 23.5;
+  return k;
+}
+
+PlanRequest coarse_to_fine(int budget, RefineBy by = RefineBy::both) {
+  PlanRequest r;
+  r.shape = ShotShape::coarse_to_fine;
+  r.budget_rays = budget;
+  r.refine_by = by;
+  return r;
+}
+
+TEST(CoarseToFine, CoveragePassPutsOneRayInEveryBlockFirst) {
+  const Mapper mapper(kinect_v1(small_camera()));
+  const ReturnRecord none = ReturnRecord::for_grid(64, 48);
+  const Shot s = plan_next_shot(mapper, none, coarse_to_fine(12));  // 4 x 3 blocks of 16
+  ASSERT_EQ(s.columns.size(), 12u);
+  std::set<int> blocks;
+  std::set<int> offsets;  // jitter: not the same position in every block
+  for (ColumnIndex c : s.columns) {
+    const int u = static_cast<int>(c % 64), v = static_cast<int>(c / 64);
+    blocks.insert((v / 16) * 4 + u / 16);
+    offsets.insert((v % 16) * 16 + u % 16);
+  }
+  EXPECT_EQ(blocks.size(), 12u);
+  EXPECT_GT(offsets.size(), 6u);
+  EXPECT_NEAR(s.expected_gain, 12 * 0.324, 0.05);
+  EXPECT_EQ(plan_next_shot(mapper, none, coarse_to_fine(12)).columns, s.columns);  // deterministic
+}
+
+// A slanted wall (depth grows to the right: the nearest rule's constant model leaves a residual
+// everywhere) seen at every 4th column and row, so every block of 16 holds samples and the whole shot is
+// refinement. At most one ray per block of the refinement level, whatever the driver: 300 rays need
+// 4 x 300 blocks, more than the 768 blocks of 2, so blocks of 2.
+Mapper slanted_wall_seen_sparsely() {
+  std::vector<float> depth(64 * 48);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u) depth[static_cast<std::size_t>(v * 64 + u)] = 1.5f + 0.02f * static_cast<float>(u);
+  VirtualSensorParams clean;
+  clean.sigma_depth_per_m2 = 0;
+  clean.disparity_step_px = 0;
+  VirtualSensor sensor(depth, small_camera(), clean);
+  Mapper mapper(kinect_v1(small_camera()));
+  std::vector<std::uint32_t> grid;
+  for (std::uint32_t v = 1; v < 48; v += 4)
+    for (std::uint32_t u = 1; u < 64; u += 4) grid.push_back(v * 64 + u);
+  mapper.insert(PointSpan::from(sensor.points(grid, sensor.shoot(grid))));
+  return mapper;
+}
+
+TEST(CoarseToFine, AtMostOneRayPerBlockPerShot) {
+  const Mapper mapper = slanted_wall_seen_sparsely();
+  const ReturnRecord none = ReturnRecord::for_grid(64, 48);
+  for (RefineBy by : {RefineBy::improvement, RefineBy::residual, RefineBy::both}) {
+    const Shot s = plan_next_shot(mapper, none, coarse_to_fine(300, by));
+    EXPECT_GT(s.columns.size(), 200u);
+    EXPECT_LE(s.columns.size(), 300u);
+    std::map<int, int> per_block;
+    for (ColumnIndex c : s.columns) {
+      const int u = static_cast<int>(c % 64), v = static_cast<int>(c / 64);
+      ++per_block[(v / 2) * 32 + u / 2];
+    }
+    for (const auto& [block, rays] : per_block) EXPECT_EQ(rays, 1) << "block " << block;
+    int top_half = 0;  // spread over the view, not taken row by row
+    for (ColumnIndex c : s.columns) top_half += c < 64 * 24 ? 1 : 0;
+    EXPECT_NEAR(top_half, static_cast<double>(s.columns.size()) / 2, s.columns.size() / 6.0);
+    EXPECT_EQ(plan_next_shot(mapper, none, coarse_to_fine(300, by)).columns, s.columns);  // deterministic
+  }
+}
+
+// After a sparse pass over a wall with a box in front, refinement by the residual goes to the box's edge.
+TEST(CoarseToFine, RefinementByTheResidualGoesToTheDepthEdge) {
+  std::vector<float> depth(64 * 48, 2.0f);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 40; u < 64; ++u) depth[static_cast<std::size_t>(v * 64 + u)] = 1.0f;
+  VirtualSensorParams clean;
+  clean.sigma_depth_per_m2 = 0;
+  clean.disparity_step_px = 0;
+  VirtualSensor sensor(depth, small_camera(), clean);
+  Mapper mapper(kinect_v1(small_camera()));
+  std::vector<std::uint32_t> grid;  // every 4th column and row
+  for (std::uint32_t v = 1; v < 48; v += 4)
+    for (std::uint32_t u = 1; u < 64; u += 4) grid.push_back(v * 64 + u);
+  mapper.insert(PointSpan::from(sensor.points(grid, sensor.shoot(grid))));
+  const Shot s = plan_next_shot(mapper, ReturnRecord::for_grid(64, 48), coarse_to_fine(40, RefineBy::residual));
+  // 40 rays: blocks of 4 (192 >= 4 x 40); the 2 x 12 blocks whose 3 x 3 neighbourhood holds the edge
+  // (u 36-43) rank first, in rank order; the flat rest follows with residuals ~0.
+  ASSERT_EQ(s.columns.size(), 40u);
+  for (std::size_t i = 0; i < 24; ++i) {
+    const int u = static_cast<int>(s.columns[i] % 64);
+    EXPECT_TRUE(u >= 36 && u < 44) << "ray " << i << " at column " << u;
+  }
+}
+
+TEST(CoarseToFine, BadRequestsThrowNamingTheValue) {
+  const Mapper mapper(kinect_v1(small_camera()));
+  const ReturnRecord none = ReturnRecord::for_grid(64, 48);
+  PlanRequest r = coarse_to_fine(10);
+  EXPECT_THROW(plan_next_shot(mapper.improvement(), none, r), InvalidParameter);  // needs the pyramid
+  r.coverage_block_columns = 12;
+  try {
+    plan_next_shot(mapper, none, r);
+    FAIL();
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("12"), std::string::npos) << e.what();
+  }
+  r = coarse_to_fine(10);
+  r.residual_cap_sigmas = 0;
+  EXPECT_THROW(plan_next_shot(mapper, none, r), InvalidParameter);
+  r = coarse_to_fine(64 * 48 + 1);
+  EXPECT_THROW(plan_next_shot(mapper, none, r), InvalidParameter);
+  EXPECT_THROW(plan_next_shot(mapper, ReturnRecord::for_grid(32, 48), coarse_to_fine(10)), InvalidInput);
 }
 
 }  // namespace

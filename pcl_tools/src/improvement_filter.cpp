@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/ranking.hpp"
 
 #include <pcl/filters/impl/filter_indices.hpp>
 
@@ -147,15 +148,65 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
           selection_ == ImprovementSelection::top_count
               ? std::min(top_count_, with_ray.size())
               : static_cast<std::size_t>(std::llround(top_fraction_ * static_cast<double>(with_ray.size())));
-      // Best first, ties to the lower index; then back to ascending index order like every PCL filter.
-      auto better = [&](pcl::index_t a, pcl::index_t b) {
-        return point_improvement[a] > point_improvement[b] || (point_improvement[a] == point_improvement[b] && a < b);
-      };
-      std::nth_element(with_ray.begin(), with_ray.begin() + static_cast<std::ptrdiff_t>(keep), with_ray.end(), better);
-      selected.assign(with_ray.begin(), with_ray.begin() + static_cast<std::ptrdiff_t>(keep));
-      std::sort(selected.begin(), selected.end());
+      selected = stratified_top(with_ray, point_improvement, keep);
+      std::sort(selected.begin(), selected.end());  // back to ascending index order like every PCL filter
       return selected;
     }
+  }
+  return selected;
+}
+
+// The top modes' order and quota (header: "Top modes"). Keys: the ray's improvement, then its block's
+// mean improvement (what the block knows, multiscale.hpp), then the ray's spread rank (rank_key:
+// a tie is spread over the view, never taken by point index), then the point's own spread rank (several
+// points of one ray).
+template <typename PointT>
+pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray,
+                                                       const std::vector<float>& point_improvement,
+                                                       std::size_t keep) const {
+  const ImprovementPyramid& pyramid = mapper_->pyramid();
+  const SphericalGeometry& geometry = mapper_->geometry();
+  struct Candidate {
+    float improvement, block_mean;
+    std::uint64_t ray_key, point_key;
+    std::size_t quota_block;
+    pcl::index_t index;
+  };
+  std::vector<Candidate> candidates;
+  candidates.reserve(with_ray.size());
+  std::vector<std::size_t> points_in_block(pyramid.block_count(kQuotaLevel), 0);
+  for (const auto i : with_ray) {
+    const PointT& p = (*input_)[static_cast<std::size_t>(i)];
+    ColumnIndex column = 0;
+    geometry.column_of(p.x, p.y, p.z, column);  // has a ray: point_improvement[i] is not NaN
+    const std::size_t b = pyramid.block_of_column(kTieLevel, column);
+    const int across = pyramid.blocks_x(kTieLevel);
+    const float block_mean = pyramid.block(kTieLevel, static_cast<int>(b % static_cast<std::size_t>(across)),
+                                           static_cast<int>(b / static_cast<std::size_t>(across))).mean_improvement();
+    const std::size_t quota_block = pyramid.block_of_column(kQuotaLevel, column);
+    ++points_in_block[quota_block];
+    candidates.push_back({point_improvement[static_cast<std::size_t>(i)], block_mean,
+                          rank_key(point_improvement[static_cast<std::size_t>(i)], column),
+                          rank_key(0.0f, static_cast<ColumnIndex>(i)), quota_block, i});
+  }
+  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+    if (a.improvement != b.improvement) return a.improvement > b.improvement;
+    if (a.block_mean != b.block_mean) return a.block_mean > b.block_mean;
+    if (a.ray_key != b.ray_key) return a.ray_key > b.ray_key;
+    return a.point_key > b.point_key;
+  });
+  // Quota: at most kQuotaShare x its proportional share per block, so a frame's kept points cannot
+  // crowd on a few rays. The quotas add up to >= kQuotaShare x keep >= keep, so the walk always fills keep.
+  const double share = with_ray.empty() ? 0.0 : static_cast<double>(keep) / static_cast<double>(with_ray.size());
+  std::vector<std::size_t> taken(points_in_block.size(), 0);
+  pcl::Indices selected;
+  selected.reserve(keep);
+  for (std::size_t k = 0; k < candidates.size() && selected.size() < keep; ++k) {
+    const std::size_t b = candidates[k].quota_block;
+    const auto quota = static_cast<std::size_t>(std::ceil(kQuotaShare * share * static_cast<double>(points_in_block[b])));
+    if (taken[b] >= quota) continue;
+    ++taken[b];
+    selected.push_back(candidates[k].index);
   }
   return selected;
 }

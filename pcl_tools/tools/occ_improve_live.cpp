@@ -48,7 +48,8 @@ const ToolFlags kFlags{
     "top regions as frames arrive. Ctrl-C stops cleanly and still writes the maps.\n",
     joined({output_folder_flag_names(),
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
-             "-stop_on_signal", "-simulate", "-budget", "-max_shots", "-load", "-save", "-threads", "-k",
+             "-stop_on_signal", "-simulate", "-budget", "-shape", "-refine", "-window",
+             "-negative_share", "-stop_gain", "-max_shots", "-load", "-save", "-threads", "-k",
              "-min_improvement", "-predicted_depth", "-radius", "-view", "-view_screenshot"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {{"-o", "occ_improve_live_out"}},
@@ -110,8 +111,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   const std::string mask_line = apply_tool_mask(command_line, mapper, &frame);
   if (!mask_line.empty()) std::printf("%s\n", mask_line.c_str());
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
-  PlanRequest request;
-  request.budget_rays = budget;
+  PlanRequest request = plan_request_from_flags(command_line);
   request.candidates = mapper.column_mask();  // rays outside -mask are never asked for
   std::vector<SimulatedShot> shots;
   std::string why = "reached -max_shots " + std::to_string(max_shots);
@@ -120,7 +120,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   try {
     while (static_cast<int>(shots.size()) < max_shots) {
       throw_if_stop_requested();
-      const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+      const Shot shot = plan_next_shot(mapper, returns, request);
       if (shot.stop) {
         why = "the plan says stop: " + shot.reason;
         break;

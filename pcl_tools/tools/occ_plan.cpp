@@ -27,8 +27,8 @@ namespace {
 const ToolFlags kFlags{
     "occ_plan",
     {"-load MAP.occmap [plan options] -o OUTDIR", "[options] INPUT... -o OUTDIR", "-sample [options] -o OUTDIR"},
-    "Plans the next shot (docs/SELECTIVE.md): rays ranked by improvement x return probability (the map's\n"
-    "return record; none for frames), in one of three shapes. Writes\n"
+    "Plans the next shot (docs/SELECTIVE.md): rays scored by improvement x return probability (the map's\n"
+    "return record; none for frames), coarse-to-fine by default or in one of three other shapes. Writes\n"
     "  OUTDIR/shot_mask.png   grey, one pixel per column (255 = in the shot); with the pixel-native\n"
     "                         kinect_v1 preset it is aligned with the depth image\n"
     "  OUTDIR/shot_rays.csv   the shot's rays: rank, column, azimuth/elevation bin, improvement,\n"
@@ -36,35 +36,12 @@ const ToolFlags kFlags{
     "  OUTDIR/plan.txt        expected gain, rays, stop decision and its reason (also printed)\n"
     "  OUTDIR/predicted_depth.png  with -predicted_depth nearest|linear: the map's dense depth from its\n"
     "                         samples, 16-bit grey in millimetres (0 = none within -radius)\n",
-    joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-window", "-negative_share",
-                                         "-stop_gain", "-predicted_depth", "-radius"},
+    joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-refine", "-window",
+                                         "-negative_share", "-stop_gain", "-predicted_depth", "-radius"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {},
     {},
     frame_inputs_help()};
-
-PlanRequest parse_request(const CommandLine& command_line) {
-  PlanRequest request;
-  request.budget_rays = *command_line.integer("-budget");
-  const std::string shape = *command_line.text("-shape");
-  request.shape = shape == "window" ? ShotShape::window : shape == "decimation" ? ShotShape::decimation : ShotShape::rays;
-  const std::string window = *command_line.text("-window");
-  const auto x = window.find('x');
-  try {
-    std::size_t used_w = 0, used_h = 0;
-    if (x == std::string::npos) throw std::invalid_argument("no x");
-    request.window_width_columns = std::stoi(window.substr(0, x), &used_w);
-    request.window_height_columns = std::stoi(window.substr(x + 1), &used_h);
-    if (used_w != x || used_h != window.size() - x - 1 || request.window_width_columns < 1 ||
-        request.window_height_columns < 1)
-      throw std::invalid_argument("not whole");
-  } catch (const std::logic_error&) {
-    throw InvalidParameter("-window " + window + " is invalid: must be WIDTHxHEIGHT in columns >= 1, e.g. 64x48");
-  }
-  request.negative_share = *command_line.number("-negative_share");
-  request.stop_gain_per_ray_below = *command_line.number("-stop_gain");
-  return request;
-}
 
 // The checks of PlanRequest::validate that depend on the grid, made first with the flags' names (the
 // library's message names its struct fields).
@@ -152,7 +129,7 @@ int run(const CommandLine& command_line) {
   const bool use_sample = command_line.has("-sample");
   const int sources = (load_path.empty() ? 0 : 1) + (use_sample ? 1 : 0) + (options.inputs.empty() ? 0 : 1);
   if (sources != 1) throw InvalidParameter("give exactly one of -load MAP, input files, or -sample (see -h)");
-  PlanRequest request = parse_request(command_line);
+  PlanRequest request = plan_request_from_flags(command_line);
   // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
   OutputFolder out = open_output_folder(command_line);
 
@@ -163,7 +140,7 @@ int run(const CommandLine& command_line) {
   require_plan_fits(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
   request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
   const auto planned = std::chrono::steady_clock::now();
-  const Shot shot = plan_next_shot(source.mapper->improvement(), source.returns, request);
+  const Shot shot = plan_next_shot(*source.mapper, source.returns, request);
   const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
 
   write_mask(out.file("shot_mask.png"), source.mapper->geometry(), shot);

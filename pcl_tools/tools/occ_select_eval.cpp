@@ -32,10 +32,12 @@ const ToolFlags kFlags{
     {"SCENE... [options]"},
     "For each scene and budget, strategies (a) full frames, (b) uniform random without replacement,\n"
     "(c) regular decimation, (d) improvement-guided, (e) (d) + return model, (f) (e) + re-acquisition of\n"
-    "negative rays acquire from a virtual Kinect v1 (virtual_sensor.hpp); quality = share of\n"
+    "negative rays, (g) coarse-to-fine (coverage pass, then one ray per block by the multi-scale improvement x\n"
+    "the predictor's residual; g_improvement / g_residual: by one of them) acquire from a virtual Kinect v1,\n"
+    "each scored with every -predictors rule (runs of the linear one are named <strategy>_linear) (virtual_sensor.hpp); quality = share of\n"
     "scene-return rays whose predicted depth lies within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's.\n"
     "Writes OUTDIR/<scene>.csv per scene and OUTDIR/summary.csv.\n",
-    joined({output_folder_flag_names(), {"-budgets", "-frames", "-negative_share", "-radius", "-seed"},
+    joined({output_folder_flag_names(), {"-budgets", "-frames", "-negative_share", "-radius", "-seed", "-strategies", "-predictors"},
             camera_flag_names()}),
     {{"-o", "out/select"}, {"-negative_share", "0.1"}},
     {},
@@ -69,17 +71,30 @@ Scene load_scene(const std::string& input, const ToolOptions& options) {
   return s;
 }
 
+constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 full frames"
+
+enum Strategy { full, uniform, decimation, guided, guided_returns, guided_reacquire, coarse_both, coarse_improvement, coarse_residual };
+const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decimation",
+                                      "d_guided",    "e_returns",       "f_reacquire",
+                                      "g_coarse_to_fine", "g_improvement", "g_residual"};
+constexpr Strategy kCompared[] = {uniform, decimation, guided, guided_returns, guided_reacquire,
+                                  coarse_both, coarse_improvement, coarse_residual};
+
+bool is_coarse_to_fine(Strategy s) { return s == coarse_both || s == coarse_improvement || s == coarse_residual; }
+
 struct Options {
   std::vector<double> budgets;
   double frames = 5, share = 0.1;
   int radius = 16;
   std::uint64_t seed = 1;
+  std::vector<Strategy> strategies;  ///< besides (a), which is always run (the reference)
+  std::vector<DepthPredictionRule> predictors;
 };
 
-constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 full frames"
-
-enum Strategy { full, uniform, decimation, guided, guided_returns, guided_reacquire };
-const char* const kStrategyNames[] = {"a_full", "b_uniform", "c_decimation", "d_guided", "e_returns", "f_reacquire"};
+/// A run's name: the strategy's, with "_linear" for the linear predictor (the prefix b_, c_, ... stays).
+std::string run_name(Strategy s, DepthPredictionRule rule) {
+  return std::string(kStrategyNames[s]) + (rule == DepthPredictionRule::linear ? "_linear" : "");
+}
 
 struct Quality {
   double within = 0, coverage = 0, mean_abs_error_m = 0;
@@ -118,10 +133,12 @@ PixelColumns pixel_columns(const SphericalGeometry& g, const PinholeIntrinsics& 
 
 /// The metric: for every scene pixel with a return, the map's z there (the surface sample of the
 /// pixel's column, else predict_depth) within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's z.
-Quality map_quality(const Mapper& mapper, const Scene& scene, const PixelColumns& map, int radius) {
+Quality map_quality(const Mapper& mapper, const Scene& scene, const PixelColumns& map, int radius,
+                    DepthPredictionRule rule) {
   DepthPredictionParams params;
   params.radius_columns = radius;
-  const PredictedDepth predicted = predict_depth(mapper.surface(), params);
+  params.rule = rule;
+  const PredictedDepth predicted = predict_depth(mapper.surface(), mapper.model(), params);
   const SphericalGeometry& g = mapper.geometry();
   Quality q;
   std::size_t returns = 0, covered = 0;
@@ -165,8 +182,9 @@ std::vector<ColumnIndex> permutation(std::size_t n, std::uint64_t seed) {
 /// One run: a strategy at one budget, shot after shot, with the metric at checkpoints.
 class Run {
 public:
-  Run(const Scene& scene, Strategy strategy, int budget, const Options& options)
-      : scene_(scene), strategy_(strategy), budget_(budget), options_(options),
+  Run(const Scene& scene, Strategy strategy, int budget, const Options& options,
+      DepthPredictionRule rule = DepthPredictionRule::nearest)
+      : scene_(scene), strategy_(strategy), rule_(rule), budget_(budget), options_(options),
         mapper_(kinect_v1(scene.intrinsics)), sensor_(scene.depth_m, scene.intrinsics, sensor_params(options)),
         returns_(ReturnRecord::for_grid(mapper_.geometry().width(), mapper_.geometry().height())),
         map_(pixel_columns(mapper_.geometry(), scene.intrinsics)) {
@@ -189,8 +207,8 @@ public:
       expected_since += shot.expected_gain;
       if (static_cast<double>(rays_asked_) + 0.5 < next_checkpoint && static_cast<double>(rays_asked_) < limit - 0.5) continue;
       next_checkpoint += checkpoint_every;
-      const Quality q = map_quality(mapper_, scene_, map_, options_.radius);
-      csv << scene_.name << ',' << kStrategyNames[strategy_] << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
+      const Quality q = map_quality(mapper_, scene_, map_, options_.radius, rule_);
+      csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
           << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
           << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << '\n';
       curve_.push_back({static_cast<double>(rays_asked_), q.within});
@@ -235,7 +253,15 @@ private:
       request.budget_rays = budget_;
       request.negative_share = strategy_ == guided_reacquire ? options_.share : 0.0;
       request.candidates = map_.observable;
-      shot = plan_next_shot(mapper_.improvement(), returns_, request);
+      if (is_coarse_to_fine(strategy_)) {
+        request.shape = ShotShape::coarse_to_fine;
+        request.refine_by = strategy_ == coarse_both          ? RefineBy::both
+                            : strategy_ == coarse_improvement ? RefineBy::improvement
+                                                              : RefineBy::residual;
+        // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
+        request.local_model = rule_ == DepthPredictionRule::linear ? LocalModel::plane : LocalModel::constant;
+      }
+      shot = plan_next_shot(mapper_, returns_, request);
     }
     return shot;
   }
@@ -247,7 +273,7 @@ private:
     const std::vector<float> depth = sensor_.shoot(pixels);
     const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
     mapper_.insert(PointSpan::from(points));
-    if (strategy_ == guided_returns || strategy_ == guided_reacquire) {
+    if (strategy_ == guided_returns || strategy_ == guided_reacquire || is_coarse_to_fine(strategy_)) {
       std::vector<std::uint8_t> got(depth.size());
       for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
       returns_.record_shot(columns, got);
@@ -260,6 +286,7 @@ private:
 
   const Scene& scene_;
   Strategy strategy_;
+  DepthPredictionRule rule_;
   int budget_;
   Options options_;
   Mapper mapper_;
@@ -313,21 +340,22 @@ std::vector<SummaryRow> evaluate_scene(const Scene& scene, const Options& option
   const double five_frames = reference.curve().back().second;
   std::vector<SummaryRow> rows;
   const auto frames = [n](double points) { return points < 0 ? -1.0 : points / n; };
-  const auto add = [&](const Run& run, Strategy s, double share) {
-    rows.push_back({scene.name, kStrategyNames[s], share, run.curve().back().second,
+  const auto add = [&](const Run& run, const std::string& name, double share) {
+    rows.push_back({scene.name, name, share, run.curve().back().second,
                     frames(points_to_reach(run.curve(), 0.95 * five_frames)),
                     run.stop_rays() ? frames(static_cast<double>(run.stop_rays())) : -1.0, frames(knee(run.curve())),
                     pearson(run.calibration()), 1e3 * run.seconds_per_shot()});
   };
-  add(reference, full, 1.0);
+  add(reference, kStrategyNames[full], 1.0);
   for (double share : options.budgets)
-    for (Strategy s : {uniform, decimation, guided, guided_returns, guided_reacquire}) {
-      Run run(scene, s, std::max(1, static_cast<int>(std::lround(share * n))), options);
-      run.run(csv);
-      add(run, s, share);
-      std::fprintf(stderr, "%s %s %.2f: quality %.4f, 95%% of 5 frames at %.3f frames\n", scene.name.c_str(),
-                   kStrategyNames[s], share, rows.back().final_quality, rows.back().points_to_95);
-    }
+    for (DepthPredictionRule rule : options.predictors)
+      for (Strategy s : options.strategies) {
+        Run run(scene, s, std::max(1, static_cast<int>(std::lround(share * n))), options, rule);
+        run.run(csv);
+        add(run, run_name(s, rule), share);
+        std::fprintf(stderr, "%s %s %.2f: quality %.4f, 95%% of 5 frames at %.3f frames\n", scene.name.c_str(),
+                     run_name(s, rule).c_str(), share, rows.back().final_quality, rows.back().points_to_95);
+      }
   return rows;
 }
 
@@ -350,6 +378,20 @@ Options parse_options(const CommandLine& command_line) {
   o.share = *command_line.number("-negative_share");
   o.radius = *command_line.integer("-radius");
   o.seed = static_cast<std::uint64_t>(*command_line.integer("-seed"));
+  const std::string names = *command_line.text("-strategies");
+  for (Strategy s : kCompared)
+    if (names == "all" || ("," + names + ",").find("," + std::string(kStrategyNames[s]) + ",") != std::string::npos)
+      o.strategies.push_back(s);
+  std::size_t listed = names == "all" ? o.strategies.size() : static_cast<std::size_t>(std::count(names.begin(), names.end(), ',') + 1);
+  if (o.strategies.empty() || listed != o.strategies.size())
+    throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of b_uniform, "
+                           "c_decimation, d_guided, e_returns, f_reacquire, g_coarse_to_fine, g_improvement, g_residual");
+  const std::string predictors = *command_line.text("-predictors");
+  for (const std::string& name : {std::string("nearest"), std::string("linear")})
+    if (("," + predictors + ",").find("," + name + ",") != std::string::npos)
+      o.predictors.push_back(name == "linear" ? DepthPredictionRule::linear : DepthPredictionRule::nearest);
+  if (o.predictors.empty() || static_cast<std::size_t>(std::count(predictors.begin(), predictors.end(), ',') + 1) != o.predictors.size())
+    throw InvalidParameter("-predictors " + predictors + " is invalid: a comma-separated list of nearest, linear");
   return o;
 }
 

@@ -1,6 +1,7 @@
 // One closed-loop round of selective acquisition with the real-use preset (kinect_v1) on 2 threads:
 // insert the returns of a 4096-ray shot (surface kept current), update the improvement incrementally,
-// plan the next shot (improvement x return model, highest first). The map starts from one full frame of
+// plan the next shot (improvement x return model): /0 the rays shape (highest first), /1 coarse_to_fine
+// (strategy (g); the insertion then also keeps the multi-scale pyramid, timed with the improvement). The map starts from one full frame of
 // the built-in sample; the virtual sensor looks at the noise-free sample.
 // Run: cmake --build <build> --target bench_select_round && <build>/tests/bench_select_round
 #include "occ_improve/mapper.hpp"
@@ -34,7 +35,8 @@ void BM_SelectRound(benchmark::State& state) {
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
   PlanRequest request;
   request.budget_rays = 4096;
-  Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+  request.shape = state.range(0) == 1 ? ShotShape::coarse_to_fine : ShotShape::rays;
+  Shot shot = plan_next_shot(mapper, returns, request);
   double insert_ms = 0, improvement_ms = 0, plan_ms = 0;
   for (auto _ : state) {
     const std::vector<float> depth = sensor.shoot(shot.columns);  // the sensor's time is not the library's
@@ -45,7 +47,7 @@ void BM_SelectRound(benchmark::State& state) {
     const MapperReport report = mapper.insert(PointSpan::from(points), two_threads);
     returns.record_shot(shot.columns, got);
     const auto planned = std::chrono::steady_clock::now();
-    shot = plan_next_shot(mapper.improvement(), returns, request);
+    shot = plan_next_shot(mapper, returns, request);
     plan_ms += ms_since(planned);
     insert_ms += 1e3 * report.insertion.seconds;
     improvement_ms += 1e3 * report.improvement_seconds;
@@ -56,7 +58,7 @@ void BM_SelectRound(benchmark::State& state) {
   state.counters["improvement_ms"] = improvement_ms / n;
   state.counters["plan_ms"] = plan_ms / n;
 }
-BENCHMARK(BM_SelectRound)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
+BENCHMARK(BM_SelectRound)->Arg(0)->Arg(1)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
 
 /// The plan alone, on the map after one frame and a record of a few shots: its share of the round.
 void BM_Plan(benchmark::State& state) {
@@ -66,13 +68,14 @@ void BM_Plan(benchmark::State& state) {
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
   PlanRequest request;
   request.budget_rays = 4096;
+  request.shape = state.range(0) == 1 ? ShotShape::coarse_to_fine : ShotShape::rays;
   for (int i = 0; i < 5; ++i) {
-    const Shot shot = plan_next_shot(mapper.improvement(), returns, request);
+    const Shot shot = plan_next_shot(mapper, returns, request);
     returns.record_shot(shot.columns, std::vector<std::uint8_t>(shot.columns.size(), i % 2));
   }
-  for (auto _ : state) benchmark::DoNotOptimize(plan_next_shot(mapper.improvement(), returns, request));
+  for (auto _ : state) benchmark::DoNotOptimize(plan_next_shot(mapper, returns, request));
 }
-BENCHMARK(BM_Plan)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plan)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 
 void BM_ShotScores(benchmark::State& state) {
   Mapper mapper(kinect_v1());

@@ -50,10 +50,16 @@ protected:
 };
 
 TEST_F(OccPlanTool, SampleShotIsWritten) {
-  const ToolRun r = run("-sample -budget 500 -o " + (dir_ / "out").string());
+  const ToolRun r = run("-sample -budget 500 -shape rays -o " + (dir_ / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_TRUE(fs::is_regular_file(dir_ / "out" / "shot_mask.png"));
   EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 501u);
+  // The default, coarse_to_fine, asks at most one ray per block and none where the sample's flat walls
+  // are predicted already: fewer than the budget after a full frame, but some (the depth edges).
+  const ToolRun fine = run("-sample -budget 500 -o " + (dir_ / "fine").string());
+  ASSERT_EQ(fine.exit_code, 0) << fine.output;
+  EXPECT_GT(lines(dir_ / "fine" / "shot_rays.csv"), 50u);
+  EXPECT_LE(lines(dir_ / "fine" / "shot_rays.csv"), 501u);
   EXPECT_NE(r.output.find("stop no"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("expected_gain"), std::string::npos) << r.output;
 }
@@ -71,8 +77,8 @@ TEST_F(OccPlanTool, AForeignOutputFolderIsRefusedAndItsOwnIsReplaced) {
   std::string content;
   in >> content;
   EXPECT_EQ(content, "mine");
-  ASSERT_EQ(run("-sample -budget 100 -o " + (dir_ / "out").string()).exit_code, 0);
-  const ToolRun again = run("-sample -budget 200 -o " + (dir_ / "out").string());
+  ASSERT_EQ(run("-sample -budget 100 -shape rays -o " + (dir_ / "out").string()).exit_code, 0);
+  const ToolRun again = run("-sample -budget 200 -shape rays -o " + (dir_ / "out").string());
   ASSERT_EQ(again.exit_code, 0) << again.output;
   EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 201u);
 }

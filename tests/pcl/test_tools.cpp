@@ -657,7 +657,7 @@ TEST_F(Tools, SimulateRunsTheSelectiveLoopUntilThePlanSaysStop) {
   ASSERT_EQ(pcl::io::savePCDFileBinary(file("sample.pcd"),
                                        organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)),
             0);
-  const ToolRun r = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 30000 -o sim");
+  const ToolRun r = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 30000 -shape rays -o sim");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("the plan says stop"), std::string::npos) << r.out;
   EXPECT_TRUE(std::filesystem::is_regular_file(folder_ / "sim" / "gain.png"));
@@ -678,6 +678,10 @@ TEST_F(Tools, SimulateRunsTheSelectiveLoopUntilThePlanSaysStop) {
   ASSERT_GE(asked.size(), 3u);
   EXPECT_TRUE(std::is_sorted(asked.begin(), asked.end()));
   EXPECT_LT(gain.back(), 0.5 * gain.front());  // what one more shot is expected to bring falls
+  // The default, coarse_to_fine, stops too: once no block is left whose predictor residual asks for a ray.
+  const ToolRun coarse = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 30000 -o sim_default");
+  ASSERT_EQ(coarse.exit_code, 0) << coarse.out << coarse.err;
+  EXPECT_NE(coarse.out.find("the plan says stop"), std::string::npos) << coarse.out;
   // Refused: a spherical grid (the plan's rays must be the sensor's pixels) and a budget of 0.
   const ToolRun spherical = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -preset kinect_v1_paper -o sim2");
   EXPECT_EQ(spherical.exit_code, 1);

@@ -1,11 +1,12 @@
 #pragma once
 // The facade for "insert frames, ask where to look": a grid, its sensor model, the surface and the
 // improvement map kept up to date together. No logic of its own: insert() is insert_points (keeping the
-// surface current) + update_improvement.
+// surface current) + update_improvement + the multi-scale pyramid's update (multiscale.hpp).
 #include "occ_improve/grid.hpp"
 #include "occ_improve/improvement.hpp"
 #include "occ_improve/integrate.hpp"
 #include "occ_improve/mask.hpp"
+#include "occ_improve/multiscale.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/sensor_model.hpp"
 #include "occ_improve/surface.hpp"
@@ -16,7 +17,7 @@ namespace occ_improve {
 
 struct MapperReport {
   InsertionReport insertion;  ///< its seconds include the surface update, done column by column inside it
-  double improvement_seconds = 0;
+  double improvement_seconds = 0;  ///< the incremental improvement and the pyramid's update
   std::size_t surface_columns_changed = 0, rays_recomputed = 0;
   std::size_t points_masked = 0;  ///< valid points outside the mask, left out before the insertion
 };
@@ -47,6 +48,8 @@ public:
   const SphericalGrid& grid() const { return grid_; }
   const SurfaceMap& surface() const { return surface_; }
   const ImprovementMap& improvement() const { return improvement_; }
+  /// The improvement on blocks of 2-16 columns and the depth samples' moments, kept with the map.
+  const ImprovementPyramid& pyramid() const { return pyramid_; }
 
 private:
   SphericalGrid grid_;
@@ -54,6 +57,7 @@ private:
   SurfaceMap surface_;
   ImprovementMap improvement_;
   std::vector<std::uint8_t> column_mask_;  ///< empty: no mask
+  ImprovementPyramid pyramid_;
 };
 
 }  // namespace occ_improve

@@ -207,8 +207,13 @@ std::vector<FlagSpec> plan_and_octomap_flags() {
   using K = FlagKind;
   return {
       bounded(value_flag("-budget", K::integer, "N", kPlan, "rays per shot", "4096"), 1),
-      choice("-shape", {"rays", "window", "decimation"}, kPlan,
-             "shot shape: the best single rays, the best WxH window, or every n-th column and row", "rays"),
+      choice("-shape", {"coarse_to_fine", "rays", "window", "decimation"}, kPlan,
+             "shot shape: coarse-to-fine (a coverage pass, then one ray per block by the multi-scale\n"
+             "improvement and the predictor's residual; docs/SELECTIVE.md), the best single rays, the best\n"
+             "WxH window, or every n-th column and row", "coarse_to_fine"),
+      choice("-refine", {"residual", "both", "improvement"}, kPlan,
+             "coarse_to_fine: what ranks the refinement blocks (the predictor's residual, x the\n"
+             "improvement, or the improvement alone)", "residual"),
       value_flag("-window", K::text, "WxH", kPlan, "window shape in columns; its area <= the budget", "64x64"),
       bounded(value_flag("-negative_share", K::number, "S", kPlan, "share of a shot re-acquiring negative rays", "0"), 0,
               1, false, true),
@@ -250,6 +255,10 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
       bounded(value_flag("-pcl_min_cluster", K::integer, "N", kPcl, "smallest cluster kept [points]", "500"), 1),
       value_flag("-budgets", K::text, "LIST", kEvaluation, "rays per shot as shares of the image, in (0, 1]",
                  "0.01,0.05,0.2"),
+      value_flag("-strategies", K::text, "LIST", kEvaluation,
+                 "strategies besides a_full: all, or a comma-separated list of their names", "all"),
+      value_flag("-predictors", K::text, "LIST", kEvaluation,
+                 "predict_depth rules scoring every strategy: nearest, linear or both", "nearest,linear"),
       value_flag("-fractions", K::text, "LIST", kEvaluation, "shares of each frame to keep, in (0, 1]", "0.05,0.2"),
       bounded(value_flag("-frames", K::number, "N", kEvaluation, "points acquired per run, in full frames", "5"), 0, kInf,
               true),

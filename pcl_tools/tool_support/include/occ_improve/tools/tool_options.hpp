@@ -11,6 +11,7 @@
 #include "occ_improve/mask.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/planner.hpp"
 #include "occ_improve/presets.hpp"
 #include "occ_improve/segmentation.hpp"
 
@@ -264,5 +265,9 @@ void create_parent_folders(const std::string& path);
 /// missing parents created; refused when it already holds files the tool did not write unless -overwrite
 /// was given (see OutputFolder).
 OutputFolder open_output_folder(const CommandLine& command_line);
+
+/// The plan flags -budget, -shape, -refine, -window, -negative_share, -stop_gain as a PlanRequest (one
+/// reading for occ_plan and occ_improve_live -simulate). InvalidParameter naming a malformed -window.
+PlanRequest plan_request_from_flags(const CommandLine& command_line);
 
 }  // namespace occ_improve
