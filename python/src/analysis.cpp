@@ -123,8 +123,14 @@ void bind_segmentation_types(py::module_& m) {
       .def_readwrite("plane_min_columns", &SegmentationParams::plane_min_columns)
       .def_readwrite("plane_ransac_iterations", &SegmentationParams::plane_ransac_iterations)
       .def_readwrite("plane_seed", &SegmentationParams::plane_seed)
+      .def_readwrite("split_concave_creases", &SegmentationParams::split_concave_creases)
+      .def_readwrite("crease_arm_m", &SegmentationParams::crease_arm_m)
+      .def_readwrite("crease_smoothing_share", &SegmentationParams::crease_smoothing_share)
+      .def_readwrite("crease_min_bend_deg", &SegmentationParams::crease_min_bend_deg)
+      .def_readwrite("crease_min_view_angle_deg", &SegmentationParams::crease_min_view_angle_deg)
+      .def_readwrite("crease_max_arm_px", &SegmentationParams::crease_max_arm_px)
       .def("validate", &SegmentationParams::validate);
-  def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane"});
+  def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane", "split_concave_creases"});
   m.def("segmentation_defaults", &segmentation_defaults, py::arg("preset"),
         "Segmentation parameters scaled for a preset's noise model.");
   py::class_<Segment> s(m, "Segment", "One segment (read-only).");
@@ -146,12 +152,17 @@ void bind_segmentation_result(py::module_& m) {
         const auto& s = self.cast<const Segmentation&>();
         return view_2d(s.contour.data(), s.height, s.width, self, py::dtype("?"));
       }, "H x W bool, True on contour rays.")
+      .def_property_readonly("crease", [](const py::object& self) {
+        const auto& s = self.cast<const Segmentation&>();
+        return view_2d(s.crease.data(), s.height, s.width, self, py::dtype("?"));
+      }, "H x W bool, True on concave-crease rays (not contour rays).")
       .def_readonly("segments", &Segmentation::segments, "Largest first.")
       .def_readonly("valid_columns", &Segmentation::valid_columns)
       .def_readonly("contour_columns", &Segmentation::contour_columns)
+      .def_readonly("crease_columns", &Segmentation::crease_columns)
       .def_readonly("attached_columns", &Segmentation::attached_columns)
       .def_readonly("plane_columns", &Segmentation::plane_columns);
-  def_fields_repr(r, {"valid_columns", "contour_columns", "attached_columns", "plane_columns"});
+  def_fields_repr(r, {"valid_columns", "contour_columns", "crease_columns", "attached_columns", "plane_columns"});
   mapper_class(m).def("segment", [](PyMapper& self, const SegmentationParams& params) {
     return with_mapper(self, [&](Mapper& mp) {
       return segment_improvement(mp.geometry(), mp.surface(), mp.improvement(), params);

@@ -4,6 +4,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/improvement.hpp"
+#include "occ_improve/mask.hpp"
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
@@ -33,8 +34,10 @@ void bind_reports(py::module_& m) {
   mr.def_readonly("insertion", &MapperReport::insertion)
       .def_readonly("improvement_seconds", &MapperReport::improvement_seconds)
       .def_readonly("surface_columns_changed", &MapperReport::surface_columns_changed)
-      .def_readonly("rays_recomputed", &MapperReport::rays_recomputed);
-  def_fields_repr(mr, {"insertion", "improvement_seconds", "surface_columns_changed", "rays_recomputed"});
+      .def_readonly("rays_recomputed", &MapperReport::rays_recomputed)
+      .def_readonly("points_masked", &MapperReport::points_masked, "valid points outside the mask, left out");
+  def_fields_repr(mr, {"insertion", "improvement_seconds", "surface_columns_changed", "rays_recomputed",
+                       "points_masked"});
 }
 
 InsertionOptions insertion_options(int threads) {
@@ -151,6 +154,40 @@ void bind_map_outputs(py::class_<PyMapper>& c) {
                         "Expected improvement per ray (eqs. 3-4), float32.");
 }
 
+/// An H x W array (bool or numbers, nonzero = valid) as the library's mask over the camera's pixels.
+PixelMask pixel_mask_from(const py::handle& mask) {
+  const auto a = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(
+      py::module_::import("numpy").attr("not_equal")(mask, 0));
+  if (!a) throw py::error_already_set();
+  if (a.ndim() != 2)
+    throw InvalidInput("mask must be an H x W array, got " + std::to_string(a.ndim()) + " dimensions");
+  PixelMask out{static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
+                std::vector<std::uint8_t>(a.data(), a.data() + a.size())};
+  out.validate();
+  return out;
+}
+
+void bind_mapper_mask(py::class_<PyMapper>& c) {
+  c.def("set_mask", [](PyMapper& self, const py::object& mask) {
+    const PixelMask m = pixel_mask_from(mask);
+    with_mapper(self, [&](Mapper& mp) { mp.set_mask(m); });
+  }, py::arg("mask"),
+        "A validity / region-of-interest mask over the camera's pixels (H x W, nonzero = valid) for every later "
+        "insert: points outside are left out and counted (MapperReport.points_masked), the improvement there is "
+        "NaN (never ranked, in a region or planned). Raises InvalidInput for another size than the camera's, "
+        "InvalidParameter for a preset without a camera.");
+  c.def("clear_mask", [](PyMapper& self) { with_mapper(self, [](Mapper& mp) { mp.clear_mask(); }); },
+        "Removes the mask: every column is observable again.");
+  c.def_property_readonly("column_mask", [](PyMapper& self) -> py::object {
+    const std::vector<std::uint8_t> columns =
+        with_mapper(self, [](Mapper& mp) { return mp.column_mask(); });
+    if (columns.empty()) return py::none();
+    py::array_t<bool> out({self.mapper.geometry().height(), self.mapper.geometry().width()});
+    std::copy(columns.begin(), columns.end(), out.mutable_data());
+    return std::move(out);
+  }, "H x W bool, True where a column is inside the mask; None without a mask.");
+}
+
 void bind_mapper_insertion(py::class_<PyMapper>& c) {
   c.def(py::init([](const SensorPreset& preset, const GridOptions& options) {
           return std::make_unique<PyMapper>(Mapper(preset, options));
@@ -221,6 +258,7 @@ void bind_mapper_class(py::module_& m) {
                          "A spherical grid with its sensor model, surface and improvement map, kept up to date "
                          "together. Methods release the GIL; calls on one Mapper from several threads are serialised.");
   bind_mapper_insertion(c);
+  bind_mapper_mask(c);
   bind_map_outputs(c);
   bind_mapper_properties(c);
   bind_mapper_rays(c);

@@ -115,7 +115,16 @@ void bind_plan_request(py::module_& m) {
   py::enum_<ShotShape>(m, "ShotShape", "What a shot takes.")
       .value("rays", ShotShape::rays, "any budget_rays rays, highest score first")
       .value("window", ShotShape::window, "the window of largest summed score (ROI readout)")
-      .value("decimation", ShotShape::decimation, "every step-th column and row, at the best offset");
+      .value("decimation", ShotShape::decimation, "every step-th column and row, at the best offset")
+      .value("coarse_to_fine", ShotShape::coarse_to_fine,
+             "a coverage pass, then one ray per refinement block (strategy (g); needs a Mapper)");
+  py::enum_<RefineBy>(m, "RefineBy", "What ranks coarse_to_fine's refinement blocks.")
+      .value("improvement", RefineBy::improvement, "the block's |mean improvement|")
+      .value("residual", RefineBy::residual, "the samples' residual from the predictor's local model")
+      .value("both", RefineBy::both, "their product");
+  py::enum_<LocalModel>(m, "LocalModel", "The predictor's local model whose error the residual estimates.")
+      .value("constant", LocalModel::constant, "nearest-sample prediction")
+      .value("plane", LocalModel::plane, "linear prediction");
   py::class_<PlanRequest> q(m, "PlanRequest", "Budget, shape, re-acquisition share, stop level, candidate mask.");
   def_keyword_init<PlanRequest>(q);
   q.def_readwrite("budget_rays", &PlanRequest::budget_rays)
@@ -125,6 +134,10 @@ void bind_plan_request(py::module_& m) {
       .def_readwrite("negative_share", &PlanRequest::negative_share)
       .def_readwrite("stop_gain_per_ray_below", &PlanRequest::stop_gain_per_ray_below)
       .def_readwrite("return_model", &PlanRequest::return_model)
+      .def_readwrite("coverage_block_columns", &PlanRequest::coverage_block_columns)
+      .def_readwrite("refine_by", &PlanRequest::refine_by)
+      .def_readwrite("local_model", &PlanRequest::local_model)
+      .def_readwrite("residual_cap_sigmas", &PlanRequest::residual_cap_sigmas)
       .def_property("candidates", [](const PlanRequest& r) -> py::object {
         if (r.candidates.empty()) return py::none();
         return flat_array(r.candidates).attr("astype")("?");
@@ -153,11 +166,15 @@ void bind_shot(py::module_& m) {
 
 void bind_planning(py::module_& m) {
   m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request) {
+    if (py::isinstance<PyMapper>(improvement))  // the Mapper's own maps and pyramid, read under its lock
+      return with_mapper(improvement.cast<PyMapper&>(),
+                         [&](Mapper& mapper) { return plan_next_shot(mapper, returns, request); });
     const ImprovementMap map = improvement_from(improvement);
     py::gil_scoped_release release;
     return plan_next_shot(map, returns, request);
   }, py::arg("improvement"), py::arg("returns"), py::arg("request") = PlanRequest{},
-        "The next shot over a Mapper's improvement map (or an H x W float32 improvement array). returns: "
+        "The next shot over a Mapper (every shape) or an H x W float32 improvement array (every shape but "
+        "coarse_to_fine, which reads the Mapper's multi-scale improvement). returns: "
         "ReturnRecord.for_grid(width, height) when nothing was shot yet. Raises as PlanRequest.validate, and "
         "InvalidInput when returns is of another grid.");
   m.def("shot_scores", [](const py::object& improvement, const ReturnRecord& returns, const ReturnModelParams& params) {

@@ -177,3 +177,47 @@ def test_fit_intrinsics_refuses_what_is_no_pinhole_image(sample):
         oi.fit_intrinsics(cloud.reshape(-1, 3))
     with pytest.raises(oi.InvalidInput):
         oi.fit_intrinsics(np.full((20, 20, 3), np.nan, np.float32))
+
+
+def test_coarse_to_fine_covers_every_block_once_on_a_fresh_view(sample):
+    """Strategy (g) from Python: on a map without data, a shot of one ray per 16-column block is the
+    coverage pass (planner.hpp): exactly one ray in every block, none twice."""
+    _, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    blocks_u, blocks_v = -(-mapper.width // 16), -(-mapper.height // 16)
+    request = oi.PlanRequest(budget_rays=blocks_u * blocks_v, shape=oi.ShotShape.coarse_to_fine,
+                             refine_by=oi.RefineBy.residual)
+    assert request.coverage_block_columns == 16 and request.residual_cap_sigmas == 8.0
+    shot = oi.plan_next_shot(mapper, empty_record(mapper), request)
+    v, u = np.divmod(shot.columns.astype(np.int64), mapper.width)
+    block = (v // 16) * blocks_u + u // 16
+    assert len(shot) == blocks_u * blocks_v
+    assert np.array_equal(np.sort(block), np.arange(blocks_u * blocks_v))
+
+
+def test_coarse_to_fine_needs_the_mapper(pixel_mapper):
+    with pytest.raises(oi.Error):
+        oi.plan_next_shot(pixel_mapper.improvement(), empty_record(pixel_mapper),
+                          oi.PlanRequest(budget_rays=100, shape=oi.ShotShape.coarse_to_fine))
+
+
+def test_mask_leaves_rays_out_of_insertion_ranking_and_plan(sample):
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mask = np.zeros((mapper.height, mapper.width), dtype=bool)
+    mask[:, : mapper.width // 2] = True
+    mapper.set_mask(mask)
+    assert np.array_equal(mapper.column_mask, mask)
+    report = mapper.insert_depth(depth, intrinsics)
+    valid_right = int(np.count_nonzero(np.isfinite(depth[:, mapper.width // 2:]) & (depth[:, mapper.width // 2:] > 0)))
+    assert report.points_masked == valid_right > 0
+    improvement = mapper.improvement()
+    assert np.all(np.isnan(improvement[:, mapper.width // 2:]))
+    assert np.all(np.isfinite(improvement[:, : mapper.width // 2]))
+    shot = oi.plan_next_shot(mapper, empty_record(mapper), oi.PlanRequest(budget_rays=2000))
+    assert np.all(shot.columns % mapper.width < mapper.width // 2)
+    with pytest.raises(oi.InvalidInput):
+        mapper.set_mask(np.ones((10, 10), dtype=bool))
+    mapper.clear_mask()
+    assert mapper.column_mask is None
+    assert np.all(np.isfinite(mapper.improvement()[:, mapper.width // 2:]))
