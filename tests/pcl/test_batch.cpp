@@ -94,24 +94,27 @@ protected:
 };
 
 // The case: a folder of three generated frames (two PCDs, one depth PNG with its camera file),
-// one corrupt PCD and one unrelated text file. Three folders whose regions equal the tool on each file
-// alone; the corrupt file named on stderr and counted; the text and intrinsics files counted as skipped;
-// exit 1 because one file failed.
+// one corrupt PCD, a depth image of the wrong size and one unrelated text file. Three folders whose regions equal the tool on each file
+// alone; the corrupt and the wrong-size file named on stderr and counted; the text and intrinsics files counted as skipped;
+// exit 1 because files failed.
 TEST_F(Batch, EachFrameFileGetsTheFolderItsOwnRunWritesAndFailuresAreNamedAndCounted) {
   write_pcd("in", "frame_a.pcd", 1);
   write_pcd("in", "frame_b.pcd", 7);
   write_depth_png("in", "frame_c.png", 3);
   std::ofstream(folder_ / "in" / "broken.pcd") << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nnot a header\n";
   std::ofstream(folder_ / "in" / "notes.txt") << "taken on Tuesday\n";
+  write_png((folder_ / "in" / "tiny.png").string(), Image16{4, 3, std::vector<std::uint16_t>(12, 1000)});  // not 640 x 480
 
   const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-input_dir in -output_dir out -depth_encoding mm -q");
   EXPECT_EQ(r.exit_code, 1) << r.out << r.err;
-  EXPECT_EQ(count_of(r.err, "error: "), 1u) << r.err;
+  EXPECT_EQ(count_of(r.err, "error: "), 2u) << r.err;
   EXPECT_NE(r.err.find("broken.pcd"), std::string::npos) << r.err;
-  EXPECT_NE(r.out.find("processed 3, failed 1 (broken.pcd), skipped 2 (camera-intrinsics.txt, notes.txt)"),
+  EXPECT_NE(r.err.find("tiny.png"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("processed 3, failed 2 (broken.pcd, tiny.png), skipped 2 (camera-intrinsics.txt, notes.txt)"),
             std::string::npos)
       << r.out;
   EXPECT_FALSE(fs::exists(folder_ / "out" / "broken"));
+  EXPECT_FALSE(fs::exists(folder_ / "out" / "tiny"));
   for (const char* stem : {"frame_a", "frame_b", "frame_c"}) {
     EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / stem / ".occ_improve_output")) << stem;
     EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / stem / "improvement.png")) << stem;
@@ -170,7 +173,7 @@ TEST_F(Batch, PerFileFoldersFollowTheNeverOverwriteRule) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(count_of(r.err, "\n"), 1u) << r.err;
   EXPECT_NE(r.err.find("-overwrite"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("frame_b"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-output_dir, the folder of 'in/frame_b.pcd'"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("[1/"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(folder_ / "out" / "frame_a" / "regions.csv"));
   EXPECT_EQ(contents(folder_ / "out" / "frame_b" / "mine.txt"), "a user's note\n");

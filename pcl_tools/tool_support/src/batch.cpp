@@ -97,8 +97,13 @@ int run_batch(const CommandLine& c, int (*run)(const CommandLine& command_line))
   // Every per-file folder is checked before any work (a folder the tool did not write, without
   // -overwrite), so a batch is not refused half-way; the check stages nothing that outlives it.
   create_parent_folders((fs::path(output_dir) / "x").string());
-  for (std::size_t i = 0; i < files.frames.size(); ++i)
-    const OutputFolder check(folders[i], c.tool().tool, c.has("-overwrite"), {files.frames[i]});
+  for (std::size_t i = 0; i < files.frames.size(); ++i) {
+    try {
+      const OutputFolder check(folders[i], c.tool().tool, c.has("-overwrite"), {files.frames[i]});
+    } catch (const IoError& e) {
+      throw IoError("-output_dir, the folder of '" + files.frames[i] + "': " + e.what());
+    }
+  }
 
   std::vector<std::string> failed;
   std::size_t processed = 0;
