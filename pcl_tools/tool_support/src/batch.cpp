@@ -7,6 +7,7 @@
 #include "occ_improve/tools/tool_options.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cctype>
 #include <cstdio>
 #include <filesystem>
@@ -23,9 +24,12 @@ bool has_frame_extension(const fs::path& path) {
   return ext == ".pcd" || ext == ".ply" || is_depth_image_path(path.string());
 }
 
-std::string joined_names(const std::vector<std::string>& names) {
+// "a, b, c", or the first `at_most` names and "and N more" (a dataset folder skips a colour image and a
+// pose file per frame: counted in full, named in part).
+std::string joined_names(const std::vector<std::string>& names, std::size_t at_most = SIZE_MAX) {
   std::string text;
-  for (const std::string& n : names) text += (text.empty() ? "" : ", ") + n;
+  for (std::size_t i = 0; i < names.size() && i < at_most; ++i) text += (text.empty() ? "" : ", ") + names[i];
+  if (names.size() > at_most) text += ", and " + std::to_string(names.size() - at_most) + " more";
   return text;
 }
 
@@ -110,7 +114,7 @@ int run_batch(const CommandLine& c, int (*run)(const CommandLine& command_line))
   const auto summary = [&] {
     return "processed " + std::to_string(processed) + ", failed " + std::to_string(failed.size()) +
            (failed.empty() ? "" : " (" + joined_names(failed) + ")") + ", skipped " + std::to_string(files.skipped.size()) +
-           (files.skipped.empty() ? "" : " (" + joined_names(files.skipped) + ")");
+           (files.skipped.empty() ? "" : " (" + joined_names(files.skipped, 10) + ")");
   };
   for (std::size_t i = 0; i < files.frames.size(); ++i) {
     const std::string& frame = files.frames[i];

@@ -30,7 +30,7 @@ bool batch_requested(const CommandLine& command_line);
 /// with positional inputs, -o, -save or -sample; an -output_dir equal to or inside -input_dir; two frame
 /// files of one stem; a per-file folder the tool may not write (OutputFolder's rules, -overwrite).
 /// A file that fails is reported in one error line on stderr naming it, and the batch goes on; at the end
-/// one summary line on stdout (processed, failed with names, skipped with names); returns 1 when any file
+/// one summary line on stdout (processed, failed with names, skipped with the first 10 names); returns 1 when any file
 /// failed, else 0. A stop (Ctrl-C) ends the batch with Cancelled after the summary so far: the folders of
 /// the files done stay.
 int run_batch(const CommandLine& command_line, int (*run)(const CommandLine& command_line));
