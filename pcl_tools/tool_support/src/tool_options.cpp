@@ -275,7 +275,7 @@ public:
     std::fprintf(stderr,
                  "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to "
                  "%.0f%% of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes "
-                 "or viewpoints? Give their poses, or map them one by one\n",
+                 "or viewpoints? Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)\n",
                  names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str());
   }
 
