@@ -131,7 +131,11 @@ TEST_F(Batch, EachFrameFileGetsTheFolderItsOwnRunWritesAndFailuresAreNamedAndCou
 // any work.
 TEST_F(Batch, OutputInsideTheInputsAndMixedFlagsAreRefusedBeforeAnyWork) {
   write_pcd("in", "frame_a.pcd", 1);
+  fs::create_directories(folder_ / "empty");
+  std::ofstream(folder_ / "empty" / "notes.txt") << "nothing to map\n";
   const std::vector<std::pair<std::string, std::string>> refused = {
+      {"-input_dir empty -output_dir out", "holds no frame file (.pcd .ply .png .pgm .tif .tiff); skipped: notes.txt"},
+      {"-input_dir missing -output_dir out", "is not a folder"},
       {"-input_dir in -output_dir in/out", "inside -input_dir"},
       {"-input_dir in -output_dir in", "inside -input_dir"},
       {"-input_dir in -output_dir out in/frame_a.pcd", "not both"},

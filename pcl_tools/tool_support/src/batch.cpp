@@ -96,6 +96,9 @@ bool batch_requested(const CommandLine& c) {
 int run_batch(const CommandLine& c, int (*run)(const CommandLine& command_line)) {
   require_batch_flags(c);
   const BatchFiles files = list_batch_files(*c.text("-input_dir"));
+  if (files.frames.empty())  // a batch that does nothing is a mistaken folder, not a success
+    throw InvalidInput("-input_dir '" + *c.text("-input_dir") + "' holds no frame file (.pcd .ply .png .pgm .tif .tiff)" +
+                       (files.skipped.empty() ? "" : "; skipped: " + joined_names(files.skipped, 10)));
   const std::string output_dir = *c.text("-output_dir");
   const std::vector<std::string> folders = output_folders(files.frames, output_dir);
   // Every per-file folder is checked before any work (a folder the tool did not write, without

@@ -27,7 +27,8 @@ bool batch_requested(const CommandLine& command_line);
 
 /// Runs `run` once per frame file of -input_dir, with CommandLine::for_one_input(file, OUTDIR/<stem>).
 /// Refused before any work (InvalidParameter, one line): -input_dir without -output_dir or the reverse,
-/// with positional inputs, -o, -save or -sample; an -output_dir equal to or inside -input_dir; two frame
+/// with positional inputs, -o, -save or -sample; an -output_dir equal to or inside -input_dir; a folder
+/// without a frame file (InvalidInput); two frame
 /// files of one stem; a per-file folder the tool may not write (OutputFolder's rules, -overwrite).
 /// A file that fails is reported in one error line on stderr naming it, and the batch goes on; at the end
 /// one summary line on stdout (processed, failed with names, skipped with the first 10 names); returns 1 when any file
