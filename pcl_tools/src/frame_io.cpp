@@ -436,15 +436,14 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
   return k;
 }
 
-namespace {
-
-// 7-Scenes / 3DMatch `*.depth.png`, PCL ImageGrabber `*_depth.tif(f)`.
-bool is_depth_frame_name(const std::filesystem::path& p) {
-  const std::string name = p.filename().string();
+bool is_depth_frame_name(const std::string& path) {
+  const std::string name = std::filesystem::path(path).filename().string();
   for (const char* suffix : {".depth.png", "_depth.tiff", "_depth.tif"})
     if (name.size() > std::strlen(suffix) && ends_with(name, suffix)) return true;
   return false;
 }
+
+namespace {
 
 // A frame with the intrinsics found for it and the pose file beside it.
 FrameSource source_of(const std::string& path, const std::optional<PinholeIntrinsics>& intrinsics) {
@@ -482,7 +481,7 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   std::vector<std::string> frames;
   for (fs::recursive_directory_iterator it(p, ec), end; it != end && !ec; it.increment(ec)) {
     if (it.depth() > 1) it.disable_recursion_pending();  // the folder and its seq-*/ subfolders
-    if (it->is_regular_file(ec) && is_depth_frame_name(it->path())) frames.push_back(it->path().string());
+    if (it->is_regular_file(ec) && is_depth_frame_name(it->path().string())) frames.push_back(it->path().string());
   }
   if (ec) throw IoError("cannot list folder '" + input + "': " + ec.message());
   if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames");

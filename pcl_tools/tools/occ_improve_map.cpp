@@ -28,7 +28,8 @@ constexpr double kRadToDeg = 57.29577951308232;
 
 const ToolFlags kFlags{
     "occ_improve_map",
-    {"[options] INPUT... -o OUTDIR", "-sample -o OUTDIR", "-load MAP.occmap [INPUT...] -o OUTDIR"},
+    {"[options] INPUT... -o OUTDIR", "-sample -o OUTDIR", "-load MAP.occmap [INPUT...] -o OUTDIR",
+     "[options] -input_dir DIR -output_dir OUTDIR   (each frame file of DIR on its own, into OUTDIR/<stem>/)"},
     "Fuses the input frames (one viewpoint, in order) into an occupancy grid along the sensor's rays and\n"
     "writes the improvement map (where one more measurement would change the map most) to OUTDIR:\n"
     "  depth.png occupancy.png improvement.png legend.png  the maps as images (pixel-native presets:\n"
@@ -41,7 +42,7 @@ const ToolFlags kFlags{
     "  rays.csv      the K best single rays\n"
     "README.md \"Output files\" lists every column.\n",
     joined({output_folder_flag_names(), {"-q", "-sample", "-load", "-save", "-threads", "-k", "-min_improvement"},
-            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
+            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}, batch_flag_names()}),
     {{"-o", "occ_improve_out"}},
     {},
     frame_inputs_help()};

@@ -26,7 +26,8 @@ namespace {
 
 const ToolFlags kFlags{
     "occ_plan",
-    {"-load MAP.occmap [plan options] -o OUTDIR", "[options] INPUT... -o OUTDIR", "-sample [options] -o OUTDIR"},
+    {"-load MAP.occmap [plan options] -o OUTDIR", "[options] INPUT... -o OUTDIR", "-sample [options] -o OUTDIR",
+     "[options] -input_dir DIR -output_dir OUTDIR   (each frame file of DIR on its own, into OUTDIR/<stem>/)"},
     "Plans the next shot (docs/SELECTIVE.md): rays scored by improvement x return probability (the map's\n"
     "return record; none for frames), coarse-to-fine by default or in one of three other shapes. Writes\n"
     "  OUTDIR/shot_mask.png   grey, one pixel per column (255 = in the shot); with the pixel-native\n"
@@ -38,7 +39,7 @@ const ToolFlags kFlags{
     "                         samples, 16-bit grey in millimetres (0 = none within -radius)\n",
     joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-refine", "-window",
                                          "-negative_share", "-stop_gain", "-predicted_depth", "-radius"},
-            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
+            sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}, batch_flag_names()}),
     {},
     {},
     frame_inputs_help()};

@@ -19,13 +19,13 @@ using namespace occ_improve;
 
 const ToolFlags kFlags{
     "occ_segment",
-    {"INPUT -o OUTDIR [options]"},
+    {"INPUT -o OUTDIR [options]", "-input_dir DIR -output_dir OUTDIR [options]   (each frame file of DIR, into OUTDIR/<stem>/)"},
     "Segments one organized frame along its negative-improvement contours (the paper's closing remark).\n"
     "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png (the segments'\n"
     "colours), label_ids.png (16-bit label per ray, 0 = none: what pcl_pcd2png --field label writes),\n"
     "contours.png, segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
     joined({output_folder_flag_names(), {"-contour", "-min_segment", "-no_plane", "-plane_distance"}, sensor_flag_names(),
-            camera_flag_names(), {"-mask"}}),
+            camera_flag_names(), {"-mask"}, batch_flag_names()}),
     {},
     {},
     frame_inputs_help()};

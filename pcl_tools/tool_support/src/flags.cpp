@@ -72,6 +72,7 @@ const char* const kSegmentation = "Segmentation";
 const char* const kPcl = "PCL's segmentation (the comparison)";
 const char* const kEvaluation = "Evaluation";
 const char* const kGeneral = "General";
+const char* const kBatch = "Batch (one output folder per input file)";
 
 std::vector<FlagSpec> input_flags() {
   using K = FlagKind;
@@ -162,6 +163,15 @@ std::vector<FlagSpec> map_and_output_flags() {
                   "also replace an output file (-save, occ_to_octomap -o) that occ_improve did not write (an\n"
                   "input of the run is never replaced)"),
       switch_flag("-q", kOutput, "no progress line (it is only shown when stderr is a terminal)"),
+      value_flag("-input_dir", K::text, "DIR", kBatch,
+                 "batch mode, as PCL's tools: every frame file in DIR (.pcd .ply .png .pgm .tif .tiff; not its\n"
+                 "subfolders) is processed on its own, into OUTDIR/<file stem>/ (-output_dir); instead of\n"
+                 "positional inputs and -o. Files that fail are named and counted, the run goes on and exits 1",
+                 "", "none: the inputs are fused"),
+      value_flag("-output_dir", K::text, "OUTDIR", kBatch,
+                 "with -input_dir: where the per-file output folders go (never inside DIR); each follows -o's\n"
+                 "rules (a folder this tool did not write is refused before any work, unless -overwrite)",
+                 "", "required with -input_dir"),
   };
 }
 
@@ -412,6 +422,8 @@ std::vector<std::string> camera_flag_names() { return {"-intrinsics", "-intrinsi
 
 std::vector<std::string> output_folder_flag_names() { return {"-o", "-overwrite"}; }
 
+std::vector<std::string> batch_flag_names() { return {"-input_dir", "-output_dir"}; }
+
 std::vector<std::string> joined(std::initializer_list<std::vector<std::string>> lists) {
   std::vector<std::string> all;
   for (const auto& list : lists) all.insert(all.end(), list.begin(), list.end());
@@ -477,6 +489,13 @@ std::optional<int> CommandLine::integer(const std::string& flag) const {
   const auto v = number(flag);
   if (!v) return std::nullopt;
   return static_cast<int>(*v);
+}
+
+CommandLine CommandLine::for_one_input(const std::string& input, const std::string& output_folder) const {
+  std::map<std::string, std::vector<std::string>> given = given_;
+  for (const std::string& flag : batch_flag_names()) given.erase(flag);
+  given["-o"] = {output_folder};
+  return CommandLine(*tool_, std::move(given), {input});
 }
 
 CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* const* argv) {

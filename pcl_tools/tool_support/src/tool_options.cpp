@@ -3,6 +3,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/sample_scene.hpp"
+#include "occ_improve/tools/batch.hpp"
 #include "occ_improve/tools/output_files.hpp"
 
 #include <pcl/common/transforms.h>
@@ -274,7 +275,7 @@ public:
     std::fprintf(stderr,
                  "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to "
                  "%.0f%% of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes "
-                 "or viewpoints? Give their poses, or map them one by one\n",
+                 "or viewpoints? Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)\n",
                  names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str());
   }
 
@@ -550,15 +551,20 @@ std::string& failed_input() {
 
 // One line on stderr: the message, and the input being worked on when the message does not name it.
 int report_failure(const std::string& message) {
-  std::string line = message;
-  std::replace(line.begin(), line.end(), '\n', ' ');
-  const std::string& input = failed_input();
-  if (!input.empty() && line.find(input) == std::string::npos) line += " (input '" + input + "')";
-  std::fprintf(stderr, "error: %s\n", line.c_str());
+  std::fprintf(stderr, "%s\n", failure_line(message).c_str());
   return 1;
 }
 
 }  // namespace
+
+std::string failure_line(const std::string& message) {
+  std::string line = message;
+  std::replace(line.begin(), line.end(), '\n', ' ');
+  const std::string& input = failed_input();
+  if (!input.empty() && line.find(input) == std::string::npos) line += " (input '" + input + "')";
+  failed_input().clear();
+  return "error: " + line;
+}
 
 InputScope::InputScope(const std::string& input) : previous_(current_input()), uncaught_(std::uncaught_exceptions()) {
   current_input() = input;
@@ -599,7 +605,7 @@ int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const Com
       pcl::console::setVerbosityLevel(pcl::console::L_DEBUG);
       std::fprintf(stderr, "%s with:\n%s", program.c_str(), resolved_flags(command_line).c_str());
     }
-    const int code = run(command_line);
+    const int code = batch_requested(command_line) ? run_batch(command_line, run) : run(command_line);
     // A signal that came too late for any poll (during the final renames, say) still ends in 128 + signal,
     // as the README promises; the run had finished, so what it wrote is in place.
     if (const int signal = stop_requested()) {

@@ -120,6 +120,10 @@ struct FrameSource {
 /// FormatError for a malformed pose file.
 std::vector<FrameSource> expand_input(const std::string& input);
 
+/// Whether the file name is a dataset folder's depth frame: 7-Scenes / 3DMatch `*.depth.png`, PCL
+/// ImageGrabber `*_depth.tif(f)` (what expand_input takes from a folder; its other images are colour).
+bool is_depth_frame_name(const std::string& path);
+
 /// The pose file of a 7-Scenes / 3DMatch depth frame: `<dir>/frame-NNNNNN.depth.png` ->
 /// `<dir>/frame-NNNNNN.pose.txt` (whether it exists or not); "" for a name not of that layout.
 std::string pose_file_for(const std::string& depth_path);

@@ -77,6 +77,9 @@ public:
   /// The positional arguments, in order.
   const std::vector<std::string>& positionals() const { return positionals_; }
   const ToolFlags& tool() const { return *tool_; }
+  /// This command line for one file of a batch (-input_dir): `input` its only positional, -o
+  /// `output_folder`, without -input_dir and -output_dir.
+  CommandLine for_one_input(const std::string& input, const std::string& output_folder) const;
 
 private:
   const FlagSpec& declared(const std::string& flag) const;
@@ -102,6 +105,8 @@ std::string resolved_flags(const CommandLine& command_line);
 std::vector<std::string> sensor_flag_names();
 std::vector<std::string> camera_flag_names();
 std::vector<std::string> output_folder_flag_names();
+/// The batch mode's -input_dir and -output_dir (batch.hpp).
+std::vector<std::string> batch_flag_names();
 /// The lists one after the other.
 std::vector<std::string> joined(std::initializer_list<std::vector<std::string>> lists);
 

@@ -132,6 +132,10 @@ std::string describe_camera(const std::vector<ToolFrame>& frames);
 /// Cancelled becomes "interrupted by SIG..." and exit code 128 + the signal number.
 int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const CommandLine& command_line));
 
+/// The one error line of a failure ("error: MESSAGE"), naming the input whose InputScope the exception
+/// left when MESSAGE does not; that input is then forgotten (a batch goes on to the next file).
+std::string failure_line(const std::string& message);
+
 /// -h text of the positional frame inputs every frame-reading tool takes.
 std::string frame_inputs_help();
 
