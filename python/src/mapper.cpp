@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -47,10 +48,35 @@ InsertionOptions insertion_options(int threads) {
   return options;
 }
 
-MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads) {
+/// An H x W array (bool or numbers, nonzero = valid) as the library's mask over the camera's pixels.
+PixelMask pixel_mask_from(const py::handle& mask) {
+  const auto a = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(
+      py::module_::import("numpy").attr("not_equal")(mask, 0));
+  if (!a) throw py::error_already_set();
+  if (a.ndim() != 2)
+    throw InvalidInput("mask must be an H x W array, got " + std::to_string(a.ndim()) + " dimensions");
+  PixelMask out{static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
+                std::vector<std::uint8_t>(a.data(), a.data() + a.size())};
+  out.validate();
+  return out;
+}
+
+/// Mapper::insert, through set_mask first when a mask is given (None: the mask in place, if any).
+MapperReport insert_masked(Mapper& m, PointSpan points, const InsertionOptions& options,
+                           const std::optional<PixelMask>& mask) {
+  return mask ? m.insert(points, options, *mask) : m.insert(points, options);
+}
+
+std::optional<PixelMask> optional_mask(const py::object& mask) {
+  if (mask.is_none()) return std::nullopt;
+  return pixel_mask_from(mask);
+}
+
+MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads, const py::object& mask) {
   const InsertionOptions options = insertion_options(threads);
+  const std::optional<PixelMask> pixels = optional_mask(mask);
   const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
-  return with_mapper(self, [&](Mapper& m) { return m.insert(in.span, options); });
+  return with_mapper(self, [&](Mapper& m) { return insert_masked(m, in.span, options, pixels); });
 }
 
 /// The depth units a scale can convert from, in the order their suggestion is tried.
@@ -90,12 +116,13 @@ void require_plausible_scale(const float* raw, std::size_t pixels, double scale,
 }
 
 MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const PinholeIntrinsics& intrinsics,
-                                double scale, int threads) {
+                                double scale, int threads, const py::object& mask) {
   occ_improve::detail::require_parameter(std::isfinite(scale) && scale > 0, "scale", scale, "finite and > 0");
   const InsertionOptions options = insertion_options(threads);
   // The camera first: an image of another camera's size is better explained by the camera than the shape.
   require_grid_camera(self.mapper.geometry(), intrinsics);
   const DepthInput in = depth_from_array(depth, intrinsics);
+  const std::optional<PixelMask> pixels = optional_mask(mask);
   return with_mapper(self, [&](Mapper& m) {
     require_plausible_scale(in.depth, in.pixels, scale, m.geometry().params());
     // Scaling happens here, without the GIL; the back-projection is the library's own.
@@ -107,7 +134,7 @@ MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const P
       metres = scaled.data();
     }
     const auto points = depth_image_to_points(DepthImage{metres, in.pixels, intrinsics});
-    return m.insert(PointSpan::from(points), options);
+    return insert_masked(m, PointSpan::from(points), options, pixels);
   });
 }
 
@@ -154,19 +181,6 @@ void bind_map_outputs(py::class_<PyMapper>& c) {
                         "Expected improvement per ray (eqs. 3-4), float32.");
 }
 
-/// An H x W array (bool or numbers, nonzero = valid) as the library's mask over the camera's pixels.
-PixelMask pixel_mask_from(const py::handle& mask) {
-  const auto a = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(
-      py::module_::import("numpy").attr("not_equal")(mask, 0));
-  if (!a) throw py::error_already_set();
-  if (a.ndim() != 2)
-    throw InvalidInput("mask must be an H x W array, got " + std::to_string(a.ndim()) + " dimensions");
-  PixelMask out{static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
-                std::vector<std::uint8_t>(a.data(), a.data() + a.size())};
-  out.validate();
-  return out;
-}
-
 void bind_mapper_mask(py::class_<PyMapper>& c) {
   c.def("set_mask", [](PyMapper& self, const py::object& mask) {
     const PixelMask m = pixel_mask_from(mask);
@@ -193,18 +207,19 @@ void bind_mapper_insertion(py::class_<PyMapper>& c) {
           return std::make_unique<PyMapper>(Mapper(preset, options));
         }),
         py::arg("preset"), py::arg("options") = GridOptions{});
-  c.def("insert", &insert_points_array, py::arg("points"), py::arg("threads") = 0,
+  c.def("insert", &insert_points_array, py::arg("points"), py::arg("threads") = 0, py::arg("mask") = py::none(),
         "Inserts points in the sensor frame (metres): an N x 3 or H x W x 3 array. float32 arrays whose points "
         "lie at one constant stride (C order, or slices like cloud[..., :3]) are read in place; other dtypes "
         "and layouts are converted to a float32 copy first. NaN/Inf/zero points are skipped and counted. "
-        "threads: 0 = all cores, at most 1024 (InvalidParameter otherwise). Releases the GIL.");
+        "threads: 0 = all cores, at most 1024 (InvalidParameter otherwise). mask: as set_mask, for this and later "
+        "inserts (None: keep the mask in place). Releases the GIL.");
   c.def("insert_depth", &insert_depth_array, py::arg("depth"), py::arg("intrinsics"), py::arg("scale") = 1.0,
-        py::arg("threads") = 0,
+        py::arg("threads") = 0, py::arg("mask") = py::none(),
         "Inserts an H x W depth image (z-depth; value * scale = metres, 0 or NaN = no return) through its "
         "intrinsics. A C-contiguous float32 image is read in place; others (e.g. uint16 millimetres with "
         "scale=0.001) are converted first. Raises InvalidParameter for a scale under which the median return lies "
         "outside the depth range while millimetres or metres would not, and for intrinsics of another camera "
-        "than the preset's. Releases the GIL.");
+        "than the preset's. mask: as in insert. Releases the GIL.");
 }
 
 void bind_mapper_properties(py::class_<PyMapper>& c) {

@@ -221,3 +221,17 @@ def test_mask_leaves_rays_out_of_insertion_ranking_and_plan(sample):
     mapper.clear_mask()
     assert mapper.column_mask is None
     assert np.all(np.isfinite(mapper.improvement()[:, mapper.width // 2:]))
+
+
+def test_insert_takes_the_mask_as_a_keyword(sample):
+    """insert_depth(..., mask=) is set_mask then insert_depth: the same maps and counts."""
+    depth, intrinsics = sample
+    mask = np.zeros(depth.shape, dtype=np.uint8)
+    mask[: depth.shape[0] // 2] = 1
+    a = oi.Mapper(oi.kinect_v1(intrinsics))
+    report = a.insert_depth(depth, intrinsics, mask=mask)
+    b = oi.Mapper(oi.kinect_v1(intrinsics))
+    b.set_mask(mask)
+    assert report.points_masked == b.insert_depth(depth, intrinsics).points_masked > 0
+    assert np.array_equal(a.column_mask, mask.astype(bool))
+    np.testing.assert_array_equal(a.improvement(), b.improvement())
