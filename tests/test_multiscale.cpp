@@ -4,6 +4,7 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/multiscale.hpp"
 #include "occ_improve/virtual_sensor.hpp"
+#include "support/small_camera.hpp"
 
 #include <gtest/gtest.h>
 
@@ -14,15 +15,7 @@
 namespace occ_improve {
 namespace {
 
-PinholeIntrinsics small_camera() {
-  PinholeIntrinsics k;
-  k.width = 64;
-  k.height = 48;
-  k.fx = k.fy = 60;
-  k.cx = 31.5;
-  k.cy = 23.5;
-  return k;
-}
+using test::small_camera;
 
 // Rows 0-15: no return (no data); below, a wall at 2 m for u < 42 and a box face at 1 m from u = 42 on.
 std::vector<float> step_scene(const PinholeIntrinsics& k) {

@@ -4,6 +4,7 @@
 #include "occ_improve/planner.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/virtual_sensor.hpp"
+#include "support/small_camera.hpp"
 
 #include <gtest/gtest.h>
 
@@ -222,15 +223,7 @@ TEST(Planner, ClosedLoopWithTheReturnModelStopsAskingSilentRays) {
 }
 
 // Strategy (g), coarse_to_fine, on a camera of 64 x 48 columns.
-PinholeIntrinsics small_camera() {
-  PinholeIntrinsics k;
-  k.width = 64;
-  k.height = 48;
-  k.fx = k.fy = 60;
-  k.cx = 31.5;
-  k.cy = 23.5;
-  return k;
-}
+using test::small_camera;
 
 PlanRequest coarse_to_fine(int budget, RefineBy by = RefineBy::both) {
   PlanRequest r;

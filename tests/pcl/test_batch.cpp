@@ -8,6 +8,7 @@
 #include "occ_improve/sample_scene.hpp"
 #include "support/csv_table.hpp"
 #include "support/temp_folder.hpp"
+#include "support/tool_run.hpp"
 
 #include <gtest/gtest.h>
 #include <pcl/io/pcd_io.h>
@@ -30,15 +31,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct ToolRun {
-  int exit_code;
-  std::string out, err;
-};
-
-std::string contents(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using ToolRun = test::ToolStreams;
+using test::file_contents;
 
 std::size_t count_of(const std::string& text, const std::string& what) {
   std::size_t n = 0;
@@ -49,13 +43,7 @@ std::size_t count_of(const std::string& text, const std::string& what) {
 class Batch : public test::TempFolderTest {
 protected:
   ToolRun run(const std::string& executable, const std::string& arguments) {
-    const std::string command = "cd " + folder_.string() + " && " + executable + " " + arguments + " > stdout.log 2> stderr.log";
-    const int status = std::system(command.c_str());
-    ToolRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, contents(folder_ / "stdout.log"),
-              contents(folder_ / "stderr.log")};
-    fs::remove(folder_ / "stdout.log");
-    fs::remove(folder_ / "stderr.log");
-    return r;
+    return test::run_tool_in(folder_, executable, arguments);
   }
   // The built-in scene with noise seed `seed` (frames of one view that differ in their noise), as an
   // organized PCD in `folder`.
@@ -180,11 +168,11 @@ TEST_F(Batch, PerFileFoldersFollowTheNeverOverwriteRule) {
   EXPECT_NE(r.err.find("-output_dir, the folder of 'in/frame_b.pcd'"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("[1/"), std::string::npos) << r.out;
   EXPECT_FALSE(fs::exists(folder_ / "out" / "frame_a" / "regions.csv"));
-  EXPECT_EQ(contents(folder_ / "out" / "frame_b" / "mine.txt"), "a user's note\n");
+  EXPECT_EQ(file_contents(folder_ / "out" / "frame_b" / "mine.txt"), "a user's note\n");
 
   r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-input_dir in -output_dir out -q -overwrite");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(contents(folder_ / "out" / "frame_b" / "mine.txt"), "a user's note\n");
+  EXPECT_EQ(file_contents(folder_ / "out" / "frame_b" / "mine.txt"), "a user's note\n");
   EXPECT_EQ(test::read_csv(folder_ / "out" / "frame_a" / "regions.csv").rows, first.rows);
   EXPECT_FALSE(test::read_csv(folder_ / "out" / "frame_b" / "regions.csv").rows.empty());
 }
@@ -239,11 +227,11 @@ TEST_F(Batch, InterruptKeepsTheFilesDone) {
   ASSERT_TRUE(fs::exists(done));
   while (!fs::exists(folder_ / "pid")) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   ASSERT_FALSE(fs::exists(folder_ / "rc")) << "finished before the signal";
-  ::kill(static_cast<pid_t>(std::stol(contents(folder_ / "pid"))), SIGINT);
+  ::kill(static_cast<pid_t>(std::stol(file_contents(folder_ / "pid"))), SIGINT);
   for (int i = 0; i < 3000 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
   ASSERT_TRUE(fs::exists(folder_ / "rc"));
-  EXPECT_EQ(std::stoi(contents(folder_ / "rc")), 130) << contents(folder_ / "stderr.log");
-  EXPECT_NE(contents(folder_ / "stdout.log").find("batch interrupted at"), std::string::npos);
+  EXPECT_EQ(std::stoi(file_contents(folder_ / "rc")), 130) << file_contents(folder_ / "stderr.log");
+  EXPECT_NE(file_contents(folder_ / "stdout.log").find("batch interrupted at"), std::string::npos);
   EXPECT_FALSE(test::read_csv(done).rows.empty());
   EXPECT_FALSE(fs::exists(folder_ / "out" / "frame_7"));
   std::size_t folders = 0;

@@ -12,6 +12,7 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/presets.hpp"
+#include "support/real_frames.hpp"
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>
@@ -24,26 +25,6 @@
 
 namespace occ_improve {
 namespace {
-
-struct RealFrame {
-  std::string relative, intrinsics_file;
-};
-
-const RealFrame kFrames[] = {
-    {"kinect/pcl_tutorials/pairwise/capture0001.pcd", ""},
-    {"kinect/pcl_test/office1.pcd", ""},
-    {"kinect/pcl_test/five_people.pcd", ""},
-    {"segmentation/mosd_learn/learn0.pcd", ""},
-    {"sequences/7scenes_redkitchen/frames/frame-000150.depth.png", "sequences/7scenes_redkitchen/camera-intrinsics.txt"},
-};
-
-LoadedFrame load_with_camera(const RealFrame& f, const std::string& path) {
-  if (!f.intrinsics_file.empty())
-    return load_depth_frame(path, read_intrinsics_file(test::data_file(f.intrinsics_file)), DepthEncoding::millimetres);
-  LoadedFrame frame = load_pcd_frame(path);
-  frame.intrinsics = estimate_intrinsics(frame.cloud);
-  return frame;
-}
 
 /// Shares of agreement (image and map measures) for one rule.
 struct Agreement {
@@ -64,11 +45,11 @@ TEST(DepthPredictionReal, LinearAgreesAtLeastAsWellAsNearestAtFivePercent) {
   if (test::data_dir().empty()) GTEST_SKIP() << "real data not found (set OCC_IMPROVE_DATA_DIR)";
   std::printf("%-36s %9s %9s %9s %9s %8s\n", "frame (5 % samples)", "img near", "img lin", "map near", "map lin", "samples");
   int frames = 0;
-  for (const RealFrame& f : kFrames) {
+  for (const test::RealFrame& f : test::kRealFrames) {
     const std::string path = test::data_file(f.relative);
     if (path.empty()) continue;
     ++frames;
-    const LoadedFrame frame = load_with_camera(f, path);
+    const LoadedFrame frame = test::load_with_camera(f, path);
     ASSERT_TRUE(frame.cloud.isOrganized()) << path;
     const int w = static_cast<int>(frame.cloud.width), h = static_cast<int>(frame.cloud.height);
     const SensorPreset preset = kinect_v1(*frame.intrinsics);

@@ -19,6 +19,7 @@
 #include "occ_improve/presets.hpp"
 #include "occ_improve/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
+#include "support/real_frames.hpp"
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>
@@ -125,34 +126,13 @@ void print_row(const std::string& name, const std::string& preset, const Levels&
               l.with_data_p90 / l.no_data_level, l.top_share_near_no_data, l.region_share_near_no_data);
 }
 
-struct RealFrame {
-  std::string relative, intrinsics_file;
-};
-
-const RealFrame kFrames[] = {
-    {"kinect/pcl_tutorials/pairwise/capture0001.pcd", ""},
-    {"kinect/pcl_test/office1.pcd", ""},
-    {"kinect/pcl_test/five_people.pcd", ""},
-    {"segmentation/mosd_learn/learn0.pcd", ""},
-    {"sequences/7scenes_redkitchen/frames/frame-000150.depth.png", "sequences/7scenes_redkitchen/camera-intrinsics.txt"},
-};
-
-// The frame and its camera: the dataset's intrinsics file, or fitted to the organized PCD.
-LoadedFrame load_with_camera(const RealFrame& f, const std::string& path) {
-  if (!f.intrinsics_file.empty())
-    return load_depth_frame(path, read_intrinsics_file(test::data_file(f.intrinsics_file)), DepthEncoding::millimetres);
-  LoadedFrame frame = load_pcd_frame(path);
-  frame.intrinsics = estimate_intrinsics(frame.cloud);
-  return frame;
-}
-
 TEST(MapQuality, RealFramesSeparateKnownFromUnknown) {
   if (test::data_dir().empty()) GTEST_SKIP() << "real data not found (set OCC_IMPROVE_DATA_DIR)";
   print_header();
-  for (const RealFrame& f : kFrames) {
+  for (const test::RealFrame& f : test::kRealFrames) {
     const std::string path = test::data_file(f.relative);
     if (path.empty()) continue;
-    const LoadedFrame frame = load_with_camera(f, path);
+    const LoadedFrame frame = test::load_with_camera(f, path);
     for (const SensorPreset& preset : {kinect_v1(*frame.intrinsics), kinect_v1_paper()}) {
       Mapper mapper(preset);
       mapper.insert(span_of(frame.cloud));
@@ -210,7 +190,7 @@ TEST(MapQuality, RepeatedFramesOfOneViewLowerTheKnownRaysOnly) {
 // depth_max) and beyond it, for both presets.
 TEST(MapQuality, GridEndAndBeyondForTheColourGuide) {
   OCC_REQUIRE_DATA(path, "kinect/pcl_test/five_people.pcd");  // much of it beyond 5 m, some beyond 8 m
-  const LoadedFrame frame = load_with_camera({"kinect/pcl_test/five_people.pcd", ""}, path);
+  const LoadedFrame frame = test::load_with_camera({"kinect/pcl_test/five_people.pcd", ""}, path);
   std::printf("%-16s %-10s %7s %7s %7s %7s\n", "preset", "rays", "count", "p50", "p99", "max");
   for (const SensorPreset& preset : {kinect_v1(*frame.intrinsics), kinect_v1_paper()}) {
     Mapper mapper(preset);

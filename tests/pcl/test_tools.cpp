@@ -10,6 +10,7 @@
 #include "occ_improve/sample_scene.hpp"
 #include "support/csv_table.hpp"
 #include "support/temp_folder.hpp"
+#include "support/tool_run.hpp"
 #include "support/test_data.hpp"
 
 #include <Eigen/Geometry>
@@ -38,26 +39,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct ToolRun {
-  int exit_code;
-  std::string out, err;
-};
-
-std::string contents(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using ToolRun = test::ToolStreams;
+using test::file_contents;
 
 class Tools : public test::TempFolderTest {
 protected:
   ToolRun run(const std::string& executable, const std::string& arguments) {
-    const std::string command = "cd " + folder_.string() + " && " + executable + " " + arguments + " > stdout.log 2> stderr.log";
-    const int status = std::system(command.c_str());
-    ToolRun r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, contents(folder_ / "stdout.log"),
-              contents(folder_ / "stderr.log")};
-    fs::remove(folder_ / "stdout.log");
-    fs::remove(folder_ / "stderr.log");
-    return r;
+    return test::run_tool_in(folder_, executable, arguments);
   }
   // An organized 64 x 48 labelled cloud whose every point is `value` (NaN, 0, or a wall at 2 m when 0 < value).
   std::string write_cloud(const std::string& name, float value) {
@@ -94,20 +82,20 @@ protected:
     // slow start on a loaded machine does not meet the default handler.
     for (int i = 0; i < 500 && !staging_left() && !fs::exists(folder_ / "rc"); ++i)
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    const pid_t pid = static_cast<pid_t>(std::stol(contents(folder_ / "pid")));
-    EXPECT_FALSE(fs::exists(folder_ / "rc")) << "finished before the signal: " << contents(folder_ / "stderr.log");
+    const pid_t pid = static_cast<pid_t>(std::stol(file_contents(folder_ / "pid")));
+    EXPECT_FALSE(fs::exists(folder_ / "rc")) << "finished before the signal: " << file_contents(folder_ / "stderr.log");
     const auto sent = std::chrono::steady_clock::now();
     ::kill(pid, signal);
     SignalledRun r;
     for (int i = 0; i < 1000 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     r.seconds_to_exit = std::chrono::duration<double>(std::chrono::steady_clock::now() - sent).count();
     if (fs::exists(folder_ / "rc")) {
-      r.exit_code = std::stoi(contents(folder_ / "rc"));
+      r.exit_code = std::stoi(file_contents(folder_ / "rc"));
     } else {
       ::kill(pid, SIGKILL);
       for (int i = 0; i < 100 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
-    r.out = contents(folder_ / "stdout.log") + contents(folder_ / "stderr.log");
+    r.out = file_contents(folder_ / "stdout.log") + file_contents(folder_ / "stderr.log");
     return r;
   }
   // Whether a staging folder or file of an output (".NAME.tmp-PID", ".NAME.staged-PID-*", "NAME.partial-PID-*")
@@ -332,10 +320,10 @@ TEST_F(Tools, PosesAreAppliedWhereverFramesAreFused) {
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, posed + " -no_poses -o unposed").exit_code, 0);
   ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + posed + " -o live").exit_code, 0);
   // The same frames, moved the same way, give the same map in both tools; ignoring the poses does not.
-  EXPECT_EQ(contents(folder_ / "map/surface.pcd"), contents(folder_ / "live/surface.pcd"));
-  EXPECT_NE(contents(folder_ / "map/surface.pcd"), contents(folder_ / "unposed/surface.pcd"));
+  EXPECT_EQ(file_contents(folder_ / "map/surface.pcd"), file_contents(folder_ / "live/surface.pcd"));
+  EXPECT_NE(file_contents(folder_ / "map/surface.pcd"), file_contents(folder_ / "unposed/surface.pcd"));
   ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, posed + " -o live_files").exit_code, 0);  // positional: the same
-  EXPECT_EQ(contents(folder_ / "map/surface.pcd"), contents(folder_ / "live_files/surface.pcd"));
+  EXPECT_EQ(file_contents(folder_ / "map/surface.pcd"), file_contents(folder_ / "live_files/surface.pcd"));
 
   // occ_to_octomap: the tree in the poses' world frame, i.e. the camera-frame tree moved by the first pose.
   const std::string one = seven_scenes_folder(folder_ / "one", frames_dir, {"000150"});
@@ -367,7 +355,7 @@ TEST_F(Tools, APcdViewpointIsTheSensorPose) {
   // The same rays see the same surfaces: the same regions of the same size and improvement (the float
   // round trip through the pose moves points by < 1 um, so the fitted camera, and the angles, by ~1e-4).
   const auto regions = [&](const char* folder) {
-    std::istringstream csv(contents(folder_ / folder / "regions.csv"));
+    std::istringstream csv(file_contents(folder_ / folder / "regions.csv"));
     std::vector<std::string> ranks_sums_areas;
     for (std::string line; std::getline(csv, line);)
       ranks_sums_areas.push_back(line.substr(0, line.find(',', line.find(',', line.find(',') + 1) + 1)));
@@ -467,12 +455,12 @@ TEST_F(Tools, SigtermStopsCleanlyWithTheSummaryAndAnExitCodeOfTheSignal) {
                               " echo $? > rc.tmp; mv rc.tmp rc) > /dev/null 2>&1 &";
   ASSERT_EQ(std::system(command.c_str()), 0);
   std::this_thread::sleep_for(std::chrono::milliseconds(2500));
-  const pid_t pid = static_cast<pid_t>(std::stol(contents(folder_ / "pid")));
+  const pid_t pid = static_cast<pid_t>(std::stol(file_contents(folder_ / "pid")));
   ASSERT_EQ(::kill(pid, SIGTERM), 0);
   for (int i = 0; i < 100 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
   ASSERT_TRUE(fs::exists(folder_ / "rc")) << "still running 10 s after SIGTERM";
-  EXPECT_EQ(std::stoi(contents(folder_ / "rc")), 128 + SIGTERM);
-  const std::string out = contents(folder_ / "stdout.log") + contents(folder_ / "stderr.log");
+  EXPECT_EQ(std::stoi(file_contents(folder_ / "rc")), 128 + SIGTERM);
+  const std::string out = file_contents(folder_ / "stdout.log") + file_contents(folder_ / "stderr.log");
   EXPECT_NE(out.find("Stopped: interrupted"), std::string::npos) << out;
   EXPECT_NE(out.find("interrupted by SIGTERM"), std::string::npos) << out;
   EXPECT_NE(out.find("Frames: "), std::string::npos) << "the summary so far: " << out;
@@ -735,7 +723,7 @@ bool starts_with(const std::string& text, const std::string& prefix) { return te
 // -save replaced anything, the run's own input included, and occ_to_octomap -save X -o X lost the map.
 TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
   const std::string wall = write_cloud("wall.pcd", 2.0f);
-  const std::string cloud_bytes = contents(wall);
+  const std::string cloud_bytes = file_contents(wall);
   std::ofstream(file("notes.txt")) << "my notes";
   for (const std::string& args : {wall + " -o out -save wall.pcd", wall + " -o out -save wall.pcd -overwrite",
                                   wall + " -o out -save notes.txt"}) {
@@ -744,15 +732,15 @@ TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
     EXPECT_NE(r.err.find("-save"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(folder_ / "out")) << "refused before any work: " << args;
   }
-  EXPECT_EQ(contents(wall), cloud_bytes);
-  EXPECT_EQ(contents(folder_ / "notes.txt"), "my notes");
+  EXPECT_EQ(file_contents(wall), cloud_bytes);
+  EXPECT_EQ(file_contents(folder_ / "notes.txt"), "my notes");
   EXPECT_NE(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save notes.txt").err.find("-overwrite"), std::string::npos);
   // A map it wrote is replaced; with -overwrite, so is another file.
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save m.occmap").exit_code, 0);
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save m.occmap").exit_code, 0);
-  EXPECT_TRUE(starts_with(contents(folder_ / "m.occmap"), "OCCIMAP"));
+  EXPECT_TRUE(starts_with(file_contents(folder_ / "m.occmap"), "OCCIMAP"));
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save notes.txt -overwrite").exit_code, 0);
-  EXPECT_TRUE(starts_with(contents(folder_ / "notes.txt"), "OCCIMAP"));
+  EXPECT_TRUE(starts_with(file_contents(folder_ / "notes.txt"), "OCCIMAP"));
 
   // A file inside an input folder, in the live tool.
   fs::create_directory(folder_ / "frames");
@@ -760,7 +748,7 @@ TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
   const ToolRun live = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -o live -save frames/f100.pcd -overwrite");
   EXPECT_EQ(live.exit_code, 1);
   EXPECT_NE(live.err.find("input folder"), std::string::npos) << live.err;
-  EXPECT_EQ(contents(folder_ / "frames" / "f100.pcd"), cloud_bytes);
+  EXPECT_EQ(file_contents(folder_ / "frames" / "f100.pcd"), cloud_bytes);
 
   // occ_to_octomap: -o and -save never the same file, -o never a file OctoMap did not write.
   const ToolRun same = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -save same.bt -o same.bt");
@@ -769,18 +757,18 @@ TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
   const ToolRun tree = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o notes.bt");
   EXPECT_EQ(tree.exit_code, 0);
   EXPECT_EQ(tree.err.find("done."), std::string::npos) << "OctoMap's writer printed on stderr: " << tree.err;
-  EXPECT_TRUE(starts_with(contents(folder_ / "notes.bt"), "# Octomap OcTree"));
+  EXPECT_TRUE(starts_with(file_contents(folder_ / "notes.bt"), "# Octomap OcTree"));
   EXPECT_GT(octomap::OcTree(file("notes.bt")).size(), 0u) << "OctoMap reads what we wrote";
   EXPECT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o notes.bt").exit_code, 0) << "its own tree is replaced";
   octomap::OcTree(0.1).writeBinary(file("theirs.bt"));  // a tree another program wrote
-  const std::string theirs = contents(folder_ / "theirs.bt");
+  const std::string theirs = file_contents(folder_ / "theirs.bt");
   EXPECT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o theirs.bt").exit_code, 1);
-  EXPECT_EQ(contents(folder_ / "theirs.bt"), theirs);
+  EXPECT_EQ(file_contents(folder_ / "theirs.bt"), theirs);
   std::ofstream(file("mine.bt")) << "not a tree";
   const ToolRun foreign = run(OCC_TO_OCTOMAP_EXECUTABLE, wall + " -o mine.bt");
   EXPECT_EQ(foreign.exit_code, 1);
   EXPECT_NE(foreign.err.find("-overwrite"), std::string::npos) << foreign.err;
-  EXPECT_EQ(contents(folder_ / "mine.bt"), "not a tree");
+  EXPECT_EQ(file_contents(folder_ / "mine.bt"), "not a tree");
 }
 
 // A failed -save was reported after -o had been replaced: now every target is checked first and nothing is
@@ -788,14 +776,14 @@ TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
 TEST_F(Tools, AFailedSaveCommitsNothing) {
   const std::string wall = write_cloud("wall.pcd", 2.0f);
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out").exit_code, 0);
-  const std::string rays_before = contents(folder_ / "out" / "rays.csv");
+  const std::string rays_before = file_contents(folder_ / "out" / "rays.csv");
   std::ofstream(folder_ / "out" / "rays.csv", std::ios::app) << "# the previous run's\n";
-  const std::string marked = contents(folder_ / "out" / "rays.csv");
+  const std::string marked = file_contents(folder_ / "out" / "rays.csv");
   fs::create_directory(folder_ / "a_folder");
   const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out -save a_folder -overwrite");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("a_folder"), std::string::npos) << r.err;
-  EXPECT_EQ(contents(folder_ / "out" / "rays.csv"), marked) << "the previous output is untouched";
+  EXPECT_EQ(file_contents(folder_ / "out" / "rays.csv"), marked) << "the previous output is untouched";
   EXPECT_FALSE(rays_before.empty());
 }
 
@@ -823,10 +811,10 @@ TEST_F(Tools, AFullDiskIsNamedAndCommitsNothing) {
 TEST_F(Tools, TheOutputOfARunKilledBetweenItsRenamesIsRecovered) {
   const std::string wall = write_cloud("wall.pcd", 2.0f);
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out").exit_code, 0);
-  const std::string rays = contents(folder_ / "out" / "rays.csv");
+  const std::string rays = file_contents(folder_ / "out" / "rays.csv");
   fs::rename(folder_ / "out", folder_ / ".out.tmp-999999999.old");  // PID beyond pid_max: a dead run
   EXPECT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, "typo.pcd -o out").exit_code, 1);
-  EXPECT_EQ(contents(folder_ / "out" / "rays.csv"), rays);
+  EXPECT_EQ(file_contents(folder_ / "out" / "rays.csv"), rays);
   EXPECT_FALSE(fs::exists(folder_ / ".out.tmp-999999999.old"));
 }
 
@@ -843,14 +831,14 @@ TEST_F(Tools, OutputLinksAreWrittenThroughAndASaveInsideTheOutputIsItsOwn) {
     const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o r1 -save r1/m.occmap");
     ASSERT_EQ(r.exit_code, 0) << "run " << i << ": " << r.err;
   }
-  EXPECT_TRUE(starts_with(contents(folder_ / "r1" / "m.occmap"), "OCCIMAP"));
-  EXPECT_NE(contents(folder_ / "r1" / ".occ_improve_output").find("\nm.occmap\n"), std::string::npos);
+  EXPECT_TRUE(starts_with(file_contents(folder_ / "r1" / "m.occmap"), "OCCIMAP"));
+  EXPECT_NE(file_contents(folder_ / "r1" / ".occ_improve_output").find("\nm.occmap\n"), std::string::npos);
   // Continuing from that map into the same folder would delete it with the folder: refused before work.
-  const std::string map = contents(folder_ / "r1" / "m.occmap");
+  const std::string map = file_contents(folder_ / "r1" / "m.occmap");
   const ToolRun resume = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load r1/m.occmap " + wall + " -o r1");
   EXPECT_EQ(resume.exit_code, 1);
   EXPECT_NE(resume.err.find("holds the input"), std::string::npos) << resume.err;
-  EXPECT_EQ(contents(folder_ / "r1" / "m.occmap"), map);
+  EXPECT_EQ(file_contents(folder_ / "r1" / "m.occmap"), map);
   // A -save inside -o that could replace an output, or not directly in it, is refused before work.
   for (const char* save : {"r2/rays.csv", "r2/sub/m.occmap", "r2"}) {
     const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o r2 -save " + save);

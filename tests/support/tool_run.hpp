@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <string>
 
@@ -25,6 +26,32 @@ inline ToolRun run_tool_command(const std::string& executable, const std::string
   std::stringstream text;
   text << in.rdbuf();
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, text.str()};
+}
+
+/// The whole of a file (empty when it cannot be read).
+inline std::string file_contents(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+/// A tool's outcome with its two streams apart.
+struct ToolStreams {
+  int exit_code;  ///< -1 when the tool did not exit normally (a crash)
+  std::string out, err;
+};
+
+/// `executable arguments` run from `folder` (relative paths resolve there), stdout and stderr captured
+/// through two logs in that folder, removed afterwards.
+inline ToolStreams run_tool_in(const std::filesystem::path& folder, const std::string& executable,
+                               const std::string& arguments) {
+  const std::string command =
+      "cd " + folder.string() + " && " + executable + " " + arguments + " > stdout.log 2> stderr.log";
+  const int status = std::system(command.c_str());
+  ToolStreams r{WIFEXITED(status) ? WEXITSTATUS(status) : -1, file_contents(folder / "stdout.log"),
+                file_contents(folder / "stderr.log")};
+  std::filesystem::remove(folder / "stdout.log");
+  std::filesystem::remove(folder / "stderr.log");
+  return r;
 }
 
 }  // namespace occ_improve::test
