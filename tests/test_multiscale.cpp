@@ -43,6 +43,7 @@ protected:
     clean.sigma_depth_per_m2 = 0;
     clean.disparity_step_px = 0;
     VirtualSensor sensor(step_scene(small_camera()), small_camera(), clean);
+    mapper.pyramid();  // asked before the shots: kept incrementally by them from then on
     acquire(mapper, sensor, 14, 7);  // every pixel twice, in 14 sparse shots
   }
   Mapper mapper{kinect_v1(small_camera())};

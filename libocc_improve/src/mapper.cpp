@@ -24,7 +24,11 @@ Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(g
   grid_.take_changed_columns();  // the surface below already accounts for everything in the grid
   surface_ = compute_surface(grid_);
   improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
-  pyramid_ = ImprovementPyramid(improvement_, surface_);
+}
+
+const ImprovementPyramid& Mapper::pyramid() const {
+  if (!pyramid_) pyramid_.emplace(improvement_, surface_);
+  return *pyramid_;
 }
 
 MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options, const PixelMask& mask) {
@@ -39,14 +43,14 @@ void Mapper::set_mask(const PixelMask& mask) {
   // Columns the old mask hid may now be inside: their values come back only from a full computation.
   if (widened) improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
   mask_improvement(column_mask_, improvement_);
-  pyramid_ = ImprovementPyramid(improvement_, surface_);  // every block may have changed
+  pyramid_.reset();  // every block may have changed: rebuilt when next asked
 }
 
 void Mapper::clear_mask() {
   if (column_mask_.empty()) return;
   column_mask_.clear();
   improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
-  pyramid_ = ImprovementPyramid(improvement_, surface_);
+  pyramid_.reset();
 }
 
 MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
@@ -65,9 +69,11 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
   const std::vector<ColumnIndex> rays = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_);
   report.rays_recomputed = rays.size();
   mask_improvement(column_mask_, improvement_);  // the recomputed rays outside the mask stay NaN
-  // A block depends on its rays' improvement and its columns' surface: both lists (duplicates are merged).
-  changed.insert(changed.end(), rays.begin(), rays.end());
-  pyramid_.update(improvement_, surface_, changed);
+  if (pyramid_) {
+    // A block depends on its rays' improvement and its columns' surface: both lists (duplicates are merged).
+    changed.insert(changed.end(), rays.begin(), rays.end());
+    pyramid_->update(improvement_, surface_, changed);
+  }
   report.improvement_seconds = seconds_since(start);
   return report;
 }

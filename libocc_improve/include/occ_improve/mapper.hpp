@@ -1,7 +1,8 @@
 #pragma once
 // The facade for "insert frames, ask where to look": a grid, its sensor model, the surface and the
 // improvement map kept up to date together. No logic of its own: insert() is insert_points (keeping the
-// surface current) + update_improvement + the multi-scale pyramid's update (multiscale.hpp).
+// surface current) + update_improvement + the multi-scale pyramid's update (multiscale.hpp), once
+// pyramid() was asked.
 #include "occ_improve/grid.hpp"
 #include "occ_improve/improvement.hpp"
 #include "occ_improve/integrate.hpp"
@@ -12,12 +13,13 @@
 #include "occ_improve/surface.hpp"
 
 #include <cstddef>
+#include <optional>
 
 namespace occ_improve {
 
 struct MapperReport {
   InsertionReport insertion;  ///< its seconds include the surface update, done column by column inside it
-  double improvement_seconds = 0;  ///< the incremental improvement and the pyramid's update
+  double improvement_seconds = 0;  ///< the incremental improvement, and the pyramid's update once asked
   std::size_t surface_columns_changed = 0, rays_recomputed = 0;
   std::size_t points_masked = 0;  ///< valid points outside the mask, left out before the insertion
 };
@@ -49,7 +51,10 @@ public:
   const SurfaceMap& surface() const { return surface_; }
   const ImprovementMap& improvement() const { return improvement_; }
   /// The improvement on blocks of 2-16 columns and the depth samples' moments, kept with the map.
-  const ImprovementPyramid& pyramid() const { return pyramid_; }
+  /// The multi-scale improvement (multiscale.hpp). Built on the first call, then kept up to date by every
+  /// insertion, so that a Mapper no coarse-to-fine planner or filter asks never pays for it (~16 ms of a
+  /// 640 x 480 frame). Like the other accessors, not to be called while another thread inserts.
+  const ImprovementPyramid& pyramid() const;
 
 private:
   SphericalGrid grid_;
@@ -57,7 +62,7 @@ private:
   SurfaceMap surface_;
   ImprovementMap improvement_;
   std::vector<std::uint8_t> column_mask_;  ///< empty: no mask
-  ImprovementPyramid pyramid_;
+  mutable std::optional<ImprovementPyramid> pyramid_;  ///< empty until pyramid() is first asked
 };
 
 }  // namespace occ_improve
