@@ -1,7 +1,7 @@
 // Inserts the built-in sample frame into a kinect_v1_paper grid and prints what happened.
-#include "occ_improve/integrate.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 
 #include <cstdio>
 

@@ -1,7 +1,7 @@
 // Maps one frame, saves the map, and resumes mapping from the saved file in a "later session": the
 // resumed mapper continues exactly where the first one stopped (map_io.hpp, docs/MAP_FORMAT.md).
 //   example_save_resume [MAP_FILE]     (default: sample.occmap in the current folder)
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/sample_scene.hpp"
 

@@ -1,7 +1,7 @@
 // write_file_atomically (atomic_file.hpp): complete files appear under the real name, failed writes
 // leave the previous file and no temporary behind.
 #include "support/temp_folder.hpp"
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <gtest/gtest.h>

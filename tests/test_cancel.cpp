@@ -1,14 +1,14 @@
 // Cancellation (cancel.hpp): a stop request makes every long loop of the library throw Cancelled
 // promptly, from the calling thread and from worker threads alike.
 #include "occ_improve/cancel.hpp"
-#include "occ_improve/depth_prediction.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 
 #include <gtest/gtest.h>
 

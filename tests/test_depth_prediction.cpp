@@ -1,8 +1,8 @@
 // predict_depth: nearest sample in chessboard distance within a radius; the linear rule over the samples'
 // Delaunay triangulation, never across a depth discontinuity; the triangulation itself.
-#include "occ_improve/depth_prediction.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
-#include "occ_improve/sample_triangulation.hpp"
+#include "occ_improve/planning/sample_triangulation.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // The insertion kernel's float exp/log (an internal header of the library) against double std::exp/log,
 // and the kernel's logit P_s profile against the double logit_opdf of sensor_model.hpp.
-#include "../libocc_improve/src/fast_math.hpp"  // internal: not installed, tested here directly
+#include "../libocc_improve/src/support/fast_math.hpp"  // internal: not installed, tested here directly
 
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 
 #include <gtest/gtest.h>
 

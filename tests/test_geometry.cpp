@@ -1,7 +1,7 @@
 // Spherical geometry: coordinates (SPEC 1), angular and depth binning (SPEC 2, 2b).
 #include "occ_improve/errors.hpp"
-#include "occ_improve/geometry.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // The sparse store: clamping options, memory cap, tiles, uniform runs, change tracking.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/grid.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/grid/grid.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <gtest/gtest.h>

@@ -1,11 +1,11 @@
 // The improvement map (eqs. 3-4, SPEC 7-8): the fast path against the dense double reference ray by
 // ray, the one-ray definition against the full map, the incremental update, and the paper's picture.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 #include "reference/reference.hpp"
 
 #include <gtest/gtest.h>

@@ -1,9 +1,9 @@
 // Insertion (eq. 2) and the surface (SPEC 6) against the dense reference, ray by ray.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 #include "reference/reference.hpp"
 
 #include <gtest/gtest.h>

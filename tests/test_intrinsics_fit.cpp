@@ -1,7 +1,7 @@
 // fit_intrinsics (intrinsics_fit.hpp): the camera of an organized cloud, and the residual that tells a
 // pinhole range image from a cloud that is not one.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
 
 #include <gtest/gtest.h>
 

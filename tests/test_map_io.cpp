@@ -1,13 +1,13 @@
 // Saving and loading maps (map_io.hpp): exact round trips on generated scenes, atomic saves, and every
 // kind of bad file refused with a typed error.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 #include "support/map_compare.hpp"
 
 #include <Eigen/Core>

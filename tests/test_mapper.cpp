@@ -1,6 +1,6 @@
 // The Mapper facade: insertion + incremental surface + incremental improvement equal full recomputation.
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <gtest/gtest.h>

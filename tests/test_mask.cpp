@@ -2,10 +2,10 @@
 // (NaN improvement), never ranked, never in a region, never planned; their points are left out.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/mask.hpp"
-#include "occ_improve/planner.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/grid/mask.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <gtest/gtest.h>

@@ -2,8 +2,8 @@
 // and settled, where it holds a depth transition, where it has no data; incremental = recomputed.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/multiscale.hpp"
-#include "occ_improve/virtual_sensor.hpp"
+#include "occ_improve/maps/multiscale.hpp"
+#include "occ_improve/sim/virtual_sensor.hpp"
 #include "support/small_camera.hpp"
 
 #include <gtest/gtest.h>

@@ -1,9 +1,9 @@
 // The planner: shapes, ties, the return-model discount, re-acquisition, the stop signal, bad requests.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/planner.hpp"
+#include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/virtual_sensor.hpp"
+#include "occ_improve/sim/virtual_sensor.hpp"
 #include "support/small_camera.hpp"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // Presets: the paper's numbers and the intrinsics-based kinect_v1 (SPEC 2, 2b).
 #include "occ_improve/errors.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <gtest/gtest.h>
 

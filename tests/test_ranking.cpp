@@ -1,9 +1,9 @@
 // Ranking: top rays, 8-connected regions, the stop signal.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/planner.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <gtest/gtest.h>

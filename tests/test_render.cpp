@@ -1,6 +1,6 @@
 // Rendering the maps into images (the PNG files of them: tests/io/test_png.cpp).
 #include "occ_improve/errors.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/sim/render.hpp"
 
 #include <gtest/gtest.h>
 

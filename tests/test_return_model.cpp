@@ -1,6 +1,6 @@
 // The return record and its Beta-Bernoulli return probability.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/return_model.hpp"
+#include "occ_improve/planning/return_model.hpp"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/segmentation.hpp"
+#include "occ_improve/segmentation/segmentation.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Eq. 1 evaluated stably in log space (SPEC 3) and the sensor model's parameters.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 #include "reference/reference.hpp"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // The virtual selective sensor: requested rays only, Kinect noise and quantisation, deterministic.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/virtual_sensor.hpp"
+#include "occ_improve/sim/virtual_sensor.hpp"
 
 #include <gtest/gtest.h>
 

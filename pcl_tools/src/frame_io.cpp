@@ -2,7 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/integrate.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
 #include "occ_improve/pcl/ply_header.hpp"
 #include "occ_improve/pcl/tiff_image.hpp"

@@ -2,7 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/planning/ranking.hpp"
 
 #include <pcl/filters/impl/filter_indices.hpp>
 

@@ -1,6 +1,6 @@
 #include "occ_improve/pcl/pcd_writer.hpp"
 
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 
 #include <pcl/io/pcd_io.h>
 

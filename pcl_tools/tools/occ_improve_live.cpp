@@ -3,7 +3,7 @@
 // occupancy and improvement maps written to a folder.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
@@ -12,10 +12,10 @@
 #include "occ_improve/tools/live_view.hpp"
 #include "occ_improve/tools/tool_frame_grabber.hpp"
 #include "occ_improve/tools/tool_options.hpp"
-#include "occ_improve/planner.hpp"
-#include "occ_improve/render.hpp"
-#include "occ_improve/return_model.hpp"
-#include "occ_improve/virtual_sensor.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/sim/render.hpp"
+#include "occ_improve/planning/return_model.hpp"
+#include "occ_improve/sim/virtual_sensor.hpp"
 
 #include <pcl/console/print.h>
 

@@ -3,15 +3,15 @@
 // images, the per-ray results as an organized PCD, and the ranked regions worth re-acquiring.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/tools/tool_options.hpp"
-#include "occ_improve/ranking.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/sim/render.hpp"
 
 #include <chrono>
 #include <cmath>

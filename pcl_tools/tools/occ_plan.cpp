@@ -2,14 +2,14 @@
 // acquire (a mask image and a rays CSV), the gain they are expected to bring and whether to stop.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/tools/tool_options.hpp"
-#include "occ_improve/planner.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/sim/render.hpp"
 
 
 #include <chrono>

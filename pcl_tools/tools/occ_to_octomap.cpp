@@ -1,8 +1,8 @@
 // occ_to_octomap: convert an occupancy grid, saved by save_map or built from range frames, into
 // an OctoMap file (.bt maximum likelihood, .ot full log-odds) at a chosen resolution, seen from a pose.
 #include "occ_improve/errors.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/octomap/export.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"

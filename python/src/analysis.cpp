@@ -2,9 +2,9 @@
 #include "arrays.hpp"
 #include "bindings.hpp"
 
-#include "occ_improve/ranking.hpp"
-#include "occ_improve/render.hpp"
-#include "occ_improve/segmentation.hpp"
+#include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/sim/render.hpp"
+#include "occ_improve/segmentation/segmentation.hpp"
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>

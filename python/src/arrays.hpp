@@ -2,8 +2,8 @@
 // numpy <-> library buffers. Inputs are read in place where the library can read the layout (float32,
 // native byte order, xyz contiguous, one constant positive stride between points); anything else is
 // converted once to a float32 C-contiguous copy, kept alive beside the span that reads it.
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>

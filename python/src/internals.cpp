@@ -4,7 +4,7 @@
 #include "arrays.hpp"
 #include "bindings.hpp"
 
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/planning/ranking.hpp"
 
 #include <pybind11/stl.h>
 

@@ -2,7 +2,7 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>

@@ -3,8 +3,8 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/mask.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/grid/mask.hpp"
 
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>

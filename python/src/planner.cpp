@@ -5,9 +5,9 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "occ_improve/intrinsics_fit.hpp"
-#include "occ_improve/planner.hpp"
-#include "occ_improve/return_model.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/planning/return_model.hpp"
 
 #include <pybind11/stl.h>
 

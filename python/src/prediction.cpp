@@ -3,7 +3,7 @@
 #include "arrays.hpp"
 #include "bindings.hpp"
 
-#include "occ_improve/depth_prediction.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <pybind11/stl.h>

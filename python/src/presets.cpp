@@ -2,8 +2,8 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "occ_improve/grid.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/grid/grid.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <pybind11/numpy.h>

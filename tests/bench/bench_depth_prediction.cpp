@@ -3,8 +3,8 @@
 // is the real capture0001 (its organized points' z), or the built-in sample for the `sample` rows.
 // Run: cmake --build <build> --target bench_depth_prediction && <build>/tests/bench_depth_prediction
 #include "bench_support.hpp"
-#include "occ_improve/depth_prediction.hpp"
-#include "occ_improve/sample_triangulation.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/planning/sample_triangulation.hpp"
 
 #include <cmath>
 #include <random>

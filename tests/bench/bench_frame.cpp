@@ -5,7 +5,7 @@
 // Counters: insert_ms (insertion + surface), improvement_ms, total_ms; targets on kinect_v1 with 2 threads:
 // 10 / 3 / 15 ms (30 ms end to end on 1 thread).
 #include "bench_support.hpp"
-#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
 #include "occ_improve/mapper.hpp"
 
 #include <benchmark/benchmark.h>

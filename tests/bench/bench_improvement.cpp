@@ -2,10 +2,10 @@
 // at 1 and 2 threads (target <= 3 ms with 2 threads), one ray, and the incremental update after a
 // second frame. Run: cmake --build <build> --target bench_improvement && <build>/tests/bench_improvement
 #include "bench_support.hpp"
-#include "occ_improve/improvement.hpp"
+#include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <benchmark/benchmark.h>

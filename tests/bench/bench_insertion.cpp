@@ -6,8 +6,8 @@
 // after one frame), B_per_col (store bytes per touched column), column_updates.
 #include "bench/bench_support.hpp"
 
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <benchmark/benchmark.h>
 

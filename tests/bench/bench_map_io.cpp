@@ -2,9 +2,9 @@
 // written to the system's temporary folder. Counters: file_MB, stored_voxels, touched_columns.
 #include "bench/bench_support.hpp"
 
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/map_io.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/io/map_io.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <benchmark/benchmark.h>
 

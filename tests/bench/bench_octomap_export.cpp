@@ -7,8 +7,8 @@
 // tree_MB (OcTree::memoryUsage).
 #include "bench/bench_support.hpp"
 
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <benchmark/benchmark.h>
 

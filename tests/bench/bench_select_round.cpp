@@ -5,9 +5,9 @@
 // the built-in sample; the virtual sensor looks at the noise-free sample.
 // Run: cmake --build <build> --target bench_select_round && <build>/tests/bench_select_round
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/planner.hpp"
+#include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sample_scene.hpp"
-#include "occ_improve/virtual_sensor.hpp"
+#include "occ_improve/sim/virtual_sensor.hpp"
 
 #include <benchmark/benchmark.h>
 

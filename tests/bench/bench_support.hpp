@@ -1,9 +1,9 @@
 #pragma once
 // Inputs shared by the benchmarks: the generated sample frame and the real frames in ../shared/data,
 // found through OCC_IMPROVE_DATA_DIR (environment), else the folder configured at build time.
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/intrinsics_fit.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <Eigen/Core>

@@ -1,6 +1,6 @@
 // A downstream program: uses the installed headers and libraries of every target it was given.
-#include <occ_improve/integrate.hpp>
-#include <occ_improve/surface.hpp>
+#include <occ_improve/integrate/integrate.hpp>
+#include <occ_improve/maps/surface.hpp>
 #ifdef HAVE_OCC_IO
 #include <occ_improve/io/png.hpp>
 #endif

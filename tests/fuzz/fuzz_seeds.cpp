@@ -1,8 +1,8 @@
 // Writes small valid inputs of every fuzzed format into DIR/<target>/, with the project's own writers
 // (and PCL's), as the starting points of `make fuzz`. Generated, so no data file is copied into the repo.
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "support/tiff_writer.hpp"
 
 #include <pcl/io/pcd_io.h>

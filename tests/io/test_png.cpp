@@ -3,7 +3,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 
 #include <gtest/gtest.h>

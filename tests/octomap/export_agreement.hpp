@@ -3,9 +3,9 @@
 // spherical grid says about a world point, what the export's rule (octomap/export.hpp) makes of a leaf,
 // estimated on a lattice of points inside it, and how an OcTree agrees with that. Written from the grid's
 // public geometry calls, independently of the exporter's loops.
-#include "occ_improve/grid.hpp"
+#include "occ_improve/grid/grid.hpp"
 #include "occ_improve/octomap/export.hpp"
-#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 
 #include <Eigen/Geometry>
 #include <octomap/OcTree.h>

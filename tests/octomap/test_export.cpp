@@ -4,9 +4,9 @@
 // leaves the caller's tree alone, and bad input is refused with typed errors and no half-written file.
 #include "support/temp_folder.hpp"
 #include "occ_improve/errors.hpp"
-#include "occ_improve/integrate.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/octomap/export.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "octomap/export_agreement.hpp"
 

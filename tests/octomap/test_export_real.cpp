@@ -5,10 +5,10 @@
 // few it does not are where the grid itself does not hold the point's voxel occupied (free space carved by
 // neighbouring rays at depth edges); every point whose voxel is occupied lies in an occupied leaf.
 // Needs PCL to read the frames: without it the tests skip.
-#include "occ_improve/integrate.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/octomap/export.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 #include "octomap/export_agreement.hpp"
 #include "support/test_data.hpp"
 

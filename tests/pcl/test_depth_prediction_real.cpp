@@ -6,12 +6,12 @@
 //    5 % points against the map of the whole frame (kinect_v1 with the frame's camera).
 // Held: on capture0001 (the frame the issue names) linear >= nearest both ways; on every frame linear
 // >= nearest in the image measure. Skips without the data folder.
-#include "occ_improve/depth_prediction.hpp"
-#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "support/real_frames.hpp"
 #include "support/test_data.hpp"
 

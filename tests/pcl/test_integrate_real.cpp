@@ -4,10 +4,10 @@
 //  - clamped mode on the pixel-native grid users run (kinect_v1, two successive frames): voxel by voxel
 //    within the documented bounds of the fast path's skips (issue 21).
 // The reference is dense and slow, so it runs on windows of the full grid (identical column extents).
-#include "occ_improve/integrate.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 #include "reference/reference.hpp"
 #include "support/test_data.hpp"
 

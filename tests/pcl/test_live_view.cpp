@@ -3,7 +3,7 @@
 // found where regions.csv puts them; Ctrl-C and a closed window end the run with its maps written; without
 // a display, one error line and nothing written.
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/sim/render.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "support/csv_table.hpp"
 #include "support/temp_folder.hpp"

@@ -1,12 +1,12 @@
 // Saved maps and the OctoMap export on real Kinect frames (../shared/data, skipped where absent): a PCD
 // capture in the paper preset and a 7-Scenes depth PNG in the kinect_v1 preset round-trip bit for bit
 // with the same surface and improvement maps, and the exported OcTree agrees with the grid.
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/octomap/export.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 #include "octomap/export_agreement.hpp"
 #include "support/map_compare.hpp"
 #include "support/test_data.hpp"

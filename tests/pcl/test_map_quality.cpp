@@ -12,12 +12,12 @@
 //    a ray with no data: the map points at what is unknown, not at the observed surface;
 //  - over repeated frames of one view the level of the rays with data falls, the no-data level stays;
 //  - the README's colour guide, as numbers, for both presets, grid end and beyond included.
-#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "support/real_frames.hpp"
 #include "support/test_data.hpp"

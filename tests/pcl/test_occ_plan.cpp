@@ -1,7 +1,7 @@
 // occ_plan end to end: the next shot from the sample and from a saved map with its return record, and
 // bad requests giving a one-line error naming the value and a non-zero exit.
-#include "occ_improve/depth_prediction.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/sample_scene.hpp"

@@ -1,7 +1,7 @@
 // Every command-line tool, run as a user runs it: the same outcome for the same bad input (exit code 1
 // and one error line naming the file), no crash on malformed files, and a clean stop on SIGINT/SIGTERM.
-#include "occ_improve/depth_prediction.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/io/png.hpp"

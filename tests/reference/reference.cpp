@@ -1,6 +1,6 @@
 #include "reference/reference.hpp"
 
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 
 #include <cmath>
 

@@ -2,9 +2,9 @@
 // The slow, obviously-correct reference of eqs. 1, 2 and the surface (SPEC 3-6): a dense grid of
 // log-odds in double, every voxel of every column in the angular window updated with eq. 1 evaluated
 // in long double, no depth truncation, no tables, no threads. The fast path is checked against it.
-#include "occ_improve/geometry.hpp"
-#include "occ_improve/grid.hpp"
-#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/grid/grid.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 
 #include <Eigen/Core>
 #include <vector>

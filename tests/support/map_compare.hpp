@@ -1,10 +1,10 @@
 #pragma once
 // Exact comparisons of grids and of the maps computed from them, for the map_io tests (generated scenes
 // in tests/test_map_io.cpp, real frames in tests/pcl/test_map_io_real.cpp).
-#include "occ_improve/grid.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/sensor_model.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/grid/grid.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
+#include "occ_improve/maps/surface.hpp"
 
 #include <gtest/gtest.h>
 

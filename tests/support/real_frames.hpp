@@ -1,7 +1,7 @@
 #pragma once
 // The five real frames the real-data tests share (one per dataset of ../shared/data), and how each is
 // loaded with its camera: the dataset's intrinsics file, or intrinsics fitted to the organized PCD.
-#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "support/test_data.hpp"
 

@@ -1,7 +1,7 @@
 #pragma once
 // A small pinhole camera (64 x 48 pixels, principal point at the centre) for unit tests that need a
 // pixel-native grid but not a full Kinect frame.
-#include "occ_improve/geometry.hpp"
+#include "occ_improve/geometry/geometry.hpp"
 
 namespace occ_improve::test {
 

@@ -1,50 +1,7 @@
 #pragma once
-// Saving and loading the spherical grid in a versioned binary format (docs/MAP_FORMAT.md): geometry,
-// sensor model, update mode and clamping, the sparse column contents, and a checksum over all of it.
-//
-// save_map writes a temporary file beside the target and renames it over the target only once it is
-// complete, so an interrupted save never leaves a half-written map under the real name.
-// load_map verifies magic, byte order, version, size and checksum before it trusts any field, then
-// checks every value against the geometry; it throws FormatError for a file that is not a valid map
-// (naming what is wrong) and IoError for a file that cannot be opened or read. Round trips are exact:
-// every voxel's log-odds comes back bit for bit.
-#include "occ_improve/grid.hpp"
-#include "occ_improve/return_model.hpp"
-#include "occ_improve/sensor_model.hpp"
-
-#include <cstdint>
-#include <string>
-
-namespace occ_improve {
-
-/// The format version this build writes. Version 2 added the angular binning and the camera, version 3
-/// the return record; version 1 maps (spherical, no camera) and version 1-2 maps (no return record) still
-/// load.
-constexpr std::uint32_t kMapFormatVersion = 3;
-constexpr std::uint32_t kOldestMapFormatVersion = 1;
-
-/// Writes `grid`, the sensor model it was built with and the return record of a selective sensor
-/// (return_model.hpp; a default-constructed record: none) to `path` (atomically: temp file + rename).
-/// Throws IoError when the folder is not writable or the write fails (the target is then untouched),
-/// InvalidInput when the record is not one of the grid's size (nothing is written).
-void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
-              const ReturnRecord& returns = ReturnRecord());
-
-/// Whether `path` starts with the map format's magic: a file save_map wrote (any version, perhaps corrupt).
-/// What the tools check before they replace a file with -save (nothing else a user owns is replaced).
-bool is_map_file(const std::string& path);
-
-struct LoadedMap {
-  SphericalGrid grid;
-  SensorModelParams model;
-  ReturnRecord returns;  ///< the saved record; an empty one of the grid's size when none was saved
-};
-
-/// Reads a map written by save_map. Throws IoError (cannot open/read) or FormatError (not a map,
-/// truncated, corrupt, other version, other byte order, inconsistent contents), ResourceLimit when the
-/// file or the grid its geometry describes may exceed `memory_cap_bytes` (checked before allocating).
-/// The loaded grid gets `memory_cap_bytes` as its cap: the cap stored in the file is not trusted, since
-/// a forged file (the checksum is easy to recompute) would raise its own.
-LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes = GridOptions{}.memory_cap_bytes);
-
-}  // namespace occ_improve
+// Deprecated include path, kept for one release (CHANGELOG.md, 0.2): include
+// "occ_improve/io/map_io.hpp" instead. Define OCC_IMPROVE_WARN_OLD_INCLUDES to be told where.
+#ifdef OCC_IMPROVE_WARN_OLD_INCLUDES
+#pragma message("occ_improve/map_io.hpp is deprecated: include occ_improve/io/map_io.hpp")
+#endif
+#include "occ_improve/io/map_io.hpp"

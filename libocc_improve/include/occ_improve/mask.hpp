@@ -1,49 +1,7 @@
 #pragma once
-// A validity / region-of-interest mask over the depth camera's pixels (nonzero = valid). Rays outside it
-// are treated as rays the sensor cannot observe (SPEC 2c): their points are not inserted, their
-// improvement is NaN, so they are never ranked, never in a region, never counted by the stop signal,
-// never taken by the planner and drawn grey (improvement.hpp, ranking.hpp, planner.hpp, render.hpp).
-//
-// Why not "finite pixels" by default: on a raw sensor frame the pixels without a return (shadows, dark or
-// specular surfaces) are exactly what the improvement map exists to find; only a cloud cropped on purpose
-// (mOSD's floor and walls set to NaN) wants its invalid pixels masked. finite_pixel_mask() builds that
-// mask when the caller says so (the tools' -mask finite).
-#include "occ_improve/geometry.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/integrate.hpp"
-
-#include <cstddef>
-#include <cstdint>
-#include <vector>
-
-namespace occ_improve {
-
-/// Row-major, one byte per camera pixel; nonzero = the pixel's ray counts.
-struct PixelMask {
-  int width = 0, height = 0;
-  std::vector<std::uint8_t> valid;
-  /// InvalidInput when `valid` does not hold width x height bytes or the size is not positive.
-  void validate() const;
-  std::size_t valid_count() const;
-};
-
-/// One byte per column of `geometry` (1 = inside the mask). Pixel-native grids: the pixel itself; spherical
-/// grids with a camera: the pixel the column's centre direction falls in (columns outside the image: 0).
-/// Throws InvalidParameter when the geometry has no camera (the paper preset: a mask names camera pixels),
-/// InvalidInput when the mask's size is not the camera's ("mask is W x H, the camera W x H").
-std::vector<std::uint8_t> mask_columns(const SphericalGeometry& geometry, const PixelMask& mask);
-
-/// The valid points of `points` whose column is outside `columns` (mask_columns) left out, the others
-/// copied to `kept` (x y z floats) in order; invalid and out-of-field points are kept, so that the
-/// insertion counts them as it always does. Returns how many were left out.
-std::size_t drop_masked_points(const SphericalGeometry& geometry, const std::vector<std::uint8_t>& columns,
-                               PointSpan points, std::vector<float>& kept);
-
-/// NaN improvement for every column outside `columns` (empty: none), as for columns no pixel can see.
-void mask_improvement(const std::vector<std::uint8_t>& columns, ImprovementMap& improvement);
-
-/// The mask of an organized frame's valid points (SPEC 1: finite, not the origin): `points` holds
-/// width x height points in row-major pixel order. InvalidInput when the count does not match.
-PixelMask finite_pixel_mask(PointSpan points, int width, int height);
-
-}  // namespace occ_improve
+// Deprecated include path, kept for one release (CHANGELOG.md, 0.2): include
+// "occ_improve/grid/mask.hpp" instead. Define OCC_IMPROVE_WARN_OLD_INCLUDES to be told where.
+#ifdef OCC_IMPROVE_WARN_OLD_INCLUDES
+#pragma message("occ_improve/mask.hpp is deprecated: include occ_improve/grid/mask.hpp")
+#endif
+#include "occ_improve/grid/mask.hpp"

@@ -1,6 +1,6 @@
 #include "occ_improve/io/png.hpp"
 
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <png.h>

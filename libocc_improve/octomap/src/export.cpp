@@ -1,9 +1,9 @@
 #include "occ_improve/octomap/export.hpp"
 
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
-#include "occ_improve/sensor_model.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -1,6 +1,6 @@
 #include "occ_improve/eval/filter_eval.hpp"
 
-#include "occ_improve/depth_prediction.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/improvement_filter.hpp"

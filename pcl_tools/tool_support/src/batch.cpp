@@ -1,6 +1,6 @@
 #include "occ_improve/tools/batch.hpp"
 
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/frame_io.hpp"

@@ -1,9 +1,9 @@
 #include "occ_improve/tools/flags.hpp"
 
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/errors.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/presets.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <algorithm>
 #include <cctype>

@@ -1,7 +1,7 @@
 #include "occ_improve/tools/map_outputs.hpp"
 
-#include "occ_improve/atomic_file.hpp"
-#include "occ_improve/depth_prediction.hpp"
+#include "occ_improve/io/atomic_file.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/map_cloud.hpp"

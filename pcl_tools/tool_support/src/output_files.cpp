@@ -1,7 +1,7 @@
 #include "occ_improve/tools/output_files.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
 #include <filesystem>

@@ -2,10 +2,10 @@
 // Segmenting an organized cloud through the occupancy grid: the cloud is inserted into a fresh map
 // (Mapper: insertion, surface, improvement), the map is segmented per ray (segmentation.hpp), and every
 // point takes the label of the ray (column) its direction falls in.
-#include "occ_improve/mask.hpp"
+#include "occ_improve/grid/mask.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/segmentation.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/segmentation/segmentation.hpp"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>

@@ -1,7 +1,7 @@
 #pragma once
 // PCL clouds -> core point spans, without copying; organized clouds <-> depth images and intrinsics.
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/intrinsics_fit.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
 
 #include <Eigen/Core>
 #include <pcl/point_cloud.h>

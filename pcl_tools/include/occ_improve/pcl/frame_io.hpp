@@ -2,9 +2,9 @@
 // Reading range frames from files: PCD and PLY (organized or not, any XYZ point type) and depth images
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
 // disparity PGM, PCL grabbers' 16-bit TIFF in millimetres). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
-#include "occ_improve/mask.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/grid/mask.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/sim/render.hpp"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>

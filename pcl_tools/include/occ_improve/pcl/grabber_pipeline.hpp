@@ -17,7 +17,7 @@
 // callback (which runs on the worker) or after stop(). Callbacks must not call stop() (it joins the
 // worker they run on); set a flag and stop from another thread instead.
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/ranking.hpp"
+#include "occ_improve/planning/ranking.hpp"
 
 #include <pcl/io/grabber.h>
 #include <pcl/point_cloud.h>

@@ -2,10 +2,10 @@
 // The per-ray results as an organized PCL cloud: one PointImprovement per ray of the grid, laid out
 // like the maps (width = azimuth bins, height = elevation bins), so pcl_viewer and PCL filters can use
 // the improvement as a field.
-#include "occ_improve/geometry.hpp"
-#include "occ_improve/improvement.hpp"
+#include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/pcl/point_types.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/maps/surface.hpp"
 
 #include <pcl/point_cloud.h>
 

@@ -8,7 +8,7 @@
 //    the IR camera: surfaces it cannot see give no return);
 //  - a dark poster on the wall that returns nothing (a patch with no returns);
 //  - Kinect disparity quantisation (1/8 pixel) and axial noise 1.425e-3 z^2 (Khoshelham 2012).
-#include "occ_improve/presets.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <Eigen/Core>
 #include <cstdint>

@@ -1,6 +1,6 @@
 #pragma once
 // PNG files of the core's images (render.hpp), written through libpng (deflate, zlib levels 0-9).
-#include "occ_improve/render.hpp"
+#include "occ_improve/sim/render.hpp"
 
 #include <cstdint>
 #include <string>

@@ -27,7 +27,7 @@
 // the Bayesian fusion of independent evidence (eq. 2, OctoMap's own rule for every ray it inserts);
 // clamping keeps the result able to change its mind, as in the grid. (Taking the max would make one
 // confident but wrong view override every other one.) Adding the same map twice counts it twice.
-#include "occ_improve/grid.hpp"
+#include "occ_improve/grid/grid.hpp"
 
 #include <Eigen/Geometry>
 #include <octomap/OcTree.h>

@@ -2,11 +2,11 @@
 // The files a tool writes for an improvement map, with the same names and columns in every tool
 // (occ_improve_map, occ_improve_live): depth.png depth_mm.png occupancy.png improvement.png legend.png
 // [overlay.png] surface.pcd regions.csv regions.png rays.csv. README "Output files" documents every column.
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/ranking.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/sim/render.hpp"
 
 #include <optional>
 #include <string>

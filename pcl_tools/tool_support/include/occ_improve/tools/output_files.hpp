@@ -5,7 +5,7 @@
 //  - an existing file is replaced only when this project wrote it (its magic), or with -overwrite;
 //  - a -save inside the -o folder is written with the folder's files and listed in its marker, so that a
 //    rerun with the same command line finds the folder its own.
-#include "occ_improve/atomic_file.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/tools/flags.hpp"
 
 #include <functional>

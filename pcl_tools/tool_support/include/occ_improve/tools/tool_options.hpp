@@ -3,17 +3,17 @@
 // from the common flags, the frames read from the inputs, the output folder, the progress line, and the
 // main() that turns every failure into one error line.
 #include "occ_improve/cancel.hpp"
-#include "occ_improve/atomic_file.hpp"
-#include "occ_improve/grid.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/map_io.hpp"
+#include "occ_improve/io/atomic_file.hpp"
+#include "occ_improve/grid/grid.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
-#include "occ_improve/mask.hpp"
+#include "occ_improve/grid/mask.hpp"
 #include "occ_improve/tools/flags.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/planner.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/segmentation.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/segmentation/segmentation.hpp"
 
 #include <Eigen/Geometry>
 

@@ -6,9 +6,9 @@
 //
 // Threads: post() may be called from any thread (the pipeline's worker renders each frame there);
 // everything else belongs to the thread that opened the view (VTK's window is not thread-safe).
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/ranking.hpp"
-#include "occ_improve/render.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/sim/render.hpp"
 
 #include <chrono>
 #include <cstdint>

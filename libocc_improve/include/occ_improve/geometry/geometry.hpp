@@ -1,0 +1,218 @@
+#pragma once
+// Grid geometry (SPEC 1-2, 2b, 2c): an angular binning of directions into columns (rays) and a depth
+// binning along each column (uniform or uniform in inverse depth), behind one type. The kernels ask it
+// only for a direction's continuous position (project), the columns a support overlaps (the two
+// uniform axes, in the binning's own angular unit), a column's centre (point) and, with the sensor
+// model, the angular term in that unit. A new binning is added in project()/point() and its axes;
+// insertion, surface, improvement and everything after them are unchanged.
+//
+// Binnings:
+//  - spherical (the paper, SPEC 2): columns uniform in azimuth theta = atan2(x, z) and elevation
+//    phi = atan2(y, hypot(x, z)), radians; the depth axis is the range rho = |p|.
+//  - pinhole (pixel-native, SPEC 2c): column (u, v) is pixel (u, v) of a pinhole camera, positions in
+//    pixels (u = fx x / z + cx, v = fy y / z + cy); the depth axis is z. z rather than the range
+//    because the sensor measures and quantises z (a Kinect's disparity is per z), so a flat wall facing
+//    the camera falls in one depth bin at every pixel instead of in rings of range bins.
+//  - a LiDAR's rings would be a third: project() to (azimuth, ring position) with a non-uniform
+//    elevation axis; the kernels read axes only through centre() and overlapping().
+// Frame: the sensor's optical frame (x right, y down, z forward). Units: metres; radians or pixels.
+#include <Eigen/Core>
+#include <cstddef>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+
+/// A pinhole depth camera (pixels; u right, v down).
+struct PinholeIntrinsics {
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+  int width = 640, height = 480;
+  void validate() const;
+  bool operator==(const PinholeIntrinsics& o) const {
+    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && width == o.width && height == o.height;
+  }
+  bool operator!=(const PinholeIntrinsics& o) const { return !(*this == o); }
+};
+
+/// Same size and fx, fy, cx, cy within 0.05 px: one camera, up to the ~1e-4 px by which fitted or
+/// file-rounded intrinsics of one sensor differ. Half a pixel (cx 319.5 against 320, both common) is not.
+bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b);
+/// "fx=525.00 fy=525.00 cx=319.50 cy=239.50 640x480", for messages.
+std::string camera_text(const PinholeIntrinsics& k);
+
+enum class AngularBinning {
+  spherical,  ///< uniform azimuth x elevation bins, radians; depth is the range (the paper)
+  pinhole,    ///< one column per camera pixel, pixels; depth is z (SPEC 2c)
+};
+
+const char* to_string(AngularBinning binning);
+
+enum class DepthBinning {
+  uniform,        ///< bins uniform in rho over [depth_min_m, depth_max_m) (the paper: [0, 5 m))
+  inverse_depth,  ///< bins uniform in 1/rho between depth_min_m > 0 and depth_max_m (width grows as rho^2)
+};
+
+struct GeometryParams {
+  AngularBinning angular_binning = AngularBinning::spherical;
+  /// pinhole: the camera whose pixels are the columns (required; its size must equal the bin counts).
+  /// spherical: when set, columns whose centre direction falls outside this camera's image are not
+  /// observable (SPEC 2c): they take no part in ranking, regions, stop signals or the filter.
+  std::optional<PinholeIntrinsics> camera;
+  /// Angular bin counts (columns per row and rows), for both binnings.
+  int azimuth_bins = 640;
+  int elevation_bins = 480;
+  int depth_bins = 512;
+  /// Spherical binning's angular range (unused by the pinhole binning, whose range is the image).
+  double azimuth_min_rad = -0.497418836818384;  ///< -28.5 deg
+  double azimuth_max_rad = 0.497418836818384;
+  double elevation_min_rad = -0.375245789179833;  ///< -21.5 deg
+  double elevation_max_rad = 0.375245789179833;
+  DepthBinning depth_binning = DepthBinning::uniform;
+  double depth_min_m = 0.0;
+  double depth_max_m = 5.0;
+
+  /// Throws InvalidParameter naming the first bad field.
+  void validate() const;
+};
+
+/// A point in spherical coordinates (SPEC 1).
+struct SphericalPoint {
+  double rho = 0;
+  double azimuth = 0;
+  double elevation = 0;
+};
+
+SphericalPoint to_spherical(double x, double y, double z);
+Eigen::Vector3d from_spherical(const SphericalPoint& s);
+
+/// Uniform bins over [min, max).
+class UniformAxis {
+public:
+  UniformAxis() = default;
+  UniformAxis(double min, double max, int bins);
+  int bins() const { return bins_; }
+  double min() const { return min_; }
+  double max() const { return max_; }
+  double width() const { return width_; }
+  /// Bin containing `value`, or -1 when outside [min, max).
+  int bin(double value) const;
+  double centre(int i) const { return min_ + (i + 0.5) * width_; }
+  double lower(int i) const { return min_ + i * width_; }
+  /// Bins whose extent overlaps [lo, hi], clipped to the axis; empty (first > last) when none.
+  void overlapping(double lo, double hi, int& first, int& last) const;
+
+private:
+  double min_ = 0, max_ = 1, width_ = 1, inv_width_ = 1;
+  int bins_ = 1;
+};
+
+/// Depth bins, uniform in rho or in 1/rho. Bin 0 is the nearest.
+class DepthAxis {
+public:
+  DepthAxis() = default;
+  DepthAxis(DepthBinning binning, double min_m, double max_m, int bins);
+  int bins() const { return bins_; }
+  DepthBinning binning() const { return binning_; }
+  double min() const { return min_; }
+  double max() const { return max_; }
+  double centre(int b) const { return centres_[static_cast<std::size_t>(b)]; }
+  double lower(int b) const { return edges_[static_cast<std::size_t>(b)]; }
+  double upper(int b) const { return edges_[static_cast<std::size_t>(b) + 1]; }
+  const std::vector<double>& centres() const { return centres_; }
+  /// Bin containing rho: -1 below min, bins() at or beyond max.
+  int bin(double rho) const;
+  /// Index of the first bin whose centre is strictly greater than rho, in [0, bins()]. Inline: the
+  /// insertion calls it several times per (measurement, column) pair. The bin is guessed in closed form
+  /// (linear in rho, or in 1/rho), then fixed up against the stored centres, so the result is exact.
+  int first_centre_above(double rho) const {
+    const double ci = binning_ == DepthBinning::uniform ? (rho - min_) * bins_per_unit_
+                                                        : (rho > 0 ? (inverse_min_ - 1.0 / rho) * bins_per_unit_ : -1.0);
+    // centre(b) > rho  <=>  b + 0.5 > ci; the cast floors because ci + 0.5 >= 0 there.
+    int b = !(ci >= -0.5) ? 0 : (ci >= bins_ ? bins_ : static_cast<int>(ci + 0.5));
+    const double* centres = centres_.data();
+    while (b > 0 && centres[b - 1] > rho) --b;
+    while (b < bins_ && centres[b] <= rho) ++b;
+    return b;
+  }
+  /// Width of the bin containing rho (the nearest or farthest bin outside the range).
+  double width_at(double rho) const;
+
+private:
+  double continuous_index(double rho) const;  // bin coordinate: bin b spans [b, b+1)
+  DepthBinning binning_ = DepthBinning::uniform;
+  double min_ = 0, max_ = 1;
+  double inverse_min_ = 0, bins_per_unit_ = 1;  ///< bins per metre (uniform) or per 1/m (inverse depth)
+  int bins_ = 1;
+  std::vector<double> centres_, edges_;
+};
+
+using ColumnIndex = std::uint32_t;
+
+/// SPEC 1: a point is valid when every coordinate is finite and it is not the origin (no return).
+inline bool is_valid_point(double x, double y, double z) {
+  return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && !(x == 0 && y == 0 && z == 0);
+}
+
+/// Where a point falls in the grid: continuous angular position (the binning's unit), the columns'
+/// bins containing it, and its coordinate on the depth axis (range or z).
+struct RayPosition {
+  double horizontal = 0, vertical = 0;  ///< azimuth/elevation [rad] or u/v [px]
+  int horizontal_bin = -1, vertical_bin = -1;
+  double depth = 0;  ///< range [m] (spherical) or z [m] (pinhole)
+};
+
+/// The whole grid's geometry: columns (rays) in rows like image pixels, each with depth bins.
+/// Columns are numbered like image pixels: column = elevation_bin * azimuth_bins + azimuth_bin.
+/// "azimuth"/"elevation" name the horizontal and vertical angular axes of either binning.
+class SphericalGeometry {
+public:
+  explicit SphericalGeometry(const GeometryParams& params);
+  const GeometryParams& params() const { return params_; }
+  AngularBinning binning() const { return params_.angular_binning; }
+  /// Horizontal / vertical angular axes, in the binning's unit (radians, or pixels from -0.5).
+  const UniformAxis& azimuth() const { return azimuth_; }
+  const UniformAxis& elevation() const { return elevation_; }
+  const DepthAxis& depth() const { return depth_; }
+  /// Position of a point (sensor frame); false when its direction is outside the field of view
+  /// (for the pinhole binning also z <= 0). The point must be finite and not the origin.
+  bool project(double x, double y, double z, RayPosition& position) const;
+  /// The column of a point (sensor frame): the one point-to-column rule of every caller. False for an
+  /// invalid point (a coordinate not finite, or the origin) and outside the field of view.
+  bool column_of(double x, double y, double z, ColumnIndex& column) const;
+  /// Columns a camera can observe (every column, unless a spherical grid was given a camera).
+  bool observable(ColumnIndex c) const { return observable_.empty() || observable_[c] != 0; }
+  bool all_observable() const { return observable_.empty(); }
+  std::size_t observable_count() const;
+  int width() const { return azimuth_.bins(); }    ///< columns per elevation row (image width)
+  int height() const { return elevation_.bins(); }  ///< elevation rows (image height)
+  std::size_t column_count() const { return static_cast<std::size_t>(width()) * height(); }
+  ColumnIndex column(int azimuth_bin, int elevation_bin) const {
+    return static_cast<ColumnIndex>(elevation_bin) * static_cast<ColumnIndex>(width()) +
+           static_cast<ColumnIndex>(azimuth_bin);
+  }
+  int azimuth_bin_of(ColumnIndex c) const { return static_cast<int>(c % static_cast<ColumnIndex>(width())); }
+  int elevation_bin_of(ColumnIndex c) const { return static_cast<int>(c / static_cast<ColumnIndex>(width())); }
+  /// Unit direction through the centre of a column.
+  Eigen::Vector3d direction(int azimuth_bin, int elevation_bin) const;
+  /// Unit direction at a continuous angular position (the binning's unit), e.g. a region's centroid.
+  Eigen::Vector3d direction_at(double horizontal, double vertical) const;
+  /// Point at coordinate `depth` of the depth axis (range, or z for the pinhole binning) on the ray
+  /// through the centre of a column.
+  Eigen::Vector3d point(int azimuth_bin, int elevation_bin, double depth) const {
+    return point_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin), depth);
+  }
+  /// The same at a continuous angular position.
+  Eigen::Vector3d point_at(double horizontal, double vertical, double depth) const;
+  bool operator==(const SphericalGeometry& other) const;
+
+private:
+  GeometryParams params_;
+  UniformAxis azimuth_, elevation_;
+  DepthAxis depth_;
+  std::vector<std::uint8_t> observable_;  ///< empty: every column observable
+};
+
+}  // namespace occ_improve

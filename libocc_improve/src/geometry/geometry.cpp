@@ -1,0 +1,234 @@
+#include "occ_improve/geometry/geometry.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace occ_improve {
+
+using detail::require_parameter;
+
+void PinholeIntrinsics::validate() const {
+  require_parameter(std::isfinite(fx) && fx > 0, "fx", fx, "finite and > 0");
+  require_parameter(std::isfinite(fy) && fy > 0, "fy", fy, "finite and > 0");
+  require_parameter(std::isfinite(cx), "cx", cx, "finite");
+  require_parameter(std::isfinite(cy), "cy", cy, "finite");
+  require_parameter(width > 0 && width <= 65536, "width", width, "in [1, 65536]");
+  require_parameter(height > 0 && height <= 65536, "height", height, "in [1, 65536]");
+}
+
+bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {
+  constexpr double kTolerancePx = 0.05;
+  return a.width == b.width && a.height == b.height && std::abs(a.fx - b.fx) <= kTolerancePx &&
+         std::abs(a.fy - b.fy) <= kTolerancePx && std::abs(a.cx - b.cx) <= kTolerancePx &&
+         std::abs(a.cy - b.cy) <= kTolerancePx;
+}
+
+std::string camera_text(const PinholeIntrinsics& k) {
+  char text[160];
+  std::snprintf(text, sizeof text, "fx=%.2f fy=%.2f cx=%.2f cy=%.2f %dx%d", k.fx, k.fy, k.cx, k.cy, k.width, k.height);
+  return text;
+}
+
+const char* to_string(AngularBinning binning) {
+  return binning == AngularBinning::pinhole ? "pinhole" : "spherical";
+}
+
+void GeometryParams::validate() const {
+  if (camera) camera->validate();
+  if (angular_binning == AngularBinning::pinhole) {
+    require_parameter(camera.has_value(), "camera", 0, "set (the pinhole binning's columns are its pixels)");
+    require_parameter(azimuth_bins == camera->width, "azimuth_bins", azimuth_bins, "equal to the camera's width");
+    require_parameter(elevation_bins == camera->height, "elevation_bins", elevation_bins,
+                      "equal to the camera's height");
+  }
+  require_parameter(azimuth_bins > 0, "azimuth_bins", azimuth_bins, "> 0");
+  require_parameter(elevation_bins > 0, "elevation_bins", elevation_bins, "> 0");
+  require_parameter(depth_bins > 0, "depth_bins", depth_bins, "> 0");
+  // Column indices are 32-bit and the store's bins are int.
+  require_parameter(static_cast<double>(azimuth_bins) * elevation_bins < 4.0e9, "azimuth_bins * elevation_bins",
+                    static_cast<double>(azimuth_bins) * elevation_bins, "< 4e9");
+  require_parameter(std::isfinite(azimuth_min_rad) && azimuth_min_rad > -M_PI, "azimuth_min_rad", azimuth_min_rad,
+                    "finite and > -pi");
+  require_parameter(std::isfinite(azimuth_max_rad) && azimuth_max_rad <= M_PI && azimuth_max_rad > azimuth_min_rad,
+                    "azimuth_max_rad", azimuth_max_rad, "finite, <= pi and > azimuth_min_rad");
+  require_parameter(std::isfinite(elevation_min_rad) && elevation_min_rad > -M_PI / 2, "elevation_min_rad",
+                    elevation_min_rad, "finite and > -pi/2");
+  require_parameter(std::isfinite(elevation_max_rad) && elevation_max_rad < M_PI / 2 &&
+                        elevation_max_rad > elevation_min_rad,
+                    "elevation_max_rad", elevation_max_rad, "finite, < pi/2 and > elevation_min_rad");
+  require_parameter(std::isfinite(depth_min_m) && depth_min_m >= 0, "depth_min_m", depth_min_m, "finite and >= 0");
+  require_parameter(std::isfinite(depth_max_m) && depth_max_m > depth_min_m, "depth_max_m", depth_max_m,
+                    "finite and > depth_min_m");
+  if (depth_binning == DepthBinning::inverse_depth)
+    require_parameter(depth_min_m > 0, "depth_min_m", depth_min_m, "> 0 for inverse-depth binning");
+}
+
+SphericalPoint to_spherical(double x, double y, double z) {
+  SphericalPoint s;
+  // Plain sqrt, not std::hypot: inputs are floats, whose squares cannot overflow a double.
+  const double horizontal = std::sqrt(x * x + z * z);
+  s.rho = std::sqrt(x * x + y * y + z * z);
+  s.azimuth = std::atan2(x, z);
+  s.elevation = std::atan2(y, horizontal);
+  return s;
+}
+
+Eigen::Vector3d from_spherical(const SphericalPoint& s) {
+  const double horizontal = s.rho * std::cos(s.elevation);
+  return {horizontal * std::sin(s.azimuth), s.rho * std::sin(s.elevation), horizontal * std::cos(s.azimuth)};
+}
+
+UniformAxis::UniformAxis(double min, double max, int bins)
+    : min_(min), max_(max), width_((max - min) / bins), inv_width_(bins / (max - min)), bins_(bins) {}
+
+int UniformAxis::bin(double value) const {
+  if (!(value >= min_ && value < max_)) return -1;
+  const int i = static_cast<int>((value - min_) * inv_width_);
+  return std::min(i, bins_ - 1);  // guards rounding right below max
+}
+
+void UniformAxis::overlapping(double lo, double hi, int& first, int& last) const {
+  first = static_cast<int>(std::floor((lo - min_) * inv_width_));
+  last = static_cast<int>(std::floor((hi - min_) * inv_width_));
+  first = std::max(first, 0);
+  last = std::min(last, bins_ - 1);
+}
+
+DepthAxis::DepthAxis(DepthBinning binning, double min_m, double max_m, int bins)
+    : binning_(binning),
+      min_(min_m),
+      max_(max_m),
+      inverse_min_(1.0 / min_m),
+      bins_per_unit_(binning == DepthBinning::uniform ? bins / (max_m - min_m) : bins / (1.0 / min_m - 1.0 / max_m)),
+      bins_(bins) {
+  edges_.resize(static_cast<std::size_t>(bins) + 1);
+  centres_.resize(static_cast<std::size_t>(bins));
+  if (binning == DepthBinning::uniform) {
+    const double w = (max_m - min_m) / bins;
+    for (int b = 0; b <= bins; ++b) edges_[static_cast<std::size_t>(b)] = min_m + b * w;
+    for (int b = 0; b < bins; ++b) centres_[static_cast<std::size_t>(b)] = min_m + (b + 0.5) * w;
+  } else {
+    // Uniform in inverse depth; the centre is the midpoint in inverse depth.
+    const double inv_min = 1.0 / min_m, step = (1.0 / min_m - 1.0 / max_m) / bins;
+    for (int b = 0; b <= bins; ++b) edges_[static_cast<std::size_t>(b)] = 1.0 / (inv_min - b * step);
+    for (int b = 0; b < bins; ++b) centres_[static_cast<std::size_t>(b)] = 1.0 / (inv_min - (b + 0.5) * step);
+  }
+  edges_.back() = max_m;
+}
+
+double DepthAxis::continuous_index(double rho) const {
+  if (binning_ == DepthBinning::uniform) return (rho - min_) / (max_ - min_) * bins_;
+  if (rho <= 0) return -1e300;
+  const double step = (1.0 / min_ - 1.0 / max_) / bins_;
+  return (1.0 / min_ - 1.0 / rho) / step;
+}
+
+int DepthAxis::bin(double rho) const {
+  if (rho < min_) return -1;
+  if (rho >= max_) return bins_;
+  const int b = static_cast<int>(continuous_index(rho));
+  return std::clamp(b, 0, bins_ - 1);
+}
+
+double DepthAxis::width_at(double rho) const {
+  const int b = std::clamp(bin(rho), 0, bins_ - 1);
+  return upper(b) - lower(b);
+}
+
+namespace {
+
+// Continuous pixel position of a direction; false behind the camera (z <= 0).
+bool to_pixel(const PinholeIntrinsics& k, double x, double y, double z, double& u, double& v) {
+  if (!(z > 0)) return false;
+  u = k.fx * x / z + k.cx;
+  v = k.fy * y / z + k.cy;
+  return true;
+}
+
+}  // namespace
+
+SphericalGeometry::SphericalGeometry(const GeometryParams& params) : params_(params) {
+  params.validate();
+  if (params.angular_binning == AngularBinning::pinhole) {
+    // Column i spans pixel positions [i - 0.5, i + 0.5): pixel centres are the column centres.
+    azimuth_ = UniformAxis(-0.5, params.azimuth_bins - 0.5, params.azimuth_bins);
+    elevation_ = UniformAxis(-0.5, params.elevation_bins - 0.5, params.elevation_bins);
+  } else {
+    azimuth_ = UniformAxis(params.azimuth_min_rad, params.azimuth_max_rad, params.azimuth_bins);
+    elevation_ = UniformAxis(params.elevation_min_rad, params.elevation_max_rad, params.elevation_bins);
+  }
+  depth_ = DepthAxis(params.depth_binning, params.depth_min_m, params.depth_max_m, params.depth_bins);
+  if (params.angular_binning == AngularBinning::spherical && params.camera) {
+    // A column is observable when the camera sees its centre direction.
+    const PinholeIntrinsics& k = *params.camera;
+    observable_.assign(column_count(), 0);
+    for (int e = 0; e < height(); ++e)
+      for (int a = 0; a < width(); ++a) {
+        const Eigen::Vector3d d = direction(a, e);
+        double u, v;
+        observable_[column(a, e)] = to_pixel(k, d.x(), d.y(), d.z(), u, v) && u >= -0.5 && u < k.width - 0.5 &&
+                                    v >= -0.5 && v < k.height - 0.5;
+      }
+  }
+}
+
+std::size_t SphericalGeometry::observable_count() const {
+  if (observable_.empty()) return column_count();
+  return static_cast<std::size_t>(std::count(observable_.begin(), observable_.end(), std::uint8_t{1}));
+}
+
+bool SphericalGeometry::project(double x, double y, double z, RayPosition& p) const {
+  if (params_.angular_binning == AngularBinning::pinhole) {
+    if (!to_pixel(*params_.camera, x, y, z, p.horizontal, p.vertical)) return false;
+    p.depth = z;
+  } else {
+    const SphericalPoint s = to_spherical(x, y, z);
+    p.horizontal = s.azimuth;
+    p.vertical = s.elevation;
+    p.depth = s.rho;
+  }
+  p.horizontal_bin = azimuth_.bin(p.horizontal);
+  p.vertical_bin = elevation_.bin(p.vertical);
+  return p.horizontal_bin >= 0 && p.vertical_bin >= 0;
+}
+
+Eigen::Vector3d SphericalGeometry::direction_at(double horizontal, double vertical) const {
+  if (params_.angular_binning == AngularBinning::pinhole) {
+    const PinholeIntrinsics& k = *params_.camera;
+    return Eigen::Vector3d((horizontal - k.cx) / k.fx, (vertical - k.cy) / k.fy, 1.0).normalized();
+  }
+  return from_spherical({1.0, horizontal, vertical});
+}
+
+Eigen::Vector3d SphericalGeometry::direction(int azimuth_bin, int elevation_bin) const {
+  return direction_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin));
+}
+
+Eigen::Vector3d SphericalGeometry::point_at(double horizontal, double vertical, double depth) const {
+  if (params_.angular_binning == AngularBinning::pinhole) {  // depth is z: back-project the pixel position
+    const PinholeIntrinsics& k = *params_.camera;
+    return {(horizontal - k.cx) / k.fx * depth, (vertical - k.cy) / k.fy * depth, depth};
+  }
+  return direction_at(horizontal, vertical) * depth;
+}
+
+bool SphericalGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
+  if (!is_valid_point(x, y, z)) return false;
+  RayPosition r;
+  if (!project(x, y, z, r)) return false;
+  c = column(r.horizontal_bin, r.vertical_bin);
+  return true;
+}
+
+bool SphericalGeometry::operator==(const SphericalGeometry& o) const {
+  const GeometryParams &a = params_, &b = o.params_;
+  return a.angular_binning == b.angular_binning && a.camera == b.camera && a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
+         a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&
+         a.elevation_min_rad == b.elevation_min_rad && a.elevation_max_rad == b.elevation_max_rad &&
+         a.depth_binning == b.depth_binning && a.depth_min_m == b.depth_min_m && a.depth_max_m == b.depth_max_m;
+}
+
+}  // namespace occ_improve

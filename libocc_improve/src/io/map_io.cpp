@@ -1,0 +1,381 @@
+#include "occ_improve/io/map_io.hpp"
+
+#include "occ_improve/io/atomic_file.hpp"
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <type_traits>
+#include <vector>
+
+namespace occ_improve {
+namespace {
+
+// Layout constants (docs/MAP_FORMAT.md). The byte-order marker is written in the writer's native
+// order: a reader of the other byte order sees 0x04030201 and refuses the file.
+constexpr char kMagic[8] = {'O', 'C', 'C', 'I', 'M', 'A', 'P', '\0'};
+constexpr std::uint32_t kByteOrderMarker = 0x01020304u;
+constexpr std::uint32_t kByteOrderSwapped = 0x04030201u;
+constexpr std::size_t kChecksumBytes = sizeof(std::uint64_t);
+constexpr std::size_t kPreambleBytes = sizeof(kMagic) + 2 * sizeof(std::uint32_t);  // magic, marker, version
+
+// FNV-1a 64 over 8-byte words (then the tail bytes): one multiply per word instead of per byte, so
+// that a one-frame map of ~100 MB is checked in tens of milliseconds. Defined by the format document.
+std::uint64_t checksum(const char* data, std::size_t size) {
+  constexpr std::uint64_t kOffset = 14695981039346656037ull, kPrime = 1099511628211ull;
+  std::uint64_t h = kOffset;
+  std::size_t i = 0;
+  for (; i + 8 <= size; i += 8) {
+    std::uint64_t word;
+    std::memcpy(&word, data + i, 8);
+    h = (h ^ word) * kPrime;
+  }
+  for (; i < size; ++i) h = (h ^ static_cast<unsigned char>(data[i])) * kPrime;
+  return h;
+}
+
+class Writer {
+public:
+  template <typename T>
+  void put(T value) {
+    static_assert(std::is_trivially_copyable_v<T>, "plain values only");
+    const std::size_t at = bytes_.size();
+    bytes_.resize(at + sizeof(T));
+    std::memcpy(bytes_.data() + at, &value, sizeof(T));
+  }
+  void put_floats(const std::vector<float>& values) {
+    const std::size_t at = bytes_.size();
+    bytes_.resize(at + values.size() * sizeof(float));
+    if (!values.empty()) std::memcpy(bytes_.data() + at, values.data(), values.size() * sizeof(float));
+  }
+  void reserve(std::size_t n) { bytes_.reserve(n); }
+  std::vector<char>& bytes() { return bytes_; }
+
+private:
+  std::vector<char> bytes_;
+};
+
+class Reader {
+public:
+  Reader(const std::vector<char>& bytes, std::size_t end, const std::string& path)
+      : bytes_(bytes), end_(end), path_(path) {}
+  template <typename T>
+  T get(const char* what) {
+    T value;
+    need(sizeof(T), what);
+    std::memcpy(&value, bytes_.data() + at_, sizeof(T));
+    at_ += sizeof(T);
+    return value;
+  }
+  void get_floats(std::vector<float>& out, std::size_t n, const char* what) {
+    if (n > (end_ - at_) / sizeof(float)) fail(std::string("truncated in ") + what);
+    out.resize(n);
+    if (n) std::memcpy(out.data(), bytes_.data() + at_, n * sizeof(float));
+    at_ += n * sizeof(float);
+  }
+  std::size_t remaining() const { return end_ - at_; }
+  [[noreturn]] void fail(const std::string& problem) const {
+    throw FormatError("map '" + path_ + "': " + problem);
+  }
+
+private:
+  void need(std::size_t n, const char* what) const {
+    if (end_ - at_ < n) fail(std::string("truncated in ") + what);
+  }
+  const std::vector<char>& bytes_;
+  std::size_t at_ = kPreambleBytes, end_;
+  const std::string& path_;
+};
+
+std::vector<char> read_file(const std::string& path, std::size_t memory_cap_bytes) {
+  std::error_code error;
+  if (std::filesystem::is_directory(path, error)) throw IoError("cannot read map '" + path + "': it is a folder");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open map '" + path + "' for reading");
+  in.seekg(0, std::ios::end);
+  const std::streamoff size = in.tellg();
+  if (size < 0) throw IoError("cannot determine the size of map '" + path + "' (not a regular file?)");
+  if (static_cast<std::uint64_t>(size) > memory_cap_bytes)
+    throw ResourceLimit("map '" + path + "' of " + std::to_string(size) + " bytes exceeds memory_cap_bytes = " +
+                        std::to_string(memory_cap_bytes));
+  in.seekg(0, std::ios::beg);
+  std::vector<char> bytes(static_cast<std::size_t>(size));
+  if (size > 0 && !in.read(bytes.data(), size)) throw IoError("cannot read map '" + path + "'");
+  return bytes;
+}
+
+void write_geometry(Writer& w, const GeometryParams& g) {
+  w.put<std::int32_t>(g.azimuth_bins);
+  w.put<std::int32_t>(g.elevation_bins);
+  w.put<std::int32_t>(g.depth_bins);
+  w.put<double>(g.azimuth_min_rad);
+  w.put<double>(g.azimuth_max_rad);
+  w.put<double>(g.elevation_min_rad);
+  w.put<double>(g.elevation_max_rad);
+  w.put<std::uint32_t>(g.depth_binning == DepthBinning::uniform ? 0u : 1u);
+  w.put<double>(g.depth_min_m);
+  w.put<double>(g.depth_max_m);
+  // Since version 2: the angular binning and the camera.
+  w.put<std::uint32_t>(g.angular_binning == AngularBinning::spherical ? 0u : 1u);
+  w.put<std::uint32_t>(g.camera ? 1u : 0u);
+  const PinholeIntrinsics k = g.camera.value_or(PinholeIntrinsics{});
+  for (double v : {k.fx, k.fy, k.cx, k.cy}) w.put<double>(v);
+  w.put<std::int32_t>(k.width);
+  w.put<std::int32_t>(k.height);
+}
+
+// Version 1 maps are spherical grids without a camera.
+void read_binning(Reader& r, GeometryParams& g) {
+  const auto binning = r.get<std::uint32_t>("geometry");
+  if (binning > 1) r.fail("unknown angular binning code " + std::to_string(binning));
+  g.angular_binning = binning == 0 ? AngularBinning::spherical : AngularBinning::pinhole;
+  const auto has_camera = r.get<std::uint32_t>("geometry");
+  if (has_camera > 1) r.fail("bad camera flag " + std::to_string(has_camera));
+  PinholeIntrinsics k;
+  k.fx = r.get<double>("geometry");
+  k.fy = r.get<double>("geometry");
+  k.cx = r.get<double>("geometry");
+  k.cy = r.get<double>("geometry");
+  k.width = r.get<std::int32_t>("geometry");
+  k.height = r.get<std::int32_t>("geometry");
+  if (has_camera) g.camera = k;
+}
+
+GeometryParams read_geometry(Reader& r, std::uint32_t version) {
+  GeometryParams g;
+  g.azimuth_bins = r.get<std::int32_t>("geometry");
+  g.elevation_bins = r.get<std::int32_t>("geometry");
+  g.depth_bins = r.get<std::int32_t>("geometry");
+  g.azimuth_min_rad = r.get<double>("geometry");
+  g.azimuth_max_rad = r.get<double>("geometry");
+  g.elevation_min_rad = r.get<double>("geometry");
+  g.elevation_max_rad = r.get<double>("geometry");
+  const auto binning = r.get<std::uint32_t>("geometry");
+  if (binning > 1) r.fail("unknown depth binning code " + std::to_string(binning));
+  g.depth_binning = binning == 0 ? DepthBinning::uniform : DepthBinning::inverse_depth;
+  g.depth_min_m = r.get<double>("geometry");
+  g.depth_max_m = r.get<double>("geometry");
+  if (version >= 2) read_binning(r, g);
+  return g;
+}
+
+void write_model(Writer& w, const SensorModelParams& m) {
+  w.put<double>(m.sigma_azimuth_rad);
+  w.put<double>(m.sigma_elevation_rad);
+  w.put<double>(m.sigma_depth_m);
+  w.put<double>(m.sigma_depth_per_m2);
+  w.put<double>(m.sigma_depth_floor_m);
+  w.put<double>(m.support_k);
+  w.put<double>(m.sigma_u_px);  // since version 2
+  w.put<double>(m.sigma_v_px);
+}
+
+SensorModelParams read_model(Reader& r, std::uint32_t version) {
+  SensorModelParams m;
+  m.sigma_azimuth_rad = r.get<double>("sensor model");
+  m.sigma_elevation_rad = r.get<double>("sensor model");
+  m.sigma_depth_m = r.get<double>("sensor model");
+  m.sigma_depth_per_m2 = r.get<double>("sensor model");
+  m.sigma_depth_floor_m = r.get<double>("sensor model");
+  m.support_k = r.get<double>("sensor model");
+  if (version >= 2) {
+    m.sigma_u_px = r.get<double>("sensor model");
+    m.sigma_v_px = r.get<double>("sensor model");
+  }
+  return m;
+}
+
+void write_options(Writer& w, const GridOptions& o) {
+  w.put<std::uint32_t>(o.mode == UpdateMode::clamped ? 0u : 1u);
+  w.put<double>(o.probability_min);
+  w.put<double>(o.probability_max);
+  w.put<std::uint64_t>(o.memory_cap_bytes);
+}
+
+GridOptions read_options(Reader& r) {
+  GridOptions o;
+  const auto mode = r.get<std::uint32_t>("grid options");
+  if (mode > 1) r.fail("unknown update mode code " + std::to_string(mode));
+  o.mode = mode == 0 ? UpdateMode::clamped : UpdateMode::exact;
+  o.probability_min = r.get<double>("grid options");
+  o.probability_max = r.get<double>("grid options");
+  o.memory_cap_bytes = static_cast<std::size_t>(r.get<std::uint64_t>("grid options"));
+  return o;
+}
+
+// Parameter checks reuse the library's own validation; a file that fails them is a corrupt file.
+template <typename Check>
+void validated(Reader& r, const char* section, Check check) {
+  try {
+    check();
+  } catch (const InvalidParameter& e) {
+    r.fail(std::string("invalid ") + section + ": " + e.what());
+  }
+}
+
+void read_columns(Reader& r, SphericalGrid& grid) {
+  const std::uint64_t count = r.get<std::uint64_t>("column count");
+  const std::size_t columns = grid.geometry().column_count();
+  const std::int32_t bins = grid.geometry().depth().bins();
+  if (count > columns) r.fail("claims " + std::to_string(count) + " touched columns, the grid has " +
+                              std::to_string(columns));
+  const bool clamped = grid.clamped();
+  const float lo = grid.log_odds_min(), hi = grid.log_odds_max();
+  auto value_ok = [&](float v) { return std::isfinite(v) && (!clamped || (v >= lo && v <= hi)); };
+  std::int64_t previous = -1;
+  for (std::uint64_t n = 0; n < count; ++n) {
+    poll_stop(static_cast<std::size_t>(n));
+    const auto index = r.get<std::uint32_t>("column record");
+    const auto uniform_end = r.get<std::int32_t>("column record");
+    const auto uniform_value = r.get<float>("column record");
+    const auto window_length = r.get<std::uint32_t>("column record");
+    const std::string where = "column " + std::to_string(index);
+    if (index >= columns) r.fail(where + " is outside the grid's " + std::to_string(columns) + " columns");
+    if (static_cast<std::int64_t>(index) <= previous) r.fail(where + " is out of order (columns must ascend)");
+    previous = index;
+    if (uniform_end < 0 || uniform_end > bins) r.fail(where + ": uniform_end " + std::to_string(uniform_end) +
+                                                      " outside [0, " + std::to_string(bins) + "]");
+    if (window_length > static_cast<std::uint32_t>(bins - uniform_end))
+      r.fail(where + ": window of " + std::to_string(window_length) + " bins runs past the " +
+             std::to_string(bins) + " depth bins");
+    if (uniform_end == 0 && window_length == 0) r.fail(where + " is stored but holds nothing");
+    if (uniform_end > 0 && !value_ok(uniform_value)) r.fail(where + ": uniform value out of range");
+    ColumnData& column = grid.touch(index);
+    column.uniform_end = uniform_end;
+    column.uniform_value = uniform_value;
+    r.get_floats(column.window, window_length, "column window");
+    for (float v : column.window)
+      if (!value_ok(v)) r.fail(where + ": window value out of range");
+  }
+}
+
+// Since version 3: a flag, then the columns ever asked for (ascending) with their asks and returns.
+void write_returns(Writer& w, const ReturnRecord& returns) {
+  w.put<std::uint32_t>(returns.size() ? 1u : 0u);
+  if (!returns.size()) return;
+  std::uint64_t asked_columns = 0;
+  for (std::uint32_t a : returns.asked()) asked_columns += a ? 1 : 0;
+  w.put<std::uint64_t>(asked_columns);
+  for (std::size_t c = 0; c < returns.size(); ++c)
+    if (returns.asked()[c]) {
+      w.put<std::uint32_t>(static_cast<std::uint32_t>(c));
+      w.put<std::uint32_t>(returns.asked()[c]);
+      w.put<std::uint32_t>(returns.returned()[c]);
+    }
+}
+
+ReturnRecord read_returns(Reader& r, const SphericalGeometry& g, std::uint32_t version) {
+  const std::size_t columns = g.column_count();
+  if (version < 3 || r.get<std::uint32_t>("return record") == 0) return ReturnRecord::for_grid(g.width(), g.height());
+  const auto count = r.get<std::uint64_t>("return record");
+  if (count > columns) r.fail("return record claims " + std::to_string(count) + " columns, the grid has " +
+                              std::to_string(columns));
+  std::vector<std::uint32_t> asked(columns, 0), returned(columns, 0);
+  std::int64_t previous = -1;
+  for (std::uint64_t n = 0; n < count; ++n) {
+    const auto c = r.get<std::uint32_t>("return record");
+    if (c >= columns || static_cast<std::int64_t>(c) <= previous)
+      r.fail("return record column " + std::to_string(c) + " is outside the grid or out of order");
+    previous = c;
+    asked[c] = r.get<std::uint32_t>("return record");
+    returned[c] = r.get<std::uint32_t>("return record");
+  }
+  try {
+    return ReturnRecord::from_counts(g.width(), g.height(), std::move(asked), std::move(returned));
+  } catch (const InvalidInput& e) {
+    r.fail(std::string("invalid return record: ") + e.what());
+  }
+}
+
+}  // namespace
+
+void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
+              const ReturnRecord& returns) {
+  const SphericalGeometry& geometry = grid.geometry();
+  if (returns.size()) returns.check_matches(geometry.width(), geometry.height());
+  Writer w;
+  w.reserve(256 + grid.stored_voxel_count() * sizeof(float) + grid.touched_column_count() * 16);
+  for (char c : kMagic) w.put<char>(c);
+  w.put<std::uint32_t>(kByteOrderMarker);
+  w.put<std::uint32_t>(kMapFormatVersion);
+  write_geometry(w, geometry.params());
+  write_model(w, model);
+  write_options(w, grid.options());
+
+  std::vector<ColumnIndex> touched;
+  for (std::size_t c = 0; c < geometry.column_count(); ++c) {
+    const ColumnData* column = grid.find(static_cast<ColumnIndex>(c));
+    if (column && column->touched()) touched.push_back(static_cast<ColumnIndex>(c));
+  }
+  w.put<std::uint64_t>(touched.size());
+  for (ColumnIndex c : touched) {
+    const ColumnData& column = *grid.find(c);
+    w.put<std::uint32_t>(c);
+    w.put<std::int32_t>(column.uniform_end);
+    w.put<float>(column.uniform_value);
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(column.window.size()));
+    w.put_floats(column.window);
+  }
+  write_returns(w, returns);
+  std::vector<char>& bytes = w.bytes();
+  w.put<std::uint64_t>(checksum(bytes.data(), bytes.size()));
+
+  write_file_atomically(path, "map", [&](std::ostream& out) {
+    return static_cast<bool>(out.write(bytes.data(), static_cast<std::streamsize>(bytes.size())));
+  });
+}
+
+bool is_map_file(const std::string& path) {
+  char magic[sizeof(kMagic)] = {};
+  std::ifstream in(path, std::ios::binary);
+  return in.read(magic, sizeof magic) && std::memcmp(magic, kMagic, sizeof kMagic) == 0;
+}
+
+LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
+  const std::vector<char> bytes = read_file(path, memory_cap_bytes);
+  auto fail = [&](const std::string& problem) { throw FormatError("map '" + path + "': " + problem); };
+  if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+    fail("not an occ_improve map (bad magic)");
+  if (bytes.size() < kPreambleBytes + kChecksumBytes) fail("truncated header");
+  std::uint32_t marker, version;
+  std::memcpy(&marker, bytes.data() + sizeof(kMagic), sizeof(marker));
+  std::memcpy(&version, bytes.data() + sizeof(kMagic) + sizeof(marker), sizeof(version));
+  if (marker == kByteOrderSwapped) fail("written on a machine of the other byte order");
+  if (marker != kByteOrderMarker) fail("bad byte-order marker");
+  if (version < kOldestMapFormatVersion || version > kMapFormatVersion)
+    fail("format version " + std::to_string(version) + ", this build reads versions " +
+         std::to_string(kOldestMapFormatVersion) + " to " + std::to_string(kMapFormatVersion));
+  const std::size_t body = bytes.size() - kChecksumBytes;
+  std::uint64_t stored;
+  std::memcpy(&stored, bytes.data() + body, sizeof(stored));
+  if (stored != checksum(bytes.data(), body)) fail("checksum mismatch (file truncated or corrupt)");
+
+  Reader r(bytes, body, path);
+  const GeometryParams geometry = read_geometry(r, version);
+  const SensorModelParams model = read_model(r, version);
+  GridOptions options = read_options(r);
+  validated(r, "geometry", [&] { geometry.validate(); });
+  validated(r, "sensor model", [&] { model.validate(); });
+  validated(r, "grid options", [&] { options.validate(); });
+  // The caller's cap, never the file's (a forged file would raise its own), before the geometry allocates.
+  options.memory_cap_bytes = memory_cap_bytes;
+  try {
+    require_within_memory_cap(geometry, memory_cap_bytes);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit("map '" + path + "': geometry: " + e.what());
+  }
+  // After the cap: a file claiming a huge grid is a ResourceLimit whatever its sigmas.
+  validated(r, "sensor model", [&] { model.validate_for(geometry); });
+  LoadedMap loaded{SphericalGrid(SphericalGeometry(geometry), options), model, {}};
+  read_columns(r, loaded.grid);
+  loaded.returns = read_returns(r, loaded.grid.geometry(), version);
+  if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the last record");
+  return loaded;
+}
+
+}  // namespace occ_improve

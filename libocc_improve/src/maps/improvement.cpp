@@ -1,0 +1,332 @@
+#include "occ_improve/maps/improvement.hpp"
+
+#include "support/fast_math.hpp"
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+#include "sensor/opdf_kernel.hpp"
+#include "support/parallel.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <type_traits>
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define OCC_IMPROVE_ROW_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define OCC_IMPROVE_ROW_CLONES
+#endif
+
+namespace occ_improve {
+namespace {
+
+void require_matching_surface(const SphericalGeometry& g, const SurfaceMap& s) {
+  if (s.width != g.width() || s.height != g.height() || s.depth_m.size() != g.column_count() ||
+      s.probability.size() != g.column_count())
+    throw InvalidInput("surface map is " + std::to_string(s.width) + " x " + std::to_string(s.height) +
+                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
+                       " columns");
+}
+
+// imp_i of eq. 3 for one surface voxel (probability p) at d_rho from the simulated measurement, whose
+// angular offset has the angular term b_angular = B, with eq. 1 from opdf_kernel.hpp: P_s = n / (n + m),
+// so the posterior p P_s / (p P_s + (1 - p)(1 - P_s)) = p n / (p n + (1 - p) m) needs one division.
+// Far in front x <= 2e38 and P_s stays ~1e-38. A certain prior (p = 0 or 1, den = 0) is left unchanged by
+// Bayes: imp_i = 0. Branch-free so the row loop vectorises.
+//
+// kWithPeak = false drops g, for window offsets with B >= kPeakNegligibleB: there g / P_s and g / (1 - P_s)
+// are both below (2/3)(e^-B + e^-(3 + 2B)) < 8e-8 for every d_rho, and a relative error eps in P_s and
+// in 1 - P_s moves the posterior of eq. 3 by at most eps / 2, so imp_i changes by < 4e-8.
+constexpr float kPeakNegligibleB = 16.0f;
+
+template <bool kWithPeak>
+inline float surface_term(float p, float d_rho, float inv_sigma, float b_angular) {
+  const float t = d_rho * inv_sigma;
+  const detail::OpdfOdds odds =
+      detail::opdf_odds(detail::opdf_x(t, b_angular), kWithPeak ? detail::opdf_g(t, b_angular) : 0.0f);
+  const float num = p * odds.n;
+  const float den = num + (1.0f - p) * odds.m;
+  const float imp = num / (den > 0.0f ? den : 1.0f) - p;  // selects, not branches: the loop vectorises
+  return den > 0.0f ? imp : 0.0f;
+}
+
+// The window rule and the per-offset angular factors, built once per geometry and model.
+// With uniform angular axes the centre offset between columns j and j + (da, de) is (da w_az, de w_el)
+// for every j, so B depends on the offset only.
+struct WindowKernel {
+  std::vector<int> az_lo, az_hi, el_lo, el_hi;  // window offsets of each azimuth bin / elevation row
+  int da_min = 0, da_max = 0, de_min = 0, de_max = 0;
+  std::vector<float> angular_term;  // B per offset, at (de - de_min) * offsets_across + (da - da_min)
+  std::vector<std::uint8_t> needs_peak;  // B < kPeakNegligibleB, per offset
+  // Per azimuth offset da: the azimuth bins whose window holds da, as [run_first, run_end) when they are
+  // contiguous (always, for the uniform axes and clipping of today; the masked loop covers the rest).
+  std::vector<int> run_first, run_end;
+  std::vector<std::uint8_t> run_contiguous;
+
+  WindowKernel(const SphericalGeometry& g, const SensorModel& model) {
+    axis_offsets(g.azimuth(), model.support_horizontal(g.binning()), az_lo, az_hi, da_min, da_max);
+    axis_offsets(g.elevation(), model.support_vertical(g.binning()), el_lo, el_hi, de_min, de_max);
+    const int across = offsets_across();
+    angular_term.resize(static_cast<std::size_t>(across) * static_cast<std::size_t>(de_max - de_min + 1));
+    for (int de = de_min; de <= de_max; ++de)
+      for (int da = da_min; da <= da_max; ++da)
+        angular_term[offset_index(da, de)] =
+            static_cast<float>(model.angular_term(g.binning(), da * g.azimuth().width(), de * g.elevation().width()));
+    needs_peak.resize(angular_term.size());
+    for (std::size_t o = 0; o < angular_term.size(); ++o) needs_peak[o] = angular_term[o] < kPeakNegligibleB;
+    for (int da = da_min; da <= da_max; ++da) {
+      int first = 0, last = -1, count = 0;
+      for (int x = 0; x < g.width(); ++x)
+        if (az_lo[static_cast<std::size_t>(x)] <= da && da <= az_hi[static_cast<std::size_t>(x)]) {
+          if (count++ == 0) first = x;
+          last = x;
+        }
+      run_first.push_back(first);
+      run_end.push_back(last + 1);
+      run_contiguous.push_back(count == last + 1 - first);
+    }
+  }
+  int offsets_across() const { return da_max - da_min + 1; }
+  std::size_t offset_index(int da, int de) const {
+    return static_cast<std::size_t>((de - de_min) * offsets_across() + (da - da_min));
+  }
+
+  // Columns of this axis overlapping centre +- support, by the insertion's rule, as offsets.
+  static void axis_offsets(const UniformAxis& axis, double support, std::vector<int>& lo, std::vector<int>& hi,
+                           int& lo_min, int& hi_max) {
+    lo.resize(static_cast<std::size_t>(axis.bins()));
+    hi.resize(lo.size());
+    lo_min = 0;
+    hi_max = 0;
+    for (int i = 0; i < axis.bins(); ++i) {
+      int first, last;
+      axis.overlapping(axis.centre(i) - support, axis.centre(i) + support, first, last);
+      lo[static_cast<std::size_t>(i)] = first - i;
+      hi[static_cast<std::size_t>(i)] = last - i;
+      lo_min = std::min(lo_min, first - i);
+      hi_max = std::max(hi_max, last - i);
+    }
+  }
+
+  // Eqs. 3-4 for one ray; the offsets are visited in the same order as in the row loop below, so both
+  // give bit-identical sums.
+  float ray(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int a, int e) const {
+    const ColumnIndex j = g.column(a, e);
+    const float rho_j = s.depth_m[j];
+    const float inv_sigma = static_cast<float>(1.0 / model.sigma_depth_at(rho_j));
+    float sum = 0.0f;
+    const auto ua = static_cast<std::size_t>(a), ue = static_cast<std::size_t>(e);
+    for (int de = el_lo[ue]; de <= el_hi[ue]; ++de)
+      for (int da = az_lo[ua]; da <= az_hi[ua]; ++da) {
+        const ColumnIndex i = g.column(a + da, e + de);
+        const std::size_t o = offset_index(da, de);
+        const float p_i = s.probability[i], d_rho = s.depth_m[i] - rho_j;
+        sum += needs_peak[o] ? surface_term<true>(p_i, d_rho, inv_sigma, angular_term[o])
+                             : surface_term<false>(p_i, d_rho, inv_sigma, angular_term[o]);
+      }
+    return sum;
+  }
+
+  // Every ray of row e at once: offset by offset, j along the row (contiguous, vectorisable). On x86-64
+  // GCC also builds an AVX2 clone picked at load time (no FMA: results stay bit-identical to ray()).
+  OCC_IMPROVE_ROW_CLONES void row(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
+           std::vector<float>& inv_sigma) const {
+    const int w = g.width();
+    const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+    const float* rho_j = s.depth_m.data() + row_start;
+    for (int x = 0; x < w; ++x) {
+      inv_sigma[static_cast<std::size_t>(x)] = static_cast<float>(1.0 / model.sigma_depth_at(rho_j[x]));
+      out[x] = 0.0f;
+    }
+    const int* lo = az_lo.data();
+    const int* hi = az_hi.data();
+    const float* inv = inv_sigma.data();
+    const auto ue = static_cast<std::size_t>(e);
+    for (int de = el_lo[ue]; de <= el_hi[ue]; ++de) {
+      const std::size_t other_start = static_cast<std::size_t>(e + de) * static_cast<std::size_t>(w);
+      for (int da = da_min; da <= da_max; ++da) {
+        const float* p_i = s.probability.data() + other_start;  // p_i[x + da]: column x + da of row e + de
+        const float* rho_i = s.depth_m.data() + other_start;
+        const float b_angular = angular_term[offset_index(da, de)];
+        // Same additions in the same order either way: the masked loop adds 0 outside the window.
+        const auto accumulate = [&](auto with_peak, auto masked, int x_begin, int x_end) {
+          for (int x = x_begin; x < x_end; ++x) {
+            const float term =
+                surface_term<decltype(with_peak)::value>(p_i[x + da], rho_i[x + da] - rho_j[x], inv[x], b_angular);
+            if constexpr (decltype(masked)::value) {
+              const bool in_window = (lo[x] <= da) & (da <= hi[x]);  // '&': no short-circuit branch
+              out[x] += in_window ? term : 0.0f;
+            } else {
+              out[x] += term;
+            }
+          }
+        };
+        const bool peak = needs_peak[offset_index(da, de)];
+        const auto r = static_cast<std::size_t>(da - da_min);
+        if (run_contiguous[r]) {
+          if (peak)
+            accumulate(std::true_type{}, std::false_type{}, run_first[r], run_end[r]);
+          else
+            accumulate(std::false_type{}, std::false_type{}, run_first[r], run_end[r]);
+        } else {
+          const int x_begin = std::max(0, -da), x_end = std::min(w, w - da);
+          if (peak)
+            accumulate(std::true_type{}, std::true_type{}, x_begin, x_end);
+          else
+            accumulate(std::false_type{}, std::true_type{}, x_begin, x_end);
+        }
+      }
+    }
+  }
+};
+
+// Rays whose window holds a changed column: j with lo[j] <= c - j <= hi[j] on both axes. A few changed
+// columns are scattered to the rays around them (cost proportional to the change); a whole frame's are
+// gathered row by row over a mask, one byte OR per window offset and ray, in the row loop's offset order
+// (vectorised; the scatter costs ~9 branchy updates per column, twice the whole improvement map).
+std::vector<std::uint8_t> affected_rays(const SphericalGeometry& g, const WindowKernel& kernel,
+                                        const std::vector<ColumnIndex>& changed) {
+  const std::size_t columns = g.column_count();
+  std::vector<std::uint8_t> affected(columns, 0);
+  for (const ColumnIndex c : changed)
+    if (c >= columns)
+      throw InvalidInput("changed column " + std::to_string(c) + " is outside the grid (" + std::to_string(columns) +
+                         " columns)");
+  if (changed.size() < columns / 16) {
+    for (const ColumnIndex c : changed) {
+      const int ca = g.azimuth_bin_of(c), ce = g.elevation_bin_of(c);
+      for (int e = std::max(0, ce - kernel.de_max); e <= std::min(g.height() - 1, ce - kernel.de_min); ++e) {
+        const auto ue = static_cast<std::size_t>(e);
+        if (ce - e < kernel.el_lo[ue] || ce - e > kernel.el_hi[ue]) continue;
+        for (int a = std::max(0, ca - kernel.da_max); a <= std::min(g.width() - 1, ca - kernel.da_min); ++a) {
+          const auto ua = static_cast<std::size_t>(a);
+          if (ca - a >= kernel.az_lo[ua] && ca - a <= kernel.az_hi[ua]) affected[g.column(a, e)] = 1;
+        }
+      }
+    }
+    return affected;
+  }
+  std::vector<std::uint8_t> mask(columns, 0);
+  for (const ColumnIndex c : changed) mask[c] = 1;
+  const int w = g.width();
+  for (int e = 0; e < g.height(); ++e) {
+    std::uint8_t* row = affected.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+    const auto ue = static_cast<std::size_t>(e);
+    for (int de = kernel.el_lo[ue]; de <= kernel.el_hi[ue]; ++de) {
+      const std::uint8_t* other = mask.data() + static_cast<std::size_t>(e + de) * static_cast<std::size_t>(w);
+      for (int da = kernel.da_min; da <= kernel.da_max; ++da) {
+        const auto r = static_cast<std::size_t>(da - kernel.da_min);
+        if (kernel.run_contiguous[r]) {
+          for (int x = kernel.run_first[r]; x < kernel.run_end[r]; ++x) row[x] |= other[x + da];
+        } else {
+          for (int x = std::max(0, -da); x < std::min(w, w - da); ++x)
+            if (kernel.az_lo[static_cast<std::size_t>(x)] <= da && da <= kernel.az_hi[static_cast<std::size_t>(x)])
+              row[x] |= other[x + da];
+        }
+      }
+    }
+  }
+  return affected;
+}
+
+// Columns the sensor cannot observe hold NaN: "no value", never ranked (ranking.hpp).
+void mask_unobservable(const SphericalGeometry& g, int e, float* row) {
+  if (g.all_observable()) return;
+  const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(g.width());
+  for (int a = 0; a < g.width(); ++a)
+    if (!g.observable(static_cast<ColumnIndex>(row_start + static_cast<std::size_t>(a))))
+      row[a] = std::numeric_limits<float>::quiet_NaN();
+}
+
+void require_bins(const SphericalGeometry& g, int a, int e) {
+  if (a < 0 || a >= g.width())
+    throw InvalidParameter("azimuth_bin = " + std::to_string(a) + " is outside [0, " + std::to_string(g.width()) + ")");
+  if (e < 0 || e >= g.height())
+    throw InvalidParameter("elevation_bin = " + std::to_string(e) + " is outside [0, " +
+                           std::to_string(g.height()) + ")");
+}
+
+}  // namespace
+
+double ray_improvement(const SphericalGeometry& geometry, const SensorModel& model, const SurfaceMap& surface,
+                       int azimuth_bin, int elevation_bin) {
+  require_bins(geometry, azimuth_bin, elevation_bin);
+  require_matching_surface(geometry, surface);
+  return WindowKernel(geometry, model).ray(geometry, model, surface, azimuth_bin, elevation_bin);
+}
+
+ImprovementMap compute_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+                                   const SurfaceMap& surface, int threads) {
+  detail::require_parameter(threads >= 0, "threads", threads, ">= 0");
+  require_matching_surface(geometry, surface);
+  const WindowKernel kernel(geometry, model);
+  ImprovementMap map;
+  map.width = geometry.width();
+  map.height = geometry.height();
+  map.value.resize(geometry.column_count());
+  const int h = geometry.height();
+  const int parts = std::min(detail::resolve_thread_count(threads), h);
+  detail::run_parts(parts, [&](int part, int count) {
+    std::vector<float> inv_sigma(static_cast<std::size_t>(geometry.width()));
+    for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
+      throw_if_stop_requested();
+      float* row = map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(geometry.width());
+      kernel.row(geometry, model, surface, e, row, inv_sigma);
+      mask_unobservable(geometry, e, row);
+    }
+  });
+  return map;
+}
+
+std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+                                            const SurfaceMap& surface,
+                                            const std::vector<ColumnIndex>& changed_surface_columns,
+                                            ImprovementMap& map) {
+  require_matching_surface(geometry, surface);
+  const std::size_t columns = geometry.column_count();
+  if (map.width == 0 && map.height == 0 && map.value.empty()) {
+    map = compute_improvement(geometry, model, surface);
+    std::vector<ColumnIndex> all(columns);
+    for (std::size_t c = 0; c < columns; ++c) all[c] = static_cast<ColumnIndex>(c);
+    return all;
+  }
+  if (map.width != geometry.width() || map.height != geometry.height() || map.value.size() != columns)
+    throw InvalidInput("improvement map is " + std::to_string(map.width) + " x " + std::to_string(map.height) +
+                       " but the grid has " + std::to_string(geometry.width()) + " x " +
+                       std::to_string(geometry.height()) + " columns");
+  const WindowKernel kernel(geometry, model);
+
+  const std::vector<std::uint8_t> affected = affected_rays(geometry, kernel, changed_surface_columns);
+  std::vector<ColumnIndex> rays;
+  for (std::size_t c = 0; c < columns; ++c)
+    if (affected[c]) rays.push_back(static_cast<ColumnIndex>(c));
+
+  // Rows with many affected rays go through the vectorised row loop (whole row into scratch, affected
+  // values copied), the others ray by ray; both give bit-identical values. Rows are independent.
+  const int w = geometry.width(), h = geometry.height();
+  const int parts = rays.size() < 20000 ? 1 : std::min(detail::resolve_thread_count(0), h);
+  detail::run_parts(parts, [&](int part, int count) {
+    std::vector<float> scratch(static_cast<std::size_t>(w)), inv_sigma(static_cast<std::size_t>(w));
+    for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
+      throw_if_stop_requested();
+      const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+      const auto row_affected = static_cast<int>(
+          std::count(affected.begin() + static_cast<std::ptrdiff_t>(row_start),
+                     affected.begin() + static_cast<std::ptrdiff_t>(row_start + static_cast<std::size_t>(w)), 1));
+      if (row_affected == 0) continue;
+      if (row_affected * 8 >= w) kernel.row(geometry, model, surface, e, scratch.data(), inv_sigma);
+      for (int a = 0; a < w; ++a) {
+        const std::size_t j = row_start + static_cast<std::size_t>(a);
+        if (!affected[j]) continue;
+        map.value[j] = !geometry.observable(static_cast<ColumnIndex>(j)) ? std::numeric_limits<float>::quiet_NaN()
+                       : row_affected * 8 >= w                             ? scratch[static_cast<std::size_t>(a)]
+                                                                           : kernel.ray(geometry, model, surface, a, e);
+      }
+    }
+  });
+  return rays;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,260 @@
+#include "occ_improve/planning/depth_prediction.hpp"
+
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace occ_improve {
+
+void DepthPredictionParams::validate() const {
+  detail::require_parameter(radius_columns >= 0, "radius_columns", radius_columns, ">= 0");
+  detail::require_parameter(rule == DepthPredictionRule::nearest || rule == DepthPredictionRule::linear, "rule",
+                            static_cast<double>(rule), "nearest (0) or linear (1)");
+  detail::require_parameter(discontinuity_sigmas > 0, "discontinuity_sigmas", discontinuity_sigmas, "> 0");
+}
+
+namespace {
+
+/// The nearest rule (header) over a checked sparse image.
+PredictedDepth nearest_fill(const std::vector<float>& sparse, int w, int h, int radius) {
+  const std::size_t n = sparse.size();
+  PredictedDepth out{w, h, std::vector<float>(n, 0.0f), std::vector<std::int32_t>(n, -1)};
+  std::vector<ColumnIndex> queue;  // breadth-first: the front is every column at the current distance
+  queue.reserve(n);
+  for (std::size_t c = 0; c < n; ++c)
+    if (sparse[c] > 0.0f) {
+      out.depth_m[c] = sparse[c];
+      out.distance[c] = 0;
+      queue.push_back(static_cast<ColumnIndex>(c));
+    }
+  for (std::size_t head = 0; head < queue.size(); ++head) {
+    poll_stop(head);
+    const ColumnIndex c = queue[head];
+    const std::int32_t next = out.distance[c] + 1;
+    if (next > radius) break;  // the queue is in distance order: nothing nearer is left
+    const int x = static_cast<int>(c % static_cast<ColumnIndex>(w)), y = static_cast<int>(c / static_cast<ColumnIndex>(w));
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int xx = x + dx, yy = y + dy;
+        if (xx < 0 || yy < 0 || xx >= w || yy >= h) continue;
+        const std::size_t o = static_cast<std::size_t>(yy) * static_cast<std::size_t>(w) + static_cast<std::size_t>(xx);
+        if (out.distance[o] >= 0) continue;
+        out.distance[o] = next;
+        out.depth_m[o] = out.depth_m[c];
+        queue.push_back(static_cast<ColumnIndex>(o));
+      }
+  }
+  return out;
+}
+
+/// Chessboard distance to the nearest sample and that sample's depth, for every column, by the two-pass
+/// distance transform (exact for the chessboard metric, a fraction of the breadth-first search's time); of
+/// equidistant samples the first found by the passes wins. Beyond `radius`: distance -1, depth 0.
+PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h, int radius) {
+  constexpr std::int32_t kFar = std::numeric_limits<std::int32_t>::max() / 2;  // + 1 never overflows
+  const std::size_t n = sparse.size();
+  PredictedDepth out{w, h, std::vector<float>(n, 0.0f), std::vector<std::int32_t>(n, kFar)};
+  for (std::size_t c = 0; c < n; ++c)
+    if (sparse[c] > 0.0f) {
+      out.depth_m[c] = sparse[c];
+      out.distance[c] = 0;
+    }
+  // Forward pass: left, up-left, up, up-right; backward pass: the mirror. Row pointers, no bounds checks
+  // inside a row (the passes run over every pixel: this is most of their time).
+  std::int32_t* d = out.distance.data();
+  float* z = out.depth_m.data();
+  const auto relax = [&](std::size_t c, std::size_t o) {  // branch-free: the comparison is unpredictable
+    const std::int32_t via = d[o] + 1;
+    const bool better = via < d[c];
+    d[c] = better ? via : d[c];
+    z[c] = better ? z[o] : z[c];
+  };
+  const auto W = static_cast<std::size_t>(w);
+  for (int y = 0; y < h; ++y) {
+    throw_if_stop_requested();
+    const std::size_t row = static_cast<std::size_t>(y) * W;
+    for (std::size_t x = 0; x < W; ++x) {
+      const std::size_t c = row + x;
+      if (d[c] == 0) continue;
+      if (x > 0) relax(c, c - 1);
+      if (y == 0) continue;
+      if (x > 0) relax(c, c - W - 1);
+      relax(c, c - W);
+      if (x + 1 < W) relax(c, c - W + 1);
+    }
+  }
+  for (int y = h - 1; y >= 0; --y) {
+    throw_if_stop_requested();
+    const std::size_t row = static_cast<std::size_t>(y) * W;
+    for (std::size_t x = W; x-- > 0;) {
+      const std::size_t c = row + x;
+      if (d[c] == 0) continue;
+      if (x + 1 < W) relax(c, c + 1);
+      if (y == h - 1) continue;
+      if (x + 1 < W) relax(c, c + W + 1);
+      relax(c, c + W);
+      if (x > 0) relax(c, c + W - 1);
+    }
+  }
+  for (std::size_t c = 0; c < n; ++c)
+    if (out.distance[c] > radius) {
+      out.distance[c] = -1;
+      out.depth_m[c] = 0.0f;
+    }
+  return out;
+}
+
+/// Calls f(column, e0, e1, e2) for every pixel inside triangle t or on its edges, e_i >= 0 being twice the
+/// area of the sub-triangle opposite vertex i (barycentric weights x twice the area). The edge functions
+/// step by one addition per pixel.
+template <class F>
+void for_each_pixel(const SampleTriangulation& s, std::size_t t, F&& f) {
+  const auto& v = s.triangles[t];
+  const int x0 = s.x(v[0]), y0 = s.y(v[0]), x1 = s.x(v[1]), y1 = s.y(v[1]), x2 = s.x(v[2]), y2 = s.y(v[2]);
+  const int xmin = std::min({x0, x1, x2}), xmax = std::max({x0, x1, x2});
+  const int ymin = std::min({y0, y1, y2}), ymax = std::max({y0, y1, y2});
+  // e(a, b, p) = (bx - ax)(py - ay) - (by - ay)(px - ax): + (bx - ax) per row, - (by - ay) per column.
+  const auto at = [](int ax, int ay, int bx, int by, int px, int py) {
+    return static_cast<std::int64_t>(bx - ax) * (py - ay) - static_cast<std::int64_t>(by - ay) * (px - ax);
+  };
+  std::int64_t r0 = at(x1, y1, x2, y2, xmin, ymin), r1 = at(x2, y2, x0, y0, xmin, ymin), r2 = at(x0, y0, x1, y1, xmin, ymin);
+  const std::int64_t sx0 = -(y2 - y1), sx1 = -(y0 - y2), sx2 = -(y1 - y0);
+  const std::int64_t sy0 = x2 - x1, sy1 = x0 - x2, sy2 = x1 - x0;
+  for (int y = ymin; y <= ymax; ++y, r0 += sy0, r1 += sy1, r2 += sy2) {
+    std::int64_t e0 = r0, e1 = r1, e2 = r2;
+    const std::size_t row = static_cast<std::size_t>(y) * static_cast<std::size_t>(s.width);
+    bool entered = false;
+    for (int x = xmin; x <= xmax; ++x, e0 += sx0, e1 += sx1, e2 += sx2) {
+      if ((e0 | e1 | e2) >= 0) {  // all three non-negative
+        f(row + static_cast<std::size_t>(x), e0, e1, e2);
+        entered = true;
+      } else if (entered) {
+        break;  // a triangle's row is one run of pixels
+      }
+    }
+  }
+}
+
+/// Interpolable triangles: barycentric in inverse depth. `open`: columns still to be written.
+void interpolate(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& open) {
+  const auto& v = s.triangles[t];
+  // Barycentric weights e_i / (2 area): pre-scale the vertices' inverse depths once per triangle.
+  const double twice_area = 2.0 * s.area_px2(t);
+  float w[3];
+  for (int i = 0; i < 3; ++i)
+    w[i] = static_cast<float>(1.0 / (twice_area * s.vertex_depth_m[static_cast<std::size_t>(v[static_cast<std::size_t>(i)])]));
+  for_each_pixel(s, t, [&](std::size_t c, std::int64_t e0, std::int64_t e1, std::int64_t e2) {
+    if (!open[c]) return;
+    out.depth_m[c] = 1.0f / (static_cast<float>(e0) * w[0] + static_cast<float>(e1) * w[1] + static_cast<float>(e2) * w[2]);
+    open[c] = 0;
+  });
+}
+
+/// Triangles across a discontinuity: the nearest vertex, the nearer surface on a tie.
+void nearest_vertex(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& open) {
+  const auto& v = s.triangles[t];
+  for_each_pixel(s, t, [&](std::size_t c, std::int64_t, std::int64_t, std::int64_t) {
+    if (!open[c]) return;
+    const int x = static_cast<int>(c % static_cast<std::size_t>(s.width)), y = static_cast<int>(c / static_cast<std::size_t>(s.width));
+    long best_d2 = -1;
+    float best_z = 0.0f;
+    for (const std::int32_t i : v) {
+      const long dx = s.x(i) - x, dy = s.y(i) - y, d2 = dx * dx + dy * dy;
+      const float z = s.vertex_depth_m[static_cast<std::size_t>(i)];
+      if (best_d2 < 0 || d2 < best_d2 || (d2 == best_d2 && z < best_z)) {
+        best_d2 = d2;
+        best_z = z;
+      }
+    }
+    out.depth_m[c] = best_z;
+    open[c] = 0;
+  });
+}
+
+/// The linear rule (header) on top of the distance transform's nearest samples.
+void linear_fill(const std::vector<float>& sparse, const SensorModel& model, const DepthPredictionParams& params,
+                 PredictedDepth& out) {
+  TriangulationParams tp;
+  tp.discontinuity_sigmas = params.discontinuity_sigmas;
+  tp.max_edge_columns = std::max(1, 2 * params.radius_columns);
+  const SampleTriangulation s = triangulate_samples(sparse, out.width, out.height, model, tp);
+  std::vector<std::uint8_t> open(sparse.size());
+  for (std::size_t c = 0; c < open.size(); ++c) open[c] = out.distance[c] > 0;  // predicted, not a sample
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    poll_stop(t, 1024);
+    if (s.interpolable[t]) interpolate(s, t, out, open);
+  }
+  // Shared edges: an interpolable neighbour wrote them first, with the values of the two continuous ends.
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    poll_stop(t, 1024);
+    if (!s.interpolable[t] && s.longest_edge_columns(t) <= tp.max_edge_columns) nearest_vertex(s, t, out, open);
+  }
+}
+
+void check_surface(const SurfaceMap& surface) {
+  const std::size_t n = static_cast<std::size_t>(surface.width) * static_cast<std::size_t>(surface.height);
+  if (surface.depth_m.size() != n || surface.probability.size() != n || surface.unknown.size() != n)
+    throw InvalidInput("predict_depth: surface arrays do not hold " + std::to_string(surface.width) + " x " +
+                       std::to_string(surface.height) + " values");
+}
+
+}  // namespace
+
+std::vector<float> sample_depth_image(const SurfaceMap& surface) {
+  check_surface(surface);
+  std::vector<float> image(surface.depth_m.size(), 0.0f);
+  for (std::size_t c = 0; c < image.size(); ++c)
+    if (is_depth_sample(surface, c)) image[c] = surface.depth_m[c];
+  return image;
+}
+
+PredictedDepth predict_dense_depth(const std::vector<float>& sparse_depth_m, int width, int height,
+                                   const SensorModel& model, const DepthPredictionParams& params) {
+  params.validate();
+  check_sparse_depth_image(sparse_depth_m, width, height);
+  if (params.rule == DepthPredictionRule::nearest) return nearest_fill(sparse_depth_m, width, height, params.radius_columns);
+  PredictedDepth out = distance_transform(sparse_depth_m, width, height, params.radius_columns);
+  linear_fill(sparse_depth_m, model, params, out);
+  return out;
+}
+
+PredictedDepth predict_depth(const SurfaceMap& surface, const SensorModel& model, const DepthPredictionParams& params) {
+  params.validate();
+  return predict_dense_depth(sample_depth_image(surface), surface.width, surface.height, model, params);
+}
+
+PredictedDepth predict_depth(const SurfaceMap& surface, const DepthPredictionParams& params) {
+  params.validate();
+  if (params.rule != DepthPredictionRule::nearest)
+    throw InvalidParameter("predict_depth: rule = linear needs the sensor model (call the overload with a SensorModel)");
+  check_surface(surface);
+  if (surface.width <= 0 || surface.height <= 0)  // an empty surface predicts nothing
+    return PredictedDepth{surface.width, surface.height, {}, {}};
+  const std::vector<float> image = sample_depth_image(surface);
+  return nearest_fill(image, surface.width, surface.height, params.radius_columns);
+}
+
+DepthAgreement depth_agreement(const SurfaceMap& reference, const PredictedDepth& predicted, const SensorModel& model,
+                               double sigmas) {
+  detail::require_parameter(sigmas > 0, "sigmas", sigmas, "> 0");
+  const std::size_t n = static_cast<std::size_t>(reference.width) * static_cast<std::size_t>(reference.height);
+  if (predicted.width != reference.width || predicted.height != reference.height || predicted.depth_m.size() != n ||
+      predicted.distance.size() != n || reference.depth_m.size() != n)
+    throw InvalidInput("depth_agreement: prediction of " + std::to_string(predicted.width) + " x " +
+                       std::to_string(predicted.height) + " columns against a reference of " +
+                       std::to_string(reference.width) + " x " + std::to_string(reference.height));
+  DepthAgreement a;
+  for (std::size_t c = 0; c < n; ++c) {
+    if (!is_depth_sample(reference, c)) continue;
+    ++a.reference_samples;
+    const double z = reference.depth_m[c];
+    if (predicted.distance[c] >= 0 && std::abs(predicted.depth_m[c] - z) <= sigmas * model.sigma_depth_at(z)) ++a.within;
+  }
+  return a;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,334 @@
+#include "occ_improve/planning/planner.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/planning/ranking.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace occ_improve {
+namespace {
+
+Shot rays_shot(const std::vector<float>& score, const PlanRequest& request) {
+  const auto negative_budget = static_cast<std::size_t>(std::floor(request.negative_share * request.budget_rays));
+  const std::uint8_t* mask = request.candidates.empty() ? nullptr : request.candidates.data();
+  std::vector<ColumnIndex> negative;
+  std::vector<std::uint8_t> rest;  // the mask without the negative rays taken, when there are any
+  if (negative_budget > 0) {
+    std::vector<float> flipped(score.size());
+    std::vector<std::uint8_t> is_negative(score.size());
+    for (std::size_t c = 0; c < score.size(); ++c) {
+      flipped[c] = -score[c];
+      is_negative[c] = (!mask || mask[c]) && score[c] < 0;
+    }
+    negative = best_columns(flipped, is_negative.data(), negative_budget);
+    rest = mask ? request.candidates : std::vector<std::uint8_t>(score.size(), 1);
+    for (ColumnIndex c : negative) rest[c] = 0;
+    mask = rest.data();
+  }
+  Shot shot;
+  shot.columns = best_columns(score, mask, static_cast<std::size_t>(request.budget_rays) - negative.size());
+  shot.ranked_rays = shot.columns.size();
+  for (ColumnIndex c : shot.columns) shot.expected_gain += score[c];
+  shot.columns.insert(shot.columns.end(), negative.begin(), negative.end());
+  return shot;
+}
+
+Shot window_shot(const std::vector<float>& score, int width, int height, const PlanRequest& request) {
+  const int ww = request.window_width_columns, wh = request.window_height_columns;
+  const auto w1 = static_cast<std::size_t>(width) + 1;
+  std::vector<double> integral(w1 * (static_cast<std::size_t>(height) + 1), 0.0);  // summed-area table
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const std::size_t i = (static_cast<std::size_t>(y) + 1) * w1 + static_cast<std::size_t>(x) + 1;
+      const float v = score[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
+      integral[i] = (v == v ? v : 0.0) + integral[i - 1] + integral[i - w1] - integral[i - w1 - 1];  // NaN: adds nothing
+    }
+  const auto sum_at = [&](int x, int y) {
+    const auto at = [&](int xx, int yy) { return integral[static_cast<std::size_t>(yy) * w1 + static_cast<std::size_t>(xx)]; };
+    return at(x + ww, y + wh) - at(x, y + wh) - at(x + ww, y) + at(x, y);
+  };
+  int best_x = 0, best_y = 0;
+  double best = sum_at(0, 0);
+  for (int y = 0; y + wh <= height; ++y)
+    for (int x = 0; x + ww <= width; ++x)
+      if (const double s = sum_at(x, y); s > best) {
+        best = s;
+        best_x = x;
+        best_y = y;
+      }
+  Shot shot;
+  for (int y = best_y; y < best_y + wh; ++y)
+    for (int x = best_x; x < best_x + ww; ++x)
+      shot.columns.push_back(static_cast<ColumnIndex>(y) * static_cast<ColumnIndex>(width) + static_cast<ColumnIndex>(x));
+  shot.expected_gain = best;
+  return shot;
+}
+
+Shot decimation_shot(const std::vector<float>& score, int width, int height, const PlanRequest& request) {
+  const int step = decimation_step(width, height, request.budget_rays);
+  std::vector<double> sums(static_cast<std::size_t>(step) * static_cast<std::size_t>(step), 0.0);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x) {
+      const float v = score[static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)];
+      sums[static_cast<std::size_t>((y % step) * step + x % step)] += v == v ? v : 0.0;  // NaN: adds nothing
+    }
+  // Row-major order of offsets: the first maximum is the lowest (row, column) offset.
+  const auto best = static_cast<int>(std::max_element(sums.begin(), sums.end()) - sums.begin());
+  Shot shot;
+  shot.columns = decimation_pattern(width, height, step, best % step, best / step);
+  shot.expected_gain = sums[static_cast<std::size_t>(best)];
+  return shot;
+}
+
+
+// coarse_to_fine's constants (planner.hpp says why).
+constexpr double kCoverageMinReturn = 0.5;
+constexpr std::size_t kBlocksPerRay = 4;
+constexpr ColumnIndex kNoColumn = std::numeric_limits<ColumnIndex>::max();
+
+// Per block of `level`: the eligible column of largest rank_key(score) (kNoColumn where none) and the
+// block's return rate (R + 1) / (A + 1) over the asks the record holds for its columns, one pass. The rate
+// complements the per-ray return probability, whose neighbourhood prior only reaches 8 columns: a block of
+// a silent region (out of range, cropped, dark) falls after a few asks wherever they were.
+struct BlockBest {
+  std::vector<ColumnIndex> column;
+  std::vector<float> return_rate;
+  std::vector<std::uint32_t> measured;  ///< columns the record saw return at least once
+};
+BlockBest best_ray_per_block(const ImprovementPyramid& pyramid, int level, const std::vector<float>& score,
+                             const std::uint8_t* eligible, const ReturnRecord& returns) {
+  BlockBest best;
+  best.column.assign(pyramid.block_count(level), kNoColumn);
+  best.measured.assign(best.column.size(), 0);
+  std::vector<std::uint64_t> best_key(best.column.size(), 0);
+  std::vector<std::uint32_t> asked(best.column.size(), 0), returned(best.column.size(), 0);
+  const int s = ImprovementPyramid::block_size(level), w = pyramid.width(), across = pyramid.blocks_x(level);
+  for (int v = 0; v < pyramid.height(); ++v) {
+    const std::size_t row = static_cast<std::size_t>(v / s) * static_cast<std::size_t>(across);
+    for (int u = 0; u < w; ++u) {
+      const auto c = static_cast<ColumnIndex>(v) * static_cast<ColumnIndex>(w) + static_cast<ColumnIndex>(u);
+      const std::size_t b = row + static_cast<std::size_t>(u / s);
+      asked[b] += returns.asked()[c];
+      returned[b] += returns.returned()[c];
+      best.measured[b] += returns.returned()[c] > 0 ? 1u : 0u;
+      if ((eligible && !eligible[c]) || std::isnan(score[c])) continue;
+      const std::uint64_t key = rank_key(score[c], c);
+      if (best.column[b] == kNoColumn || key > best_key[b]) best.column[b] = c, best_key[b] = key;
+    }
+  }
+  best.return_rate.resize(best.column.size());
+  for (std::size_t b = 0; b < best.column.size(); ++b)
+    best.return_rate[b] = static_cast<float>((returned[b] + 1.0) / (asked[b] + 1.0));
+  return best;
+}
+
+// r of a block, or of the nearest ancestor with enough samples; the cap where none has.
+double inherited_residual(const ImprovementPyramid& pyramid, int level, std::size_t block, const SensorModel& model,
+                          const PlanRequest& request) {
+  int bx = static_cast<int>(block % static_cast<std::size_t>(pyramid.blocks_x(level)));
+  int by = static_cast<int>(block / static_cast<std::size_t>(pyramid.blocks_x(level)));
+  for (; level < ImprovementPyramid::kLevels; ++level, bx /= 2, by /= 2) {
+    const double r = pyramid.residual_sigmas(level, bx, by, model, request.local_model);
+    if (!std::isnan(r)) return std::min(r, request.residual_cap_sigmas);
+  }
+  // No samples within 3 x 3 blocks of 16: unseen (the coverage pass's job) or silent (asking again wastes
+  // rays: measured, it cost the real scenes a third of their returns).
+  return 0.0;
+}
+
+// `unmeasured`: the share of the block's rays without a measurement of their own (a return in the record;
+// without a record, without a depth sample: a full frame's map).
+double block_priority(const ImprovementPyramid& pyramid, int level, std::size_t block, double p, double unmeasured,
+                      const SensorModel& model, const PlanRequest& request) {
+  const int across = pyramid.blocks_x(level);
+  const BlockSummary& b = pyramid.block(level, static_cast<int>(block % static_cast<std::size_t>(across)),
+                                        static_cast<int>(block / static_cast<std::size_t>(across)));
+  // The magnitude of the block's mean improvement: missing data (0.324) and depth transitions (negative:
+  // "regions of negative improvement can be re-acquired") high, settled blocks (~0.1 and less) low.
+  const double improvement = std::abs(static_cast<double>(b.mean_improvement()));
+  if (request.refine_by == RefineBy::improvement) return improvement * p;
+  // The residual does not fall when a block is sampled (an edge stays an edge): the share of its rays
+  // still unmeasured stands for what a new ray there can add to the prediction. Not the pyramid's depth
+  // samples: a measurement's OPDF makes its 3 x 3 neighbours samples too, and counting them stopped the
+  // refinement once every ray had a measured neighbour (measured: the quality stalled at 0.84-0.87).
+  const double residual = inherited_residual(pyramid, level, block, model, request) / request.residual_cap_sigmas;
+  const double geometric = residual * p * std::max(0.0, unmeasured);
+  return request.refine_by == RefineBy::both ? geometric * improvement : geometric;
+}
+
+Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SensorModel& model,
+                         const ReturnRecord& returns, const PlanRequest& request) {
+  const std::vector<float> probability = return_probability_map(returns, request.return_model);
+  std::vector<float> score(probability.size());
+  for (std::size_t c = 0; c < score.size(); ++c) score[c] = probability[c] * improvement.value[c];
+  const std::uint8_t* mask = request.candidates.empty() ? nullptr : request.candidates.data();
+  const auto budget = static_cast<std::size_t>(request.budget_rays);
+  Shot shot;
+  const auto take = [&](ColumnIndex c) {
+    shot.columns.push_back(c);
+    shot.expected_gain += score[c];
+  };
+  // 1. Coverage: blocks without a sample, one jittered ray each, spread over the view by rank_key.
+  const int coverage_level = ImprovementPyramid::level_of_block_size(request.coverage_block_columns);
+  {
+    const BlockBest blocks = best_ray_per_block(pyramid, coverage_level, score, mask, returns);
+    const std::vector<ColumnIndex>& best = blocks.column;
+    const int across = pyramid.blocks_x(coverage_level);
+    std::vector<std::pair<std::uint64_t, std::size_t>> open;  // (rank_key over the block index, block)
+    for (std::size_t b = 0; b < best.size(); ++b) {
+      const ColumnIndex c = best[b];
+      if (c == kNoColumn || !(score[c] > 0) || probability[c] * blocks.return_rate[b] < kCoverageMinReturn) continue;
+      const BlockSummary& block = pyramid.block(coverage_level, static_cast<int>(b % static_cast<std::size_t>(across)),
+                                                static_cast<int>(b / static_cast<std::size_t>(across)));
+      if (block.samples == 0) open.push_back({rank_key(score[c], static_cast<ColumnIndex>(b)), b});
+    }
+    std::sort(open.begin(), open.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
+    for (std::size_t i = 0; i < open.size() && shot.columns.size() < budget; ++i) take(best[open[i].second]);
+  }
+  const std::size_t coverage_rays = shot.columns.size();
+  // 2. Refinement: one ray per block of the level that leaves the priority room to choose.
+  const std::size_t left = budget - coverage_rays;
+  if (left > 0) {
+    int level = 0;
+    for (int l = ImprovementPyramid::kLevels - 1; l >= 0; --l)
+      if (pyramid.block_count(l) >= kBlocksPerRay * left) {
+        level = l;
+        break;
+      }
+    std::vector<std::uint8_t> eligible = mask ? request.candidates : std::vector<std::uint8_t>(score.size(), 1);
+    std::vector<std::uint8_t> block_taken(pyramid.block_count(level), 0);
+    for (std::size_t i = 0; i < coverage_rays; ++i) {
+      eligible[shot.columns[i]] = 0;
+      block_taken[pyramid.block_of_column(level, shot.columns[i])] = 1;
+    }
+    const BlockBest blocks = best_ray_per_block(pyramid, level, score, eligible.data(), returns);
+    const std::vector<ColumnIndex>& best = blocks.column;
+    std::vector<std::pair<std::uint64_t, std::size_t>> ranked;
+    for (std::size_t b = 0; b < best.size(); ++b) {
+      if (best[b] == kNoColumn || block_taken[b] || !(score[best[b]] > 0)) continue;
+      const double p = static_cast<double>(probability[best[b]]) * blocks.return_rate[b];
+      const BlockSummary& summary = pyramid.block(level, static_cast<int>(b % static_cast<std::size_t>(pyramid.blocks_x(level))),
+                                                  static_cast<int>(b / static_cast<std::size_t>(pyramid.blocks_x(level))));
+      const double rays = summary.observable_rays ? summary.observable_rays : 1.0;
+      const double unmeasured = returns.empty() ? 1.0 - summary.samples / rays : 1.0 - blocks.measured[b] / rays;
+      const double priority = block_priority(pyramid, level, b, p, unmeasured, model, request);
+      if (priority > 0) ranked.push_back({rank_key(static_cast<float>(priority), static_cast<ColumnIndex>(b)), b});
+    }
+    const std::size_t n = std::min(left, ranked.size());
+    std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(n), ranked.end(),
+                      [](const auto& a, const auto& b) { return a.first > b.first; });
+    for (std::size_t i = 0; i < n; ++i) take(best[ranked[i].second]);
+  }
+  shot.ranked_rays = shot.columns.size();
+  return shot;
+}
+}  // namespace
+
+void PlanRequest::validate(int grid_width, int grid_height) const {
+  const double columns = static_cast<double>(grid_width) * grid_height;
+  detail::require_parameter(budget_rays > 0 && budget_rays <= columns, "budget_rays", budget_rays,
+                            "in [1, the grid's column count]");
+  detail::require_parameter(negative_share >= 0 && negative_share < 1, "negative_share", negative_share, "in [0, 1)");
+  detail::require_parameter(std::isfinite(stop_gain_per_ray_below) && stop_gain_per_ray_below >= 0,
+                            "stop_gain_per_ray_below", stop_gain_per_ray_below, "finite and >= 0");
+  return_model.validate();
+  if (shape == ShotShape::coarse_to_fine) {
+    ImprovementPyramid::level_of_block_size(coverage_block_columns);  // InvalidParameter naming the value
+    detail::require_parameter(std::isfinite(residual_cap_sigmas) && residual_cap_sigmas > 0, "residual_cap_sigmas",
+                              residual_cap_sigmas, "finite and > 0");
+  }
+  if (shape == ShotShape::window) {
+    detail::require_parameter(window_width_columns > 0 && window_width_columns <= grid_width, "window_width_columns",
+                              window_width_columns, "in [1, the grid's width]");
+    detail::require_parameter(window_height_columns > 0 && window_height_columns <= grid_height,
+                              "window_height_columns", window_height_columns, "in [1, the grid's height]");
+    detail::require_parameter(static_cast<double>(window_width_columns) * window_height_columns <= budget_rays,
+                              "window_width_columns * window_height_columns",
+                              static_cast<double>(window_width_columns) * window_height_columns, "<= budget_rays");
+  }
+  if (!candidates.empty() && candidates.size() != static_cast<std::size_t>(columns)) {
+    std::ostringstream m;
+    m << "candidate mask of " << candidates.size() << " columns does not match the grid's " << grid_width << " x "
+      << grid_height;
+    throw InvalidInput(m.str());
+  }
+}
+
+std::vector<float> shot_scores(const ImprovementMap& improvement, const ReturnRecord& returns,
+                               const ReturnModelParams& params) {
+  if (improvement.value.size() != static_cast<std::size_t>(improvement.width) * static_cast<std::size_t>(improvement.height))
+    throw InvalidInput("improvement map holds " + std::to_string(improvement.value.size()) + " values for " +
+                       std::to_string(improvement.width) + " x " + std::to_string(improvement.height) + " columns");
+  returns.check_matches(improvement.width, improvement.height);
+  std::vector<float> score = return_probability_map(returns, params);
+  for (std::size_t c = 0; c < score.size(); ++c) score[c] *= improvement.value[c];
+  return score;
+}
+
+namespace {
+Shot decide_stop(Shot shot, const PlanRequest& request) {
+  const double threshold = request.stop_gain_per_ray_below * static_cast<double>(shot.ranked_rays);
+  shot.stop = shot.ranked_rays == 0 || shot.expected_gain < threshold;
+  std::ostringstream reason;
+  reason << "expected gain " << shot.expected_gain << " over " << shot.ranked_rays << " rays "
+         << (shot.stop ? "is below " : "reaches ") << threshold << " (" << request.stop_gain_per_ray_below << " per ray)";
+  shot.reason = reason.str();
+  return shot;
+}
+}  // namespace
+
+Shot plan_next_shot(const ImprovementMap& improvement, const ReturnRecord& returns, const PlanRequest& request) {
+  request.validate(improvement.width, improvement.height);
+  if (request.shape == ShotShape::coarse_to_fine)
+    throw InvalidParameter("shape coarse_to_fine needs the multi-scale pyramid: call plan_next_shot with the mapper "
+                           "or with the pyramid and the sensor model");
+  const std::vector<float> score = shot_scores(improvement, returns, request.return_model);
+  Shot shot = request.shape == ShotShape::rays     ? rays_shot(score, request)
+              : request.shape == ShotShape::window ? window_shot(score, improvement.width, improvement.height, request)
+                                                   : decimation_shot(score, improvement.width, improvement.height, request);
+  if (request.shape != ShotShape::rays) shot.ranked_rays = shot.columns.size();
+  return decide_stop(std::move(shot), request);
+}
+
+Shot plan_next_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SensorModel& model,
+                    const ReturnRecord& returns, const PlanRequest& request) {
+  if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(improvement, returns, request);
+  request.validate(improvement.width, improvement.height);
+  if (pyramid.width() != improvement.width || pyramid.height() != improvement.height)
+    throw InvalidInput("multi-scale pyramid is " + std::to_string(pyramid.width()) + " x " +
+                       std::to_string(pyramid.height()) + " but the improvement map is " +
+                       std::to_string(improvement.width) + " x " + std::to_string(improvement.height));
+  if (improvement.value.size() != static_cast<std::size_t>(improvement.width) * static_cast<std::size_t>(improvement.height))
+    throw InvalidInput("improvement map holds " + std::to_string(improvement.value.size()) + " values for " +
+                       std::to_string(improvement.width) + " x " + std::to_string(improvement.height) + " columns");
+  returns.check_matches(improvement.width, improvement.height);
+  return decide_stop(coarse_to_fine_shot(improvement, pyramid, model, returns, request), request);
+}
+
+Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const PlanRequest& request) {
+  return plan_next_shot(mapper.improvement(), mapper.pyramid(), mapper.model(), returns, request);
+}
+
+int decimation_step(int width, int height, int budget_rays) {
+  detail::require_parameter(budget_rays > 0, "budget_rays", budget_rays, "> 0");
+  int step = 1;
+  while ((static_cast<long long>(width + step - 1) / step) * ((height + step - 1) / step) > budget_rays) ++step;
+  return step;
+}
+
+std::vector<ColumnIndex> decimation_pattern(int width, int height, int step, int offset_x, int offset_y) {
+  detail::require_parameter(step > 0, "step", step, "> 0");
+  detail::require_parameter(offset_x >= 0 && offset_x < step, "offset_x", offset_x, "in [0, step)");
+  detail::require_parameter(offset_y >= 0 && offset_y < step, "offset_y", offset_y, "in [0, step)");
+  std::vector<ColumnIndex> out;
+  for (int y = offset_y; y < height; y += step)
+    for (int x = offset_x; x < width; x += step)
+      out.push_back(static_cast<ColumnIndex>(y) * static_cast<ColumnIndex>(width) + static_cast<ColumnIndex>(x));
+  return out;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,98 @@
+#include "occ_improve/planning/return_model.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <string>
+
+namespace occ_improve {
+
+ReturnRecord ReturnRecord::for_grid(int width, int height) {
+  detail::require_parameter(width > 0, "width", width, "> 0");
+  detail::require_parameter(height > 0, "height", height, "> 0");
+  ReturnRecord r;
+  r.width_ = width;
+  r.height_ = height;
+  r.asked_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  r.returned_ = r.asked_nearby_ = r.returned_nearby_ = r.asked_;
+  return r;
+}
+
+ReturnRecord ReturnRecord::from_counts(int width, int height, std::vector<std::uint32_t> asked,
+                                       std::vector<std::uint32_t> returned) {
+  ReturnRecord r = for_grid(width, height);
+  if (asked.size() != r.size() || returned.size() != r.size()) {
+    std::ostringstream m;
+    m << "return record holds " << asked.size() << " / " << returned.size() << " counts for " << width << " x "
+      << height << " columns";
+    throw InvalidInput(m.str());
+  }
+  for (std::size_t c = 0; c < r.size(); ++c)
+    if (returned[c] > asked[c]) {
+      std::ostringstream m;
+      m << "return record column " << c << " has " << returned[c] << " returns of " << asked[c] << " asks";
+      throw InvalidInput(m.str());
+    }
+  for (std::size_t c = 0; c < r.size(); ++c) {
+    for (std::uint32_t i = 0; i < asked[c]; ++i) r.count(static_cast<ColumnIndex>(c), i < returned[c]);
+  }
+  return r;
+}
+
+void ReturnRecord::check_matches(int grid_width, int grid_height) const {
+  if (width_ == grid_width && height_ == grid_height) return;
+  std::ostringstream m;
+  m << "return record of " << width_ << " x " << height_ << " columns does not match the grid's " << grid_width
+    << " x " << grid_height;
+  throw InvalidInput(m.str());
+}
+
+void ReturnRecord::count(ColumnIndex column, bool got_return) {
+  ++asked_[column];
+  returned_[column] += got_return ? 1 : 0;
+  const int x = static_cast<int>(column % static_cast<ColumnIndex>(width_));
+  const int y = static_cast<int>(column / static_cast<ColumnIndex>(width_));
+  for (int yy = std::max(0, y - 1); yy <= std::min(height_ - 1, y + 1); ++yy)
+    for (int xx = std::max(0, x - 1); xx <= std::min(width_ - 1, x + 1); ++xx) {
+      if (xx == x && yy == y) continue;
+      const std::size_t n = static_cast<std::size_t>(yy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(xx);
+      ++asked_nearby_[n];
+      returned_nearby_[n] += got_return ? 1 : 0;
+    }
+  ++total_asked_;
+  total_returned_ += got_return ? 1 : 0;
+}
+
+void ReturnRecord::record_shot(const std::vector<ColumnIndex>& columns, const std::vector<std::uint8_t>& got_return) {
+  if (columns.size() != got_return.size())
+    throw InvalidInput("record_shot: " + std::to_string(columns.size()) + " columns but " +
+                       std::to_string(got_return.size()) + " return flags");
+  for (ColumnIndex c : columns) detail::require_parameter(c < size(), "shot column", c, "inside the return record's grid");
+  for (std::size_t i = 0; i < columns.size(); ++i) count(columns[i], got_return[i] != 0);
+}
+
+void ReturnModelParams::validate() const {
+  detail::require_parameter(std::isfinite(prior_strength_shots) && prior_strength_shots > 0, "prior_strength_shots",
+                            prior_strength_shots, "finite and > 0");
+}
+
+double record_return_rate(const ReturnRecord& record) {
+  return record.empty() ? 1.0 : static_cast<double>(record.total_returned()) / static_cast<double>(record.total_asked());
+}
+
+std::vector<float> return_probability_map(const ReturnRecord& record, const ReturnModelParams& params) {
+  params.validate();
+  std::vector<float> p(record.size(), 1.0f);
+  if (record.empty()) return p;
+  const auto s = static_cast<float>(params.prior_strength_shots);
+  const std::uint32_t *asked = record.asked().data(), *returned = record.returned().data();
+  const std::uint32_t *asked_n = record.asked_nearby().data(), *returned_n = record.returned_nearby().data();
+  for (std::size_t c = 0; c < p.size(); ++c) {
+    const float prior = (static_cast<float>(returned_n[c]) + 1.0f) / (static_cast<float>(asked_n[c]) + 1.0f);
+    p[c] = (s * prior + static_cast<float>(returned[c])) / (s + static_cast<float>(asked[c]));
+  }
+  return p;
+}
+
+}  // namespace occ_improve

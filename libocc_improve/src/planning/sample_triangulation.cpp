@@ -1,0 +1,375 @@
+#include "occ_improve/planning/sample_triangulation.hpp"
+
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <string>
+
+namespace occ_improve {
+
+void TriangulationParams::validate() const {
+  detail::require_parameter(discontinuity_sigmas > 0, "discontinuity_sigmas", discontinuity_sigmas, "> 0");
+  detail::require_parameter(max_edge_columns >= 1, "max_edge_columns", max_edge_columns, ">= 1");
+}
+
+namespace {
+
+__extension__ typedef __int128 Int128;  // exact in-circle tests with a super corner 2^22 px away
+
+constexpr std::int64_t kSuper = std::int64_t{1} << 22;  // super triangle corners: far outside any image
+constexpr int kMaxSide = 1 << 20;                       // images up to this size lie well inside it
+constexpr int kSmallSide = 1 << 13;                     // below it the in-circle test fits in 64 bits
+
+struct Point {
+  std::int64_t x, y;
+};
+
+std::int64_t orient(const Point& a, const Point& b, const Point& c) {
+  return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
+/// > 0 when d lies strictly inside the circle through a, b, c (orient(a, b, c) > 0).
+template <class T>
+bool in_circle(const Point& a, const Point& b, const Point& c, const Point& d) {
+  const T adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
+  const T ad = adx * adx + ady * ady, bd = bdx * bdx + bdy * bdy, cd = cdx * cdx + cdy * cdy;
+  return adx * (bdy * cd - bd * cdy) - ady * (bdx * cd - bd * cdx) + ad * (bdx * cdy - bdy * cdx) > 0;
+}
+
+/// Position of (x, y) along a Hilbert curve over a side x side square (side a power of two).
+std::uint64_t hilbert_index(std::uint32_t side, std::uint32_t x, std::uint32_t y) {
+  std::uint64_t d = 0;
+  for (std::uint32_t s = side / 2; s > 0; s /= 2) {
+    const std::uint32_t rx = (x & s) ? 1u : 0u, ry = (y & s) ? 1u : 0u;
+    d += static_cast<std::uint64_t>(s) * s * ((3u * rx) ^ ry);
+    if (ry == 0) {
+      if (rx == 1) {
+        x = side - 1 - x;
+        y = side - 1 - y;
+      }
+      std::swap(x, y);
+    }
+  }
+  return d;
+}
+
+struct Triangle {
+  std::array<std::int32_t, 3> v;  // counter-clockwise (orient > 0)
+  std::array<std::int32_t, 3> n;  // n[i]: neighbour across the edge opposite v[i], -1 outside the super triangle
+};
+
+/// Bowyer-Watson over integer points; the last three points are the super triangle's corners.
+class Delaunay {
+public:
+  Delaunay(std::vector<Point> points, bool small) : points_(std::move(points)), small_(small) {
+    const auto s = static_cast<std::int32_t>(points_.size());
+    tris_.reserve(2 * points_.size());  // 2 n + 1 triangles in the end
+    mark_.reserve(2 * points_.size());
+    tris_.push_back({{s - 3, s - 2, s - 1}, {-1, -1, -1}});
+    mark_.push_back(-1);
+    first_of_.assign(points_.size(), -1);
+  }
+
+  void insert(std::int32_t p) {
+    const std::int32_t start = locate(points_[static_cast<std::size_t>(p)]);
+    dig_cavity(start, p);
+    fill_cavity(p);
+  }
+
+  const std::vector<Triangle>& triangles() const { return tris_; }
+  bool alive(std::size_t t) const { return mark_[t] != kDead; }
+
+private:
+  static constexpr std::int64_t kDead = -2;
+  struct Edge {
+    std::int32_t a, b, outer;
+  };
+
+  bool inside_circle(std::int32_t t, const Point& d) const {
+    const Triangle& T = tris_[static_cast<std::size_t>(t)];
+    const Point &a = pt(T.v[0]), &b = pt(T.v[1]), &c = pt(T.v[2]);
+    const auto super = static_cast<std::int32_t>(points_.size()) - 3;
+    if (small_ && T.v[0] < super && T.v[1] < super && T.v[2] < super) return in_circle<std::int64_t>(a, b, c, d);
+    return in_circle<Int128>(a, b, c, d);
+  }
+  const Point& pt(std::int32_t i) const { return points_[static_cast<std::size_t>(i)]; }
+
+  /// Visibility walk from the last new triangle; in a Delaunay triangulation it cannot cycle. The edge
+  /// tried first rotates so that the walk does not favour one direction.
+  std::int32_t locate(const Point& p) {
+    std::int32_t t = last_;
+    for (unsigned step = 0;; ++step) {
+      const Triangle& T = tris_[static_cast<std::size_t>(t)];
+      bool moved = false;
+      for (unsigned k = 0; k < 3 && !moved; ++k) {
+        const unsigned i = (k + step) % 3;
+        if (orient(pt(T.v[(i + 1) % 3]), pt(T.v[(i + 2) % 3]), p) < 0) {
+          t = T.n[i];
+          moved = true;
+        }
+      }
+      if (!moved) return t;
+    }
+  }
+
+  /// The triangles whose circumcircle holds p strictly (connected, from the one containing p), and the
+  /// edges that bound them.
+  void dig_cavity(std::int32_t start, std::int32_t p) {
+    ++stamp_;
+    const Point& q = pt(p);
+    bad_.clear();
+    boundary_.clear();
+    stack_.assign(1, start);
+    mark_[static_cast<std::size_t>(start)] = stamp_;
+    while (!stack_.empty()) {
+      const std::int32_t u = stack_.back();
+      stack_.pop_back();
+      bad_.push_back(u);
+      for (int i = 0; i < 3; ++i) {
+        const Triangle& U = tris_[static_cast<std::size_t>(u)];
+        const std::int32_t nb = U.n[i];
+        if (nb >= 0 && mark_[static_cast<std::size_t>(nb)] == stamp_) continue;  // inside the cavity
+        if (nb >= 0 && inside_circle(nb, q)) {
+          mark_[static_cast<std::size_t>(nb)] = stamp_;
+          stack_.push_back(nb);
+          continue;
+        }
+        boundary_.push_back({U.v[(i + 1) % 3], U.v[(i + 2) % 3], nb});
+      }
+    }
+  }
+
+  /// One triangle (p, a, b) per boundary edge, in the cavity's slots first.
+  void fill_cavity(std::int32_t p) {
+    new_.clear();
+    for (std::size_t k = 0; k < boundary_.size(); ++k) {
+      std::int32_t t;
+      if (k < bad_.size()) {
+        t = bad_[k];
+      } else {
+        t = static_cast<std::int32_t>(tris_.size());
+        tris_.push_back({});
+        mark_.push_back(0);
+      }
+      const Edge& e = boundary_[k];
+      tris_[static_cast<std::size_t>(t)] = {{p, e.a, e.b}, {e.outer, -1, -1}};
+      if (e.outer >= 0) {
+        // By the edge's vertices, not by the old neighbour's index: that slot may already hold a new triangle.
+        Triangle& O = tris_[static_cast<std::size_t>(e.outer)];
+        for (int i = 0; i < 3; ++i)
+          if (O.v[i] != e.a && O.v[i] != e.b) O.n[i] = t;
+      }
+      first_of_[static_cast<std::size_t>(e.a)] = t;
+      new_.push_back(t);
+    }
+    // (p, a, b) meets (p, b, c) across the edge (b, p): opposite a in the first, opposite c in the second.
+    for (const std::int32_t t : new_) {
+      Triangle& T = tris_[static_cast<std::size_t>(t)];
+      T.n[1] = first_of_[static_cast<std::size_t>(T.v[2])];
+      tris_[static_cast<std::size_t>(T.n[1])].n[2] = t;
+    }
+    for (std::size_t k = boundary_.size(); k < bad_.size(); ++k) mark_[static_cast<std::size_t>(bad_[k])] = kDead;
+    last_ = new_.front();
+  }
+
+  std::vector<Point> points_;
+  bool small_;
+  std::vector<Triangle> tris_;
+  std::vector<std::int64_t> mark_;  // stamp of the cavity a triangle was last found in; kDead: unused slot
+  std::vector<std::int32_t> first_of_;
+  std::vector<std::int32_t> bad_, stack_, new_;
+  std::vector<Edge> boundary_;
+  std::int64_t stamp_ = 0;
+  std::int32_t last_ = 0;
+};
+
+/// Sample indices in Hilbert-curve order of their pixels.
+std::vector<std::int32_t> insertion_order(const SampleTriangulation& s) {
+  std::uint32_t side = 1;
+  while (side < static_cast<std::uint32_t>(std::max(s.width, s.height))) side *= 2;
+  std::vector<std::uint64_t> keys(s.vertex_count());
+  for (std::size_t v = 0; v < keys.size(); ++v) {
+    const auto i = static_cast<std::int32_t>(v);
+    keys[v] = (hilbert_index(side, static_cast<std::uint32_t>(s.x(i)), static_cast<std::uint32_t>(s.y(i))) << 22) | v;
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<std::int32_t> order(keys.size());
+  for (std::size_t k = 0; k < keys.size(); ++k) order[k] = static_cast<std::int32_t>(keys[k] & ((1u << 22) - 1));
+  return order;
+}
+
+void triangulate(SampleTriangulation& s) {
+  std::vector<Point> points;
+  points.reserve(s.vertex_count() + 3);
+  for (std::size_t v = 0; v < s.vertex_count(); ++v)
+    points.push_back({s.x(static_cast<std::int32_t>(v)), s.y(static_cast<std::int32_t>(v))});
+  points.push_back({-kSuper, -kSuper});
+  points.push_back({kSuper, -kSuper});
+  points.push_back({0, kSuper});
+  Delaunay d(std::move(points), s.width < kSmallSide && s.height < kSmallSide);
+  const std::vector<std::int32_t> order = insertion_order(s);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    poll_stop(k);
+    d.insert(order[k]);
+  }
+  const auto n = static_cast<std::int32_t>(s.vertex_count());
+  for (std::size_t t = 0; t < d.triangles().size(); ++t) {
+    const auto& v = d.triangles()[t].v;
+    if (d.alive(t) && v[0] < n && v[1] < n && v[2] < n) s.triangles.push_back(v);
+  }
+}
+
+int chessboard(const SampleTriangulation& s, std::int32_t a, std::int32_t b) {
+  return std::max(std::abs(s.x(a) - s.x(b)), std::abs(s.y(a) - s.y(b)));
+}
+
+void flag_interpolable(SampleTriangulation& s, const SensorModel& model, const TriangulationParams& params) {
+  s.interpolable.assign(s.triangles.size(), 0);
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const auto& v = s.triangles[t];
+    float lo = s.vertex_depth_m[static_cast<std::size_t>(v[0])], hi = lo;
+    for (int i = 1; i < 3; ++i) {
+      lo = std::min(lo, s.vertex_depth_m[static_cast<std::size_t>(v[i])]);
+      hi = std::max(hi, s.vertex_depth_m[static_cast<std::size_t>(v[i])]);
+    }
+    // A slanted surface spreads a triangle's depths by many sigma (a wall at 60 degrees and 2 m: ~1 sigma per
+    // pixel) while its vertices still lie on their neighbours' plane; a step puts every vertex near it off
+    // the plane of its neighbours, which straddle the step.
+    const bool continuous = hi - lo <= params.discontinuity_sigmas * model.sigma_depth_at(hi) ||
+                            s.non_planarity_sigmas(t) <= params.discontinuity_sigmas;
+    s.interpolable[t] = continuous && s.longest_edge_columns(t) <= params.max_edge_columns;
+  }
+}
+
+/// Normal equations of the least-squares plane w = a + b dx + c dy (w = 1/z, (dx, dy) the offset from the
+/// vertex, so that a is the fit at the vertex) through a vertex's Delaunay neighbours, gathered triangle by
+/// triangle: a neighbour counts once per triangle the two share, i.e. twice for every neighbour of an
+/// interior vertex (the same fit as once each) and once for the two hull neighbours of a hull vertex.
+struct PlaneSums {
+  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
+  void add(double dx, double dy, double w) {
+    m00 += 1;
+    m01 += dx;
+    m02 += dy;
+    m11 += dx * dx;
+    m12 += dx * dy;
+    m22 += dy * dy;
+    r0 += w;
+    r1 += dx * w;
+    r2 += dy * w;
+  }
+  /// The fit at the vertex (Cramer's rule for a); false when the neighbours are collinear (or fewer than
+  /// 3): the sums of integer offsets are exact, so the determinant is then exactly 0 and otherwise >= 1.
+  bool intercept(double& a) const {
+    const double c0 = m11 * m22 - m12 * m12, c1 = m01 * m22 - m12 * m02, c2 = m01 * m12 - m11 * m02;
+    const double det = m00 * c0 - m01 * c1 + m02 * c2;
+    if (det < 0.5) return false;
+    a = (r0 * c0 - m01 * (r1 * m22 - m12 * r2) + m02 * (r1 * m12 - m11 * r2)) / det;
+    return true;
+  }
+};
+
+/// Leave-one-out residual of vertex v (header) from its plane sums.
+float plane_residual_sigmas(const PlaneSums& sums, double z, const SensorModel& model) {
+  double w_fit;
+  if (!sums.intercept(w_fit)) return 0.0f;
+  if (w_fit > 0) return static_cast<float>(std::abs(z - 1.0 / w_fit) / model.sigma_depth_at(1.0 / w_fit));
+  return static_cast<float>(std::abs(1.0 / z - w_fit) * z * z / model.sigma_depth_at(z));  // plane behind the camera
+}
+
+void measure_non_planarity(SampleTriangulation& s, const SensorModel& model) {
+  std::vector<PlaneSums> sums(s.vertex_count());
+  std::vector<double> inverse(s.vertex_count());
+  for (std::size_t v = 0; v < inverse.size(); ++v) inverse[v] = 1.0 / s.vertex_depth_m[v];
+  for (const auto& t : s.triangles)
+    for (int i = 0; i < 3; ++i) {
+      const std::int32_t v = t[static_cast<std::size_t>(i)];
+      for (const int k : {1, 2}) {
+        const std::int32_t j = t[static_cast<std::size_t>((i + k) % 3)];
+        sums[static_cast<std::size_t>(v)].add(s.x(j) - s.x(v), s.y(j) - s.y(v), inverse[static_cast<std::size_t>(j)]);
+      }
+    }
+  s.residual_sigmas.assign(s.vertex_count(), 0.0f);
+  for (std::size_t v = 0; v < s.vertex_count(); ++v)
+    s.residual_sigmas[v] = plane_residual_sigmas(sums[v], s.vertex_depth_m[v], model);
+}
+
+}  // namespace
+
+void check_sparse_depth_image(const std::vector<float>& depth, int width, int height) {
+  detail::require_parameter(width > 0 && width <= kMaxSide, "width", width, "in [1, 2^20]");
+  detail::require_parameter(height > 0 && height <= kMaxSide, "height", height, "in [1, 2^20]");
+  const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
+  if (depth.size() != n)
+    throw InvalidInput("sparse depth image holds " + std::to_string(depth.size()) + " values, not " +
+                       std::to_string(width) + " x " + std::to_string(height));
+  for (std::size_t c = 0; c < n; ++c)
+    if (depth[c] < 0.0f || std::isinf(depth[c]))
+      throw InvalidInput("sparse depth image: pixel (" + std::to_string(c % static_cast<std::size_t>(width)) + ", " +
+                         std::to_string(c / static_cast<std::size_t>(width)) + ") holds depth " +
+                         std::to_string(depth[c]) + " (must be >= 0 and finite; 0 or NaN = no sample)");
+}
+
+double SampleTriangulation::area_px2(std::size_t t) const {
+  const auto& v = triangles[t];
+  const Point a{x(v[0]), y(v[0])}, b{x(v[1]), y(v[1])}, c{x(v[2]), y(v[2])};
+  return 0.5 * static_cast<double>(orient(a, b, c));
+}
+
+int SampleTriangulation::longest_edge_columns(std::size_t t) const {
+  const auto& v = triangles[t];
+  return std::max({chessboard(*this, v[0], v[1]), chessboard(*this, v[1], v[2]), chessboard(*this, v[2], v[0])});
+}
+
+double SampleTriangulation::non_planarity_sigmas(std::size_t t) const {
+  const auto& v = triangles[t];
+  return std::max({residual_sigmas[static_cast<std::size_t>(v[0])], residual_sigmas[static_cast<std::size_t>(v[1])],
+                   residual_sigmas[static_cast<std::size_t>(v[2])]});
+}
+
+ColumnIndex SampleTriangulation::centroid_column(std::size_t t) const {
+  const auto& v = triangles[t];
+  const int cx = static_cast<int>(std::lround((x(v[0]) + x(v[1]) + x(v[2])) / 3.0));
+  const int cy = static_cast<int>(std::lround((y(v[0]) + y(v[1]) + y(v[2])) / 3.0));
+  return static_cast<ColumnIndex>(cy) * static_cast<ColumnIndex>(width) + static_cast<ColumnIndex>(cx);
+}
+
+SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m, int width, int height,
+                                        const SensorModel& model, const TriangulationParams& params) {
+  params.validate();
+  check_sparse_depth_image(sparse_depth_m, width, height);
+  SampleTriangulation s;
+  s.width = width;
+  s.height = height;
+  for (std::size_t c = 0; c < sparse_depth_m.size(); ++c)
+    if (sparse_depth_m[c] > 0.0f) {  // NaN fails the test: no sample
+      s.vertex_column.push_back(static_cast<ColumnIndex>(c));
+      s.vertex_x.push_back(static_cast<std::int32_t>(c % static_cast<std::size_t>(width)));
+      s.vertex_y.push_back(static_cast<std::int32_t>(c / static_cast<std::size_t>(width)));
+      s.vertex_depth_m.push_back(sparse_depth_m[c]);
+    }
+  if (s.vertex_count() >= (std::size_t{1} << 22))
+    throw InvalidInput("triangulate_samples: " + std::to_string(s.vertex_count()) + " samples (at most 2^22)");
+  triangulate(s);
+  measure_non_planarity(s, model);
+  flag_interpolable(s, model, params);
+  return s;
+}
+
+std::vector<std::size_t> top_scored_triangles(const SampleTriangulation& triangulation, std::size_t count) {
+  std::vector<std::pair<double, std::size_t>> scored;
+  for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
+    const double s = triangulation.score(t);
+    if (s > 0) scored.emplace_back(-s, t);
+  }
+  count = std::min(count, scored.size());
+  std::partial_sort(scored.begin(), scored.begin() + static_cast<std::ptrdiff_t>(count), scored.end());
+  std::vector<std::size_t> out(count);
+  for (std::size_t k = 0; k < count; ++k) out[k] = scored[k].second;
+  return out;
+}
+
+}  // namespace occ_improve
