@@ -8,7 +8,7 @@
 int main() {
   using namespace occ_improve;
   const SensorPreset preset = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(preset.geometry)};
+  ColumnGrid grid{GridGeometry(preset.geometry)};
   const SensorModel model(preset.model);
   const auto points = sample::generate_scene().points();
   const InsertionReport r = insert_points(grid, model, PointSpan::from(points));

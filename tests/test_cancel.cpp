@@ -52,14 +52,14 @@ TEST_F(Cancel, EveryLongComputationStopsOnARequest) {
   const std::vector<Eigen::Vector3f> points = frame.points();
   Mapper mapper(kinect_v1(frame.intrinsics));
   mapper.insert(PointSpan::from(points));
-  const SphericalGrid& grid = mapper.grid();
+  const ColumnGrid& grid = mapper.grid();
   request_stop(SIGINT);
   EXPECT_THROW(compute_surface(grid), Cancelled);
   EXPECT_THROW(compute_improvement(mapper.geometry(), mapper.model(), mapper.surface()), Cancelled);
   EXPECT_THROW(predict_depth(mapper.surface()), Cancelled);
-  SphericalGrid fresh(mapper.geometry());
+  ColumnGrid fresh(mapper.geometry());
   EXPECT_THROW(insert_points(fresh, mapper.model(), PointSpan::from(points)), Cancelled);
-  EXPECT_THROW(Mapper(SphericalGrid(mapper.geometry()), mapper.model()), Cancelled);
+  EXPECT_THROW(Mapper(ColumnGrid(mapper.geometry()), mapper.model()), Cancelled);
   const std::string path = (std::filesystem::temp_directory_path() /
                             ("occ_cancel_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + ".occmap"))
                                .string();

@@ -45,7 +45,7 @@ TEST(Geometry, UniformAxisBinsAndOverlaps) {
 TEST(Geometry, PaperPresetSupportTouchesTwoToThreeColumns) {
   // SPEC 4: 2 sigma (0.87 mrad) is a little more than half a bin (0.78 mrad).
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g(p.geometry);
+  const GridGeometry g(p.geometry);
   const double support = p.model.support_k * p.model.sigma_azimuth_rad;
   EXPECT_NEAR(g.azimuth().width() / 2, 0.777e-3, 1e-5);
   EXPECT_NEAR(support, 0.867e-3, 1e-5);
@@ -88,27 +88,27 @@ TEST(Geometry, InvalidParametersNameTheField) {
   GeometryParams p;
   p.depth_bins = 0;
   try {
-    SphericalGeometry g(p);
+    GridGeometry g(p);
     FAIL() << "expected InvalidParameter";
   } catch (const InvalidParameter& e) {
     EXPECT_NE(std::string(e.what()).find("depth_bins"), std::string::npos);
   }
   p = GeometryParams{};
   p.depth_max_m = 0.0;
-  EXPECT_THROW(SphericalGeometry{p}, InvalidParameter);
+  EXPECT_THROW(GridGeometry{p}, InvalidParameter);
   p = GeometryParams{};
   p.depth_binning = DepthBinning::inverse_depth;  // needs depth_min_m > 0
-  EXPECT_THROW(SphericalGeometry{p}, InvalidParameter);
+  EXPECT_THROW(GridGeometry{p}, InvalidParameter);
   p = GeometryParams{};
   p.azimuth_max_rad = p.azimuth_min_rad;
-  EXPECT_THROW(SphericalGeometry{p}, InvalidParameter);
+  EXPECT_THROW(GridGeometry{p}, InvalidParameter);
   p = GeometryParams{};
   p.elevation_min_rad = std::nan("");
-  EXPECT_THROW(SphericalGeometry{p}, InvalidParameter);
+  EXPECT_THROW(GridGeometry{p}, InvalidParameter);
 }
 
 TEST(Geometry, ColumnIndexingIsRowMajorLikeAnImage) {
-  const SphericalGeometry g(kinect_v1_paper().geometry);
+  const GridGeometry g(kinect_v1_paper().geometry);
   const ColumnIndex c = g.column(17, 5);
   EXPECT_EQ(c, 5u * 640u + 17u);
   EXPECT_EQ(g.azimuth_bin_of(c), 17);

@@ -12,13 +12,13 @@
 namespace occ_improve {
 namespace {
 
-SphericalGeometry paper_geometry() { return SphericalGeometry(kinect_v1_paper().geometry); }
+GridGeometry paper_geometry() { return GridGeometry(kinect_v1_paper().geometry); }
 
 TEST(Grid, ClampingBoundsAreLogOdds) {
-  const SphericalGrid g(paper_geometry());
+  const ColumnGrid g(paper_geometry());
   EXPECT_NEAR(g.log_odds_min(), std::log(0.001 / 0.999), 1e-5);
   EXPECT_NEAR(g.log_odds_max(), std::log(0.999 / 0.001), 1e-5);
-  const SphericalGrid o(paper_geometry(), GridOptions::octomap_clamping());
+  const ColumnGrid o(paper_geometry(), GridOptions::octomap_clamping());
   EXPECT_NEAR(o.log_odds_min(), std::log(0.1192 / 0.8808), 1e-5);
   EXPECT_NEAR(o.log_odds_max(), std::log(0.971 / 0.029), 1e-5);
 }
@@ -26,14 +26,14 @@ TEST(Grid, ClampingBoundsAreLogOdds) {
 TEST(Grid, BadOptionsAndMemoryCapThrow) {
   GridOptions o;
   o.probability_min = 0.6;
-  EXPECT_THROW(SphericalGrid(paper_geometry(), o), InvalidParameter);
+  EXPECT_THROW(ColumnGrid(paper_geometry(), o), InvalidParameter);
   o = {};
   o.probability_max = 1.0;
-  EXPECT_THROW(SphericalGrid(paper_geometry(), o), InvalidParameter);
+  EXPECT_THROW(ColumnGrid(paper_geometry(), o), InvalidParameter);
   o = {};
   o.memory_cap_bytes = 100u << 20;  // the paper grid's dense worst case is 629 MB
   try {
-    SphericalGrid g(paper_geometry(), o);
+    ColumnGrid g(paper_geometry(), o);
     FAIL() << "expected ResourceLimit";
   } catch (const ResourceLimit& e) {
     EXPECT_NE(std::string(e.what()).find("memory_cap_bytes"), std::string::npos);
@@ -41,7 +41,7 @@ TEST(Grid, BadOptionsAndMemoryCapThrow) {
 }
 
 TEST(Grid, UntouchedColumnsCostNoTileAndReadAsUnknown) {
-  SphericalGrid g(paper_geometry());
+  ColumnGrid g(paper_geometry());
   EXPECT_EQ(g.allocated_tile_count(), 0u);
   EXPECT_EQ(g.find(1234), nullptr);
   EXPECT_EQ(g.log_odds(1234, 10), 0.0f);
@@ -58,7 +58,7 @@ TEST(Grid, CompactMergesLeadingUniformVoxels) {
   c.uniform_end = 3;
   c.uniform_value = -6.9f;
   c.window = {-6.9f, -6.9f, -1.0f, 2.0f};
-  SphericalGrid::compact(c);
+  ColumnGrid::compact(c);
   EXPECT_EQ(c.uniform_end, 5);
   ASSERT_EQ(c.window.size(), 2u);
   EXPECT_EQ(c.value(4), -6.9f);
@@ -69,7 +69,7 @@ TEST(Grid, CompactMergesLeadingUniformVoxels) {
 
 TEST(Grid, OneFrameStoresFreeSpaceAsUniformRuns) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid g{SphericalGeometry(p.geometry)};
+  ColumnGrid g{GridGeometry(p.geometry)};
   const auto points = sample::generate_scene().points();
   insert_points(g, SensorModel(p.model), PointSpan::from(points));
   const std::size_t touched = g.touched_column_count();
@@ -88,7 +88,7 @@ TEST(Grid, OneFrameStoresFreeSpaceAsUniformRuns) {
 
 TEST(Grid, ChangedColumnsAreRecordedOnceAndReset) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid g{SphericalGeometry(p.geometry)};
+  ColumnGrid g{GridGeometry(p.geometry)};
   std::vector<Eigen::Vector3f> one = {{0.0f, 0.0f, 2.0f}};
   insert_points(g, SensorModel(p.model), PointSpan::from(one));
   const auto changed = g.take_changed_columns();

@@ -17,12 +17,12 @@
 namespace occ_improve {
 namespace {
 
-SphericalGeometry paper_crop(int a0, int e0, int w, int h) {
-  return reference::crop(SphericalGeometry(kinect_v1_paper().geometry), a0, e0, w, h);
+GridGeometry paper_crop(int a0, int e0, int w, int h) {
+  return reference::crop(GridGeometry(kinect_v1_paper().geometry), a0, e0, w, h);
 }
 
 // The fast path's input built from the reference's own surfaces, so that eqs. 3-4 are compared alone.
-SurfaceMap surface_from(const SphericalGeometry& g, const std::vector<reference::DenseGrid::Surface>& ref) {
+SurfaceMap surface_from(const GridGeometry& g, const std::vector<reference::DenseGrid::Surface>& ref) {
   SurfaceMap s;
   s.width = g.width();
   s.height = g.height();
@@ -42,18 +42,18 @@ double median(std::vector<double> v) {
 }
 
 struct ReferenceScene {
-  SphericalGeometry geometry;
+  GridGeometry geometry;
   SensorModel model;
-  SphericalGrid fast;
+  ColumnGrid fast;
   reference::DenseGrid ref;
 };
 
 // The sample scene's box, pole, wall and shadow band, exact mode.
 ReferenceScene make_reference_scene(const SensorPreset& preset, int a0, int e0, int w, int h) {
-  const SphericalGeometry g = reference::crop(SphericalGeometry(preset.geometry), a0, e0, w, h);
+  const GridGeometry g = reference::crop(GridGeometry(preset.geometry), a0, e0, w, h);
   GridOptions o;
   o.mode = UpdateMode::exact;
-  ReferenceScene s{g, SensorModel(preset.model), SphericalGrid(g, o), reference::DenseGrid(g, SensorModel(preset.model), o)};
+  ReferenceScene s{g, SensorModel(preset.model), ColumnGrid(g, o), reference::DenseGrid(g, SensorModel(preset.model), o)};
   const auto points = sample::generate_scene().points();
   insert_points(s.fast, s.model, PointSpan::from(points));
   s.ref.insert(points);
@@ -81,9 +81,9 @@ TEST(Improvement, EquationsMatchReferenceOnReferenceSurface) {
 // surface, in clamped mode where P reaches 0.001 / 0.999 and 1 - P is least accurate in float.
 TEST(Improvement, FloatKernelIsWithinItsDocumentedBound) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g = paper_crop(140, 190, 96, 80);
+  const GridGeometry g = paper_crop(140, 190, 96, 80);
   const SensorModel model(p.model);
-  SphericalGrid grid(g);
+  ColumnGrid grid(g);
   for (std::uint32_t seed : {1u, 2u, 3u}) {
     sample::SceneOptions o;
     o.seed = seed;
@@ -136,9 +136,9 @@ TEST(Improvement, PipelineMatchesReferenceRayByRay) {
 
 TEST(Improvement, RayDefinitionEqualsFullMapForAnyThreadCount) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g(p.geometry);
+  const GridGeometry g(p.geometry);
   const SensorModel model(p.model);
-  SphericalGrid grid(g);
+  ColumnGrid grid(g);
   insert_points(grid, model, PointSpan::from(sample::generate_scene().points()));
   const SurfaceMap surface = compute_surface(grid);
   const ImprovementMap one = compute_improvement(g, model, surface, 1);
@@ -167,11 +167,11 @@ TEST(Improvement, WindowsOnBinBoundariesStillMatchTheOneRayDefinition) {
   gp.elevation_min_rad = -0.025;
   gp.elevation_max_rad = 0.025;
   gp.depth_bins = 128;
-  const SphericalGeometry g(gp);
+  const GridGeometry g(gp);
   SensorModelParams mp;
   mp.sigma_azimuth_rad = mp.sigma_elevation_rad = 0.25e-3;  // k sigma = 0.5 mrad = half a bin
   const SensorModel model(mp);
-  SphericalGrid grid(g);
+  ColumnGrid grid(g);
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(-0.09f, 0.09f), v(-0.02f, 0.02f), d(1.0f, 4.0f);
   std::vector<Eigen::Vector3f> points;
@@ -186,9 +186,9 @@ TEST(Improvement, WindowsOnBinBoundariesStillMatchTheOneRayDefinition) {
 
 TEST(Improvement, IncrementalUpdateRecomputesExactlyTheAffectedRays) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g = paper_crop(100, 100, 64, 48);
+  const GridGeometry g = paper_crop(100, 100, 64, 48);
   const SensorModel model(p.model);
-  SphericalGrid grid(g);
+  ColumnGrid grid(g);
   const auto points = sample::generate_scene().points();
   insert_points(grid, model, PointSpan::from(points));
   SurfaceMap surface = compute_surface(grid);
@@ -219,9 +219,9 @@ TEST(Improvement, IncrementalUpdateRecomputesExactlyTheAffectedRays) {
 // centre leaves P ~ 0.5 and the ray is worth almost as much as an unknown one.
 TEST(Improvement, PaperPictureOnTheSampleScene) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g(p.geometry);
+  const GridGeometry g(p.geometry);
   const SensorModel model(p.model);
-  SphericalGrid grid(g);  // clamped, as a user runs it
+  ColumnGrid grid(g);  // clamped, as a user runs it
   insert_points(grid, model, PointSpan::from(sample::generate_scene().points()));
   const SurfaceMap s = compute_surface(grid);
   const ImprovementMap imp = compute_improvement(g, model, s);
@@ -267,9 +267,9 @@ TEST(Improvement, PaperPictureOnTheSampleScene) {
 // A plane at 2 m measured exactly once along every column's centre ray: every ray is worth ~0.135.
 TEST(Improvement, CentredSingleObservationIsWorthAboutOneEighth) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g = paper_crop(300, 220, 24, 20);
+  const GridGeometry g = paper_crop(300, 220, 24, 20);
   const SensorModel model(p.model);
-  SphericalGrid grid(g);
+  ColumnGrid grid(g);
   std::vector<Eigen::Vector3f> points;
   for (int e = 0; e < g.height(); ++e)
     for (int a = 0; a < g.width(); ++a) points.push_back(g.point(a, e, 2.0 + 1e-3).cast<float>());
@@ -285,13 +285,13 @@ TEST(Improvement, CentredSingleObservationIsWorthAboutOneEighth) {
 
 TEST(Improvement, BadInputThrows) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g = paper_crop(0, 0, 16, 8);
+  const GridGeometry g = paper_crop(0, 0, 16, 8);
   const SensorModel model(p.model);
-  const SurfaceMap surface = compute_surface(SphericalGrid(g));
+  const SurfaceMap surface = compute_surface(ColumnGrid(g));
   EXPECT_THROW(ray_improvement(g, model, surface, -1, 0), InvalidParameter);
   EXPECT_THROW(ray_improvement(g, model, surface, 0, 8), InvalidParameter);
   EXPECT_THROW(compute_improvement(g, model, surface, -1), InvalidParameter);
-  const SurfaceMap other = compute_surface(SphericalGrid(paper_crop(0, 0, 8, 8)));
+  const SurfaceMap other = compute_surface(ColumnGrid(paper_crop(0, 0, 8, 8)));
   EXPECT_THROW(compute_improvement(g, model, other), InvalidInput);
   ImprovementMap wrong = compute_improvement(paper_crop(0, 0, 8, 8), model, other);
   EXPECT_THROW(update_improvement(g, model, surface, {}, wrong), InvalidInput);

@@ -21,7 +21,7 @@ struct Agreement {
   double max_dp = 0;
 };
 
-Agreement compare(const SphericalGrid& fast, const reference::DenseGrid& ref) {
+Agreement compare(const ColumnGrid& fast, const reference::DenseGrid& ref) {
   Agreement a;
   const SurfaceMap s = compute_surface(fast);
   for (std::size_t c = 0; c < s.size(); ++c) {
@@ -34,18 +34,18 @@ Agreement compare(const SphericalGrid& fast, const reference::DenseGrid& ref) {
 }
 
 // A window of the paper preset's columns around the sample scene's box, pole and wall.
-SphericalGeometry paper_crop(int a0, int e0, int w, int h, int depth_bins = 512) {
+GridGeometry paper_crop(int a0, int e0, int w, int h, int depth_bins = 512) {
   SensorPreset p = kinect_v1_paper();
   p.geometry.depth_bins = depth_bins;
-  return reference::crop(SphericalGeometry(p.geometry), a0, e0, w, h);
+  return reference::crop(GridGeometry(p.geometry), a0, e0, w, h);
 }
 
 TEST(Integrate, ExactModeMatchesReferenceOnSampleScene) {
-  const SphericalGeometry g = paper_crop(150, 200, 48, 40);
+  const GridGeometry g = paper_crop(150, 200, 48, 40);
   const SensorModel model(kinect_v1_paper().model);
   GridOptions o;
   o.mode = UpdateMode::exact;
-  SphericalGrid fast(g, o);
+  ColumnGrid fast(g, o);
   reference::DenseGrid ref(g, model, o);
   const auto points = sample::generate_scene().points();
   const InsertionReport r = insert_points(fast, model, PointSpan::from(points), {});
@@ -58,9 +58,9 @@ TEST(Integrate, ExactModeMatchesReferenceOnSampleScene) {
 }
 
 TEST(Integrate, ClampedModeMatchesReferenceVoxelByVoxel) {
-  const SphericalGeometry g = paper_crop(300, 220, 40, 30);
+  const GridGeometry g = paper_crop(300, 220, 40, 30);
   const SensorModel model(kinect_v1_paper().model);
-  SphericalGrid fast(g);
+  ColumnGrid fast(g);
   reference::DenseGrid ref(g, model, GridOptions{});
   // Two frames with different noise, so clamping and re-visits are exercised.
   for (std::uint32_t seed : {1u, 2u}) {
@@ -83,11 +83,11 @@ TEST(Integrate, RangeDependentSigmaMatchesReference) {
   // Spherical bins and the pixel-native binning, with the sample camera's own intrinsics.
   for (SensorPreset p : {kinect_v1_spherical(sample::generate_scene().intrinsics), kinect_v1(sample::generate_scene().intrinsics)}) {
     p.geometry.depth_bins = 1024;
-    const SphericalGeometry g = reference::crop(SphericalGeometry(p.geometry), 280, 240, 32, 32);
+    const GridGeometry g = reference::crop(GridGeometry(p.geometry), 280, 240, 32, 32);
     const SensorModel model(p.model);
     GridOptions o;
     o.mode = UpdateMode::exact;
-    SphericalGrid fast(g, o);
+    ColumnGrid fast(g, o);
     reference::DenseGrid ref(g, model, o);
     const auto points = sample::generate_scene().points();
     insert_points(fast, model, PointSpan::from(points));
@@ -100,10 +100,10 @@ TEST(Integrate, RangeDependentSigmaMatchesReference) {
 
 TEST(Integrate, ThreadCountDoesNotChangeTheResult) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g(p.geometry);
+  const GridGeometry g(p.geometry);
   const SensorModel model(p.model);
   const auto points = sample::generate_scene().points();
-  SphericalGrid one(g), two(g);
+  ColumnGrid one(g), two(g);
   insert_points(one, model, PointSpan::from(points), {1});
   insert_points(two, model, PointSpan::from(points), {2});
   for (std::size_t c = 0; c < g.column_count(); c += 7) {
@@ -117,9 +117,9 @@ TEST(Integrate, ThreadCountDoesNotChangeTheResult) {
 
 TEST(Integrate, SurfaceKeptCurrentDuringInsertionMatchesASeparatePass) {
   const SensorPreset p = kinect_v1_paper();
-  const SphericalGeometry g(p.geometry);
+  const GridGeometry g(p.geometry);
   const SensorModel model(p.model);
-  SphericalGrid fused(g), separate(g);
+  ColumnGrid fused(g), separate(g);
   SurfaceMap fused_surface = compute_surface(fused), separate_surface = compute_surface(separate);
   for (std::uint32_t seed : {1u, 2u}) {  // the second frame changes some surfaces and leaves others
     sample::SceneOptions so;
@@ -143,7 +143,7 @@ TEST(Integrate, SurfaceKeptCurrentDuringInsertionMatchesASeparatePass) {
 
 TEST(Integrate, SurfaceOfAnotherSizeIsRefused) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  ColumnGrid grid{GridGeometry(p.geometry)};
   SurfaceMap wrong;
   std::vector<ColumnIndex> changed;
   const std::vector<Eigen::Vector3f> points{{0.0f, 0.0f, 1.0f}};
@@ -152,7 +152,7 @@ TEST(Integrate, SurfaceOfAnotherSizeIsRefused) {
 
 TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  ColumnGrid grid{GridGeometry(p.geometry)};
   const SensorModel model(p.model);
   const float nan = std::nanf(""), inf = INFINITY;
   std::vector<Eigen::Vector3f> pts = {{nan, 0, 1}, {0, inf, 1}, {0, 0, 0},     // invalid
@@ -174,7 +174,7 @@ TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {
 
 TEST(Integrate, DepthImageSizeMismatchThrows) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  ColumnGrid grid{GridGeometry(p.geometry)};
   std::vector<float> depth(100, 1.0f);
   DepthImage image{depth.data(), depth.size(), kinect_v1_intrinsics()};
   EXPECT_THROW(insert_depth_image(grid, SensorModel(p.model), image), InvalidInput);
@@ -182,7 +182,7 @@ TEST(Integrate, DepthImageSizeMismatchThrows) {
 
 TEST(Integrate, ThreadCountsOutsideTheToolsRangeAreRefused) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  ColumnGrid grid{GridGeometry(p.geometry)};
   const std::vector<Eigen::Vector3f> points{{0.0f, 0.0f, 1.0f}};
   for (const int threads : {-1, InsertionOptions::kMaxThreads + 1, 40000}) {
     try {
@@ -203,7 +203,7 @@ TEST(Integrate, DepthImageOfAnotherCameraThanTheGridsIsRefused) {
   camera.fx = camera.fy = 585.0;
   std::vector<float> depth(static_cast<std::size_t>(camera.width * camera.height), 2.0f);
   for (const SensorPreset& p : {kinect_v1(camera), kinect_v1_spherical(camera)}) {
-    SphericalGrid grid{SphericalGeometry(p.geometry)};
+    ColumnGrid grid{GridGeometry(p.geometry)};
     const SensorModel model(p.model);
     try {
       insert_depth_image(grid, model, DepthImage{depth.data(), depth.size(), kinect_v1_intrinsics()});
@@ -221,7 +221,7 @@ TEST(Integrate, DepthImageOfAnotherCameraThanTheGridsIsRefused) {
   }
   // A grid that does not depend on a camera takes any.
   const SensorPreset paper = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(paper.geometry)};
+  ColumnGrid grid{GridGeometry(paper.geometry)};
   EXPECT_GT(insert_depth_image(grid, SensorModel(paper.model), DepthImage{depth.data(), depth.size(), camera})
                 .points_inserted, 0u);
 }

@@ -76,7 +76,7 @@ void reseal(std::vector<char>& bytes) {
 }
 
 // Surface and improvement maps of two grids, bit for bit (the maps a loaded map must reproduce).
-void expect_same_maps(const SphericalGrid& a, const SphericalGrid& b, const SensorModelParams& model) {
+void expect_same_maps(const ColumnGrid& a, const ColumnGrid& b, const SensorModelParams& model) {
   const SurfaceMap sa = compute_surface(a), sb = compute_surface(b);
   test::expect_same_surface(sa, sb);
   const SensorModel m(model);
@@ -93,8 +93,8 @@ const std::vector<std::vector<Eigen::Vector3f>>& sample_frames() {
   return frames;
 }
 
-SphericalGrid sample_grid(const SensorPreset& preset, const GridOptions& options, int frames = 1) {
-  SphericalGrid grid{SphericalGeometry(preset.geometry), options};
+ColumnGrid sample_grid(const SensorPreset& preset, const GridOptions& options, int frames = 1) {
+  ColumnGrid grid{GridGeometry(preset.geometry), options};
   const SensorModel model(preset.model);
   for (int f = 0; f < frames; ++f) insert_points(grid, model, PointSpan::from(sample_frames()[static_cast<std::size_t>(f)]));
   return grid;
@@ -102,7 +102,7 @@ SphericalGrid sample_grid(const SensorPreset& preset, const GridOptions& options
 
 TEST_F(MapIo, PaperPresetSampleFrameRoundTripsBitForBit) {
   const SensorPreset preset = kinect_v1_paper();
-  const SphericalGrid grid = sample_grid(preset, {});
+  const ColumnGrid grid = sample_grid(preset, {});
   ASSERT_GT(grid.touched_column_count(), 100000u);
   save_map(file("frame.occmap"), grid, preset.model);
   const LoadedMap loaded = load_map(file("frame.occmap"));
@@ -132,7 +132,7 @@ TEST_F(MapIo, MappingContinuedFromASavedMapEqualsUninterruptedMapping) {
 TEST_F(MapIo, PixelNativePresetRoundTripsWithItsCamera) {
   const PinholeIntrinsics k{575.8, 576.0, 321.0, 238.5, 640, 480};
   const SensorPreset preset = kinect_v1(k);
-  const SphericalGrid grid = sample_grid(preset, GridOptions{});
+  const ColumnGrid grid = sample_grid(preset, GridOptions{});
   save_map(file("pinhole.occmap"), grid, preset.model);
   const LoadedMap loaded = load_map(file("pinhole.occmap"));
   EXPECT_EQ(loaded.grid.geometry().binning(), AngularBinning::pinhole);
@@ -144,7 +144,7 @@ TEST_F(MapIo, PixelNativePresetRoundTripsWithItsCamera) {
 
 TEST_F(MapIo, SphericalPresetKeepsItsObservableColumns) {
   const SensorPreset preset = kinect_v1_spherical();
-  const SphericalGrid grid = sample_grid(preset, GridOptions{});
+  const ColumnGrid grid = sample_grid(preset, GridOptions{});
   save_map(file("spherical.occmap"), grid, preset.model);
   const LoadedMap loaded = load_map(file("spherical.occmap"));
   EXPECT_EQ(loaded.grid.geometry().observable_count(), grid.geometry().observable_count());
@@ -156,7 +156,7 @@ TEST_F(MapIo, ExactModeInverseDepthPresetRoundTrips) {
   preset.geometry.depth_bins = 256;
   GridOptions options;
   options.mode = UpdateMode::exact;
-  const SphericalGrid grid = sample_grid(preset, options, 2);
+  const ColumnGrid grid = sample_grid(preset, options, 2);
   save_map(file("exact.occmap"), grid, preset.model);
   const LoadedMap loaded = load_map(file("exact.occmap"));
   EXPECT_EQ(loaded.grid.options().mode, UpdateMode::exact);
@@ -170,7 +170,7 @@ TEST_F(MapIo, OctomapClampingAndEmptyGridRoundTrip) {
   SensorPreset preset = kinect_v1_paper();
   preset.geometry.azimuth_bins = 64;
   preset.geometry.elevation_bins = 48;
-  const SphericalGrid empty{SphericalGeometry(preset.geometry), GridOptions::octomap_clamping()};
+  const ColumnGrid empty{GridGeometry(preset.geometry), GridOptions::octomap_clamping()};
   save_map(file("empty.occmap"), empty, preset.model);
   const LoadedMap loaded = load_map(file("empty.occmap"));
   EXPECT_EQ(loaded.grid.touched_column_count(), 0u);
@@ -183,9 +183,9 @@ TEST_F(MapIo, ResavingOverAnExistingMapReplacesIt) {
   SensorPreset preset = kinect_v1_paper();
   preset.geometry.azimuth_bins = 64;
   preset.geometry.elevation_bins = 48;
-  const SphericalGrid empty{SphericalGeometry(preset.geometry)};
+  const ColumnGrid empty{GridGeometry(preset.geometry)};
   save_map(file("map.occmap"), empty, preset.model);
-  const SphericalGrid full = sample_grid(preset, {});
+  const ColumnGrid full = sample_grid(preset, {});
   ASSERT_GT(full.touched_column_count(), 0u);
   save_map(file("map.occmap"), full, preset.model);
   test::expect_identical(full, load_map(file("map.occmap")).grid);
@@ -200,7 +200,7 @@ protected:
     preset.geometry.azimuth_bins = 80;
     preset.geometry.elevation_bins = 60;
     preset.geometry.depth_bins = 128;
-    const SphericalGrid grid = sample_grid(preset, {});
+    const ColumnGrid grid = sample_grid(preset, {});
     touched_ = grid.touched_column_count();
     // One file per process: ctest runs the tests of this suite in parallel processes.
     const std::string path =
@@ -409,7 +409,7 @@ TEST_F(MapIo, ReturnRecordRoundTripsAndABadOneIsRefused) {
   preset.geometry.azimuth_bins = 40;
   preset.geometry.elevation_bins = 30;
   preset.geometry.depth_bins = 64;
-  const SphericalGrid grid = sample_grid(preset, {});
+  const ColumnGrid grid = sample_grid(preset, {});
   ReturnRecord returns = ReturnRecord::for_grid(40, 30);
   returns.record_shot({3, 3, 500, 1199}, {0, 1, 1, 0});
   save_map(file("returns.occmap"), grid, preset.model, returns);
@@ -445,7 +445,7 @@ TEST_F(MapIo, UnwritableTargetIsAnIoErrorAndLeavesNothingBehind) {
   SensorPreset preset = kinect_v1_paper();
   preset.geometry.azimuth_bins = 16;
   preset.geometry.elevation_bins = 16;
-  const SphericalGrid grid{SphericalGeometry(preset.geometry)};
+  const ColumnGrid grid{GridGeometry(preset.geometry)};
   EXPECT_THROW(save_map(file("no_such_folder/map.occmap"), grid, preset.model), IoError);
   fs::create_directory(file("a_folder"));
   EXPECT_THROW(save_map(file("a_folder"), grid, preset.model), IoError);

@@ -61,7 +61,7 @@ TEST(Mapper, RandomBatchesGiveTheFullRecomputation) {
 
 TEST(Mapper, FromGridComputesSurfaceAndImprovement) {
   const SensorPreset p = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(p.geometry)};
+  ColumnGrid grid{GridGeometry(p.geometry)};
   const SensorModel model(p.model);
   insert_points(grid, model, PointSpan::from(sample::generate_scene().points()));
   const SurfaceMap surface = compute_surface(grid);

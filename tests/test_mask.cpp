@@ -90,7 +90,7 @@ TEST(Mask, SphericalGridsMaskTheColumnsWhoseDirectionFallsInAMaskedPixel) {
   const sample::SampleFrame frame = sample::generate_scene();
   Mapper mapper(kinect_v1_spherical(frame.intrinsics));
   mapper.set_mask(left_half(frame.intrinsics));
-  const SphericalGeometry& g = mapper.geometry();
+  const GridGeometry& g = mapper.geometry();
   std::size_t checked = 0;
   for (int e = 0; e < g.height(); e += 7)
     for (int a = 0; a < g.width(); a += 7) {

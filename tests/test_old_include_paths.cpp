@@ -28,7 +28,7 @@ namespace occ_improve {
 
 TEST(OldIncludePaths, ForwardToTheStageHeaders) {
   const SensorPreset preset = kinect_v1(PinholeIntrinsics{});
-  const SphericalGeometry geometry(preset.geometry);
+  const GridGeometry geometry(preset.geometry);
   EXPECT_EQ(geometry.width(), 640);
   EXPECT_EQ(geometry.height(), 480);
 }

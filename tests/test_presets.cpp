@@ -28,7 +28,7 @@ const PinholeIntrinsics kCameras[] = {kinect_v1_intrinsics(), PinholeIntrinsics{
 TEST(Presets, SphericalKinectPresetContainsEveryPixel) {
   for (const PinholeIntrinsics& k : kCameras) {
     const SensorPreset p = kinect_v1_spherical(k);
-    const SphericalGeometry g(p.geometry);
+    const GridGeometry g(p.geometry);
     EXPECT_EQ(g.binning(), AngularBinning::spherical);
     for (int v = 0; v < k.height; v += 1)
       for (int u : {0, 1, k.width / 2, k.width - 2, k.width - 1}) {
@@ -49,7 +49,7 @@ TEST(Presets, SphericalKinectPresetContainsEveryPixel) {
 TEST(Presets, KinectPresetIsPixelNative) {
   for (const PinholeIntrinsics& k : kCameras) {
     const SensorPreset p = kinect_v1(k);
-    const SphericalGeometry g(p.geometry);
+    const GridGeometry g(p.geometry);
     EXPECT_EQ(g.binning(), AngularBinning::pinhole);
     EXPECT_EQ(g.width(), k.width);
     EXPECT_EQ(g.height(), k.height);
@@ -81,10 +81,10 @@ TEST(Presets, KinectPresetIsPixelNative) {
 TEST(Presets, PinholeBinningNeedsItsCamera) {
   GeometryParams g = kinect_v1().geometry;
   g.camera.reset();
-  EXPECT_THROW(SphericalGeometry{g}, InvalidParameter);
+  EXPECT_THROW(GridGeometry{g}, InvalidParameter);
   g = kinect_v1().geometry;
   g.azimuth_bins = 320;
-  EXPECT_THROW(SphericalGeometry{g}, InvalidParameter);
+  EXPECT_THROW(GridGeometry{g}, InvalidParameter);
 }
 
 TEST(Presets, LookupByNameAndErrors) {

@@ -16,7 +16,7 @@ namespace occ_improve {
 namespace {
 
 struct Maps {
-  SphericalGeometry geometry;
+  GridGeometry geometry;
   SurfaceMap surface;
   ImprovementMap improvement;
 };
@@ -26,7 +26,7 @@ Maps small_maps(int w, int h) {
   GeometryParams gp;
   gp.azimuth_bins = w;
   gp.elevation_bins = h;
-  Maps m{SphericalGeometry(gp), {}, {}};
+  Maps m{GridGeometry(gp), {}, {}};
   m.surface.width = m.improvement.width = w;
   m.surface.height = m.improvement.height = h;
   const std::size_t n = static_cast<std::size_t>(w) * h;

@@ -16,10 +16,10 @@ const GeometryParams& within_cap(const GeometryParams& geometry, const GridOptio
 }  // namespace
 
 Mapper::Mapper(const SensorPreset& preset, const GridOptions& options)
-    : Mapper(SphericalGrid(SphericalGeometry(within_cap(preset.geometry, options)), options),
+    : Mapper(ColumnGrid(GridGeometry(within_cap(preset.geometry, options)), options),
              SensorModel(preset.model)) {}
 
-Mapper::Mapper(SphericalGrid grid, const SensorModel& model) : grid_(std::move(grid)), model_(model) {
+Mapper::Mapper(ColumnGrid grid, const SensorModel& model) : grid_(std::move(grid)), model_(model) {
   model_.params().validate_for(grid_.geometry().params());  // sigmas the binning can mean (cost bound)
   grid_.take_changed_columns();  // the surface below already accounts for everything in the grid
   surface_ = compute_surface(grid_);

@@ -15,7 +15,7 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 }  // namespace
 
 template <typename PointT>
-std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const SphericalGeometry& geometry,
+std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const GridGeometry& geometry,
                                              const Segmentation& segmentation, std::size_t& outside) {
   if (segmentation.width != geometry.width() || segmentation.height != geometry.height())
     throw InvalidInput("labels_for_points: the segmentation does not match the grid geometry");
@@ -67,7 +67,7 @@ CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const Sens
 #define OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(T)                                                                  \
   template CloudSegmentation segment_cloud(const pcl::PointCloud<T>&, const SensorPreset&,                        \
                                            const SegmentationParams&, const GridOptions&, const PixelMask*);                         \
-  template std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<T>&, const SphericalGeometry&,     \
+  template std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<T>&, const GridGeometry&,     \
                                                         const Segmentation&, std::size_t&);
 OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZ)
 OCC_IMPROVE_INSTANTIATE_SEGMENT_CLOUD(pcl::PointXYZRGB)

@@ -98,7 +98,7 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) 
     }
   }
 
-  const SphericalGeometry& geometry = mapper_->geometry();
+  const GridGeometry& geometry = mapper_->geometry();
   const SurfaceMap& surface = mapper_->surface();
   const ImprovementMap& improvement = mapper_->improvement();
   const float nan = std::numeric_limits<float>::quiet_NaN();
@@ -165,7 +165,7 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
                                                        const std::vector<float>& point_improvement,
                                                        std::size_t keep) const {
   const ImprovementPyramid& pyramid = mapper_->pyramid();
-  const SphericalGeometry& geometry = mapper_->geometry();
+  const GridGeometry& geometry = mapper_->geometry();
   struct Candidate {
     float improvement, block_mean;
     std::uint64_t ray_key, point_key;

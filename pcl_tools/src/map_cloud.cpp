@@ -11,7 +11,7 @@
 
 namespace occ_improve {
 
-pcl::PointCloud<PointImprovement> to_improvement_cloud(const SphericalGeometry& geometry, const SurfaceMap& surface,
+pcl::PointCloud<PointImprovement> to_improvement_cloud(const GridGeometry& geometry, const SurfaceMap& surface,
                                                        const ImprovementMap& improvement) {
   const int width = geometry.width(), height = geometry.height();
   const std::size_t n = geometry.column_count();

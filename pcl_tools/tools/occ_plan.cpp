@@ -103,7 +103,7 @@ Source map_from_file(const CommandLine& command_line, const std::string& path, c
   return source;
 }
 
-void write_mask(const std::string& path, const SphericalGeometry& geometry, const Shot& shot) {
+void write_mask(const std::string& path, const GridGeometry& geometry, const Shot& shot) {
   Image mask{geometry.width(), geometry.height(), 1, std::vector<std::uint8_t>(geometry.column_count(), 0)};
   for (ColumnIndex c : shot.columns) mask.pixels[c] = 255;
   write_png(path, mask);
@@ -114,7 +114,7 @@ void write_rays(const std::string& path, const Mapper& mapper, const ReturnRecor
   const std::vector<float> p = return_probability_map(returns, model);
   std::ofstream out(path);
   out << "rank,column,azimuth_bin,elevation_bin,improvement,return_probability,score,depth_m,reacquisition\n";
-  const SphericalGeometry& g = mapper.geometry();
+  const GridGeometry& g = mapper.geometry();
   for (std::size_t i = 0; i < shot.columns.size(); ++i) {
     const ColumnIndex c = shot.columns[i];
     const float imp = mapper.improvement().value[c];

@@ -61,7 +61,7 @@ int run(const CommandLine& command_line) {
   apply_segmentation_flags(command_line, params);
 
   const std::optional<PixelMask> mask = read_tool_mask(command_line, &frame);
-  if (mask) tool_mask_columns(command_line, SphericalGeometry(preset.geometry), *mask);  // refused naming -mask
+  if (mask) tool_mask_columns(command_line, GridGeometry(preset.geometry), *mask);  // refused naming -mask
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid, mask ? &*mask : nullptr);
   throw_if_stop_requested();
 

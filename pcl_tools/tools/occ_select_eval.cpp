@@ -109,7 +109,7 @@ struct PixelColumns {
   std::vector<std::uint8_t> observable;  ///< per column: observable by the grid and by a pixel
 };
 
-PixelColumns pixel_columns(const SphericalGeometry& g, const PinholeIntrinsics& k) {
+PixelColumns pixel_columns(const GridGeometry& g, const PinholeIntrinsics& k) {
   PixelColumns m;
   const auto pixels = static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height);
   m.column_of_pixel.assign(pixels, -1);
@@ -139,7 +139,7 @@ Quality map_quality(const Mapper& mapper, const Scene& scene, const PixelColumns
   params.radius_columns = radius;
   params.rule = rule;
   const PredictedDepth predicted = predict_depth(mapper.surface(), mapper.model(), params);
-  const SphericalGeometry& g = mapper.geometry();
+  const GridGeometry& g = mapper.geometry();
   Quality q;
   std::size_t returns = 0, covered = 0;
   double abs_error = 0;
@@ -243,7 +243,7 @@ private:
         shot.columns.push_back(observable_columns_[order_[order_position_++]]);
       }
     } else if (strategy_ == decimation) {
-      const SphericalGeometry& g = mapper_.geometry();
+      const GridGeometry& g = mapper_.geometry();
       const int step = decimation_step(g.width(), g.height(), budget_);
       const int offset = static_cast<int>(shots_ % static_cast<std::size_t>(step * step));  // row-major cycle
       for (ColumnIndex c : decimation_pattern(g.width(), g.height(), step, offset % step, offset / step))

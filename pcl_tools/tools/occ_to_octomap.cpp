@@ -69,7 +69,7 @@ Eigen::Isometry3d parse_pose(const std::string& text) {
 }
 
 struct Source {
-  std::optional<SphericalGrid> grid;
+  std::optional<ColumnGrid> grid;
   SensorModelParams model;
   std::string description;
   InsertionReport insertion;
@@ -90,7 +90,7 @@ Source build_from_frames(const CommandLine& command_line, const ToolOptions& opt
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
         source.model = preset.model;
-        source.grid.emplace(SphericalGeometry(preset.geometry), options.grid);
+        source.grid.emplace(GridGeometry(preset.geometry), options.grid);
         model.emplace(preset.model);
         const ToolFrame* first_frame = first ? &*first : nullptr;
         if (const std::optional<PixelMask> mask = read_tool_mask(command_line, first_frame))
@@ -205,7 +205,7 @@ int run(const CommandLine& command_line) {
   const double write_seconds = seconds_since(start);
 
   for (const Source& source : grids) {
-    const SphericalGrid& grid = *source.grid;
+    const ColumnGrid& grid = *source.grid;
     const GeometryParams& g = grid.geometry().params();
     std::printf("read %s: %d x %d x %d bins, %zu touched columns, %s mode\n", source.description.c_str(),
                 g.azimuth_bins, g.elevation_bins, g.depth_bins, grid.touched_column_count(),

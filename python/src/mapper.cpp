@@ -235,13 +235,13 @@ void bind_mapper_properties(py::class_<PyMapper>& c) {
     return with_mapper(s, [](Mapper& mp) { return mp.grid().touched_column_count(); });
   }, "Rays that hold any data.");
   c.def("__repr__", [](PyMapper& s) {
-    const SphericalGeometry& g = s.mapper.geometry();
+    const GridGeometry& g = s.mapper.geometry();
     return "Mapper(" + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " x " +
            std::to_string(g.depth().bins()) + ")";
   });
 }
 
-void require_bins(const SphericalGeometry& g, int azimuth_bin, int elevation_bin) {
+void require_bins(const GridGeometry& g, int azimuth_bin, int elevation_bin) {
   occ_improve::detail::require_parameter(azimuth_bin >= 0 && azimuth_bin < g.width(), "azimuth_bin", azimuth_bin,
                                          "inside [0, width)");
   occ_improve::detail::require_parameter(elevation_bin >= 0 && elevation_bin < g.height(), "elevation_bin",
@@ -261,7 +261,7 @@ void bind_mapper_rays(py::class_<PyMapper>& c) {
   }, py::arg("azimuth_bin"), py::arg("elevation_bin"), "Unit direction (sensor frame) through a ray's centre.");
   c.def("locate", [](PyMapper& s, const std::array<double, 3>& p) -> std::optional<std::pair<int, int>> {
     // std::array, not Eigen: GCC 12 gives a false maybe-uninitialized warning in pybind11's Eigen caster.
-    const SphericalGeometry& g = s.mapper.geometry();
+    const GridGeometry& g = s.mapper.geometry();
     ColumnIndex c = 0;
     if (!g.column_of(p[0], p[1], p[2], c)) return std::nullopt;
     return std::make_pair(g.azimuth_bin_of(c), g.elevation_bin_of(c));

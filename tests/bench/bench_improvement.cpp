@@ -43,7 +43,7 @@ void BM_IncrementalSecondFrame(benchmark::State& state) {
   sample::SceneOptions o;
   o.seed = 2;
   const auto points = sample::generate_scene(o).points();
-  SphericalGrid grid{m.geometry()};
+  ColumnGrid grid{m.geometry()};
   insert_points(grid, m.model(), PointSpan::from(bench::sample_points()));
   grid.take_changed_columns();
   SurfaceMap surface = compute_surface(grid);

@@ -2,7 +2,7 @@
 // store's memory after 1 and 100 frames of the same static view, and OctoMap 1.9's insertPointCloud of
 // the same cloud side by side (max range 5 m, sensor at the origin).
 //
-// Counters: points (received), ms (insertion alone, the timed part), store_MB (SphericalGrid::memory_bytes
+// Counters: points (received), ms (insertion alone, the timed part), store_MB (ColumnGrid::memory_bytes
 // after one frame), B_per_col (store bytes per touched column), column_updates.
 #include "bench/bench_support.hpp"
 
@@ -24,7 +24,7 @@ namespace {
 using bench::Input;
 using bench::input_points;
 
-void set_store_counters(benchmark::State& state, const SphericalGrid& grid, const InsertionReport& r) {
+void set_store_counters(benchmark::State& state, const ColumnGrid& grid, const InsertionReport& r) {
   state.counters["points"] = static_cast<double>(r.points_received);
   state.counters["column_updates"] = static_cast<double>(r.column_updates);
   state.counters["store_MB"] = static_cast<double>(grid.memory_bytes()) / 1e6;
@@ -39,7 +39,7 @@ void insert_one_frame(benchmark::State& state, Input input) {
   const SensorPreset preset = bench::input_preset(input, static_cast<int>(state.range(1)));
   state.SetLabel(bench::preset_label(static_cast<int>(state.range(1))));
   const SensorModel model(preset.model);
-  SphericalGrid grid{SphericalGeometry(preset.geometry)};
+  ColumnGrid grid{GridGeometry(preset.geometry)};
   InsertionOptions options;
   options.threads = static_cast<int>(state.range(0));
   InsertionReport last;
@@ -74,7 +74,7 @@ void insert_static_view(benchmark::State& state, Input input) {
   options.threads = 2;
   constexpr int kFrames = 100;
   for (auto _ : state) {
-    SphericalGrid grid{SphericalGeometry(preset.geometry)};
+    ColumnGrid grid{GridGeometry(preset.geometry)};
     const InsertionReport first = insert_points(grid, model, PointSpan::from(*points), options);
     const double first_mb = static_cast<double>(grid.memory_bytes()) / 1e6;
     const double first_bytes_per_col =
@@ -117,7 +117,7 @@ void insert_octomap(benchmark::State& state, Input input) {
   }
   const SensorPreset preset = kinect_v1_paper();
   const SensorModel model(preset.model);
-  SphericalGrid grid{SphericalGeometry(preset.geometry)};
+  ColumnGrid grid{GridGeometry(preset.geometry)};
   insert_points(grid, model, PointSpan::from(*points), {1});  // warm-up
   grid.clear();
   const InsertionReport ours = insert_points(grid, model, PointSpan::from(*points), {1});

@@ -14,10 +14,10 @@
 namespace occ_improve {
 namespace {
 
-const SphericalGrid& one_frame_grid() {
+const ColumnGrid& one_frame_grid() {
   static const auto grid = [] {
     const SensorPreset preset = kinect_v1_paper();
-    auto g = std::make_unique<SphericalGrid>(SphericalGeometry(preset.geometry));
+    auto g = std::make_unique<ColumnGrid>(GridGeometry(preset.geometry));
     insert_points(*g, SensorModel(preset.model), PointSpan::from(bench::sample_points()));
     return g;
   }();
@@ -27,7 +27,7 @@ const SphericalGrid& one_frame_grid() {
 std::string map_path() { return (std::filesystem::temp_directory_path() / "occ_bench_map_io.occmap").string(); }
 
 void BM_SaveOneFrameMap(benchmark::State& state) {
-  const SphericalGrid& grid = one_frame_grid();
+  const ColumnGrid& grid = one_frame_grid();
   for (auto _ : state) save_map(map_path(), grid, kinect_v1_paper().model);
   state.counters["file_MB"] = static_cast<double>(std::filesystem::file_size(map_path())) / 1e6;
   state.counters["stored_voxels"] = static_cast<double>(grid.stored_voxel_count());

@@ -29,9 +29,9 @@ constexpr double kMaxRange = 5.0;
 using bench::Input;
 using bench::input_points;
 
-std::unique_ptr<SphericalGrid> one_frame_grid(const std::vector<Eigen::Vector3f>& points) {
+std::unique_ptr<ColumnGrid> one_frame_grid(const std::vector<Eigen::Vector3f>& points) {
   const SensorPreset preset = kinect_v1_paper();
-  auto grid = std::make_unique<SphericalGrid>(SphericalGeometry(preset.geometry));
+  auto grid = std::make_unique<ColumnGrid>(GridGeometry(preset.geometry));
   insert_points(*grid, SensorModel(preset.model), PointSpan::from(points));
   return grid;
 }

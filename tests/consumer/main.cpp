@@ -19,7 +19,7 @@
 int main() {
   using namespace occ_improve;
   const SensorPreset preset = kinect_v1_paper();
-  SphericalGrid grid{SphericalGeometry(preset.geometry)};
+  ColumnGrid grid{GridGeometry(preset.geometry)};
   std::vector<Eigen::Vector3f> points;  // a 1 m x 1 m wall 2 m ahead
   for (float x = -0.5f; x <= 0.5f; x += 0.005f)
     for (float y = -0.5f; y <= 0.5f; y += 0.005f) points.emplace_back(x, y, 2.0f);
@@ -49,7 +49,7 @@ int main() {
 #ifdef HAVE_OCC_PCL
   pcl::PointCloud<pcl::PointXYZ> cloud;
   cloud.push_back(pcl::PointXYZ(0.0f, 0.0f, 2.0f));
-  SphericalGrid from_pcl{SphericalGeometry(preset.geometry)};
+  ColumnGrid from_pcl{GridGeometry(preset.geometry)};
   if (insert_points(from_pcl, SensorModel(preset.model), span_of(cloud)).points_inserted != 1 ||
       parse_depth_encoding("tum") != DepthEncoding::tum_5000) {
     std::fprintf(stderr, "consumer: unexpected result from occ_improve::pcl\n");

@@ -23,9 +23,9 @@ enum class Occupancy { unknown = 0, free = 1, occupied = 2 };
 
 /// Log-odds of the spherical voxel holding world point `w`; nullopt where the export counts it unknown
 /// (outside the field of view or depth range, never touched, or inside the unknown band).
-inline std::optional<float> spherical_log_odds(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+inline std::optional<float> spherical_log_odds(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
                                                const Eigen::Vector3d& w, const OctomapExportOptions& options) {
-  const SphericalGeometry& g = grid.geometry();
+  const GridGeometry& g = grid.geometry();
   const Eigen::Vector3d p = world_from_sensor.inverse() * w;
   RayPosition r;
   if (!(p.squaredNorm() > 0) || !g.project(p.x(), p.y(), p.z(), r)) return std::nullopt;
@@ -36,7 +36,7 @@ inline std::optional<float> spherical_log_odds(const SphericalGrid& grid, const 
   return value;
 }
 
-inline Occupancy spherical_occupancy(const SphericalGrid& grid, const Eigen::Isometry3d& pose, const Eigen::Vector3d& w,
+inline Occupancy spherical_occupancy(const ColumnGrid& grid, const Eigen::Isometry3d& pose, const Eigen::Vector3d& w,
                                      const OctomapExportOptions& options) {
   const auto l = spherical_log_odds(grid, pose, w, options);
   if (!l) return Occupancy::unknown;
@@ -58,7 +58,7 @@ struct LeafEstimate {
   float largest_occupied = -std::numeric_limits<float>::infinity();  ///< largest occupied log-odds seen
 };
 
-inline LeafEstimate estimate_leaf(const SphericalGrid& grid, const Eigen::Isometry3d& pose, const Eigen::Vector3d& centre,
+inline LeafEstimate estimate_leaf(const ColumnGrid& grid, const Eigen::Isometry3d& pose, const Eigen::Vector3d& centre,
                                   double size, const OctomapExportOptions& options, int n) {
   LeafEstimate e;
   bool all_free = true;
@@ -87,9 +87,9 @@ struct Agreement {
 /// The finest leaves holding random points of the grid's frustum (uniform in the binning's angular
 /// position, uniform in volume along depth), their exported class against the lattice estimate. The rule
 /// forbids holes and false frees outright; other disagreements are thin features the lattice missed.
-inline Agreement compare_leaves(const SphericalGrid& grid, const Eigen::Isometry3d& pose, const octomap::OcTree& tree,
+inline Agreement compare_leaves(const ColumnGrid& grid, const Eigen::Isometry3d& pose, const octomap::OcTree& tree,
                                 const OctomapExportOptions& options, int samples, unsigned seed = 7, int lattice = 6) {
-  const SphericalGeometry& g = grid.geometry();
+  const GridGeometry& g = grid.geometry();
   const GeometryParams& p = g.params();
   std::mt19937 random(seed);
   std::uniform_real_distribution<double> az(g.azimuth().min(), g.azimuth().max()),

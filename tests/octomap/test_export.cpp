@@ -38,12 +38,12 @@ constexpr double kResolution = 0.03;
 constexpr double kMinAgreement = 0.97;
 
 // The sample frame in the paper preset (clamped) and in an exact-mode grid, built once.
-const SphericalGrid& sample_grid(UpdateMode mode) {
+const ColumnGrid& sample_grid(UpdateMode mode) {
   auto build = [](UpdateMode m) {
     const SensorPreset preset = kinect_v1_paper();
     GridOptions options;
     options.mode = m;
-    auto grid = std::make_unique<SphericalGrid>(SphericalGeometry(preset.geometry), options);
+    auto grid = std::make_unique<ColumnGrid>(GridGeometry(preset.geometry), options);
     const auto points = sample::generate_scene().points();
     insert_points(*grid, SensorModel(preset.model), PointSpan::from(points));
     return grid;
@@ -90,7 +90,7 @@ void expect_agreement(const test::Agreement& a, double min_fraction) {
 }
 
 // The grid exported from some_pose(), with the report's counts checked.
-std::unique_ptr<octomap::OcTree> exported(const SphericalGrid& grid, const OctomapExportOptions& options) {
+std::unique_ptr<octomap::OcTree> exported(const ColumnGrid& grid, const OctomapExportOptions& options) {
   OctomapExportReport report;
   auto tree = to_octree(grid, some_pose(), kResolution, options, &report);
   EXPECT_GT(report.free_written, 100000u);
@@ -99,7 +99,7 @@ std::unique_ptr<octomap::OcTree> exported(const SphericalGrid& grid, const Octom
 }
 
 TEST_F(OctomapExport, FilesReadBackAgreeWithTheGrid) {
-  const SphericalGrid& grid = sample_grid(UpdateMode::clamped);
+  const ColumnGrid& grid = sample_grid(UpdateMode::clamped);
   const Eigen::Isometry3d pose = some_pose();
   const OctomapExportOptions options;
   const auto tree = exported(grid, options);
@@ -124,7 +124,7 @@ TEST_F(OctomapExport, FilesReadBackAgreeWithTheGrid) {
 
 TEST_F(OctomapExport, PixelNativeGridAgreesToo) {
   const SensorPreset preset = kinect_v1(sample::generate_scene().intrinsics);
-  SphericalGrid grid(SphericalGeometry(preset.geometry));
+  ColumnGrid grid(GridGeometry(preset.geometry));
   insert_points(grid, SensorModel(preset.model), PointSpan::from(sample::generate_scene().points()));
   const OctomapExportOptions options;
   expect_agreement(test::compare_leaves(grid, some_pose(), *exported(grid, options), options, 5000), kMinAgreement);
@@ -139,7 +139,7 @@ TEST_F(OctomapExport, AThinWallExportsWithoutHoles) {
   for (int v = 0; v < camera.height; ++v)
     for (int u = 0; u < camera.width; ++u) wall.emplace_back((u - 32) * 0.01f, (v - 24) * 0.01f, 2.0f);
   const SensorPreset preset = kinect_v1(camera);
-  SphericalGrid grid(SphericalGeometry(preset.geometry));
+  ColumnGrid grid(GridGeometry(preset.geometry));
   insert_points(grid, SensorModel(preset.model), PointSpan::from(wall));
   for (double resolution : {0.01, 0.02, 0.05}) {
     OctomapExportReport report;
@@ -173,7 +173,7 @@ TEST_F(OctomapExport, AThinWallExportsWithoutHoles) {
 // voxels reaching them, so at least the largest a lattice inside them finds.
 TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBounds) {
   for (UpdateMode mode : {UpdateMode::clamped, UpdateMode::exact}) {
-    const SphericalGrid& grid = sample_grid(mode);
+    const ColumnGrid& grid = sample_grid(mode);
     const Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
     const OctomapExportOptions options;
     const auto tree = to_octree(grid, pose, kResolution, options);
@@ -208,7 +208,7 @@ TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBou
 
 // The merged tree against the two views exported alone: every leaf is the clamped sum of theirs.
 TEST_F(OctomapExport, TwoPosesMergeByAddingLogOddsThenClamping) {
-  const SphericalGrid& grid = sample_grid(UpdateMode::clamped);
+  const ColumnGrid& grid = sample_grid(UpdateMode::clamped);
   const Eigen::Isometry3d a = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d b = Eigen::Isometry3d::Identity();
   b.translate(Eigen::Vector3d(0.4, 0.0, 0.6));
@@ -287,7 +287,7 @@ TEST_F(OctomapExport, TreeFilesHoldOctomapsOwnBytesAndSayWhoWroteThem) {
 }
 
 TEST_F(OctomapExport, BadResolutionPoseAndPathsAreRefused) {
-  const SphericalGrid& grid = sample_grid(UpdateMode::clamped);
+  const ColumnGrid& grid = sample_grid(UpdateMode::clamped);
   const Eigen::Isometry3d identity = Eigen::Isometry3d::Identity();
   EXPECT_THROW(to_octree(grid, identity, 0.0), InvalidParameter);
   EXPECT_THROW(to_octree(grid, identity, -0.02), InvalidParameter);

@@ -51,13 +51,13 @@ const LoadedFrame& frame(const std::string& path) {
 }
 
 // The grid of a frame in a preset, built once per (frame, preset).
-const SphericalGrid& grid_of(const std::string& path, const std::string& preset_name) {
-  static std::map<std::pair<std::string, std::string>, std::unique_ptr<SphericalGrid>> grids;
+const ColumnGrid& grid_of(const std::string& path, const std::string& preset_name) {
+  static std::map<std::pair<std::string, std::string>, std::unique_ptr<ColumnGrid>> grids;
   auto& slot = grids[{path, preset_name}];
   if (!slot) {
     const LoadedFrame& f = frame(path);
     const SensorPreset preset = preset_by_name(preset_name, estimate_intrinsics(f.cloud));
-    slot = std::make_unique<SphericalGrid>(SphericalGeometry(preset.geometry));
+    slot = std::make_unique<ColumnGrid>(GridGeometry(preset.geometry));
     insert_points(*slot, SensorModel(preset.model), span_of(f.cloud));
   }
   return *slot;
@@ -66,7 +66,7 @@ const SphericalGrid& grid_of(const std::string& path, const std::string& preset_
 // OctoMap's own map of the frame: insertPointCloud from the sensor's origin with OctoMap's default
 // sensor model, built once per (frame, resolution). Only the points the grid holds (depth coordinate in
 // its range) are inserted, so both maps see the same measurements.
-const octomap::OcTree& reference_of(const std::string& path, const SphericalGeometry& geometry, double resolution) {
+const octomap::OcTree& reference_of(const std::string& path, const GridGeometry& geometry, double resolution) {
   static std::map<std::pair<std::string, double>, std::unique_ptr<octomap::OcTree>> trees;
   auto& slot = trees[{path, resolution}];
   if (!slot) {
@@ -131,7 +131,7 @@ class ExportAgainstInsertPointCloud : public ::testing::TestWithParam<Case> {};
 TEST_P(ExportAgainstInsertPointCloud, OccupiedLeavesAgree) {
   const auto& [relative, preset, resolution] = GetParam();
   OCC_REQUIRE_DATA(path, relative);
-  const SphericalGrid& grid = grid_of(path, preset);
+  const ColumnGrid& grid = grid_of(path, preset);
   const octomap::OcTree& reference = reference_of(path, grid.geometry(), resolution);
   OctomapExportReport report;
   const auto exported = to_octree(grid, z_up_from_optical(), resolution, {}, &report);

@@ -95,7 +95,7 @@ TEST_F(ImprovementFilterTest, ImprovementCloudIsAlignedWithTheInputAndTheMap) {
   ASSERT_EQ(improvement.size(), cloud_->size());
   EXPECT_EQ(improvement.width, cloud_->width);
   EXPECT_EQ(improvement.height, cloud_->height);
-  const SphericalGeometry& geometry = mapper_->geometry();
+  const GridGeometry& geometry = mapper_->geometry();
   std::size_t without_ray = 0;
   for (std::size_t i = 0; i < cloud_->size(); i += 97) {
     const auto& p = (*cloud_)[i];

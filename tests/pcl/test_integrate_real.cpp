@@ -24,7 +24,7 @@ struct Window {
 
 void expect_exact_matches_reference(const pcl::PointCloud<pcl::PointXYZ>& cloud, const SensorPreset& preset,
                                     const std::vector<Window>& windows) {
-  const SphericalGeometry full(preset.geometry);
+  const GridGeometry full(preset.geometry);
   const SensorModel model(preset.model);
   std::vector<Eigen::Vector3f> points;
   for (const auto& p : cloud) points.emplace_back(p.x, p.y, p.z);
@@ -33,8 +33,8 @@ void expect_exact_matches_reference(const pcl::PointCloud<pcl::PointXYZ>& cloud,
   // Counted over all windows: the 99.9% of the issue is a share of columns, not of each small window.
   std::size_t same = 0, columns = 0;
   for (const Window& w : windows) {
-    const SphericalGeometry g = reference::crop(full, w.azimuth_first, w.elevation_first, w.width, w.height);
-    SphericalGrid fast(g, exact);
+    const GridGeometry g = reference::crop(full, w.azimuth_first, w.elevation_first, w.width, w.height);
+    ColumnGrid fast(g, exact);
     reference::DenseGrid ref(g, model, exact);
     const InsertionReport r = insert_points(fast, model, span_of(cloud));
     ref.insert(points);
@@ -54,11 +54,11 @@ void expect_exact_matches_reference(const pcl::PointCloud<pcl::PointXYZ>& cloud,
 }
 
 double clamped_exact_agreement(const pcl::PointCloud<pcl::PointXYZ>& cloud, const SensorPreset& preset) {
-  const SphericalGeometry g(preset.geometry);
+  const GridGeometry g(preset.geometry);
   const SensorModel model(preset.model);
   GridOptions exact;
   exact.mode = UpdateMode::exact;
-  SphericalGrid clamped_grid(g), exact_grid(g, exact);
+  ColumnGrid clamped_grid(g), exact_grid(g, exact);
   insert_points(clamped_grid, model, span_of(cloud));
   insert_points(exact_grid, model, span_of(cloud));
   const SurfaceMap a = compute_surface(clamped_grid), b = compute_surface(exact_grid);
@@ -102,12 +102,12 @@ TEST(IntegrateReal, PixelNativeClampedMatchesReferenceVoxelByVoxel) {
   const LoadedFrame f1 = load_pcd_frame(first), f2 = load_pcd_frame(second);
   SensorPreset preset = kinect_v1(estimate_intrinsics(f1.cloud));
   preset.geometry.depth_bins = 1024;  // keeps the dense reference small (about 0.8 bins per sigma)
-  const SphericalGeometry full(preset.geometry);
+  const GridGeometry full(preset.geometry);
   const SensorModel model(preset.model);
   std::size_t free_voxels = 0, changed_voxels = 0;
   for (const Window& w : std::vector<Window>{{300, 220, 16, 16}, {100, 60, 16, 16}, {520, 400, 16, 16}}) {
-    const SphericalGeometry g = reference::crop(full, w.azimuth_first, w.elevation_first, w.width, w.height);
-    SphericalGrid fast(g);
+    const GridGeometry g = reference::crop(full, w.azimuth_first, w.elevation_first, w.width, w.height);
+    ColumnGrid fast(g);
     reference::DenseGrid ref(g, model, GridOptions{});
     for (const LoadedFrame* f : {&f1, &f2}) {
       std::vector<Eigen::Vector3f> points;

@@ -44,7 +44,7 @@ void expect_round_trip(const Mapper& mapper, const std::string& name) {
 // a lattice inside each: no occupied space missed, nothing but free space written free. Other
 // disagreements are features thinner than the lattice's spacing (the kinect_v1 preset's occupied shell is a
 // few millimetres deep, sigma_z = 1.4 mm at 1 m), which the lattice misses.
-void expect_octree_agreement(const SphericalGrid& grid) {
+void expect_octree_agreement(const ColumnGrid& grid) {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.translate(Eigen::Vector3d(-0.5, 0.2, 1.0));
   pose.rotate(Eigen::AngleAxisd(-0.3, Eigen::Vector3d::UnitX()));

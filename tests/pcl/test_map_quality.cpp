@@ -38,7 +38,7 @@ constexpr float kNoDataBand = 0.31f;  // render.cpp: from here up the colour is 
 
 // Which observable columns received a return from any of the frames (not nearer than the grid's start:
 // such a return leaves its column untouched).
-std::vector<std::uint8_t> columns_with_data(const SphericalGeometry& g,
+std::vector<std::uint8_t> columns_with_data(const GridGeometry& g,
                                             const std::vector<pcl::PointCloud<pcl::PointXYZ>>& frames) {
   std::vector<std::uint8_t> hit(g.column_count(), 0);
   for (const auto& cloud : frames)
@@ -51,7 +51,7 @@ std::vector<std::uint8_t> columns_with_data(const SphericalGeometry& g,
 }
 
 // Columns with no data, or with an 8-neighbour that has none (a hole, a shadow, its border).
-std::vector<std::uint8_t> near_no_data(const SphericalGeometry& g, const std::vector<std::uint8_t>& hit) {
+std::vector<std::uint8_t> near_no_data(const GridGeometry& g, const std::vector<std::uint8_t>& hit) {
   std::vector<std::uint8_t> near(g.column_count(), 0);
   for (int e = 0; e < g.height(); ++e)
     for (int a = 0; a < g.width(); ++a) {
@@ -81,7 +81,7 @@ struct Levels {
 };
 
 Levels measure(const Mapper& mapper, const std::vector<pcl::PointCloud<pcl::PointXYZ>>& frames) {
-  const SphericalGeometry& g = mapper.geometry();
+  const GridGeometry& g = mapper.geometry();
   const auto hit = columns_with_data(g, frames);
   const auto near = near_no_data(g, hit);
   const std::vector<float>& imp = mapper.improvement().value;
@@ -195,7 +195,7 @@ TEST(MapQuality, GridEndAndBeyondForTheColourGuide) {
   for (const SensorPreset& preset : {kinect_v1(*frame.intrinsics), kinect_v1_paper()}) {
     Mapper mapper(preset);
     mapper.insert(span_of(frame.cloud));
-    const SphericalGeometry& g = mapper.geometry();
+    const GridGeometry& g = mapper.geometry();
     const SensorModel& model = mapper.model();
     std::vector<float> at_end, beyond;
     std::vector<std::uint8_t> done(g.column_count(), 0);

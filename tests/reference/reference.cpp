@@ -25,7 +25,7 @@ struct Position {
   double h = 0, v = 0, depth = 0;
 };
 
-bool reference_position(const SphericalGeometry& g, const Eigen::Vector3f& q, Position& out) {
+bool reference_position(const GridGeometry& g, const Eigen::Vector3f& q, Position& out) {
   const double x = q.x(), y = q.y(), z = q.z();
   if (g.binning() == AngularBinning::pinhole) {
     if (!(z > 0)) return false;
@@ -38,16 +38,16 @@ bool reference_position(const SphericalGeometry& g, const Eigen::Vector3f& q, Po
   return inside(g.azimuth(), out.h) && inside(g.elevation(), out.v);
 }
 
-double sigma_h(const SphericalGeometry& g, const SensorModelParams& p) {
+double sigma_h(const GridGeometry& g, const SensorModelParams& p) {
   return g.binning() == AngularBinning::pinhole ? p.sigma_u_px : p.sigma_azimuth_rad;
 }
-double sigma_v(const SphericalGeometry& g, const SensorModelParams& p) {
+double sigma_v(const GridGeometry& g, const SensorModelParams& p) {
   return g.binning() == AngularBinning::pinhole ? p.sigma_v_px : p.sigma_elevation_rad;
 }
 
 }  // namespace
 
-DenseGrid::DenseGrid(const SphericalGeometry& geometry, const SensorModel& model, const GridOptions& options)
+DenseGrid::DenseGrid(const GridGeometry& geometry, const SensorModel& model, const GridOptions& options)
     : geometry_(geometry), model_(model), options_(options), bins_(static_cast<std::size_t>(geometry.depth().bins())) {
   lmin_ = std::log(options.probability_min / (1 - options.probability_min));
   lmax_ = std::log(options.probability_max / (1 - options.probability_max));
@@ -123,7 +123,7 @@ DenseGrid::Surface DenseGrid::surface(std::size_t column) const {
   return s;
 }
 
-std::vector<double> improvement_map(const SphericalGeometry& g, const SensorModel& model,
+std::vector<double> improvement_map(const GridGeometry& g, const SensorModel& model,
                                     const std::vector<DenseGrid::Surface>& surfaces) {
   const auto& p = model.params();
   const double sh = sigma_h(g, p), sv = sigma_v(g, p);
@@ -163,7 +163,7 @@ std::vector<double> improvement_map(const DenseGrid& grid) {
   return improvement_map(grid.geometry(), grid.model(), surfaces);
 }
 
-SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height) {
+GridGeometry crop(const GridGeometry& full, int azimuth_first, int elevation_first, int width, int height) {
   GeometryParams p = full.params();
   if (p.angular_binning == AngularBinning::pinhole) {
     // The same pixels of a smaller image: the principal point moves with the crop's origin.
@@ -179,7 +179,7 @@ SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int ele
   }
   p.azimuth_bins = width;
   p.elevation_bins = height;
-  return SphericalGeometry(p);
+  return GridGeometry(p);
 }
 
 }  // namespace occ_improve::reference

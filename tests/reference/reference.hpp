@@ -16,12 +16,12 @@ long double logit_opdf(long double d_rho, long double angular_term, long double 
 
 class DenseGrid {
 public:
-  DenseGrid(const SphericalGeometry& geometry, const SensorModel& model, const GridOptions& options);
+  DenseGrid(const GridGeometry& geometry, const SensorModel& model, const GridOptions& options);
   /// Inserts points in order (NaN/zero and out-of-field points are skipped, as SPEC 1 says).
   void insert(const std::vector<Eigen::Vector3f>& points);
   double log_odds(std::size_t column, int bin) const { return values_[column * bins_ + static_cast<std::size_t>(bin)]; }
   bool touched(std::size_t column) const { return touched_[column] != 0; }
-  const SphericalGeometry& geometry() const { return geometry_; }
+  const GridGeometry& geometry() const { return geometry_; }
   const SensorModel& model() const { return model_; }
 
   struct Surface {
@@ -33,7 +33,7 @@ public:
   Surface surface(std::size_t column) const;
 
 private:
-  SphericalGeometry geometry_;
+  GridGeometry geometry_;
   SensorModel model_;
   GridOptions options_;
   std::size_t bins_;
@@ -45,13 +45,13 @@ private:
 /// Eqs. 3-4 (SPEC 7) by brute force in double for every column, over the given surfaces (one per column):
 /// the window is found by testing every column's extent against the +-k sigma box of the simulated
 /// measurement; unknown surfaces take part with depth 0 and P = 1/2; P_s comes from logit_opdf above.
-std::vector<double> improvement_map(const SphericalGeometry& geometry, const SensorModel& model,
+std::vector<double> improvement_map(const GridGeometry& geometry, const SensorModel& model,
                                     const std::vector<DenseGrid::Surface>& surfaces);
 /// The same over the dense grid's own surface.
 std::vector<double> improvement_map(const DenseGrid& grid);
 
 /// A geometry covering only a window of another one's columns, with identical column extents:
 /// columns [azimuth_first, azimuth_first + width) x [elevation_first, elevation_first + height).
-SphericalGeometry crop(const SphericalGeometry& full, int azimuth_first, int elevation_first, int width, int height);
+GridGeometry crop(const GridGeometry& full, int azimuth_first, int elevation_first, int width, int height);
 
 }  // namespace occ_improve::reference

@@ -30,7 +30,7 @@ inline bool same_bits(const std::vector<float>& a, const std::vector<float>& b) 
 }
 
 /// Every column bit for bit: the same touched set, runs, windows and float bit patterns; same options.
-inline void expect_identical(const SphericalGrid& a, const SphericalGrid& b) {
+inline void expect_identical(const ColumnGrid& a, const ColumnGrid& b) {
   ASSERT_TRUE(same_params(a.geometry().params(), b.geometry().params()));
   EXPECT_EQ(a.options().mode, b.options().mode);
   EXPECT_EQ(a.options().probability_min, b.options().probability_min);

@@ -28,7 +28,7 @@ class Mapper {
 public:
   explicit Mapper(const SensorPreset& preset, const GridOptions& options = {});
   /// Takes over a grid (e.g. a loaded map) and computes its surface and improvement.
-  Mapper(SphericalGrid grid, const SensorModel& model);
+  Mapper(ColumnGrid grid, const SensorModel& model);
 
   /// Insertion with the surface kept current + incremental improvement.
   MapperReport insert(PointSpan points, const InsertionOptions& options = {});
@@ -45,9 +45,9 @@ public:
   /// One byte per column, 1 = inside the mask; empty without a mask.
   const std::vector<std::uint8_t>& column_mask() const { return column_mask_; }
 
-  const SphericalGeometry& geometry() const { return grid_.geometry(); }
+  const GridGeometry& geometry() const { return grid_.geometry(); }
   const SensorModel& model() const { return model_; }
-  const SphericalGrid& grid() const { return grid_; }
+  const ColumnGrid& grid() const { return grid_; }
   const SurfaceMap& surface() const { return surface_; }
   const ImprovementMap& improvement() const { return improvement_; }
   /// The improvement on blocks of 2-16 columns and the depth samples' moments, kept with the map.
@@ -57,7 +57,7 @@ public:
   const ImprovementPyramid& pyramid() const;
 
 private:
-  SphericalGrid grid_;
+  ColumnGrid grid_;
   SensorModel model_;
   SurfaceMap surface_;
   ImprovementMap improvement_;

@@ -44,8 +44,8 @@ void require_rigid(const Eigen::Isometry3d& pose) {
 
 // The far end of everything the grid knows: beyond the last touched bin of every column all voxels are
 // unknown, so the export need not visit them (a table-top frame in an 8 m grid ends near 2 m).
-double known_far_m(const SphericalGrid& grid) {
-  const SphericalGeometry& g = grid.geometry();
+double known_far_m(const ColumnGrid& grid) {
+  const GridGeometry& g = grid.geometry();
   int last_bin = -1;
   for (std::size_t c = 0; c < g.column_count(); ++c) {
     const ColumnData* column = grid.find(static_cast<ColumnIndex>(c));
@@ -58,7 +58,7 @@ double known_far_m(const SphericalGrid& grid) {
 // extents, in the binning's unit), for any binning.
 constexpr int kSamples = 17;
 template <typename Visit>
-void for_each_lattice_position(const SphericalGeometry& g, Visit&& visit) {
+void for_each_lattice_position(const GridGeometry& g, Visit&& visit) {
   const UniformAxis &h = g.azimuth(), &v = g.elevation();
   for (int i = 0; i < kSamples; ++i)
     for (int j = 0; j < kSamples; ++j)
@@ -68,7 +68,7 @@ void for_each_lattice_position(const SphericalGeometry& g, Visit&& visit) {
 // Volume of the field of view out to depth coordinate far_m: per lattice cell, its solid angle (the
 // parallelogram of two edge directions) x (r_far^3 - r_near^3) / 3 at the cell's first corner. An
 // estimate for the memory cap only.
-double frustum_volume_m3(const SphericalGeometry& g, double far_m) {
+double frustum_volume_m3(const GridGeometry& g, double far_m) {
   std::vector<Eigen::Vector3d> d(kSamples * kSamples);
   std::vector<double> far_range(d.size());
   for_each_lattice_position(g, [&](int i, int j, double h, double v) {
@@ -88,7 +88,7 @@ double frustum_volume_m3(const SphericalGeometry& g, double far_m) {
 
 // World-frame bounding box of the field of view out to far_m: the lattice at the near and far depths
 // (and the sensor origin), padded by the far cap's bulge between lattice directions.
-void frustum_bounds(const SphericalGeometry& g, double far_m, const Eigen::Isometry3d& pose, Eigen::Vector3d& lo,
+void frustum_bounds(const GridGeometry& g, double far_m, const Eigen::Isometry3d& pose, Eigen::Vector3d& lo,
                     Eigen::Vector3d& hi) {
   lo = hi = pose.translation();
   double widest_step_rad = 0, far_range = 0;
@@ -278,7 +278,7 @@ struct BinRun {
 // gathered into patches no wider than the cover's step: far fewer boxes, no looser than the step.
 class LeafMarker {
 public:
-  LeafMarker(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor, float band, const PatchCover& cover)
+  LeafMarker(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor, float band, const PatchCover& cover)
       : grid_(grid), g_(grid.geometry()), band_(band), cover_(cover), marks_(cover.key_lo(), cover.key_hi()),
         corners_(static_cast<std::size_t>(g_.width() + 1) * (g_.height() + 1)) {
     const Eigen::Matrix3d rotation = world_from_sensor.linear();
@@ -490,8 +490,8 @@ private:
     }
   }
 
-  const SphericalGrid& grid_;
-  const SphericalGeometry& g_;
+  const ColumnGrid& grid_;
+  const GridGeometry& g_;
   float band_;
   const PatchCover& cover_;
   LeafMarks marks_;
@@ -510,7 +510,7 @@ constexpr double kPieceFraction = 0.25;
 // How far the curved faces of a spherical voxel (range caps, elevation cones) and the directions between its
 // corners stray from the corners' box: less than r alpha^2 / 8 for a column alpha wide (diagonally) at range
 // r, taken 4 times over. The pinhole binning's faces are planes. Plus a nanometre for rounding.
-double curvature_pad_m(const SphericalGeometry& g, double far_m) {
+double curvature_pad_m(const GridGeometry& g, double far_m) {
   if (g.binning() != AngularBinning::spherical) return 1e-9;
   const double alpha = std::hypot(g.azimuth().width(), g.elevation().width());
   return 1e-9 + far_m * alpha * alpha / 2;
@@ -521,10 +521,10 @@ double curvature_pad_m(const SphericalGeometry& g, double far_m) {
 // holding their centre. Leaves whose centre is in the field of view and that are neither free nor occupied
 // count as unknown.
 template <typename Write>
-void write_free_leaves(const octomap::OcTree& tree, const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+void write_free_leaves(const octomap::OcTree& tree, const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
                        double far_m, const octomap::OcTreeKey& key_lo, const octomap::OcTreeKey& key_hi, float band,
                        const LeafMarks& marks, Write&& write, OctomapExportReport& report) {
-  const SphericalGeometry& geometry = grid.geometry();
+  const GridGeometry& geometry = grid.geometry();
   const double near2 = geometry.params().depth_min_m * geometry.params().depth_min_m;
   const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
   const Eigen::Vector3d origin = world_from_sensor.translation();
@@ -605,7 +605,7 @@ void OctomapExportOptions::validate() const {
   require_parameter(memory_cap_bytes > 0, "memory_cap_bytes", static_cast<double>(memory_cap_bytes), "> 0");
 }
 
-std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double resolution_m,
+std::unique_ptr<octomap::OcTree> make_octree(const ColumnGrid& grid, double resolution_m,
                                              const OctomapExportOptions& options) {
   options.validate();
   require_parameter(std::isfinite(resolution_m) && resolution_m > 0, "resolution_m", resolution_m, "> 0");
@@ -623,12 +623,12 @@ std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double r
   return tree;
 }
 
-OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& grid,
+OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
                                   const Eigen::Isometry3d& world_from_sensor, const OctomapExportOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   options.validate();
   require_rigid(world_from_sensor);
-  const SphericalGeometry& geometry = grid.geometry();
+  const GridGeometry& geometry = grid.geometry();
   const double resolution = tree.getResolution();
 
   const double far_m = known_far_m(grid);
@@ -673,7 +673,7 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& gr
   return report;
 }
 
-std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+std::unique_ptr<octomap::OcTree> to_octree(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
                                            double resolution_m, const OctomapExportOptions& options,
                                            OctomapExportReport* report) {
   auto tree = make_octree(grid, resolution_m, options);

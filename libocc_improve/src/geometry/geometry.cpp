@@ -150,7 +150,7 @@ bool to_pixel(const PinholeIntrinsics& k, double x, double y, double z, double& 
 
 }  // namespace
 
-SphericalGeometry::SphericalGeometry(const GeometryParams& params) : params_(params) {
+GridGeometry::GridGeometry(const GeometryParams& params) : params_(params) {
   params.validate();
   if (params.angular_binning == AngularBinning::pinhole) {
     // Column i spans pixel positions [i - 0.5, i + 0.5): pixel centres are the column centres.
@@ -175,12 +175,12 @@ SphericalGeometry::SphericalGeometry(const GeometryParams& params) : params_(par
   }
 }
 
-std::size_t SphericalGeometry::observable_count() const {
+std::size_t GridGeometry::observable_count() const {
   if (observable_.empty()) return column_count();
   return static_cast<std::size_t>(std::count(observable_.begin(), observable_.end(), std::uint8_t{1}));
 }
 
-bool SphericalGeometry::project(double x, double y, double z, RayPosition& p) const {
+bool GridGeometry::project(double x, double y, double z, RayPosition& p) const {
   if (params_.angular_binning == AngularBinning::pinhole) {
     if (!to_pixel(*params_.camera, x, y, z, p.horizontal, p.vertical)) return false;
     p.depth = z;
@@ -195,7 +195,7 @@ bool SphericalGeometry::project(double x, double y, double z, RayPosition& p) co
   return p.horizontal_bin >= 0 && p.vertical_bin >= 0;
 }
 
-Eigen::Vector3d SphericalGeometry::direction_at(double horizontal, double vertical) const {
+Eigen::Vector3d GridGeometry::direction_at(double horizontal, double vertical) const {
   if (params_.angular_binning == AngularBinning::pinhole) {
     const PinholeIntrinsics& k = *params_.camera;
     return Eigen::Vector3d((horizontal - k.cx) / k.fx, (vertical - k.cy) / k.fy, 1.0).normalized();
@@ -203,11 +203,11 @@ Eigen::Vector3d SphericalGeometry::direction_at(double horizontal, double vertic
   return from_spherical({1.0, horizontal, vertical});
 }
 
-Eigen::Vector3d SphericalGeometry::direction(int azimuth_bin, int elevation_bin) const {
+Eigen::Vector3d GridGeometry::direction(int azimuth_bin, int elevation_bin) const {
   return direction_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin));
 }
 
-Eigen::Vector3d SphericalGeometry::point_at(double horizontal, double vertical, double depth) const {
+Eigen::Vector3d GridGeometry::point_at(double horizontal, double vertical, double depth) const {
   if (params_.angular_binning == AngularBinning::pinhole) {  // depth is z: back-project the pixel position
     const PinholeIntrinsics& k = *params_.camera;
     return {(horizontal - k.cx) / k.fx * depth, (vertical - k.cy) / k.fy * depth, depth};
@@ -215,7 +215,7 @@ Eigen::Vector3d SphericalGeometry::point_at(double horizontal, double vertical, 
   return direction_at(horizontal, vertical) * depth;
 }
 
-bool SphericalGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
+bool GridGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
   if (!is_valid_point(x, y, z)) return false;
   RayPosition r;
   if (!project(x, y, z, r)) return false;
@@ -223,7 +223,7 @@ bool SphericalGeometry::column_of(double x, double y, double z, ColumnIndex& c) 
   return true;
 }
 
-bool SphericalGeometry::operator==(const SphericalGeometry& o) const {
+bool GridGeometry::operator==(const GridGeometry& o) const {
   const GeometryParams &a = params_, &b = o.params_;
   return a.angular_binning == b.angular_binning && a.camera == b.camera && a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
          a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&

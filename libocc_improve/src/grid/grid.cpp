@@ -57,7 +57,7 @@ void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_b
   throw ResourceLimit(m.str());
 }
 
-SphericalGrid::SphericalGrid(const SphericalGeometry& geometry, const GridOptions& options)
+ColumnGrid::ColumnGrid(const GridGeometry& geometry, const GridOptions& options)
     : geometry_(geometry), options_(options) {
   options.validate();
   require_within_memory_cap(geometry.params(), options.memory_cap_bytes);
@@ -69,35 +69,35 @@ SphericalGrid::SphericalGrid(const SphericalGeometry& geometry, const GridOption
   changed_.assign(geometry.column_count(), 0);
 }
 
-std::size_t SphericalGrid::tile_of(ColumnIndex column, std::size_t& slot) const {
+std::size_t ColumnGrid::tile_of(ColumnIndex column, std::size_t& slot) const {
   const int a = geometry_.azimuth_bin_of(column), e = geometry_.elevation_bin_of(column);
   slot = static_cast<std::size_t>((e % kTileSize) * kTileSize + (a % kTileSize));
   return static_cast<std::size_t>(e / kTileSize) * tiles_x_ + static_cast<std::size_t>(a / kTileSize);
 }
 
-const ColumnData* SphericalGrid::find(ColumnIndex column) const {
+const ColumnData* ColumnGrid::find(ColumnIndex column) const {
   std::size_t slot;
   const auto& tile = tiles_[tile_of(column, slot)];
   return tile ? &tile->columns[slot] : nullptr;
 }
 
-ColumnData& SphericalGrid::touch(ColumnIndex column) {
+ColumnData& ColumnGrid::touch(ColumnIndex column) {
   std::size_t slot;
   auto& tile = tiles_[tile_of(column, slot)];
   if (!tile) tile = std::make_unique<Tile>();
   return tile->columns[slot];
 }
 
-float SphericalGrid::log_odds(ColumnIndex column, int depth_bin) const {
+float ColumnGrid::log_odds(ColumnIndex column, int depth_bin) const {
   const ColumnData* c = find(column);
   return c ? c->value(depth_bin) : 0.0f;
 }
 
-double SphericalGrid::probability(ColumnIndex column, int depth_bin) const {
+double ColumnGrid::probability(ColumnIndex column, int depth_bin) const {
   return probability_from_logit(log_odds(column, depth_bin));
 }
 
-std::vector<ColumnIndex> SphericalGrid::take_changed_columns() {
+std::vector<ColumnIndex> ColumnGrid::take_changed_columns() {
   std::vector<ColumnIndex> out;
   for (std::size_t i = 0; i < changed_.size(); ++i)
     if (changed_[i]) {
@@ -107,7 +107,7 @@ std::vector<ColumnIndex> SphericalGrid::take_changed_columns() {
   return out;
 }
 
-std::size_t SphericalGrid::touched_column_count() const {
+std::size_t ColumnGrid::touched_column_count() const {
   std::size_t n = 0;
   for (const auto& t : tiles_)
     if (t)
@@ -115,7 +115,7 @@ std::size_t SphericalGrid::touched_column_count() const {
   return n;
 }
 
-std::size_t SphericalGrid::stored_voxel_count() const {
+std::size_t ColumnGrid::stored_voxel_count() const {
   std::size_t n = 0;
   for (const auto& t : tiles_)
     if (t)
@@ -123,7 +123,7 @@ std::size_t SphericalGrid::stored_voxel_count() const {
   return n;
 }
 
-std::size_t SphericalGrid::memory_bytes() const {
+std::size_t ColumnGrid::memory_bytes() const {
   std::size_t n = tiles_.capacity() * sizeof(tiles_[0]) + changed_.capacity();
   for (const auto& t : tiles_)
     if (t) {
@@ -133,18 +133,18 @@ std::size_t SphericalGrid::memory_bytes() const {
   return n;
 }
 
-std::size_t SphericalGrid::allocated_tile_count() const {
+std::size_t ColumnGrid::allocated_tile_count() const {
   std::size_t n = 0;
   for (const auto& t : tiles_) n += t ? 1 : 0;
   return n;
 }
 
-void SphericalGrid::clear() {
+void ColumnGrid::clear() {
   for (auto& t : tiles_) t.reset();
   std::fill(changed_.begin(), changed_.end(), 0);
 }
 
-void SphericalGrid::compact(ColumnData& column) {
+void ColumnGrid::compact(ColumnData& column) {
   if (column.uniform_end == 0) return;
   std::size_t n = 0;
   while (n < column.window.size() && column.window[n] == column.uniform_value) ++n;

@@ -24,7 +24,7 @@ std::size_t PixelMask::valid_count() const {
   return static_cast<std::size_t>(std::count_if(valid.begin(), valid.end(), [](std::uint8_t b) { return b != 0; }));
 }
 
-std::vector<std::uint8_t> mask_columns(const SphericalGeometry& geometry, const PixelMask& mask) {
+std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const PixelMask& mask) {
   mask.validate();
   const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
   if (!camera)
@@ -50,7 +50,7 @@ std::vector<std::uint8_t> mask_columns(const SphericalGeometry& geometry, const 
   return columns;
 }
 
-std::size_t drop_masked_points(const SphericalGeometry& geometry, const std::vector<std::uint8_t>& columns,
+std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<std::uint8_t>& columns,
                                PointSpan points, std::vector<float>& kept) {
   if (columns.size() != geometry.column_count())
     throw InvalidInput("column mask of " + std::to_string(columns.size()) + " columns does not match the grid's " +

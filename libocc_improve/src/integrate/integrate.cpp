@@ -220,7 +220,7 @@ struct ColumnScratch {
 // Adds one measurement's truncated OPDF to one column.
 class ColumnKernel {
 public:
-  explicit ColumnKernel(const SphericalGrid& grid) : depth_(grid.geometry().depth()) {
+  explicit ColumnKernel(const ColumnGrid& grid) : depth_(grid.geometry().depth()) {
     clamped_ = grid.clamped();
     lmin_ = grid.log_odds_min();
     lmax_ = grid.log_odds_max();
@@ -251,7 +251,7 @@ public:
       std::vector<float>(s.v + s.run_end, s.v + s.tail).swap(c.window);
     else
       c.window.assign(s.v + s.run_end, s.v + s.tail);
-    SphericalGrid::compact(c);
+    ColumnGrid::compact(c);
     s.loaded = false;
   }
 
@@ -323,7 +323,7 @@ private:
   float lmin_, lmax_, omin_, omax_;
 };
 
-bool to_measurement(const float* p, const SphericalGeometry& g, const SensorModel& model, Measurement& m,
+bool to_measurement(const float* p, const GridGeometry& g, const SensorModel& model, Measurement& m,
                     InsertionReport& report) {
   const double x = p[0], y = p[1], z = p[2];
   if (!is_valid_point(x, y, z)) {
@@ -355,7 +355,7 @@ std::vector<int> balanced_bands(const MeasurementChunks& measurements, int tile_
   measurements.for_each([&](std::size_t, const Measurement& m) {
     const double columns = m.azimuth_last - m.azimuth_first + 1;
     for (int e = m.elevation_first; e <= m.elevation_last; ++e)
-      work[static_cast<std::size_t>(e / SphericalGrid::kTileSize)] += columns;
+      work[static_cast<std::size_t>(e / ColumnGrid::kTileSize)] += columns;
   });
   double total = 0;
   for (double w : work) total += w;
@@ -404,7 +404,7 @@ InsertionReport& InsertionReport::operator+=(const InsertionReport& o) {
 namespace {
 
 // Both public insert_points: `surface` null, or the surface to keep current and where to list its changes.
-InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
+InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
                        SurfaceMap* surface, std::vector<ColumnIndex>* surface_changed) {
   const auto start = std::chrono::steady_clock::now();
   options.validate();
@@ -416,7 +416,7 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
   }
   if (points.count > std::numeric_limits<std::uint32_t>::max())  // tiles index measurements with 32 bits
     throw InvalidInput("insert_points: more than 2^32 - 1 points in one call; insert them in parts");
-  const SphericalGeometry& g = grid.geometry();
+  const GridGeometry& g = grid.geometry();
   const int threads = detail::resolve_thread_count(options.threads);
 
   // 1. Points -> measurements, in input order (parallel over contiguous chunks).
@@ -443,7 +443,7 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
   //    share a tile or a column, and every column sees its measurements in input order: results do not
   //    depend on threads. Within a tile, a measurement's depth terms are computed once for all its
   //    columns there, and the tile's columns stay in cache while its measurements are applied.
-  constexpr int kTile = SphericalGrid::kTileSize;
+  constexpr int kTile = ColumnGrid::kTileSize;
   const int tile_rows = (g.height() + kTile - 1) / kTile, tile_columns = (g.width() + kTile - 1) / kTile;
   const int parts = std::max(1, std::min(threads, tile_rows));
   const std::vector<int> band_begin = balanced_bands(measurements, tile_rows, parts);
@@ -548,14 +548,14 @@ InsertionReport insert(SphericalGrid& grid, const SensorModel& model, PointSpan 
 
 }  // namespace
 
-InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points,
+InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points,
                               const InsertionOptions& options) {
   return insert(grid, model, points, options, nullptr, nullptr);
 }
 
-InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
+InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
                               std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options) {
-  const SphericalGeometry& g = grid.geometry();
+  const GridGeometry& g = grid.geometry();
   if (surface.width != g.width() || surface.height != g.height() || surface.size() != g.column_count())
     throw InvalidInput("surface map is " + std::to_string(surface.width) + " x " + std::to_string(surface.height) +
                        " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
@@ -598,7 +598,7 @@ void InsertionOptions::validate() const {
   detail::require_parameter(threads >= 0 && threads <= kMaxThreads, "threads", threads, range.c_str());
 }
 
-void require_grid_camera(const SphericalGeometry& geometry, const PinholeIntrinsics& intrinsics) {
+void require_grid_camera(const GridGeometry& geometry, const PinholeIntrinsics& intrinsics) {
   const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
   if (!camera || same_camera(*camera, intrinsics)) return;
   throw InvalidParameter("intrinsics (" + camera_text(intrinsics) + ") are not the camera the grid was built for (" +
@@ -606,14 +606,14 @@ void require_grid_camera(const SphericalGeometry& geometry, const PinholeIntrins
                          "of view; build the preset from these intrinsics");
 }
 
-InsertionReport insert_depth_image(SphericalGrid& grid, const SensorModel& model, const DepthImage& image,
+InsertionReport insert_depth_image(ColumnGrid& grid, const SensorModel& model, const DepthImage& image,
                                    const InsertionOptions& options) {
   require_grid_camera(grid.geometry(), image.intrinsics);
   const auto points = depth_image_to_points(image);
   return insert_points(grid, model, PointSpan::from(points), options);
 }
 
-InsertionReport insert_frames(SphericalGrid& grid, const SensorModel& model, const std::vector<PointSpan>& frames,
+InsertionReport insert_frames(ColumnGrid& grid, const SensorModel& model, const std::vector<PointSpan>& frames,
                               const InsertionOptions& options) {
   InsertionReport total;
   for (const PointSpan& f : frames) total += insert_points(grid, model, f, options);

@@ -218,7 +218,7 @@ void validated(Reader& r, const char* section, Check check) {
   }
 }
 
-void read_columns(Reader& r, SphericalGrid& grid) {
+void read_columns(Reader& r, ColumnGrid& grid) {
   const std::uint64_t count = r.get<std::uint64_t>("column count");
   const std::size_t columns = grid.geometry().column_count();
   const std::int32_t bins = grid.geometry().depth().bins();
@@ -269,7 +269,7 @@ void write_returns(Writer& w, const ReturnRecord& returns) {
     }
 }
 
-ReturnRecord read_returns(Reader& r, const SphericalGeometry& g, std::uint32_t version) {
+ReturnRecord read_returns(Reader& r, const GridGeometry& g, std::uint32_t version) {
   const std::size_t columns = g.column_count();
   if (version < 3 || r.get<std::uint32_t>("return record") == 0) return ReturnRecord::for_grid(g.width(), g.height());
   const auto count = r.get<std::uint64_t>("return record");
@@ -294,9 +294,9 @@ ReturnRecord read_returns(Reader& r, const SphericalGeometry& g, std::uint32_t v
 
 }  // namespace
 
-void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
+void save_map(const std::string& path, const ColumnGrid& grid, const SensorModelParams& model,
               const ReturnRecord& returns) {
-  const SphericalGeometry& geometry = grid.geometry();
+  const GridGeometry& geometry = grid.geometry();
   if (returns.size()) returns.check_matches(geometry.width(), geometry.height());
   Writer w;
   w.reserve(256 + grid.stored_voxel_count() * sizeof(float) + grid.touched_column_count() * 16);
@@ -371,7 +371,7 @@ LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
   }
   // After the cap: a file claiming a huge grid is a ResourceLimit whatever its sigmas.
   validated(r, "sensor model", [&] { model.validate_for(geometry); });
-  LoadedMap loaded{SphericalGrid(SphericalGeometry(geometry), options), model, {}};
+  LoadedMap loaded{ColumnGrid(GridGeometry(geometry), options), model, {}};
   read_columns(r, loaded.grid);
   loaded.returns = read_returns(r, loaded.grid.geometry(), version);
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the last record");

@@ -22,7 +22,7 @@
 namespace occ_improve {
 namespace {
 
-void require_matching_surface(const SphericalGeometry& g, const SurfaceMap& s) {
+void require_matching_surface(const GridGeometry& g, const SurfaceMap& s) {
   if (s.width != g.width() || s.height != g.height() || s.depth_m.size() != g.column_count() ||
       s.probability.size() != g.column_count())
     throw InvalidInput("surface map is " + std::to_string(s.width) + " x " + std::to_string(s.height) +
@@ -65,7 +65,7 @@ struct WindowKernel {
   std::vector<int> run_first, run_end;
   std::vector<std::uint8_t> run_contiguous;
 
-  WindowKernel(const SphericalGeometry& g, const SensorModel& model) {
+  WindowKernel(const GridGeometry& g, const SensorModel& model) {
     axis_offsets(g.azimuth(), model.support_horizontal(g.binning()), az_lo, az_hi, da_min, da_max);
     axis_offsets(g.elevation(), model.support_vertical(g.binning()), el_lo, el_hi, de_min, de_max);
     const int across = offsets_across();
@@ -112,7 +112,7 @@ struct WindowKernel {
 
   // Eqs. 3-4 for one ray; the offsets are visited in the same order as in the row loop below, so both
   // give bit-identical sums.
-  float ray(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int a, int e) const {
+  float ray(const GridGeometry& g, const SensorModel& model, const SurfaceMap& s, int a, int e) const {
     const ColumnIndex j = g.column(a, e);
     const float rho_j = s.depth_m[j];
     const float inv_sigma = static_cast<float>(1.0 / model.sigma_depth_at(rho_j));
@@ -131,7 +131,7 @@ struct WindowKernel {
 
   // Every ray of row e at once: offset by offset, j along the row (contiguous, vectorisable). On x86-64
   // GCC also builds an AVX2 clone picked at load time (no FMA: results stay bit-identical to ray()).
-  OCC_IMPROVE_ROW_CLONES void row(const SphericalGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
+  OCC_IMPROVE_ROW_CLONES void row(const GridGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
            std::vector<float>& inv_sigma) const {
     const int w = g.width();
     const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
@@ -186,7 +186,7 @@ struct WindowKernel {
 // columns are scattered to the rays around them (cost proportional to the change); a whole frame's are
 // gathered row by row over a mask, one byte OR per window offset and ray, in the row loop's offset order
 // (vectorised; the scatter costs ~9 branchy updates per column, twice the whole improvement map).
-std::vector<std::uint8_t> affected_rays(const SphericalGeometry& g, const WindowKernel& kernel,
+std::vector<std::uint8_t> affected_rays(const GridGeometry& g, const WindowKernel& kernel,
                                         const std::vector<ColumnIndex>& changed) {
   const std::size_t columns = g.column_count();
   std::vector<std::uint8_t> affected(columns, 0);
@@ -232,7 +232,7 @@ std::vector<std::uint8_t> affected_rays(const SphericalGeometry& g, const Window
 }
 
 // Columns the sensor cannot observe hold NaN: "no value", never ranked (ranking.hpp).
-void mask_unobservable(const SphericalGeometry& g, int e, float* row) {
+void mask_unobservable(const GridGeometry& g, int e, float* row) {
   if (g.all_observable()) return;
   const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(g.width());
   for (int a = 0; a < g.width(); ++a)
@@ -240,7 +240,7 @@ void mask_unobservable(const SphericalGeometry& g, int e, float* row) {
       row[a] = std::numeric_limits<float>::quiet_NaN();
 }
 
-void require_bins(const SphericalGeometry& g, int a, int e) {
+void require_bins(const GridGeometry& g, int a, int e) {
   if (a < 0 || a >= g.width())
     throw InvalidParameter("azimuth_bin = " + std::to_string(a) + " is outside [0, " + std::to_string(g.width()) + ")");
   if (e < 0 || e >= g.height())
@@ -250,14 +250,14 @@ void require_bins(const SphericalGeometry& g, int a, int e) {
 
 }  // namespace
 
-double ray_improvement(const SphericalGeometry& geometry, const SensorModel& model, const SurfaceMap& surface,
+double ray_improvement(const GridGeometry& geometry, const SensorModel& model, const SurfaceMap& surface,
                        int azimuth_bin, int elevation_bin) {
   require_bins(geometry, azimuth_bin, elevation_bin);
   require_matching_surface(geometry, surface);
   return WindowKernel(geometry, model).ray(geometry, model, surface, azimuth_bin, elevation_bin);
 }
 
-ImprovementMap compute_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorModel& model,
                                    const SurfaceMap& surface, int threads) {
   detail::require_parameter(threads >= 0, "threads", threads, ">= 0");
   require_matching_surface(geometry, surface);
@@ -280,7 +280,7 @@ ImprovementMap compute_improvement(const SphericalGeometry& geometry, const Sens
   return map;
 }
 
-std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const SensorModel& model,
                                             const SurfaceMap& surface,
                                             const std::vector<ColumnIndex>& changed_surface_columns,
                                             ImprovementMap& map) {

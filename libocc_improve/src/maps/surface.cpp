@@ -30,7 +30,7 @@ float window_max(const float* v, std::size_t n) {
 }
 }  // namespace
 
-SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
+SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
   SurfaceVoxel s;
   if (c == nullptr || !c->touched()) return s;
   const DepthAxis& depth = grid.geometry().depth();
@@ -85,15 +85,15 @@ SurfaceVoxel column_surface(const ColumnData* c, const SphericalGrid& grid) {
   return s;
 }
 
-bool refresh_column_surface(const SphericalGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface) {
+bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface) {
   const SurfaceVoxel v = column_surface(data, grid);
   if (v == surface.at(column)) return false;
   surface.set(column, v);
   return true;
 }
 
-SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
-  const SphericalGeometry& g = grid.geometry();
+SurfaceMap compute_surface(const ColumnGrid& grid, int threads) {
+  const GridGeometry& g = grid.geometry();
   SurfaceMap m;
   m.width = g.width();
   m.height = g.height();
@@ -115,7 +115,7 @@ SurfaceMap compute_surface(const SphericalGrid& grid, int threads) {
   return m;
 }
 
-std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::vector<ColumnIndex>& columns,
+std::vector<ColumnIndex> update_surface(const ColumnGrid& grid, const std::vector<ColumnIndex>& columns,
                                         SurfaceMap& surface, int threads) {
   const int parts = std::max(1, std::min(detail::resolve_thread_count(threads),
                                          static_cast<int>(columns.size() / 4096) + 1));

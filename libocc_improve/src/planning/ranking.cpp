@@ -112,7 +112,7 @@ std::vector<double> summed_distances(const std::vector<std::size_t>& counts) {
 }
 
 /// Bounding box, peak and medoid (L1 in columns and rows) of a region's columns; ties by rank_key.
-void describe_columns(const SphericalGeometry& geometry, const ImprovementMap& map,
+void describe_columns(const GridGeometry& geometry, const ImprovementMap& map,
                       const std::vector<ColumnIndex>& members, Region& r) {
   r.min_u = r.min_v = std::numeric_limits<int>::max();
   r.max_u = r.max_v = std::numeric_limits<int>::min();
@@ -155,7 +155,7 @@ namespace {
 
 // The 8-connected columns of improvement >= threshold reachable from `seed` (which must qualify) and not
 // yet visited, marked visited, into `members`: the one region rule of find_regions and region_labels.
-void grow_region(const SphericalGeometry& geometry, const ImprovementMap& map, float threshold, ColumnIndex seed,
+void grow_region(const GridGeometry& geometry, const ImprovementMap& map, float threshold, ColumnIndex seed,
                  std::vector<std::uint8_t>& visited, std::vector<ColumnIndex>& stack,
                  std::vector<ColumnIndex>& members) {
   const int w = map.width, h = map.height;
@@ -179,7 +179,7 @@ void grow_region(const SphericalGeometry& geometry, const ImprovementMap& map, f
   }
 }
 
-void require_matching_grid(const SphericalGeometry& geometry, const ImprovementMap& map) {
+void require_matching_grid(const GridGeometry& geometry, const ImprovementMap& map) {
   if (map.width != geometry.width() || map.height != geometry.height())
     throw InvalidInput("improvement map (" + std::to_string(map.width) + " x " + std::to_string(map.height) +
                        ") does not match the grid (" + std::to_string(geometry.width()) + " x " +
@@ -188,7 +188,7 @@ void require_matching_grid(const SphericalGeometry& geometry, const ImprovementM
 
 }  // namespace
 
-std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
+std::vector<Region> find_regions(const GridGeometry& geometry, const ImprovementMap& map,
                                  const SurfaceMap& surface, const RegionOptions& options) {
   options.validate();
   require_same_size(map, surface);
@@ -220,7 +220,7 @@ std::vector<Region> find_regions(const SphericalGeometry& geometry, const Improv
   return regions;
 }
 
-std::vector<std::uint32_t> region_labels(const SphericalGeometry& geometry, const ImprovementMap& map,
+std::vector<std::uint32_t> region_labels(const GridGeometry& geometry, const ImprovementMap& map,
                                          const std::vector<Region>& regions, const RegionOptions& options) {
   options.validate();
   require_matching_grid(geometry, map);

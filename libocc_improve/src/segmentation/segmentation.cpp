@@ -53,7 +53,7 @@ constexpr std::uint32_t kNone = 0;
 constexpr std::uint32_t kUnassigned = std::numeric_limits<std::uint32_t>::max();
 
 // The valid rays: a known, occupied surface inside the depth range.
-std::vector<std::uint8_t> valid_rays(const SphericalGeometry& geometry, const SurfaceMap& surface) {
+std::vector<std::uint8_t> valid_rays(const GridGeometry& geometry, const SurfaceMap& surface) {
   std::vector<std::uint8_t> valid(surface.size(), 0);
   const int bins = geometry.depth().bins();
   for (std::size_t c = 0; c < surface.size(); ++c)
@@ -62,7 +62,7 @@ std::vector<std::uint8_t> valid_rays(const SphericalGeometry& geometry, const Su
   return valid;
 }
 
-std::vector<Eigen::Vector3f> surface_points(const SphericalGeometry& geometry, const SurfaceMap& surface,
+std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const SurfaceMap& surface,
                                             const std::vector<std::uint8_t>& valid) {
   std::vector<Eigen::Vector3f> points(surface.size(), Eigen::Vector3f::Zero());
   for (int e = 0; e < geometry.height(); ++e)
@@ -179,7 +179,7 @@ private:
 
 // The angle between the rays of two neighbouring columns at the image centre: converts the crease arm
 // from metres on the surface to pixels.
-double column_angle_rad(const SphericalGeometry& geometry) {
+double column_angle_rad(const GridGeometry& geometry) {
   const int a = std::max(0, geometry.width() / 2 - 1), e = geometry.height() / 2;
   if (geometry.width() < 2) return 1.0;
   const double cosine = geometry.direction(a, e).dot(geometry.direction(a + 1, e));
@@ -211,7 +211,7 @@ ArmPixels arm_pixels(double range_m, double pixel_rad, const SegmentationParams&
 // runs nearly along the line of sight: that is a depth step, not a crease between two faces both seen.
 // Contour rays may lie on the section: the improvement's band often lines a crease too. The tests run
 // cheapest and most selective first: most rays lie on flat faces and fail the bend at once.
-std::vector<std::uint8_t> concave_creases(const SphericalGeometry& geometry, const std::vector<Eigen::Vector3f>& points,
+std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const std::vector<Eigen::Vector3f>& points,
                                           const PointMeans& means, const std::vector<std::uint8_t>& member,
                                           const std::vector<std::uint8_t>& passable, const SegmentationParams& params) {
   const int width = geometry.width(), height = geometry.height();
@@ -335,7 +335,7 @@ std::size_t attach_to_closest_in_depth(const std::vector<std::uint8_t>& valid, c
 
 }  // namespace
 
-Segmentation segment_improvement(const SphericalGeometry& geometry, const SurfaceMap& surface,
+Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap& surface,
                                  const ImprovementMap& improvement, const SegmentationParams& params) {
   params.validate();
   const int width = geometry.width(), height = geometry.height();

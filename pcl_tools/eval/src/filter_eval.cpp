@@ -30,7 +30,7 @@ const char* keep_strategy_name(KeepStrategy strategy) {
 
 namespace {
 
-FrameCloud::Ptr points_with_a_column(const FrameCloud& cloud, const SphericalGeometry& geometry) {
+FrameCloud::Ptr points_with_a_column(const FrameCloud& cloud, const GridGeometry& geometry) {
   FrameCloud::Ptr kept(new FrameCloud);
   ColumnIndex column;
   for (const auto& p : cloud.points)
@@ -41,7 +41,7 @@ FrameCloud::Ptr points_with_a_column(const FrameCloud& cloud, const SphericalGeo
 
 }  // namespace
 
-Frames read_posed_frames(DepthSequence sequence, const PinholeIntrinsics& intrinsics, const SphericalGeometry& geometry,
+Frames read_posed_frames(DepthSequence sequence, const PinholeIntrinsics& intrinsics, const GridGeometry& geometry,
                          std::size_t max_frames) {
   if (max_frames > 0 && sequence.frames.size() > max_frames) sequence.frames.resize(max_frames);
   DepthSequenceGrabber grabber(std::move(sequence), intrinsics);
@@ -127,7 +127,7 @@ FrameCloud::ConstPtr shuffled(const FrameCloud& frame, std::uint32_t seed) {
   return out;
 }
 
-std::size_t distinct_columns(const FrameCloud& cloud, const SphericalGeometry& geometry) {
+std::size_t distinct_columns(const FrameCloud& cloud, const GridGeometry& geometry) {
   std::vector<ColumnIndex> columns;
   columns.reserve(cloud.size());
   ColumnIndex column;

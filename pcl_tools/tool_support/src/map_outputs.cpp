@@ -35,7 +35,7 @@ void write_regions_csv(const std::string& path, const std::vector<Region>& regio
   write_text_file(path, "CSV file", out);
 }
 
-void write_rays_csv(const std::string& path, const SphericalGeometry& geometry, const std::vector<RankedRay>& rays) {
+void write_rays_csv(const std::string& path, const GridGeometry& geometry, const std::vector<RankedRay>& rays) {
   std::string out = "rank,improvement,column_u,row_v,direction_x,direction_y,direction_z,azimuth_deg,elevation_deg,depth_m\n";
   char line[256];
   for (std::size_t i = 0; i < rays.size(); ++i) {

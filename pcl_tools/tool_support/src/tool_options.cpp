@@ -374,7 +374,7 @@ std::string apply_tool_mask(const CommandLine& command_line, Mapper& mapper, con
   });
 }
 
-std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const SphericalGeometry& geometry,
+std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const GridGeometry& geometry,
                                             const PixelMask& mask) {
   return with_mask_named(command_line, [&] { return mask_columns(geometry, mask); });
 }

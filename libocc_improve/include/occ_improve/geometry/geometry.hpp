@@ -167,9 +167,9 @@ struct RayPosition {
 /// The whole grid's geometry: columns (rays) in rows like image pixels, each with depth bins.
 /// Columns are numbered like image pixels: column = elevation_bin * azimuth_bins + azimuth_bin.
 /// "azimuth"/"elevation" name the horizontal and vertical angular axes of either binning.
-class SphericalGeometry {
+class GridGeometry {
 public:
-  explicit SphericalGeometry(const GeometryParams& params);
+  explicit GridGeometry(const GeometryParams& params);
   const GeometryParams& params() const { return params_; }
   AngularBinning binning() const { return params_.angular_binning; }
   /// Horizontal / vertical angular axes, in the binning's unit (radians, or pixels from -0.5).
@@ -206,7 +206,7 @@ public:
   }
   /// The same at a continuous angular position.
   Eigen::Vector3d point_at(double horizontal, double vertical, double depth) const;
-  bool operator==(const SphericalGeometry& other) const;
+  bool operator==(const GridGeometry& other) const;
 
 private:
   GeometryParams params_;
@@ -214,5 +214,8 @@ private:
   DepthAxis depth_;
   std::vector<std::uint8_t> observable_;  ///< empty: every column observable
 };
+
+/// Deprecated name (0.1) of GridGeometry, kept for one release (CHANGELOG.md): the default grid is pixel-native, not spherical.
+using SphericalGeometry [[deprecated("renamed GridGeometry in 0.2")]] = GridGeometry;
 
 }  // namespace occ_improve

@@ -71,14 +71,14 @@ struct ColumnData {
   bool touched() const { return uniform_end > 0 || !window.empty(); }
 };
 
-class SphericalGrid {
+class ColumnGrid {
 public:
   static constexpr int kTileSize = 8;
 
   /// Throws InvalidParameter for bad options, ResourceLimit when the worst case exceeds the cap.
-  SphericalGrid(const SphericalGeometry& geometry, const GridOptions& options = {});
+  ColumnGrid(const GridGeometry& geometry, const GridOptions& options = {});
 
-  const SphericalGeometry& geometry() const { return geometry_; }
+  const GridGeometry& geometry() const { return geometry_; }
   const GridOptions& options() const { return options_; }
   bool clamped() const { return options_.mode == UpdateMode::clamped; }
   float log_odds_min() const { return log_odds_min_; }
@@ -112,7 +112,7 @@ private:
   };
   std::size_t tile_of(ColumnIndex column, std::size_t& slot) const;
 
-  SphericalGeometry geometry_;
+  GridGeometry geometry_;
   GridOptions options_;
   float log_odds_min_, log_odds_max_;
   int tiles_x_, tiles_y_;
@@ -124,7 +124,7 @@ private:
 /// table (the role of Bonxai's accessor and OpenVDB's ValueAccessor).
 class GridAccessor {
 public:
-  explicit GridAccessor(const SphericalGrid& grid) : grid_(&grid) {}
+  explicit GridAccessor(const ColumnGrid& grid) : grid_(&grid) {}
   const ColumnData* find(ColumnIndex column) {
     if (column != last_column_) {
       last_column_ = column;
@@ -138,9 +138,12 @@ public:
   }
 
 private:
-  const SphericalGrid* grid_;
+  const ColumnGrid* grid_;
   ColumnIndex last_column_ = ~ColumnIndex{0};
   const ColumnData* last_ = nullptr;
 };
+
+/// Deprecated name (0.1) of ColumnGrid, kept for one release (CHANGELOG.md).
+using SphericalGrid [[deprecated("renamed ColumnGrid in 0.2")]] = ColumnGrid;
 
 }  // namespace occ_improve

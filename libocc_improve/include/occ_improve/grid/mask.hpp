@@ -31,12 +31,12 @@ struct PixelMask {
 /// grids with a camera: the pixel the column's centre direction falls in (columns outside the image: 0).
 /// Throws InvalidParameter when the geometry has no camera (the paper preset: a mask names camera pixels),
 /// InvalidInput when the mask's size is not the camera's ("mask is W x H, the camera W x H").
-std::vector<std::uint8_t> mask_columns(const SphericalGeometry& geometry, const PixelMask& mask);
+std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const PixelMask& mask);
 
 /// The valid points of `points` whose column is outside `columns` (mask_columns) left out, the others
 /// copied to `kept` (x y z floats) in order; invalid and out-of-field points are kept, so that the
 /// insertion counts them as it always does. Returns how many were left out.
-std::size_t drop_masked_points(const SphericalGeometry& geometry, const std::vector<std::uint8_t>& columns,
+std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<std::uint8_t>& columns,
                                PointSpan points, std::vector<float>& kept);
 
 /// NaN improvement for every column outside `columns` (empty: none), as for columns no pixel can see.

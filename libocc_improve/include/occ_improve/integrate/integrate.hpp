@@ -76,7 +76,7 @@ struct InsertionReport {
 /// individual points. Deterministic: every column receives its measurements in input order.
 /// The calling thread keeps its working buffers between calls (about 40 bytes per point of the largest
 /// call, and 64 depth rows of floats per worker thread), so a stream of frames allocates them once.
-InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points,
+InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points,
                               const InsertionOptions& options = {});
 
 /// insert_points that also keeps `surface` (of this grid) current: each column the call updates gets its
@@ -84,25 +84,25 @@ InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, Poi
 /// update_surface pass. Returns the columns whose surface changed (any order), as update_surface would
 /// for the updated columns. The grid's changed-column record is kept as by insert_points.
 /// Throws InvalidInput when `surface` is not the grid's size.
-InsertionReport insert_points(SphericalGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
+InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
                               std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options = {});
 
 /// Throws InvalidParameter naming both cameras when the grid was built for a camera (pinhole columns, or a
 /// spherical grid's observable columns) and `intrinsics` describe another one (same_camera): its pixels
 /// would land in other columns or outside the field of view and be dropped without a word.
-void require_grid_camera(const SphericalGeometry& geometry, const PinholeIntrinsics& intrinsics);
+void require_grid_camera(const GridGeometry& geometry, const PinholeIntrinsics& intrinsics);
 
 /// Back-projects an organized depth image through its intrinsics and inserts it.
 /// Throws InvalidInput when the buffer is null or its size does not match the intrinsics, and as
 /// require_grid_camera when the image is from another camera than the grid's.
-InsertionReport insert_depth_image(SphericalGrid& grid, const SensorModel& model, const DepthImage& image,
+InsertionReport insert_depth_image(ColumnGrid& grid, const SensorModel& model, const DepthImage& image,
                                    const InsertionOptions& options = {});
 
 /// Back-projection used by insert_depth_image (pixels with no return give NaN points, kept in place).
 std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image);
 
 /// Inserts several frames of the same viewpoint in order and sums their reports.
-InsertionReport insert_frames(SphericalGrid& grid, const SensorModel& model, const std::vector<PointSpan>& frames,
+InsertionReport insert_frames(ColumnGrid& grid, const SensorModel& model, const std::vector<PointSpan>& frames,
                               const InsertionOptions& options = {});
 
 /// logit P_s for a run of depth bins of one column, as the fast path evaluates it (exposed for tests).

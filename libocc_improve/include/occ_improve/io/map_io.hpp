@@ -27,7 +27,7 @@ constexpr std::uint32_t kOldestMapFormatVersion = 1;
 /// (return_model.hpp; a default-constructed record: none) to `path` (atomically: temp file + rename).
 /// Throws IoError when the folder is not writable or the write fails (the target is then untouched),
 /// InvalidInput when the record is not one of the grid's size (nothing is written).
-void save_map(const std::string& path, const SphericalGrid& grid, const SensorModelParams& model,
+void save_map(const std::string& path, const ColumnGrid& grid, const SensorModelParams& model,
               const ReturnRecord& returns = ReturnRecord());
 
 /// Whether `path` starts with the map format's magic: a file save_map wrote (any version, perhaps corrupt).
@@ -35,7 +35,7 @@ void save_map(const std::string& path, const SphericalGrid& grid, const SensorMo
 bool is_map_file(const std::string& path);
 
 struct LoadedMap {
-  SphericalGrid grid;
+  ColumnGrid grid;
   SensorModelParams model;
   ReturnRecord returns;  ///< the saved record; an empty one of the grid's size when none was saved
 };

@@ -30,7 +30,7 @@
 namespace occ_improve {
 
 /// Improvement per column, same indexing as SurfaceMap / ColumnIndex (row = elevation bin).
-/// Columns the sensor cannot observe (SphericalGeometry::observable) hold NaN in the maps computed by
+/// Columns the sensor cannot observe (GridGeometry::observable) hold NaN in the maps computed by
 /// compute_improvement / update_improvement: they have no value to act on (use nan-aware reductions).
 struct ImprovementMap {
   int width = 0, height = 0;
@@ -40,19 +40,19 @@ struct ImprovementMap {
 /// Eqs. 3-4 for the ray through column (azimuth_bin, elevation_bin): the one definition every path uses.
 /// Builds the window tables on each call (~10 us on the paper preset): use the map functions for many rays.
 /// Throws InvalidParameter for a bin outside the grid, InvalidInput when the surface does not match it.
-double ray_improvement(const SphericalGeometry& geometry, const SensorModel& model, const SurfaceMap& surface,
+double ray_improvement(const GridGeometry& geometry, const SensorModel& model, const SurfaceMap& surface,
                        int azimuth_bin, int elevation_bin);
 
 /// The whole map. threads = 0: hardware concurrency. Throws InvalidInput when the surface does not
 /// match the geometry, InvalidParameter for threads < 0.
-ImprovementMap compute_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorModel& model,
                                    const SurfaceMap& surface, int threads = 0);
 
 /// Incremental update (SPEC 8): recomputes exactly the rays whose window contains one of
 /// `changed_surface_columns` (as returned by update_surface) and returns them (ascending). The result
 /// equals compute_improvement on the new surface. An empty `map` is computed in full (every ray returned).
 /// Throws InvalidInput for a map or surface of another size, or a column outside the grid.
-std::vector<ColumnIndex> update_improvement(const SphericalGeometry& geometry, const SensorModel& model,
+std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const SensorModel& model,
                                             const SurfaceMap& surface,
                                             const std::vector<ColumnIndex>& changed_surface_columns,
                                             ImprovementMap& map);

@@ -46,7 +46,7 @@ struct SurfaceMap {
 };
 
 /// The surface voxel of one column (nullptr column = never touched).
-SurfaceVoxel column_surface(const ColumnData* column, const SphericalGrid& grid);
+SurfaceVoxel column_surface(const ColumnData* column, const ColumnGrid& grid);
 
 inline SurfaceVoxel SurfaceMap::at(std::size_t c) const { return {depth_m[c], probability[c], bin[c], unknown[c] != 0}; }
 inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
@@ -59,14 +59,14 @@ inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
 /// Recomputes the surface of `column` (whose data is `data`, nullptr if never touched) into `surface`;
 /// true when it changed (depth, P, bin or flag). The one step of update_surface and of the insertion
 /// that keeps a surface current.
-bool refresh_column_surface(const SphericalGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface);
+bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface);
 
 /// Full computation over the grid (threads: 0 = hardware concurrency).
-SurfaceMap compute_surface(const SphericalGrid& grid, int threads = 0);
+SurfaceMap compute_surface(const ColumnGrid& grid, int threads = 0);
 
 /// Recomputes the given columns; returns those whose surface (depth, P, bin or flag) changed, in the
 /// order given. Columns are split in contiguous chunks over `threads` (0 = hardware concurrency).
-std::vector<ColumnIndex> update_surface(const SphericalGrid& grid, const std::vector<ColumnIndex>& columns,
+std::vector<ColumnIndex> update_surface(const ColumnGrid& grid, const std::vector<ColumnIndex>& columns,
                                         SurfaceMap& surface, int threads = 0);
 
 }  // namespace occ_improve

@@ -72,14 +72,14 @@ struct Region {
 
 /// 8-connected regions of improvement >= min_improvement with at least min_area_columns columns,
 /// sorted by summed_improvement (descending). Throws InvalidInput for maps of mismatched sizes.
-std::vector<Region> find_regions(const SphericalGeometry& geometry, const ImprovementMap& map,
+std::vector<Region> find_regions(const GridGeometry& geometry, const ImprovementMap& map,
                                  const SurfaceMap& surface, const RegionOptions& options = {});
 
 /// The columns of `regions` (find_regions' result on this map with these options, or its first K):
 /// label i + 1 for the columns of regions[i], 0 elsewhere. Each region is grown again from its peak by
 /// find_regions' rule. Throws InvalidInput for a region that is not one of this map's (its peak below the
 /// threshold, or another area), and as find_regions.
-std::vector<std::uint32_t> region_labels(const SphericalGeometry& geometry, const ImprovementMap& map,
+std::vector<std::uint32_t> region_labels(const GridGeometry& geometry, const ImprovementMap& map,
                                          const std::vector<Region>& regions, const RegionOptions& options = {});
 
 /// When to stop acquiring. Defaults are scaled for a 640 x 480 map with the paper's model, where one

@@ -91,7 +91,7 @@ struct Segmentation {
 
 /// Throws InvalidInput when surface or improvement do not match the geometry, InvalidParameter for
 /// bad params. A surface with no valid ray gives no segments (not an error).
-Segmentation segment_improvement(const SphericalGeometry& geometry, const SurfaceMap& surface,
+Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap& surface,
                                  const ImprovementMap& improvement, const SegmentationParams& params = {});
 
 /// A label's colour: a fixed hash, so a label keeps its colour; black for 0 (unlabelled).

@@ -37,7 +37,7 @@ CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const Sens
 /// The per-ray labels carried to the points of an organized cloud (the column each point's direction
 /// falls in). Counts valid points outside the grid in `outside`.
 template <typename PointT>
-std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const SphericalGeometry& geometry,
+std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const GridGeometry& geometry,
                                              const Segmentation& segmentation, std::size_t& outside);
 
 }  // namespace occ_improve

@@ -17,7 +17,7 @@ namespace occ_improve {
 /// unknown (never observed), its surface_depth 0, probability 0.5, and its improvement kept. The cloud
 /// is organized (width x height) and not dense. Throws InvalidInput when the maps do not match the
 /// geometry.
-pcl::PointCloud<PointImprovement> to_improvement_cloud(const SphericalGeometry& geometry, const SurfaceMap& surface,
+pcl::PointCloud<PointImprovement> to_improvement_cloud(const GridGeometry& geometry, const SurfaceMap& surface,
                                                        const ImprovementMap& improvement);
 
 /// Writes the cloud as a binary PCD. Throws IoError when the file cannot be written.

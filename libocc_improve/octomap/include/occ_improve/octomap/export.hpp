@@ -62,7 +62,7 @@ struct OctomapExportReport {
 /// An empty OcTree at `resolution_m` with the grid's clamping thresholds (exact-mode grids: probabilities
 /// 0 and 1, i.e. log-odds -inf/+inf, no clamping, as eq. 2) and the occupancy threshold.
 /// Throws InvalidParameter for resolution_m <= 0 or non-finite.
-std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double resolution_m,
+std::unique_ptr<octomap::OcTree> make_octree(const ColumnGrid& grid, double resolution_m,
                                              const OctomapExportOptions& options = {});
 
 /// Adds `grid`, observed from `world_from_sensor`, to `tree` by the merge rule above, at the tree's
@@ -71,12 +71,12 @@ std::unique_ptr<octomap::OcTree> make_octree(const SphericalGrid& grid, double r
 /// not a finite rigid transform or a frustum outside the tree's addressable range, ResourceLimit when the
 /// estimated memory exceeds options.memory_cap_bytes. The tree is unchanged when it throws,
 /// except for Cancelled (cancel.hpp): a stop request leaves it partly updated, for the caller to discard.
-OctomapExportReport add_to_octree(octomap::OcTree& tree, const SphericalGrid& grid,
+OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
                                   const Eigen::Isometry3d& world_from_sensor,
                                   const OctomapExportOptions& options = {});
 
 /// make_octree + add_to_octree.
-std::unique_ptr<octomap::OcTree> to_octree(const SphericalGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+std::unique_ptr<octomap::OcTree> to_octree(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
                                            double resolution_m, const OctomapExportOptions& options = {},
                                            OctomapExportReport* report = nullptr);
 

@@ -31,7 +31,7 @@ const char* keep_strategy_name(KeepStrategy strategy);
 /// first frame's view), each reduced to its points that have a column in `geometry`, so that every
 /// strategy chooses among the same points. Throws InvalidInput when the sequence has no poses (one view
 /// needs them) or a frame cannot be read.
-Frames read_posed_frames(DepthSequence sequence, const PinholeIntrinsics& intrinsics, const SphericalGeometry& geometry,
+Frames read_posed_frames(DepthSequence sequence, const PinholeIntrinsics& intrinsics, const GridGeometry& geometry,
                          std::size_t max_frames);
 
 /// pcl::VoxelGrid with the leaf size in [smallest without index overflow, 1 m], found by bisection, whose

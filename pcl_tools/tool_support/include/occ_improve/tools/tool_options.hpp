@@ -210,7 +210,7 @@ std::optional<PixelMask> read_tool_mask(const CommandLine& command_line, const T
 std::string apply_tool_mask(const CommandLine& command_line, Mapper& mapper, const ToolFrame* first);
 /// mask_columns(geometry, mask) with refusals naming -mask and the file: for a tool that checks the mask
 /// before its mapper exists (occ_segment) or fills a grid itself (occ_to_octomap).
-std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const SphericalGeometry& geometry,
+std::vector<std::uint8_t> tool_mask_columns(const CommandLine& command_line, const GridGeometry& geometry,
                                             const PixelMask& mask);
 
 /// The points line of a tool's summary: read, used, skipped and beyond the depth range.
