@@ -67,6 +67,27 @@ TEST(Mask, ColumnsOutsideAreNotObservableAndTheirPointsAreLeftOut) {
   EXPECT_GT(masked.improvement().value[static_cast<std::size_t>(240) * w + 600], 0.3f);
 }
 
+// The Mapper re-masks only the rays an insertion recomputed: after several insertions under a mask the
+// improvement equals a full computation masked as a whole, value for value (NaN where masked).
+TEST(Mask, IncrementalMaskingEqualsMaskingTheWholeMap) {
+  const sample::SampleFrame frame = sample::generate_scene();
+  const std::vector<Eigen::Vector3f> points = frame.points();
+  const PixelMask mask = left_half(frame.intrinsics);
+  Mapper mapper(kinect_v1(frame.intrinsics));
+  mapper.set_mask(mask);
+  const std::size_t half = points.size() / 2;
+  mapper.insert(PointSpan{points.front().data(), half, 3});
+  const MapperReport second = mapper.insert(PointSpan{points[half].data(), points.size() - half, 3});
+  ASSERT_GT(second.rays_recomputed, 1000u);
+  ImprovementMap whole = compute_improvement(mapper.geometry(), mapper.model(), mapper.surface());
+  mask_improvement(mapper.column_mask(), whole);
+  ASSERT_EQ(whole.value.size(), mapper.improvement().value.size());
+  for (std::size_t c = 0; c < whole.value.size(); ++c) {
+    const float got = mapper.improvement().value[c], want = whole.value[c];
+    ASSERT_TRUE(std::isnan(got) ? std::isnan(want) : got == want) << "column " << c << ": " << got << " vs " << want;
+  }
+}
+
 TEST(Mask, RefusesAnotherSizeAndAGridWithoutCamera) {
   const PinholeIntrinsics k = kinect_v1_intrinsics();
   Mapper mapper(kinect_v1(k));

@@ -68,7 +68,7 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<ColumnIndex> rays = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_);
   report.rays_recomputed = rays.size();
-  mask_improvement(column_mask_, improvement_);  // the recomputed rays outside the mask stay NaN
+  mask_improvement(column_mask_, rays, improvement_);  // the recomputed rays outside the mask stay NaN
   if (pyramid_) {
     // A block depends on its rays' improvement and its columns' surface: both lists (duplicates are merged).
     changed.insert(changed.end(), rays.begin(), rays.end());

@@ -70,12 +70,26 @@ std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<s
   return dropped;
 }
 
-void mask_improvement(const std::vector<std::uint8_t>& columns, ImprovementMap& improvement) {
-  if (columns.empty()) return;
+namespace {
+void require_mask_fits(const std::vector<std::uint8_t>& columns, const ImprovementMap& improvement) {
   if (columns.size() != improvement.value.size())
     throw InvalidInput("column mask of " + std::to_string(columns.size()) +
                        " columns does not match the improvement map's " + std::to_string(improvement.value.size()));
+}
+}  // namespace
+
+void mask_improvement(const std::vector<std::uint8_t>& columns, ImprovementMap& improvement) {
+  if (columns.empty()) return;
+  require_mask_fits(columns, improvement);
   for (std::size_t c = 0; c < columns.size(); ++c)
+    if (!columns[c]) improvement.value[c] = std::numeric_limits<float>::quiet_NaN();
+}
+
+void mask_improvement(const std::vector<std::uint8_t>& columns, const std::vector<ColumnIndex>& rays,
+                      ImprovementMap& improvement) {
+  if (columns.empty()) return;
+  require_mask_fits(columns, improvement);
+  for (const ColumnIndex c : rays)
     if (!columns[c]) improvement.value[c] = std::numeric_limits<float>::quiet_NaN();
 }
 

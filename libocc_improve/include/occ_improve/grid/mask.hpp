@@ -41,6 +41,10 @@ std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<s
 
 /// NaN improvement for every column outside `columns` (empty: none), as for columns no pixel can see.
 void mask_improvement(const std::vector<std::uint8_t>& columns, ImprovementMap& improvement);
+/// The same for `rays` only (the rays an incremental update recomputed): the other columns outside the
+/// mask are NaN already, so an insertion costs O(changed rays), not a pass over every column.
+void mask_improvement(const std::vector<std::uint8_t>& columns, const std::vector<ColumnIndex>& rays,
+                      ImprovementMap& improvement);
 
 /// The mask of an organized frame's valid points (SPEC 1: finite, not the origin): `points` holds
 /// width x height points in row-major pixel order. InvalidInput when the count does not match.
