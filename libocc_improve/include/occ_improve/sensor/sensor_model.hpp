@@ -76,6 +76,10 @@ double logit_opdf(double d_rho, double angular_term, double sigma_rho);
 /// P_s of eq. 1 itself.
 double opdf(double d_rho, double angular_term, double sigma_rho);
 
+/// The peak term of eq. 1, 1/3 exp(-(d^2/s^2 + B)): P_s minus it is the step term (opdf_bounds.hpp's bounds
+/// name the two apart).
+double opdf_peak(double d_rho, double angular_term, double sigma_rho);
+
 inline double logit(double p) { return std::log(p / (1.0 - p)); }
 inline double probability_from_logit(double l) { return 1.0 / (1.0 + std::exp(-l)); }
 
