@@ -9,6 +9,7 @@
 // (mOSD's floor and walls set to NaN) wants its invalid pixels masked. finite_pixel_mask() builds that
 // mask when the caller says so (the tools' -mask finite).
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/column_map.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 
@@ -25,6 +26,7 @@ struct PixelMask {
   /// InvalidInput when `valid` does not hold width x height bytes or the size is not positive.
   void validate() const;
   std::size_t valid_count() const;
+  ColumnShape shape() const { return ColumnShape::of_arrays(width, height, {valid.size()}); }
 };
 
 /// One byte per column of `geometry` (1 = inside the mask). Pixel-native grids: the pixel itself; spherical

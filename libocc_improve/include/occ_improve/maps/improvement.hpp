@@ -22,6 +22,7 @@
 //    one-ray path performs the same float operations in the same order, so both are bit-identical and
 //    the incremental update equals the full recomputation exactly.
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/column_map.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 #include "occ_improve/maps/surface.hpp"
 
@@ -35,6 +36,7 @@ namespace occ_improve {
 struct ImprovementMap {
   int width = 0, height = 0;
   std::vector<float> value;
+  ColumnShape shape() const { return ColumnShape::of_arrays(width, height, {value.size()}); }
 };
 
 /// Eqs. 3-4 for the ray through column (azimuth_bin, elevation_bin): the one definition every path uses.

@@ -14,6 +14,7 @@
 // 1e-6 be skipped and values are held in float, so bins closer than that to the maximum are ties, not
 // a better surface (typical case: the unknown tail behind carved free space, L = 0 +- 1e-7).
 #include "occ_improve/grid/grid.hpp"
+#include "occ_improve/maps/column_map.hpp"
 
 #include <cstdint>
 #include <vector>
@@ -41,6 +42,9 @@ struct SurfaceMap {
 
   std::size_t size() const { return depth_m.size(); }
   std::size_t known_count() const;
+  ColumnShape shape() const {
+    return ColumnShape::of_arrays(width, height, {depth_m.size(), probability.size(), bin.size(), unknown.size()});
+  }
   SurfaceVoxel at(std::size_t column) const;
   void set(std::size_t column, const SurfaceVoxel& voxel);
 };

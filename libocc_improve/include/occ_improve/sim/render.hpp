@@ -7,6 +7,7 @@
 // Columns that are not observable (NaN) are neutral grey (128,128,128), unlike the no-data red.
 // It is non-linear in value: most of the colour range is spent on [-0.1, 0.3], where the paper's
 // picture lives (observed-once ~0.13, no data ~0.32, discontinuities negative).
+#include "occ_improve/maps/image.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/maps/surface.hpp"
 
@@ -16,12 +17,6 @@
 #include <vector>
 
 namespace occ_improve {
-
-/// 8-bit image, row-major, channels interleaved (1 = grey, 3 = RGB).
-struct Image {
-  int width = 0, height = 0, channels = 1;
-  std::vector<std::uint8_t> pixels;
-};
 
 /// Grey: 0 m black .. depth_max_m white (clipped). depth_max_m <= 0 or NaN -> InvalidParameter.
 Image render_depth(const SurfaceMap& surface, double depth_max_m);
