@@ -90,6 +90,11 @@ TEST(ColumnMap, TheMapsReadersRefuseAnotherShapeNamingBoth) {
   SurfaceMap torn = surface;
   torn.bin.pop_back();
 
+  EXPECT_EQ(invalid_input_message([&] { compute_improvement(g, model, torn, 1); }),
+            "surface map of 8 x 6 holds 47 values, not 48");
+  ImprovementMap narrow_map = narrow;
+  EXPECT_EQ(invalid_input_message([&] { update_improvement(g, model, surface, {}, narrow_map); }),
+            "improvement map is 7 x 6, the grid 8 x 6");
   EXPECT_EQ(invalid_input_message([&] { segment_improvement(g, surface, narrow); }),
             "segment_improvement: improvement map is 7 x 6, the grid 8 x 6");
   EXPECT_EQ(invalid_input_message([&] { top_rays(narrow, surface, 3); }),

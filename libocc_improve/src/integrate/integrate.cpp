@@ -533,10 +533,7 @@ InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointS
 InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
                               std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options) {
   const GridGeometry& g = grid.geometry();
-  if (surface.width != g.width() || surface.height != g.height() || surface.size() != g.column_count())
-    throw InvalidInput("surface map is " + std::to_string(surface.width) + " x " + std::to_string(surface.height) +
-                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                       " columns");
+  require_shape("surface map", surface.shape(), "the grid", ColumnShape::of_grid(g.width(), g.height()));
   return insert(grid, model, points, options, &surface, &surface_changed);
 }
 

@@ -24,11 +24,7 @@ namespace occ_improve {
 namespace {
 
 void require_matching_surface(const GridGeometry& g, const SurfaceMap& s) {
-  if (s.width != g.width() || s.height != g.height() || s.depth_m.size() != g.column_count() ||
-      s.probability.size() != g.column_count())
-    throw InvalidInput("surface map is " + std::to_string(s.width) + " x " + std::to_string(s.height) +
-                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                       " columns");
+  require_shape("surface map", s.shape(), "the grid", ColumnShape::of_grid(g.width(), g.height()));
 }
 
 // imp_i of eq. 3 for one surface voxel (probability p) at d_rho from the simulated measurement, whose
@@ -288,10 +284,7 @@ std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const 
     for (std::size_t c = 0; c < columns; ++c) all[c] = static_cast<ColumnIndex>(c);
     return all;
   }
-  if (map.width != geometry.width() || map.height != geometry.height() || map.value.size() != columns)
-    throw InvalidInput("improvement map is " + std::to_string(map.width) + " x " + std::to_string(map.height) +
-                       " but the grid has " + std::to_string(geometry.width()) + " x " +
-                       std::to_string(geometry.height()) + " columns");
+  require_shape("improvement map", map.shape(), "the grid", ColumnShape::of_grid(geometry.width(), geometry.height()));
   const WindowKernel kernel(geometry, model);
 
   const std::vector<std::uint8_t> affected = affected_rays(geometry, kernel, changed_surface_columns);
