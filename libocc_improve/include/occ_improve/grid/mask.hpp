@@ -1,6 +1,6 @@
 #pragma once
 // A validity / region-of-interest mask over the depth camera's pixels (nonzero = valid). Rays outside it
-// are treated as rays the sensor cannot observe (SPEC 2c): their points are not inserted, their
+// are treated as rays the sensor cannot observe (CONVENTIONS 2c): their points are not inserted, their
 // improvement is NaN, so they are never ranked, never in a region, never counted by the stop signal,
 // never taken by the planner and drawn grey (improvement.hpp, ranking.hpp, planner.hpp, render.hpp).
 //
@@ -44,7 +44,7 @@ std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<s
 /// NaN improvement for every column outside `columns` (empty: none), as for columns no pixel can see.
 void mask_improvement(const std::vector<std::uint8_t>& columns, ImprovementMap& improvement);
 
-/// The mask of an organized frame's valid points (SPEC 1: finite, not the origin): `points` holds
+/// The mask of an organized frame's valid points (CONVENTIONS 1: finite, not the origin): `points` holds
 /// width x height points in row-major pixel order. InvalidInput when the count does not match.
 PixelMask finite_pixel_mask(PointSpan points, int width, int height);
 

@@ -1,5 +1,5 @@
 #pragma once
-// The improvement map (eqs. 3 and 4, SPEC 7-8): per ray j, the expected change of occupancy probability
+// The improvement map (eqs. 3 and 4, CONVENTIONS 7-8): per ray j, the expected change of occupancy probability
 // that one more measurement a_j along j would bring to the surface voxels it touches.
 //
 // Conventions (docs/METHOD.md, "Improvement"):
@@ -50,7 +50,7 @@ double ray_improvement(const GridGeometry& geometry, const SensorModel& model, c
 ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorModel& model,
                                    const SurfaceMap& surface, int threads = 0);
 
-/// Incremental update (SPEC 8): recomputes exactly the rays whose window contains one of
+/// Incremental update (CONVENTIONS 8): recomputes exactly the rays whose window contains one of
 /// `changed_surface_columns` (as returned by update_surface) and returns them (ascending). The result
 /// equals compute_improvement on the new surface. An empty `map` is computed in full (every ray returned).
 /// Throws InvalidInput for a map or surface of another size, or a column outside the grid.

@@ -1,5 +1,5 @@
 #pragma once
-// The sensor occupancy PDF of eq. 1 (SPEC 3) and its noise model (SPEC 2b).
+// The sensor occupancy PDF of eq. 1 (CONVENTIONS 3) and its noise model (CONVENTIONS 2b).
 //   P_s = 1/2 (1 + exp(-u))^-1 + 1/3 exp(-(d^2/s^2 + B)),
 //   d = rho - rho_bar, B = d_theta^2/s_theta^2 + d_phi^2/s_phi^2, u = 2 (d + 2 s)/s + B.
 // The angular offsets and sigmas are in the grid binning's unit: radians (spherical) or pixels (pinhole);

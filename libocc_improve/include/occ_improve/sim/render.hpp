@@ -1,5 +1,5 @@
 #pragma once
-// Images of the maps (SPEC 9). Files of them: occ_improve::io (occ_improve/io/png.hpp), which needs libpng.
+// Images of the maps (CONVENTIONS 9). Files of them: occ_improve::io (occ_improve/io/png.hpp), which needs libpng.
 //
 // Improvement colour map (docs/METHOD.md, "Rendering"), piecewise linear in RGB between breakpoints:
 //   <= -0.3 dark blue (0,0,128), -0.1 blue (0,64,255), 0 green (0,200,0), 0.1 yellow (255,255,0),
