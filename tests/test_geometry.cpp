@@ -1,4 +1,4 @@
-// Spherical geometry: coordinates (SPEC 1), angular and depth binning (SPEC 2, 2b).
+// Spherical geometry: coordinates (CONVENTIONS 1), angular and depth binning (CONVENTIONS 2, 2b).
 #include "occ_improve/errors.hpp"
 #include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/sensor/presets.hpp"
@@ -43,7 +43,7 @@ TEST(Geometry, UniformAxisBinsAndOverlaps) {
 }
 
 TEST(Geometry, PaperPresetSupportTouchesTwoToThreeColumns) {
-  // SPEC 4: 2 sigma (0.87 mrad) is a little more than half a bin (0.78 mrad).
+  // CONVENTIONS 4: 2 sigma (0.87 mrad) is a little more than half a bin (0.78 mrad).
   const SensorPreset p = kinect_v1_paper();
   const GridGeometry g(p.geometry);
   const double support = p.model.support_k * p.model.sigma_azimuth_rad;

@@ -1,4 +1,4 @@
-// The improvement map (eqs. 3-4, SPEC 7-8): the fast path against the dense double reference ray by
+// The improvement map (eqs. 3-4, CONVENTIONS 7-8): the fast path against the dense double reference ray by
 // ray, the one-ray definition against the full map, the incremental update, and the paper's picture.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/maps/improvement.hpp"
@@ -212,7 +212,7 @@ TEST(Improvement, IncrementalUpdateRecomputesExactlyTheAffectedRays) {
   EXPECT_EQ(empty.value, full.value);
 }
 
-// SPEC 7's picture with the paper preset on the sample frame, as medians over masks of 3 x 3 windows.
+// CONVENTIONS 7's picture with the paper preset on the sample frame, as medians over masks of 3 x 3 windows.
 // "Observed once" means one measurement close to the column's centre ray (P of a single centred
 // measurement is P_s(0, 0) = 0.824; eq. 3 then gives 0.135). Most columns are not so aligned: 640 uniform
 // bins of 1.55 mrad meet pinhole pixels of 1.9 mrad (the paper's moire), a measurement half a bin off the

@@ -1,4 +1,4 @@
-// Insertion (eq. 2) and the surface (SPEC 6) against the dense reference, ray by ray.
+// Insertion (eq. 2) and the surface (CONVENTIONS 6) against the dense reference, ray by ray.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/sensor/presets.hpp"

@@ -1,4 +1,4 @@
-// Presets: the paper's numbers and the intrinsics-based kinect_v1 (SPEC 2, 2b).
+// Presets: the paper's numbers and the intrinsics-based kinect_v1 (CONVENTIONS 2, 2b).
 #include "occ_improve/errors.hpp"
 #include "occ_improve/sensor/presets.hpp"
 

@@ -1,4 +1,4 @@
-// Eq. 1 evaluated stably in log space (SPEC 3) and the sensor model's parameters.
+// Eq. 1 evaluated stably in log space (CONVENTIONS 3) and the sensor model's parameters.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/sensor/presets.hpp"

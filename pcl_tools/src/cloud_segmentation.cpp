@@ -17,8 +17,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 template <typename PointT>
 std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const GridGeometry& geometry,
                                              const Segmentation& segmentation, std::size_t& outside) {
-  if (segmentation.width != geometry.width() || segmentation.height != geometry.height())
-    throw InvalidInput("labels_for_points: the segmentation does not match the grid geometry");
+  require_shape("labels_for_points: segmentation", segmentation.shape(), "the grid",
+                ColumnShape::of_grid(geometry.width(), geometry.height()));
   std::vector<std::uint32_t> labels(cloud.size(), 0);
   outside = 0;
   for (std::size_t i = 0; i < cloud.size(); ++i) {

@@ -7,7 +7,6 @@
 #include "occ_improve/pcl/pcd_writer.hpp"
 
 #include <limits>
-#include <sstream>
 
 namespace occ_improve {
 
@@ -15,14 +14,9 @@ pcl::PointCloud<PointImprovement> to_improvement_cloud(const GridGeometry& geome
                                                        const ImprovementMap& improvement) {
   const int width = geometry.width(), height = geometry.height();
   const std::size_t n = geometry.column_count();
-  if (surface.width != width || surface.height != height || surface.size() != n || surface.unknown.size() != n ||
-      improvement.width != width || improvement.height != height || improvement.value.size() != n) {
-    std::ostringstream m;
-    m << "to_improvement_cloud: the surface (" << surface.width << " x " << surface.height << ") and improvement ("
-      << improvement.width << " x " << improvement.height << ") maps must match the grid's " << width << " x "
-      << height << " rays";
-    throw InvalidInput(m.str());
-  }
+  const ColumnShape grid = ColumnShape::of_grid(width, height);
+  require_shape("to_improvement_cloud: surface map", surface.shape(), "the grid", grid);
+  require_shape("to_improvement_cloud: improvement map", improvement.shape(), "the grid", grid);
   constexpr float nan = std::numeric_limits<float>::quiet_NaN();
   pcl::PointCloud<PointImprovement> cloud;
   cloud.width = static_cast<std::uint32_t>(width);

@@ -35,9 +35,9 @@ void bind_region_types(py::module_& m) {
       .def_readonly("min_v", &Region::min_v)
       .def_readonly("max_u", &Region::max_u)
       .def_readonly("max_v", &Region::max_v)
-      .def_readonly("centre_azimuth_rad", &Region::centre_azimuth_rad, "Azimuth of centre_direction (SPEC 1).")
+      .def_readonly("centre_azimuth_rad", &Region::centre_azimuth_rad, "Azimuth of centre_direction (CONVENTIONS 1).")
       .def_readonly("centre_elevation_rad", &Region::centre_elevation_rad,
-                    "Elevation of centre_direction (SPEC 1; y down, so it grows downwards like v).")
+                    "Elevation of centre_direction (CONVENTIONS 1; y down, so it grows downwards like v).")
       .def_readonly("centre_direction", &Region::centre_direction,
                     "Unit vector through the centre ray, sensor frame, shape (3,).")
       .def_readonly("mean_depth_m", &Region::mean_depth_m, "Over known rays, 0 if none.");

@@ -132,7 +132,7 @@ TEST_F(OccImproveMapTool, RaysCsvGivesPixelsDirectionsAndTrueAnglesWithTiesSprea
     EXPECT_NEAR(x, px / n, 2e-6) << i;
     EXPECT_NEAR(y, py / n, 2e-6) << i;
     EXPECT_NEAR(z, 1 / n, 2e-6) << i;
-    // Degrees of that ray (SPEC 1), inside the camera's field of view (+-28.7 x +-22.3 deg).
+    // Degrees of that ray (CONVENTIONS 1), inside the camera's field of view (+-28.7 x +-22.3 deg).
     EXPECT_NEAR(rays.value(i, "azimuth_deg"), std::atan2(x, z) * kDeg, 2e-3) << i;
     EXPECT_NEAR(rays.value(i, "elevation_deg"), std::atan2(y, std::hypot(x, z)) * kDeg, 2e-3) << i;
     EXPECT_LT(std::abs(rays.value(i, "azimuth_deg")), 29.0) << i;

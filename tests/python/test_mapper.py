@@ -28,7 +28,7 @@ def windows(a):
 
 
 def test_paper_preset_maps_have_the_papers_values(paper_mapper):
-    """SPEC 7's picture as medians over masks of 3 x 3 windows (tests/test_improvement.cpp)."""
+    """CONVENTIONS 7's picture as medians over masks of 3 x 3 windows (tests/test_improvement.cpp)."""
     depth, probability = paper_mapper.depth(), paper_mapper.probability()
     unknown, improvement, bins = paper_mapper.unknown(), paper_mapper.improvement(), paper_mapper.surface_bin()
     assert depth.shape == (480, 640) and depth.dtype == np.float32 and improvement.dtype == np.float32

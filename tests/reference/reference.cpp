@@ -19,7 +19,7 @@ long double logit_opdf(long double d, long double b, long double s) {
 
 namespace {
 
-// A point's angular position and depth coordinate, from SPEC 1 (spherical) and SPEC 2c (pinhole) as
+// A point's angular position and depth coordinate, from CONVENTIONS 1 (spherical) and CONVENTIONS 2c (pinhole) as
 // written, without the library's projection.
 struct Position {
   double h = 0, v = 0, depth = 0;
@@ -93,7 +93,7 @@ DenseGrid::Surface DenseGrid::surface(std::size_t column) const {
   const double* v = &values_[column * bins_];
   double best = v[0];
   for (std::size_t k = 1; k < bins_; ++k) best = std::max(best, v[k]);
-  const double floor_value = best - kSurfaceTieTolerance;  // SPEC 6 ties, as surface.hpp defines them
+  const double floor_value = best - kSurfaceTieTolerance;  // CONVENTIONS 6 ties, as surface.hpp defines them
   std::size_t first = 0;
   while (v[first] < floor_value) ++first;
   std::size_t last = first;

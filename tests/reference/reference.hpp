@@ -1,5 +1,5 @@
 #pragma once
-// The slow, obviously-correct reference of eqs. 1, 2 and the surface (SPEC 3-6): a dense grid of
+// The slow, obviously-correct reference of eqs. 1, 2 and the surface (CONVENTIONS 3-6): a dense grid of
 // log-odds in double, every voxel of every column in the angular window updated with eq. 1 evaluated
 // in long double, no depth truncation, no tables, no threads. The fast path is checked against it.
 #include "occ_improve/geometry/geometry.hpp"
@@ -17,7 +17,7 @@ long double logit_opdf(long double d_rho, long double angular_term, long double 
 class DenseGrid {
 public:
   DenseGrid(const GridGeometry& geometry, const SensorModel& model, const GridOptions& options);
-  /// Inserts points in order (NaN/zero and out-of-field points are skipped, as SPEC 1 says).
+  /// Inserts points in order (NaN/zero and out-of-field points are skipped, as CONVENTIONS 1 says).
   void insert(const std::vector<Eigen::Vector3f>& points);
   double log_odds(std::size_t column, int bin) const { return values_[column * bins_ + static_cast<std::size_t>(bin)]; }
   bool touched(std::size_t column) const { return touched_[column] != 0; }
@@ -29,7 +29,7 @@ public:
     int bin = -1;
     bool unknown = true;
   };
-  /// SPEC 6 by brute force over the dense column.
+  /// CONVENTIONS 6 by brute force over the dense column.
   Surface surface(std::size_t column) const;
 
 private:
@@ -42,7 +42,7 @@ private:
   std::vector<unsigned char> touched_;
 };
 
-/// Eqs. 3-4 (SPEC 7) by brute force in double for every column, over the given surfaces (one per column):
+/// Eqs. 3-4 (CONVENTIONS 7) by brute force in double for every column, over the given surfaces (one per column):
 /// the window is found by testing every column's extent against the +-k sigma box of the simulated
 /// measurement; unknown surfaces take part with depth 0 and P = 1/2; P_s comes from logit_opdf above.
 std::vector<double> improvement_map(const GridGeometry& geometry, const SensorModel& model,

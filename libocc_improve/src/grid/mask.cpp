@@ -14,10 +14,9 @@ std::string size_text(int width, int height) { return std::to_string(width) + " 
 }  // namespace
 
 void PixelMask::validate() const {
-  if (width <= 0 || height <= 0 ||
-      valid.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
-    throw InvalidInput("mask of " + size_text(width, height) + " holds " + std::to_string(valid.size()) +
-                       " values (need width x height > 0)");
+  if (width <= 0 || height <= 0)
+    throw InvalidInput("mask of " + size_text(width, height) + ": need width x height > 0");
+  require_shape("mask", shape());
 }
 
 std::size_t PixelMask::valid_count() const {
@@ -30,9 +29,7 @@ std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const Pixel
   if (!camera)
     throw InvalidParameter("a mask names camera pixels, and this grid has no camera (use a camera-based preset "
                            "such as kinect_v1)");
-  if (mask.width != camera->width || mask.height != camera->height)
-    throw InvalidInput("mask is " + size_text(mask.width, mask.height) + ", the camera " +
-                       size_text(camera->width, camera->height) + ": they must match");
+  require_shape("mask", mask.shape(), "the camera", ColumnShape::of_grid(camera->width, camera->height));
   std::vector<std::uint8_t> columns(geometry.column_count(), 0);
   if (geometry.binning() == AngularBinning::pinhole) {  // one column per pixel
     for (std::size_t c = 0; c < columns.size(); ++c) columns[c] = mask.valid[c] != 0;
@@ -52,9 +49,7 @@ std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const Pixel
 
 std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<std::uint8_t>& columns,
                                PointSpan points, std::vector<float>& kept) {
-  if (columns.size() != geometry.column_count())
-    throw InvalidInput("column mask of " + std::to_string(columns.size()) + " columns does not match the grid's " +
-                       std::to_string(geometry.column_count()));
+  require_shape("column mask", ColumnShape::of_arrays(geometry.width(), geometry.height(), {columns.size()}));
   kept.clear();
   kept.reserve(points.count * 3);
   std::size_t dropped = 0;
@@ -72,9 +67,8 @@ std::size_t drop_masked_points(const GridGeometry& geometry, const std::vector<s
 
 namespace {
 void require_mask_fits(const std::vector<std::uint8_t>& columns, const ImprovementMap& improvement) {
-  if (columns.size() != improvement.value.size())
-    throw InvalidInput("column mask of " + std::to_string(columns.size()) +
-                       " columns does not match the improvement map's " + std::to_string(improvement.value.size()));
+  require_shape("column mask", ColumnShape::of_arrays(improvement.width, improvement.height, {columns.size()}),
+                "the improvement map", improvement.shape());
 }
 }  // namespace
 
@@ -94,9 +88,9 @@ void mask_improvement(const std::vector<std::uint8_t>& columns, const std::vecto
 }
 
 PixelMask finite_pixel_mask(PointSpan points, int width, int height) {
-  if (width <= 0 || height <= 0 || points.count != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
-    throw InvalidInput("a finite-point mask needs an organized frame: " + std::to_string(points.count) +
-                       " points are not " + size_text(width, height));
+  if (width <= 0 || height <= 0)
+    throw InvalidInput("a finite-point mask needs an organized frame, not " + size_text(width, height));
+  require_shape("a finite-point mask's organized frame", ColumnShape::of_arrays(width, height, {points.count}));
   PixelMask mask;
   mask.width = width;
   mask.height = height;

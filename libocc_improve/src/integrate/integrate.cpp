@@ -3,6 +3,7 @@
 #include "support/fast_math.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "sensor/opdf_bounds.hpp"
 #include "sensor/opdf_kernel.hpp"
 #include "support/parallel.hpp"
 
@@ -45,26 +46,6 @@ double skip_offset_sigmas(double angular_term) {
   return std::max(step_offset, std::sqrt(peak_limit - angular_term));
 }
 
-// In exact mode, bins with u < kLinearU take logit P_s = log(1/2) + u: there log(1 + e^u) < 2.1e-9 and the
-// peak term is below e^-120 of the step term (t <= -12).
-constexpr double kLinearU = -20.0;
-
-// Clamped-mode shortcuts (exact under clamping; see integrate.hpp):
-//  - logit P_s <= 0 wherever t <= kNonPositiveT, for every B >= 0: P_s <= 1/2 there because
-//    (2/3)(e^-B + e^(2t+4)) <= (2/3)(1 + e^1) = 2.48 < e^(t^2) = 9.49 at t = -1.5 and the gap widens below.
-//    Bins of the leading L_min run stay at L_min.
-//  - for t <= -3 - B/2 (u <= -2): P_s <= 1/2 e^u (1 + 6.1e-4) (the peak term is (2/3) e^-((t+1)^2 + 3 + 2B)
-//    <= 6.1e-4 of the step term) and -log(1 - P_s) <= 0.071, so logit P_s <= log(1/2) + u + 0.072. An
-//    untouched bin (L = 0) with log(1/2) + u <= L_min - kBoundMargin therefore ends at L_min: not evaluated.
-constexpr double kNonPositiveT = -1.5;
-constexpr double kBoundMargin = 0.2;
-//  - for B >= kNegligibleB every bin with t > kNonPositiveT has |logit P_s| < 4.5e-7 (below half of
-//    kSkipEpsilon): there x = e^-u <= e^-(1 + B) and the peak term g <= e^-B / 3, and |logit P_s| <= 4 max(x, g).
-//    So a column whose leading L_min run already reaches t = kNonPositiveT is left unchanged by such a
-//    measurement (the run stays at L_min, the rest moves by less than the epsilon SPEC 4 allows to skip):
-//    the diagonal neighbours of a pixel-native return (B = 24) cost nothing where the view is continuous.
-constexpr double kNegligibleB = 15.0;
-
 // e_b = x and g_b = g of eq. 1 (opdf_kernel.hpp) at B = 0 for bins [0, n): the B-free factors, shared by
 // every column of one measurement (a column multiplies both by e^-B).
 // With angular_term = B0 != 0 the factor e^-B0 is folded in (for columns with B > kMaxFactoredB).
@@ -77,10 +58,6 @@ void opdf_bin_terms(const double* centres, int n, double rho_bar, double inv_sig
     g[i] = detail::opdf_g(t, angular_term);
   }
 }
-
-// Columns with B above this take terms of their own: e^-B (fast_exp saturates at e^-87) times e_b would
-// lose e^-u where e_b is large.
-constexpr double kMaxFactoredB = 60.0;
 
 // logit P_s from the bin terms, with a = e^-B the column's factor.
 inline float logit_from_terms(float e, float g, float a) {
@@ -556,10 +533,7 @@ InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointS
 InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
                               std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options) {
   const GridGeometry& g = grid.geometry();
-  if (surface.width != g.width() || surface.height != g.height() || surface.size() != g.column_count())
-    throw InvalidInput("surface map is " + std::to_string(surface.width) + " x " + std::to_string(surface.height) +
-                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                       " columns");
+  require_shape("surface map", surface.shape(), "the grid", ColumnShape::of_grid(g.width(), g.height()));
   return insert(grid, model, points, options, &surface, &surface_changed);
 }
 

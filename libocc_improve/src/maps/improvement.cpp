@@ -3,6 +3,7 @@
 #include "support/fast_math.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "sensor/opdf_bounds.hpp"
 #include "sensor/opdf_kernel.hpp"
 #include "support/parallel.hpp"
 
@@ -23,11 +24,7 @@ namespace occ_improve {
 namespace {
 
 void require_matching_surface(const GridGeometry& g, const SurfaceMap& s) {
-  if (s.width != g.width() || s.height != g.height() || s.depth_m.size() != g.column_count() ||
-      s.probability.size() != g.column_count())
-    throw InvalidInput("surface map is " + std::to_string(s.width) + " x " + std::to_string(s.height) +
-                       " but the grid has " + std::to_string(g.width()) + " x " + std::to_string(g.height()) +
-                       " columns");
+  require_shape("surface map", s.shape(), "the grid", ColumnShape::of_grid(g.width(), g.height()));
 }
 
 // imp_i of eq. 3 for one surface voxel (probability p) at d_rho from the simulated measurement, whose
@@ -35,12 +32,7 @@ void require_matching_surface(const GridGeometry& g, const SurfaceMap& s) {
 // so the posterior p P_s / (p P_s + (1 - p)(1 - P_s)) = p n / (p n + (1 - p) m) needs one division.
 // Far in front x <= 2e38 and P_s stays ~1e-38. A certain prior (p = 0 or 1, den = 0) is left unchanged by
 // Bayes: imp_i = 0. Branch-free so the row loop vectorises.
-//
-// kWithPeak = false drops g, for window offsets with B >= kPeakNegligibleB: there g / P_s and g / (1 - P_s)
-// are both below (2/3)(e^-B + e^-(3 + 2B)) < 8e-8 for every d_rho, and a relative error eps in P_s and
-// in 1 - P_s moves the posterior of eq. 3 by at most eps / 2, so imp_i changes by < 4e-8.
-constexpr float kPeakNegligibleB = 16.0f;
-
+// kWithPeak = false drops g, for window offsets with B >= kPeakNegligibleB (opdf_bounds.hpp).
 template <bool kWithPeak>
 inline float surface_term(float p, float d_rho, float inv_sigma, float b_angular) {
   const float t = d_rho * inv_sigma;
@@ -292,10 +284,7 @@ std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const 
     for (std::size_t c = 0; c < columns; ++c) all[c] = static_cast<ColumnIndex>(c);
     return all;
   }
-  if (map.width != geometry.width() || map.height != geometry.height() || map.value.size() != columns)
-    throw InvalidInput("improvement map is " + std::to_string(map.width) + " x " + std::to_string(map.height) +
-                       " but the grid has " + std::to_string(geometry.width()) + " x " +
-                       std::to_string(geometry.height()) + " columns");
+  require_shape("improvement map", map.shape(), "the grid", ColumnShape::of_grid(geometry.width(), geometry.height()));
   const WindowKernel kernel(geometry, model);
 
   const std::vector<std::uint8_t> affected = affected_rays(geometry, kernel, changed_surface_columns);

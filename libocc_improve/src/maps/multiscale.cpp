@@ -40,15 +40,8 @@ ImprovementPyramid::ImprovementPyramid(const ImprovementMap& improvement, const 
 }
 
 void ImprovementPyramid::check_maps(const ImprovementMap& improvement, const SurfaceMap& surface) const {
-  const auto cells = static_cast<std::size_t>(width_) * static_cast<std::size_t>(height_);
-  if (improvement.width != width_ || improvement.height != height_ || improvement.value.size() != cells)
-    throw InvalidInput("improvement map is " + std::to_string(improvement.width) + " x " +
-                       std::to_string(improvement.height) + " but the pyramid is " + std::to_string(width_) + " x " +
-                       std::to_string(height_));
-  if (surface.width != width_ || surface.height != height_ || surface.depth_m.size() != cells ||
-      surface.probability.size() != cells || surface.unknown.size() != cells)
-    throw InvalidInput("surface map is " + std::to_string(surface.width) + " x " + std::to_string(surface.height) +
-                       " but the pyramid is " + std::to_string(width_) + " x " + std::to_string(height_));
+  require_shape("improvement map", improvement.shape(), "the pyramid", shape());
+  require_shape("surface map", surface.shape(), "the pyramid", shape());
 }
 
 int ImprovementPyramid::blocks_x(int level) const {

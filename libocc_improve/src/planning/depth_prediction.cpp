@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <string>
 
 namespace occ_improve {
 
@@ -195,12 +194,7 @@ void linear_fill(const std::vector<float>& sparse, const SensorModel& model, con
   }
 }
 
-void check_surface(const SurfaceMap& surface) {
-  const std::size_t n = static_cast<std::size_t>(surface.width) * static_cast<std::size_t>(surface.height);
-  if (surface.depth_m.size() != n || surface.probability.size() != n || surface.unknown.size() != n)
-    throw InvalidInput("predict_depth: surface arrays do not hold " + std::to_string(surface.width) + " x " +
-                       std::to_string(surface.height) + " values");
-}
+void check_surface(const SurfaceMap& surface) { require_shape("predict_depth: surface map", surface.shape()); }
 
 }  // namespace
 
@@ -241,14 +235,9 @@ PredictedDepth predict_depth(const SurfaceMap& surface, const DepthPredictionPar
 DepthAgreement depth_agreement(const SurfaceMap& reference, const PredictedDepth& predicted, const SensorModel& model,
                                double sigmas) {
   detail::require_parameter(sigmas > 0, "sigmas", sigmas, "> 0");
-  const std::size_t n = static_cast<std::size_t>(reference.width) * static_cast<std::size_t>(reference.height);
-  if (predicted.width != reference.width || predicted.height != reference.height || predicted.depth_m.size() != n ||
-      predicted.distance.size() != n || reference.depth_m.size() != n)
-    throw InvalidInput("depth_agreement: prediction of " + std::to_string(predicted.width) + " x " +
-                       std::to_string(predicted.height) + " columns against a reference of " +
-                       std::to_string(reference.width) + " x " + std::to_string(reference.height));
+  require_shape("depth_agreement: prediction", predicted.shape(), "the reference surface map", reference.shape());
   DepthAgreement a;
-  for (std::size_t c = 0; c < n; ++c) {
+  for (std::size_t c = 0; c < predicted.depth_m.size(); ++c) {
     if (!is_depth_sample(reference, c)) continue;
     ++a.reference_samples;
     const double z = reference.depth_m[c];

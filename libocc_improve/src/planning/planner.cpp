@@ -250,20 +250,13 @@ void PlanRequest::validate(int grid_width, int grid_height) const {
                               "window_width_columns * window_height_columns",
                               static_cast<double>(window_width_columns) * window_height_columns, "<= budget_rays");
   }
-  if (!candidates.empty() && candidates.size() != static_cast<std::size_t>(columns)) {
-    std::ostringstream m;
-    m << "candidate mask of " << candidates.size() << " columns does not match the grid's " << grid_width << " x "
-      << grid_height;
-    throw InvalidInput(m.str());
-  }
+  if (!candidates.empty())
+    require_shape("candidate mask", ColumnShape::of_arrays(grid_width, grid_height, {candidates.size()}));
 }
 
 std::vector<float> shot_scores(const ImprovementMap& improvement, const ReturnRecord& returns,
                                const ReturnModelParams& params) {
-  if (improvement.value.size() != static_cast<std::size_t>(improvement.width) * static_cast<std::size_t>(improvement.height))
-    throw InvalidInput("improvement map holds " + std::to_string(improvement.value.size()) + " values for " +
-                       std::to_string(improvement.width) + " x " + std::to_string(improvement.height) + " columns");
-  returns.check_matches(improvement.width, improvement.height);
+  require_shape("return record", returns.shape(), "the improvement map", improvement.shape());
   std::vector<float> score = return_probability_map(returns, params);
   for (std::size_t c = 0; c < score.size(); ++c) score[c] *= improvement.value[c];
   return score;
@@ -298,14 +291,8 @@ Shot plan_next_shot(const ImprovementMap& improvement, const ImprovementPyramid&
                     const ReturnRecord& returns, const PlanRequest& request) {
   if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(improvement, returns, request);
   request.validate(improvement.width, improvement.height);
-  if (pyramid.width() != improvement.width || pyramid.height() != improvement.height)
-    throw InvalidInput("multi-scale pyramid is " + std::to_string(pyramid.width()) + " x " +
-                       std::to_string(pyramid.height()) + " but the improvement map is " +
-                       std::to_string(improvement.width) + " x " + std::to_string(improvement.height));
-  if (improvement.value.size() != static_cast<std::size_t>(improvement.width) * static_cast<std::size_t>(improvement.height))
-    throw InvalidInput("improvement map holds " + std::to_string(improvement.value.size()) + " values for " +
-                       std::to_string(improvement.width) + " x " + std::to_string(improvement.height) + " columns");
-  returns.check_matches(improvement.width, improvement.height);
+  require_shape("multi-scale pyramid", pyramid.shape(), "the improvement map", improvement.shape());
+  require_shape("return record", returns.shape(), "the improvement map", improvement.shape());
   return decide_stop(coarse_to_fine_shot(improvement, pyramid, model, returns, request), request);
 }
 

@@ -12,11 +12,7 @@ namespace occ_improve {
 namespace {
 
 void require_same_size(const ImprovementMap& map, const SurfaceMap& surface) {
-  if (map.width != surface.width || map.height != surface.height || map.value.size() != surface.size() ||
-      map.value.size() != static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height))
-    throw InvalidInput("improvement map (" + std::to_string(map.width) + " x " + std::to_string(map.height) +
-                       ") and surface map (" + std::to_string(surface.width) + " x " + std::to_string(surface.height) +
-                       ") differ in size");
+  require_shape("improvement map", map.shape(), "the surface map", surface.shape());
 }
 
 /// MurmurHash3's 32-bit finaliser: a bijection, so every column has its own spread rank.
@@ -180,10 +176,7 @@ void grow_region(const GridGeometry& geometry, const ImprovementMap& map, float 
 }
 
 void require_matching_grid(const GridGeometry& geometry, const ImprovementMap& map) {
-  if (map.width != geometry.width() || map.height != geometry.height())
-    throw InvalidInput("improvement map (" + std::to_string(map.width) + " x " + std::to_string(map.height) +
-                       ") does not match the grid (" + std::to_string(geometry.width()) + " x " +
-                       std::to_string(geometry.height()) + ")");
+  require_shape("improvement map", map.shape(), "the grid", ColumnShape::of_grid(geometry.width(), geometry.height()));
 }
 
 }  // namespace
@@ -254,9 +247,7 @@ void StopCriteria::validate() const {
 
 StopSignal stop_signal(const ImprovementMap& map, const std::vector<Region>& regions, const StopCriteria& criteria) {
   criteria.validate();
-  if (map.value.size() != static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height))
-    throw InvalidInput("improvement map holds " + std::to_string(map.value.size()) + " values for " +
-                       std::to_string(map.width) + " x " + std::to_string(map.height) + " rays");
+  require_shape("improvement map", map.shape());
   StopSignal s{false, 0.0, 0.0, {}};
   for (const float v : map.value)
     if (v >= criteria.ray_floor) s.total_improvement += v;

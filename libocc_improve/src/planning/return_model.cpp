@@ -22,12 +22,7 @@ ReturnRecord ReturnRecord::for_grid(int width, int height) {
 ReturnRecord ReturnRecord::from_counts(int width, int height, std::vector<std::uint32_t> asked,
                                        std::vector<std::uint32_t> returned) {
   ReturnRecord r = for_grid(width, height);
-  if (asked.size() != r.size() || returned.size() != r.size()) {
-    std::ostringstream m;
-    m << "return record holds " << asked.size() << " / " << returned.size() << " counts for " << width << " x "
-      << height << " columns";
-    throw InvalidInput(m.str());
-  }
+  require_shape("return record", ColumnShape::of_arrays(width, height, {asked.size(), returned.size()}));
   for (std::size_t c = 0; c < r.size(); ++c)
     if (returned[c] > asked[c]) {
       std::ostringstream m;
@@ -41,11 +36,7 @@ ReturnRecord ReturnRecord::from_counts(int width, int height, std::vector<std::u
 }
 
 void ReturnRecord::check_matches(int grid_width, int grid_height) const {
-  if (width_ == grid_width && height_ == grid_height) return;
-  std::ostringstream m;
-  m << "return record of " << width_ << " x " << height_ << " columns does not match the grid's " << grid_width
-    << " x " << grid_height;
-  throw InvalidInput(m.str());
+  require_shape("return record", shape(), "the grid", ColumnShape::of_grid(grid_width, grid_height));
 }
 
 void ReturnRecord::count(ColumnIndex column, bool got_return) {

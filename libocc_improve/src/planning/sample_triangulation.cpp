@@ -2,6 +2,7 @@
 
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "occ_improve/maps/column_map.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -303,9 +304,7 @@ void check_sparse_depth_image(const std::vector<float>& depth, int width, int he
   detail::require_parameter(width > 0 && width <= kMaxSide, "width", width, "in [1, 2^20]");
   detail::require_parameter(height > 0 && height <= kMaxSide, "height", height, "in [1, 2^20]");
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  if (depth.size() != n)
-    throw InvalidInput("sparse depth image holds " + std::to_string(depth.size()) + " values, not " +
-                       std::to_string(width) + " x " + std::to_string(height));
+  require_shape("sparse depth image", ColumnShape::of_arrays(width, height, {depth.size()}));
   for (std::size_t c = 0; c < n; ++c)
     if (depth[c] < 0.0f || std::isinf(depth[c]))
       throw InvalidInput("sparse depth image: pixel (" + std::to_string(c % static_cast<std::size_t>(width)) + ", " +

@@ -340,11 +340,9 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   params.validate();
   const int width = geometry.width(), height = geometry.height();
   const std::size_t n = geometry.column_count();
-  if (surface.width != width || surface.height != height || surface.size() != n || surface.unknown.size() != n ||
-      surface.bin.size() != n || surface.probability.size() != n)
-    throw InvalidInput("segment_improvement: the surface map does not match the grid geometry");
-  if (improvement.width != width || improvement.height != height || improvement.value.size() != n)
-    throw InvalidInput("segment_improvement: the improvement map does not match the grid geometry");
+  const ColumnShape grid = ColumnShape::of_grid(width, height);
+  require_shape("segment_improvement: surface map", surface.shape(), "the grid", grid);
+  require_shape("segment_improvement: improvement map", improvement.shape(), "the grid", grid);
 
   Segmentation out;
   out.width = width;

@@ -1,5 +1,5 @@
 #pragma once
-// The float OPDF kernel of eq. 1 (SPEC 3) shared by insertion (integrate.cpp) and improvement
+// The float OPDF kernel of eq. 1 (CONVENTIONS 3) shared by insertion (integrate.cpp) and improvement
 // (improvement.cpp); sensor_model.cpp's logit_opdf is the double reference both are tested against.
 //
 // With t = d_rho / sigma and B the angular term, eq. 1 is P_s = 1/2 (1 + x)^-1 + g with

@@ -13,7 +13,7 @@ PinholeIntrinsics kinect_v1_intrinsics() { return PinholeIntrinsics{}; }
 SensorPreset kinect_v1_paper() {
   SensorPreset p;
   p.name = "kinect_v1_paper";
-  // GeometryParams and SensorModelParams default to the paper's values (SPEC 2).
+  // GeometryParams and SensorModelParams default to the paper's values (CONVENTIONS 2).
   return p;
 }
 

@@ -91,10 +91,15 @@ double logit_opdf(double d_rho, double angular_term, double sigma_rho) {
   return log_p - std::log1p(-std::exp(log_p));
 }
 
+double opdf_peak(double d_rho, double angular_term, double sigma_rho) {
+  const double t = d_rho / sigma_rho;
+  return std::exp(-(t * t + angular_term)) / 3.0;
+}
+
 double opdf(double d_rho, double angular_term, double sigma_rho) {
   const double t = d_rho / sigma_rho;
   const double u = 2.0 * (t + 2.0) + angular_term;
-  return 0.5 / (1.0 + std::exp(-u)) + std::exp(-(t * t + angular_term)) / 3.0;
+  return 0.5 / (1.0 + std::exp(-u)) + opdf_peak(d_rho, angular_term, sigma_rho);
 }
 
 }  // namespace occ_improve

@@ -23,12 +23,7 @@ Image grey_image(int width, int height) {
   return im;
 }
 
-void require_consistent(const SurfaceMap& s) {
-  const std::size_t n = static_cast<std::size_t>(s.width) * static_cast<std::size_t>(s.height);
-  if (s.width < 0 || s.height < 0 || s.depth_m.size() != n || s.probability.size() != n)
-    throw InvalidInput("surface map of " + std::to_string(s.width) + " x " + std::to_string(s.height) +
-                       " rays holds " + std::to_string(s.depth_m.size()) + " depths");
-}
+void require_consistent(const SurfaceMap& s) { require_shape("surface map", s.shape()); }
 
 struct ColourStop {
   float value;
@@ -120,10 +115,8 @@ Image render_occupancy(const SurfaceMap& surface) {
 }
 
 Image render_improvement(const ImprovementMap& map) {
-  const std::size_t n = static_cast<std::size_t>(map.width) * static_cast<std::size_t>(map.height);
-  if (map.width < 0 || map.height < 0 || map.value.size() != n)
-    throw InvalidInput("improvement map of " + std::to_string(map.width) + " x " + std::to_string(map.height) +
-                       " rays holds " + std::to_string(map.value.size()) + " values");
+  require_shape("improvement map", map.shape());
+  const std::size_t n = map.value.size();
   Image im;
   im.width = map.width;
   im.height = map.height;
@@ -161,12 +154,12 @@ Image render_improvement_legend() {
 Image render_overlay(const ImprovementMap& map, const Image& colour, double improvement_weight) {
   detail::require_parameter(improvement_weight >= 0 && improvement_weight <= 1, "improvement_weight",
                             improvement_weight, "in [0, 1]");
-  if (colour.width != map.width || colour.height != map.height || colour.channels != 3 ||
-      colour.pixels.size() != static_cast<std::size_t>(colour.width) * static_cast<std::size_t>(colour.height) * 3)
-    throw InvalidInput("overlay: colour image of " + std::to_string(colour.width) + " x " +
-                       std::to_string(colour.height) + " x " + std::to_string(colour.channels) +
-                       " does not match the improvement map's " + std::to_string(map.width) + " x " +
-                       std::to_string(map.height) + " RGB");
+  if (colour.channels != 3 || colour.pixels.size() % 3 != 0)
+    throw InvalidInput("overlay: colour image of " + std::to_string(colour.channels) + " channels in " +
+                       std::to_string(colour.pixels.size()) + " bytes is not RGB");
+  const std::size_t colour_pixels = colour.pixels.size() / 3;
+  require_shape("overlay: colour image", ColumnShape::of_arrays(colour.width, colour.height, {colour_pixels}),
+                "the improvement map", map.shape());
   Image out = render_improvement(map);
   for (std::size_t i = 0; i < out.pixels.size(); ++i)
     out.pixels[i] = static_cast<std::uint8_t>(std::lround(improvement_weight * out.pixels[i] +

@@ -1,6 +1,7 @@
 #include "occ_improve/sim/virtual_sensor.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/maps/column_map.hpp"
 
 #include <cmath>
 #include <string>
@@ -38,10 +39,7 @@ VirtualSensor::VirtualSensor(std::vector<float> scene_depth_m, const PinholeIntr
     : scene_(std::move(scene_depth_m)), intrinsics_(intrinsics), params_(params) {
   intrinsics.validate();
   params.validate();
-  const std::size_t n = static_cast<std::size_t>(intrinsics.width) * static_cast<std::size_t>(intrinsics.height);
-  if (scene_.size() != n)
-    throw InvalidInput("virtual sensor scene holds " + std::to_string(scene_.size()) + " depths for a " +
-                       std::to_string(intrinsics.width) + " x " + std::to_string(intrinsics.height) + " image");
+  require_shape("virtual sensor scene", ColumnShape::of_arrays(intrinsics.width, intrinsics.height, {scene_.size()}));
   for (float& z : scene_)
     if (!(z > 0) || !std::isfinite(z)) z = 0.0f;  // one encoding of "no return"
 }

@@ -17,7 +17,7 @@ namespace {
 constexpr double kRadToDeg = 57.29577951308232;
 
 // Directions and angles are written for both binnings: the angles are those of the unit direction
-// (SPEC 1: azimuth atan2(x, z), elevation atan2(y, hypot(x, z)), y down), so they are degrees with the
+// (CONVENTIONS 1: azimuth atan2(x, z), elevation atan2(y, hypot(x, z)), y down), so they are degrees with the
 // pixel-native presets too, never pixel positions.
 void write_regions_csv(const std::string& path, const std::vector<Region>& regions) {
   std::string out = "rank,summed_improvement,area_columns,peak_improvement,centre_u,centre_v,peak_u,peak_v,min_u,min_v,max_u,"

@@ -1,5 +1,5 @@
 #pragma once
-// Grid geometry (SPEC 1-2, 2b, 2c): an angular binning of directions into columns (rays) and a depth
+// Grid geometry (CONVENTIONS 1-2, 2b, 2c): an angular binning of directions into columns (rays) and a depth
 // binning along each column (uniform or uniform in inverse depth), behind one type. The kernels ask it
 // only for a direction's continuous position (project), the columns a support overlaps (the two
 // uniform axes, in the binning's own angular unit), a column's centre (point) and, with the sensor
@@ -7,9 +7,9 @@
 // insertion, surface, improvement and everything after them are unchanged.
 //
 // Binnings:
-//  - spherical (the paper, SPEC 2): columns uniform in azimuth theta = atan2(x, z) and elevation
+//  - spherical (the paper, CONVENTIONS 2): columns uniform in azimuth theta = atan2(x, z) and elevation
 //    phi = atan2(y, hypot(x, z)), radians; the depth axis is the range rho = |p|.
-//  - pinhole (pixel-native, SPEC 2c): column (u, v) is pixel (u, v) of a pinhole camera, positions in
+//  - pinhole (pixel-native, CONVENTIONS 2c): column (u, v) is pixel (u, v) of a pinhole camera, positions in
 //    pixels (u = fx x / z + cx, v = fy y / z + cy); the depth axis is z. z rather than the range
 //    because the sensor measures and quantises z (a Kinect's disparity is per z), so a flat wall facing
 //    the camera falls in one depth bin at every pixel instead of in rings of range bins.
@@ -45,7 +45,7 @@ std::string camera_text(const PinholeIntrinsics& k);
 
 enum class AngularBinning {
   spherical,  ///< uniform azimuth x elevation bins, radians; depth is the range (the paper)
-  pinhole,    ///< one column per camera pixel, pixels; depth is z (SPEC 2c)
+  pinhole,    ///< one column per camera pixel, pixels; depth is z (CONVENTIONS 2c)
 };
 
 const char* to_string(AngularBinning binning);
@@ -59,7 +59,7 @@ struct GeometryParams {
   AngularBinning angular_binning = AngularBinning::spherical;
   /// pinhole: the camera whose pixels are the columns (required; its size must equal the bin counts).
   /// spherical: when set, columns whose centre direction falls outside this camera's image are not
-  /// observable (SPEC 2c): they take no part in ranking, regions, stop signals or the filter.
+  /// observable (CONVENTIONS 2c): they take no part in ranking, regions, stop signals or the filter.
   std::optional<PinholeIntrinsics> camera;
   /// Angular bin counts (columns per row and rows), for both binnings.
   int azimuth_bins = 640;
@@ -78,7 +78,7 @@ struct GeometryParams {
   void validate() const;
 };
 
-/// A point in spherical coordinates (SPEC 1).
+/// A point in spherical coordinates (CONVENTIONS 1).
 struct SphericalPoint {
   double rho = 0;
   double azimuth = 0;
@@ -151,7 +151,7 @@ private:
 
 using ColumnIndex = std::uint32_t;
 
-/// SPEC 1: a point is valid when every coordinate is finite and it is not the origin (no return).
+/// CONVENTIONS 1: a point is valid when every coordinate is finite and it is not the origin (no return).
 inline bool is_valid_point(double x, double y, double z) {
   return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && !(x == 0 && y == 0 && z == 0);
 }

@@ -1,6 +1,6 @@
 #pragma once
 // A validity / region-of-interest mask over the depth camera's pixels (nonzero = valid). Rays outside it
-// are treated as rays the sensor cannot observe (SPEC 2c): their points are not inserted, their
+// are treated as rays the sensor cannot observe (CONVENTIONS 2c): their points are not inserted, their
 // improvement is NaN, so they are never ranked, never in a region, never counted by the stop signal,
 // never taken by the planner and drawn grey (improvement.hpp, ranking.hpp, planner.hpp, render.hpp).
 //
@@ -9,6 +9,7 @@
 // (mOSD's floor and walls set to NaN) wants its invalid pixels masked. finite_pixel_mask() builds that
 // mask when the caller says so (the tools' -mask finite).
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/column_map.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 
@@ -25,6 +26,7 @@ struct PixelMask {
   /// InvalidInput when `valid` does not hold width x height bytes or the size is not positive.
   void validate() const;
   std::size_t valid_count() const;
+  ColumnShape shape() const { return ColumnShape::of_arrays(width, height, {valid.size()}); }
 };
 
 /// One byte per column of `geometry` (1 = inside the mask). Pixel-native grids: the pixel itself; spherical
@@ -46,7 +48,7 @@ void mask_improvement(const std::vector<std::uint8_t>& columns, ImprovementMap& 
 void mask_improvement(const std::vector<std::uint8_t>& columns, const std::vector<ColumnIndex>& rays,
                       ImprovementMap& improvement);
 
-/// The mask of an organized frame's valid points (SPEC 1: finite, not the origin): `points` holds
+/// The mask of an organized frame's valid points (CONVENTIONS 1: finite, not the origin): `points` holds
 /// width x height points in row-major pixel order. InvalidInput when the count does not match.
 PixelMask finite_pixel_mask(PointSpan points, int width, int height);
 

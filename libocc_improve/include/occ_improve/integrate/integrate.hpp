@@ -1,9 +1,9 @@
 #pragma once
-// Bayesian insertion (eq. 2, SPEC 4-5): each valid point's truncated OPDF is added in log-odds to every
+// Bayesian insertion (eq. 2, CONVENTIONS 4-5): each valid point's truncated OPDF is added in log-odds to every
 // column whose angular extent overlaps its +-k sigma box, along the whole ray in front of it.
 //
 // Documented approximations of this fast path (all bounded; tests/reference checks them):
-//  - voxels behind a measurement whose |logit P_s| < kSkipEpsilon (1e-6) are not updated (SPEC 4); where
+//  - voxels behind a measurement whose |logit P_s| < kSkipEpsilon (1e-6) are not updated (CONVENTIONS 4); where
 //    the angular term B >= log(8 / (3 eps)) = 14.8 (a pixel-native return's diagonal neighbours, B = 24)
 //    the peak term is below eps/8 at every depth, so the update ends where the step term's deviation from
 //    1/2 falls below eps/8: (log(4/eps) - 4 - B)/2 sigmas (-6.4 at B = 24), in front of the return;
@@ -16,7 +16,7 @@
 //    b) for t <= -3 - B/2, logit P_s <= log(1/2) + u + 0.072, so an untouched voxel (L = 0) with
 //       log(1/2) + u <= L_min - 0.2 ends at L_min;
 //    b') for B >= 15 (a pixel-native return's diagonal neighbours, B = 24) |logit P_s| < 4.5e-7 wherever
-//       t > -1.5, so a column whose leading L_min run reaches t = -1.5 is not updated at all (a) + SPEC 4);
+//       t > -1.5, so a column whose leading L_min run reaches t = -1.5 is not updated at all (a) + CONVENTIONS 4);
 //    c) while a column is being updated its window holds odds e^L (one exp and one log per voxel and
 //       call instead of a log per voxel and measurement); the clamps map to L_min/L_max exactly and the
 //       round trip moves other voxels by < 5e-7 + 2e-7 |L| (once per column and call: a column is loaded

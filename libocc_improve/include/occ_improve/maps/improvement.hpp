@@ -1,5 +1,5 @@
 #pragma once
-// The improvement map (eqs. 3 and 4, SPEC 7-8): per ray j, the expected change of occupancy probability
+// The improvement map (eqs. 3 and 4, CONVENTIONS 7-8): per ray j, the expected change of occupancy probability
 // that one more measurement a_j along j would bring to the surface voxels it touches.
 //
 // Conventions (docs/METHOD.md, "Improvement"):
@@ -22,6 +22,7 @@
 //    one-ray path performs the same float operations in the same order, so both are bit-identical and
 //    the incremental update equals the full recomputation exactly.
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/column_map.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 #include "occ_improve/maps/surface.hpp"
 
@@ -35,6 +36,7 @@ namespace occ_improve {
 struct ImprovementMap {
   int width = 0, height = 0;
   std::vector<float> value;
+  ColumnShape shape() const { return ColumnShape::of_arrays(width, height, {value.size()}); }
 };
 
 /// Eqs. 3-4 for the ray through column (azimuth_bin, elevation_bin): the one definition every path uses.
@@ -48,7 +50,7 @@ double ray_improvement(const GridGeometry& geometry, const SensorModel& model, c
 ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorModel& model,
                                    const SurfaceMap& surface, int threads = 0);
 
-/// Incremental update (SPEC 8): recomputes exactly the rays whose window contains one of
+/// Incremental update (CONVENTIONS 8): recomputes exactly the rays whose window contains one of
 /// `changed_surface_columns` (as returned by update_surface) and returns them (ascending). The result
 /// equals compute_improvement on the new surface. An empty `map` is computed in full (every ray returned).
 /// Throws InvalidInput for a map or surface of another size, or a column outside the grid.

@@ -69,6 +69,7 @@ public:
 
   int width() const { return width_; }    ///< fine columns
   int height() const { return height_; }  ///< fine rows
+  ColumnShape shape() const { return ColumnShape::of_grid(width_, height_); }
   int blocks_x(int level) const;
   int blocks_y(int level) const;
   std::size_t block_count(int level) const;

@@ -1,5 +1,5 @@
 #pragma once
-// The surface of highest occupancy probability (SPEC 6): per column, the depth bin of largest
+// The surface of highest occupancy probability (CONVENTIONS 6): per column, the depth bin of largest
 // log-odds, with the tie rules:
 //  - never updated: depth 0, P = 0.5, unknown;
 //  - all bins hold the same value: depth rho_max, that P;
@@ -7,13 +7,14 @@
 //    just beyond the grid and only the rising edge of its OPDF is inside. Like a column free to the end:
 //    depth rho_max, bin = depth_bins, P of its free space (bin 0). Without this rule such rays (P ~ 0.3
 //    at the last bin) score up to 0.37 improvement, above the no-data level, though the grid can never
-//    hold their surface (SPEC 7 wants rays beyond the depth range at ~0);
+//    hold their surface (CONVENTIONS 7 wants rays beyond the depth range at ~0);
 //  - otherwise the nearest run of maximal bins: its centre if the maximum is the clamp L_max,
 //    else its first bin.
-// "Maximal" means within kSurfaceTieTolerance of the maximum (in log-odds): SPEC 4 lets updates below
+// "Maximal" means within kSurfaceTieTolerance of the maximum (in log-odds): CONVENTIONS 4 lets updates below
 // 1e-6 be skipped and values are held in float, so bins closer than that to the maximum are ties, not
 // a better surface (typical case: the unknown tail behind carved free space, L = 0 +- 1e-7).
 #include "occ_improve/grid/grid.hpp"
+#include "occ_improve/maps/column_map.hpp"
 
 #include <cstdint>
 #include <vector>
@@ -41,6 +42,9 @@ struct SurfaceMap {
 
   std::size_t size() const { return depth_m.size(); }
   std::size_t known_count() const;
+  ColumnShape shape() const {
+    return ColumnShape::of_arrays(width, height, {depth_m.size(), probability.size(), bin.size(), unknown.size()});
+  }
   SurfaceVoxel at(std::size_t column) const;
   void set(std::size_t column, const SurfaceVoxel& voxel);
 };

@@ -53,6 +53,7 @@ struct PredictedDepth {
   std::vector<float> depth_m;          ///< per column; 0 where no sample lies within the radius
   /// chessboard distance to the nearest sample (the sample used by `nearest`; 0: a sample; -1: none)
   std::vector<std::int32_t> distance;
+  ColumnShape shape() const { return ColumnShape::of_arrays(width, height, {depth_m.size(), distance.size()}); }
 };
 
 /// True when column c of `surface` is a sample (rule above).

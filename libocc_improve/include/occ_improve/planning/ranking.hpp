@@ -1,5 +1,5 @@
 #pragma once
-// Where to look next: the best rays, connected regions of high improvement, and when to stop (SPEC 9).
+// Where to look next: the best rays, connected regions of high improvement, and when to stop (CONVENTIONS 9).
 //
 // Conventions (docs/METHOD.md, "Ranking"):
 //  - one order of rays everywhere (rank_key): larger value first; equal values go to the lower spread
@@ -66,7 +66,7 @@ struct Region {
   int centre_u = 0, centre_v = 0;  ///< the medoid: always a column of the region (ties by rank_key)
   int min_u = 0, min_v = 0, max_u = 0, max_v = 0;  ///< bounding box, inclusive
   Eigen::Vector3d centre_direction = Eigen::Vector3d::UnitZ();  ///< unit ray through the centre column, sensor frame
-  double centre_azimuth_rad = 0, centre_elevation_rad = 0;      ///< SPEC 1 angles of centre_direction
+  double centre_azimuth_rad = 0, centre_elevation_rad = 0;      ///< CONVENTIONS 1 angles of centre_direction
   double mean_depth_m = 0;                                      ///< over known columns, 0 if none
 };
 

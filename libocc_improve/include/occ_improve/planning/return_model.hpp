@@ -18,6 +18,7 @@
 // raise the prior above 1 - the value of a ray nothing is known about - so a plan does not prefer unseen
 // rays next to seen ones and bunch its rays instead of spreading them.
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/column_map.hpp"
 
 #include <cstdint>
 #include <vector>
@@ -46,6 +47,7 @@ public:
   const std::vector<std::uint32_t>& returned_nearby() const { return returned_nearby_; }
   std::uint64_t total_asked() const { return total_asked_; }
   std::uint64_t total_returned() const { return total_returned_; }
+  ColumnShape shape() const { return ColumnShape::of_arrays(width_, height_, {asked_.size(), returned_.size()}); }
 
   /// Throws InvalidInput naming both sizes when the record is not one of a grid_width x grid_height grid.
   void check_matches(int grid_width, int grid_height) const;

@@ -17,9 +17,9 @@
 //     segments outwards, to the 4-neighbouring segment closest in depth, so every valid ray is labelled
 //     (a leftover region with no segment around it becomes a segment of its own).
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/maps/image.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/sensor/presets.hpp"
-#include "occ_improve/sim/render.hpp"
 #include "occ_improve/maps/surface.hpp"
 
 #include <Eigen/Core>
@@ -87,6 +87,9 @@ struct Segmentation {
   std::vector<std::uint8_t> crease;   ///< 1 on concave-crease rays (not contour rays)
   std::vector<Segment> segments;      ///< segments[l - 1] has label l, largest first
   std::size_t valid_columns = 0, contour_columns = 0, crease_columns = 0, attached_columns = 0, plane_columns = 0;
+  ColumnShape shape() const {
+    return ColumnShape::of_arrays(width, height, {label.size(), contour.size(), crease.size()});
+  }
 };
 
 /// Throws InvalidInput when surface or improvement do not match the geometry, InvalidParameter for

@@ -1,5 +1,5 @@
 #pragma once
-// Pinhole intrinsics recovered from an organized cloud (SPEC 2c needs the camera of every frame; it is
+// Pinhole intrinsics recovered from an organized cloud (CONVENTIONS 2c needs the camera of every frame; it is
 // never assumed): two independent least-squares lines u = fx x/z + cx and v = fy y/z + cy over the valid
 // pixels, with the residual that says whether the cloud really is a pinhole range image.
 #include "occ_improve/geometry/geometry.hpp"

@@ -1,5 +1,5 @@
 #pragma once
-// Sensor presets: a grid geometry and a sensor model that belong together (SPEC 2, 2b).
+// Sensor presets: a grid geometry and a sensor model that belong together (CONVENTIONS 2, 2b).
 #include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 
@@ -22,7 +22,7 @@ struct SensorPreset {
 /// The paper's set-up: 640 x 480 x 512 bins, 57 x 43 deg, rho in [0, 5 m), constant sigmas, k = 2.
 SensorPreset kinect_v1_paper();
 
-/// For real use (SPEC 2b, 2c), what every tool runs by default: pixel-native binning (one column per
+/// For real use (CONVENTIONS 2b, 2c), what every tool runs by default: pixel-native binning (one column per
 /// pixel of the camera, depth along z), inverse-depth bins over [0.5 m, 8 m], sigma_z = 1.425e-3 z^2
 /// (Khoshelham & Elberink 2012), angular sigmas = pixel quantisation (1/sqrt 12 px), as the paper
 /// derives its own.

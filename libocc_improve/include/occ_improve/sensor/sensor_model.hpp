@@ -1,5 +1,5 @@
 #pragma once
-// The sensor occupancy PDF of eq. 1 (SPEC 3) and its noise model (SPEC 2b).
+// The sensor occupancy PDF of eq. 1 (CONVENTIONS 3) and its noise model (CONVENTIONS 2b).
 //   P_s = 1/2 (1 + exp(-u))^-1 + 1/3 exp(-(d^2/s^2 + B)),
 //   d = rho - rho_bar, B = d_theta^2/s_theta^2 + d_phi^2/s_phi^2, u = 2 (d + 2 s)/s + B.
 // The angular offsets and sigmas are in the grid binning's unit: radians (spherical) or pixels (pinhole);
@@ -75,6 +75,10 @@ double logit_opdf(double d_rho, double angular_term, double sigma_rho);
 
 /// P_s of eq. 1 itself.
 double opdf(double d_rho, double angular_term, double sigma_rho);
+
+/// The peak term of eq. 1, 1/3 exp(-(d^2/s^2 + B)): P_s minus it is the step term (opdf_bounds.hpp's bounds
+/// name the two apart).
+double opdf_peak(double d_rho, double angular_term, double sigma_rho);
 
 inline double logit(double p) { return std::log(p / (1.0 - p)); }
 inline double probability_from_logit(double l) { return 1.0 / (1.0 + std::exp(-l)); }

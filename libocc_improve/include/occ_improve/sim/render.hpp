@@ -1,5 +1,5 @@
 #pragma once
-// Images of the maps (SPEC 9). Files of them: occ_improve::io (occ_improve/io/png.hpp), which needs libpng.
+// Images of the maps (CONVENTIONS 9). Files of them: occ_improve::io (occ_improve/io/png.hpp), which needs libpng.
 //
 // Improvement colour map (docs/METHOD.md, "Rendering"), piecewise linear in RGB between breakpoints:
 //   <= -0.3 dark blue (0,0,128), -0.1 blue (0,64,255), 0 green (0,200,0), 0.1 yellow (255,255,0),
@@ -7,6 +7,7 @@
 // Columns that are not observable (NaN) are neutral grey (128,128,128), unlike the no-data red.
 // It is non-linear in value: most of the colour range is spent on [-0.1, 0.3], where the paper's
 // picture lives (observed-once ~0.13, no data ~0.32, discontinuities negative).
+#include "occ_improve/maps/image.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/maps/surface.hpp"
 
@@ -16,12 +17,6 @@
 #include <vector>
 
 namespace occ_improve {
-
-/// 8-bit image, row-major, channels interleaved (1 = grey, 3 = RGB).
-struct Image {
-  int width = 0, height = 0, channels = 1;
-  std::vector<std::uint8_t> pixels;
-};
 
 /// Grey: 0 m black .. depth_max_m white (clipped). depth_max_m <= 0 or NaN -> InvalidParameter.
 Image render_depth(const SurfaceMap& surface, double depth_max_m);

@@ -3,8 +3,9 @@
 // (16-bit PNG in millimetres or TUM's 1/5000 m, SUN3D's bit-rotated millimetres, NYU's raw Kinect
 // disparity PGM, PCL grabbers' 16-bit TIFF in millimetres). Every failure throws occ_improve::IoError / FormatError / InvalidInput naming the file.
 #include "occ_improve/grid/mask.hpp"
+#include "occ_improve/maps/column_map.hpp"
+#include "occ_improve/maps/image.hpp"
 #include "occ_improve/sensor/presets.hpp"
-#include "occ_improve/sim/render.hpp"
 
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
@@ -30,10 +31,7 @@ DepthEncoding parse_depth_encoding(const std::string& name);
 const char* depth_encoding_name(DepthEncoding encoding);
 
 /// A 16-bit single-channel image (PNG 16-bit grey, PGM P5 16-bit, or TIFF 16-bit unsigned).
-struct DepthImage16 {
-  int width = 0, height = 0;
-  std::vector<std::uint16_t> values;
-};
+using DepthImage16 = ColumnMap<std::uint16_t>;
 /// The largest depth image read: 2^26 pixels (128 MiB of 16-bit values; a 4K depth map is 8.3 Mpx).
 inline constexpr std::uint64_t kMaxDepthImagePixels = std::uint64_t{1} << 26;
 

@@ -3,7 +3,7 @@
 // registered colour beside them (`*_rgb.tiff`). libtiff never prints: its errors and warnings go to
 // per-file handlers, and the first error ends up in the exception (FormatError naming the file).
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/sim/render.hpp"
+#include "occ_improve/maps/image.hpp"
 
 #include <string>
 
