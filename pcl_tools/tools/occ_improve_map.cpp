@@ -1,6 +1,7 @@
 // occ_improve_map: fuse one or more range frames taken from one viewpoint into the occupancy
 // grid and write where one more measurement would teach the most: depth, occupancy and improvement
 // images, the per-ray results as an organized PCD, and the ranked regions worth re-acquiring.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/io/map_io.hpp"
@@ -9,6 +10,11 @@
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sim/render.hpp"

@@ -1,5 +1,6 @@
 // occ_plan: the next shot of a selective sensor from a saved map or from input frames: which rays to
 // acquire (a mask image and a rays CSV), the gain they are expected to bring and whether to stop.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/io/map_io.hpp"
@@ -7,6 +8,13 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/plan_flags.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sim/render.hpp"

@@ -1,11 +1,16 @@
 // occ_select_eval: does following the improvement map build a better map per point acquired than
 // sampling uniformly? Strategies (a)-(f) of docs/SELECTIVE.md run against a virtual selective sensor
 // over real frames; the map's predicted depth is scored against the scene's depth (not improvement).
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sample_scene.hpp"

@@ -1,5 +1,6 @@
 // occ_to_octomap: convert an occupancy grid, saved by save_map or built from range frames, into
 // an OctoMap file (.bt maximum likelihood, .ot full log-odds) at a chosen resolution, seen from a pose.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/io/map_io.hpp"
@@ -7,6 +8,12 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
 #include <Eigen/Geometry>
