@@ -18,7 +18,7 @@
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sim/render.hpp"
-
+#include "occ_improve/timing.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -142,15 +142,15 @@ int run(const CommandLine& command_line) {
   // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
   OutputFolder out = open_output_folder(command_line);
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   ProgressLine progress(command_line, "frame");
   const Source source = load_path.empty() ? map_from_frames(command_line, options, use_sample, progress)
                                           : map_from_file(command_line, load_path, options);
   require_plan_fits(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
   request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
-  const auto planned = std::chrono::steady_clock::now();
+  const auto planned = SteadyClock::now();
   const Shot shot = plan_next_shot(*source.mapper, source.returns, request);
-  const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
+  const double plan_ms = 1e3 * seconds_since(planned);
 
   write_mask(out.file("shot_mask.png"), source.mapper->geometry(), shot);
   write_rays(out.file("shot_rays.csv"), *source.mapper, source.returns, shot, request.return_model);
