@@ -1,13 +1,9 @@
 #include "occ_improve/mapper.hpp"
 
-#include <chrono>
+#include "occ_improve/timing.hpp"
 
 namespace occ_improve {
 namespace {
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-
 // The cap is checked before the geometry allocates its depth axis (a huge depth_bins would allocate first).
 const GeometryParams& within_cap(const GeometryParams& geometry, const GridOptions& options) {
   require_within_memory_cap(geometry, options.memory_cap_bytes);
@@ -65,7 +61,7 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
   report.insertion = insert_points(grid_, model_, points, surface_, changed, options);
   grid_.take_changed_columns();  // accounted for by `changed`
   report.surface_columns_changed = changed.size();
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   const std::vector<ColumnIndex> rays = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_);
   report.rays_recomputed = rays.size();
   mask_improvement(column_mask_, rays, improvement_);  // the recomputed rays outside the mask stay NaN

@@ -2,17 +2,11 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/timing.hpp"
 
-#include <chrono>
 #include <cmath>
 
 namespace occ_improve {
-
-namespace {
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
-}  // namespace
 
 template <typename PointT>
 std::vector<std::uint32_t> labels_for_points(const pcl::PointCloud<PointT>& cloud, const GridGeometry& geometry,
@@ -43,7 +37,7 @@ CloudSegmentation segment_cloud(const pcl::PointCloud<PointT>& cloud, const Sens
     throw InvalidInput("the cloud is not organized (height 1): segmentation from the improvement map needs a "
                        "range image, i.e. an organized cloud");
   params.validate();
-  using Clock = std::chrono::steady_clock;
+  using Clock = SteadyClock;
   CloudSegmentation result;
   auto start = Clock::now();
   Mapper mapper(preset, grid_options);

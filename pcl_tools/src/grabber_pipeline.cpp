@@ -2,17 +2,13 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/timing.hpp"
 
 #include <algorithm>
-#include <chrono>
 
 namespace occ_improve {
 
 namespace {
-
-double now_seconds() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 double ms_since(double start_seconds) { return (now_seconds() - start_seconds) * 1e3; }
 

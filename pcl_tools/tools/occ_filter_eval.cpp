@@ -2,8 +2,11 @@
 // keeping a fraction of each frame (chosen against the map before the frame is inserted) against
 // pcl::RandomSample and pcl::VoxelGrid keeping as many points; each map is scored against the map from all
 // points (filter_eval.hpp, docs/SELECTIVE.md "The same question in a PCL pipeline").
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/eval/filter_eval.hpp"
+#include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/tool_main.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
 

@@ -11,11 +11,19 @@
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/tools/live_view.hpp"
 #include "occ_improve/tools/tool_frame_grabber.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/plan_flags.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/signals.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sim/render.hpp"
 #include "occ_improve/planning/return_model.hpp"
 #include "occ_improve/sim/virtual_sensor.hpp"
+#include "occ_improve/timing.hpp"
 
 #include <pcl/console/print.h>
 
@@ -116,7 +124,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   std::vector<SimulatedShot> shots;
   std::string why = "reached -max_shots " + std::to_string(max_shots);
   ProgressLine progress(command_line, "shot");
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   try {
     while (static_cast<int>(shots.size()) < max_shots) {
       throw_if_stop_requested();
@@ -148,7 +156,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   const std::string predicted =
       write_predicted_depth(out, mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
   const std::vector<std::string> names = write_maps(mapper, out, save, regions, options.top_k);
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double seconds = seconds_since(start);
   std::printf("%zu shots, %zu rays asked (%.2f frames), %zu returned, in %.2f s; stopped: %s\n", shots.size(),
               shots.empty() ? 0 : shots.back().rays_asked_total,
               shots.empty() ? 0.0 : static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),

@@ -1,6 +1,7 @@
 // occ_improve_map: fuse one or more range frames taken from one viewpoint into the occupancy
 // grid and write where one more measurement would teach the most: depth, occupancy and improvement
 // images, the per-ray results as an organized PCD, and the ranked regions worth re-acquiring.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/io/map_io.hpp"
@@ -9,11 +10,16 @@
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
 #include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sim/render.hpp"
+#include "occ_improve/timing.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -46,10 +52,6 @@ const ToolFlags kFlags{
     {{"-o", "occ_improve_out"}},
     {},
     frame_inputs_help()};
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
@@ -98,12 +100,12 @@ int run(const CommandLine& command_line) {
       });
 
   // Rank.
-  auto start = std::chrono::steady_clock::now();
+  auto start = SteadyClock::now();
   const MapSummary summary = summarize_map(*mapper, region_options, options.top_k);
   const double ranking_seconds = seconds_since(start);
 
   // Write into the staging folder, then move it into place.
-  start = std::chrono::steady_clock::now();
+  start = SteadyClock::now();
   const std::vector<std::string> written =
       write_map_outputs(staging, *mapper, summary, fused.colour);
   if (save.requested()) save_map(save.staged_path(), mapper->grid(), mapper->model().params());

@@ -1,5 +1,6 @@
 // occ_plan: the next shot of a selective sensor from a saved map or from input frames: which rays to
 // acquire (a mask image and a rays CSV), the gain they are expected to bring and whether to stop.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/io/map_io.hpp"
@@ -7,10 +8,17 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/map_outputs.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/plan_flags.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 #include "occ_improve/planning/planner.hpp"
 #include "occ_improve/sim/render.hpp"
-
+#include "occ_improve/timing.hpp"
 
 #include <chrono>
 #include <cstdio>
@@ -134,15 +142,15 @@ int run(const CommandLine& command_line) {
   // Fail on an unwritable or foreign output folder before any work (never overwrites what it did not write).
   OutputFolder out = open_output_folder(command_line);
 
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   ProgressLine progress(command_line, "frame");
   const Source source = load_path.empty() ? map_from_frames(command_line, options, use_sample, progress)
                                           : map_from_file(command_line, load_path, options);
   require_plan_fits(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
   request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
-  const auto planned = std::chrono::steady_clock::now();
+  const auto planned = SteadyClock::now();
   const Shot shot = plan_next_shot(*source.mapper, source.returns, request);
-  const double plan_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - planned).count();
+  const double plan_ms = 1e3 * seconds_since(planned);
 
   write_mask(out.file("shot_mask.png"), source.mapper->geometry(), shot);
   write_rays(out.file("shot_rays.csv"), *source.mapper, source.returns, shot, request.return_model);

@@ -1,11 +1,18 @@
 // occ_segment: segments an organized range frame along its negative-improvement contours (the paper's
 // closing remark) and writes a labelled cloud, label and contour images and a per-segment table.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/pcd_writer.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/segmentation_flags.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
 #include <pcl/io/pcd_io.h>

@@ -1,10 +1,14 @@
 // occ_segment_eval: scores segmentations of labelled organized clouds (mOSD) against their ground truth,
 // side by side: the negative-improvement segmentation (ours) and PCL's organized segmentation recipe.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/eval/segmentation_eval.hpp"
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/tools/tool_options.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/segmentation_flags.hpp"
+#include "occ_improve/tools/tool_main.hpp"
 
 #include <pcl/common/io.h>
 #include <pcl/console/print.h>

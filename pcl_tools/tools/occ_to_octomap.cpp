@@ -1,5 +1,6 @@
 // occ_to_octomap: convert an occupancy grid, saved by save_map or built from range frames, into
 // an OctoMap file (.bt maximum likelihood, .ot full log-odds) at a chosen resolution, seen from a pose.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/io/map_io.hpp"
@@ -7,10 +8,16 @@
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
+#include "occ_improve/timing.hpp"
 
 #include <Eigen/Geometry>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -48,10 +55,6 @@ Eigen::Isometry3d z_up_from_optical() {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
   pose.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
   return pose;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 Eigen::Isometry3d parse_pose(const std::string& text) {
@@ -179,7 +182,7 @@ int run(const CommandLine& command_line) {
   // Every source is read before the first export, so a bad map fails before any work.
   if (!load_paths.empty() && command_line.has("-mask"))
     throw InvalidParameter("-mask applies to input frames; a saved map (-load) is exported as it is");
-  auto start = std::chrono::steady_clock::now();
+  auto start = SteadyClock::now();
   std::vector<Source> grids;
   for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options));
   ProgressLine progress(command_line, "frame");
@@ -189,7 +192,7 @@ int run(const CommandLine& command_line) {
 
   double save_seconds = 0;
   if (save.requested()) {
-    start = std::chrono::steady_clock::now();
+    start = SteadyClock::now();
     save_map(save.staged_path(), *grids.front().grid, grids.front().model);
     save_seconds = seconds_since(start);
   }
@@ -197,7 +200,7 @@ int run(const CommandLine& command_line) {
   const auto tree = make_octree(*grids.front().grid, resolution);
   const OctomapExportReport report = export_grids(grids, poses, *tree);
   throw_if_stop_requested();  // before the output is written: an interrupted run leaves nothing behind
-  start = std::chrono::steady_clock::now();
+  start = SteadyClock::now();
   write_octree(*tree, tree_file->staged());
   throw_if_stop_requested();
   save.commit();

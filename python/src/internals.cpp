@@ -5,10 +5,10 @@
 #include "bindings.hpp"
 
 #include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/timing.hpp"
 
 #include <pybind11/stl.h>
 
-#include <chrono>
 #include <ctime>
 
 namespace occ_improve::python {
@@ -17,7 +17,7 @@ namespace {
 /// Wall-clock seconds, or the calling thread's CPU seconds: with threads=1 the latter leaves out the time
 /// the thread waited for a core, the main noise on a shared machine (Python: time.thread_time()).
 double now_seconds(bool thread_cpu) {
-  if (!thread_cpu) return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  if (!thread_cpu) return occ_improve::now_seconds();
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);

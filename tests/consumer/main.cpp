@@ -2,7 +2,12 @@
 #include <occ_improve/integrate/integrate.hpp>
 #include <occ_improve/maps/surface.hpp>
 #ifdef HAVE_OCC_IO
+#include <occ_improve/errors.hpp>
+#include <occ_improve/io/depth_image.hpp>
 #include <occ_improve/io/png.hpp>
+#include <occ_improve/io/tiff.hpp>
+
+#include <filesystem>
 #endif
 #ifdef HAVE_OCC_OCTOMAP
 #include <occ_improve/octomap/export.hpp>
@@ -36,7 +41,22 @@ int main() {
     std::fprintf(stderr, "consumer: no PNG from occ_improve::io\n");
     return 1;
   }
-  std::printf("consumer: occ_improve::io OK (%zu-byte PNG)\n", png.size());
+  // The depth decoders: a 16-bit PNG read back through libpng, and libtiff linked (a missing TIFF is an IoError).
+  const std::string depth_png = (std::filesystem::temp_directory_path() / "occ_improve_consumer_depth.png").string();
+  write_png(depth_png, Image16{2, 1, {1500, 0}});
+  const DepthImage16 depth = read_depth_image16(depth_png);
+  std::filesystem::remove(depth_png);
+  bool tiff_refused = false;
+  try {
+    read_tiff_depth16(depth_png + ".absent.tiff");
+  } catch (const IoError&) {
+    tiff_refused = true;
+  }
+  if (depth.width != 2 || depth.values.at(0) != 1500 || !tiff_refused) {
+    std::fprintf(stderr, "consumer: the depth decoders of occ_improve::io failed\n");
+    return 1;
+  }
+  std::printf("consumer: occ_improve::io OK (%zu-byte PNG, depth PNG read back, libtiff linked)\n", png.size());
 #endif
 #ifdef HAVE_OCC_OCTOMAP
   const auto tree = to_octree(grid, Eigen::Isometry3d::Identity(), 0.05);

@@ -1,8 +1,9 @@
 # ctest's consumer test: installs the build into a scratch prefix, then configures, builds and runs
-# tests/consumer against it three times: asking for the core alone with PCL, OctoMap and libpng made
-# unfindable (a core user needs none of them), for io with PCL and OctoMap unfindable (libpng is found
-# through the config's find_dependency), and for every component; then twice against the build folder
-# itself (its exported targets, occ_improve_DIR=<build>): the core alone and every component.
+# tests/consumer against it three times: asking for the core alone with PCL, OctoMap, libpng and libtiff
+# made unfindable (a core user needs none of them), for io with PCL and OctoMap unfindable (libpng and
+# libtiff are found through the config's find_dependency), and for every component; then twice against
+# the build folder itself (its exported targets, occ_improve_DIR=<build>): the core alone and every
+# component.
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DLINKER_FLAGS=...] -P run_consumer.cmake
 # LINKER_FLAGS are the build's own (a sanitizer build's static libraries need its runtime to link).
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
@@ -28,7 +29,8 @@ set(without_pcl_and_octomap -DCMAKE_DISABLE_FIND_PACKAGE_PCL=TRUE -DCMAKE_DISABL
 foreach(case core io all build_tree_core build_tree_all)
   set(build ${WORK_DIR}/${case})
   if(case MATCHES "core$")
-    set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=core ${without_pcl_and_octomap} -DCMAKE_DISABLE_FIND_PACKAGE_PNG=TRUE)
+    set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=core ${without_pcl_and_octomap} -DCMAKE_DISABLE_FIND_PACKAGE_PNG=TRUE
+                -DCMAKE_DISABLE_FIND_PACKAGE_TIFF=TRUE)
   elseif(case STREQUAL "io")
     set(options -DOCC_IMPROVE_CONSUMER_COMPONENTS=io ${without_pcl_and_octomap})
   else()

@@ -1,5 +1,5 @@
 // The flag table (flags.hpp): one registry, checked parsing naming flag and value, -h from the same table.
-#include "occ_improve/tools/flags.hpp"
+#include "occ_improve/tools/flag_usage.hpp"
 
 #include "occ_improve/errors.hpp"
 

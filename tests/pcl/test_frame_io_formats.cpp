@@ -4,14 +4,12 @@
 #include "occ_improve/pcl/frame_io.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "occ_improve/pcl/tiff_image.hpp"
+#include "occ_improve/pcl/tiff_image.hpp"  // the deprecated path still compiles (docs/LAYOUT.md)
 #include "support/temp_folder.hpp"
 #include "support/test_data.hpp"
-#include "support/tiff_writer.hpp"
 
 #include <gtest/gtest.h>
 #include <pcl/io/ply_io.h>
-#include <tiffio.h>
 
 #include <algorithm>
 #include <cmath>
@@ -54,12 +52,6 @@ std::string message_of(const std::function<void()>& f) {
     return e.what();
   }
   return "no FormatError";
-}
-
-std::vector<std::uint8_t> as_bytes(const std::vector<std::uint16_t>& values) {
-  std::vector<std::uint8_t> bytes(values.size() * 2);
-  std::memcpy(bytes.data(), values.data(), bytes.size());
-  return bytes;
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -125,58 +117,6 @@ TEST(FrameIoTiffReal, GrabberFolderExpandsToItsThreeDepthFrames) {
   EXPECT_TRUE(std::is_sorted(sources.begin(), sources.end(),
                              [](const FrameSource& x, const FrameSource& y) { return x.path < y.path; }));
   EXPECT_THROW(load_frame(sources.front().path, std::nullopt), InvalidInput);
-}
-
-class FrameIoTiffFiles : public test::TempFolderTest {};
-
-TEST_F(FrameIoTiffFiles, TruncatedRealTiffIsAFormatErrorNamingTheFile) {
-  OCC_REQUIRE_DATA(path, std::string(kGrabberTiff) + "/" + kGrabberFrame + "_depth.tiff");
-  const std::string bytes = read_bytes(path), cut = file("cut_depth.tiff");
-  write_bytes(cut, bytes.substr(0, bytes.size() / 2));
-  testing::internal::CaptureStderr();
-  const std::string message = message_of([&] { read_depth_image16(cut); });
-  EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << "libtiff must not print";
-  EXPECT_NE(message.find(cut), std::string::npos) << message;
-}
-
-TEST_F(FrameIoTiffFiles, Synthetic16BitTiffRoundTripsInAnyStripLayout) {
-  const std::uint32_t width = 7, height = 5;
-  std::vector<std::uint16_t> values(width * height);
-  for (std::size_t i = 0; i < values.size(); ++i) values[i] = static_cast<std::uint16_t>(i * 1000 + 1);
-  for (const std::uint32_t rows_per_strip : {1u, 2u, 5u})
-    for (const std::uint16_t compression : {COMPRESSION_NONE, COMPRESSION_LZW, COMPRESSION_ADOBE_DEFLATE}) {
-      const std::string path = file("d" + std::to_string(rows_per_strip) + "_" + std::to_string(compression) + ".tif");
-      ASSERT_TRUE(test::write_tiff(path, width, height, 16, 1, as_bytes(values), rows_per_strip, compression));
-      const DepthImage16 image = read_depth_image16(path);
-      EXPECT_EQ(image.width, 7);
-      EXPECT_EQ(image.height, 5);
-      EXPECT_EQ(image.values, values) << path;
-    }
-}
-
-TEST_F(FrameIoTiffFiles, OtherPixelFormatsAreRefusedNamingWhatTheyHold) {
-  const std::string grey8 = file("grey8_depth.tiff"), rgb8 = file("rgb8_depth.tiff");
-  ASSERT_TRUE(test::write_tiff(grey8, 4, 3, 8, 1, std::vector<std::uint8_t>(12, 7), 3));
-  ASSERT_TRUE(test::write_tiff(rgb8, 4, 3, 8, 3, std::vector<std::uint8_t>(36, 7), 3));
-  const std::string m8 = message_of([&] { read_depth_image16(grey8); });
-  EXPECT_NE(m8.find(grey8), std::string::npos) << m8;
-  EXPECT_NE(m8.find("8-bit samples, 1 per pixel"), std::string::npos) << m8;
-  const std::string m3 = message_of([&] { read_depth_image16(rgb8); });
-  EXPECT_NE(m3.find("8-bit samples, 3 per pixel"), std::string::npos) << m3;
-  // The colour reader takes them; as a depth frame's colour it is used only at the depth's size.
-  EXPECT_EQ(read_tiff_rgb8(rgb8).width, 4);
-}
-
-TEST_F(FrameIoTiffFiles, GarbageAndMissingTiffsAreTypedErrorsAndLibtiffPrintsNothing) {
-  testing::internal::CaptureStderr();
-  EXPECT_THROW(read_depth_image16(file("absent.tiff")), IoError);
-  write_bytes(file("empty.tif"), "");
-  EXPECT_THROW(read_depth_image16(file("empty.tif")), FormatError);
-  write_bytes(file("header.TIFF"), std::string("II*\0\x08\0\0\0\xff\xff", 10));
-  EXPECT_THROW(read_depth_image16(file("header.TIFF")), FormatError);
-  write_bytes(file("mm.tif"), std::string("MM\0*garbage", 11));
-  EXPECT_THROW(read_depth_image16(file("mm.tif")), FormatError);
-  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
 }
 
 // ---------------------------------------------------------------------------------------------------
@@ -400,11 +340,6 @@ TEST(FrameIo, PoseFileForSevenScenesNamesOnly) {
   EXPECT_EQ(pose_file_for("/d/frame-000150.depth.png"), "/d/frame-000150.pose.txt");
   EXPECT_EQ(pose_file_for("/d/frame_1_depth.tiff"), "");
   EXPECT_EQ(pose_file_for("/d/1_depth.png"), "");
-}
-
-TEST(FrameIo, DepthImagePathsByExtension) {
-  for (const char* p : {"a.png", "b.PGM", "c_depth.tiff", "d.TIF", "dir.x/e.Tiff"}) EXPECT_TRUE(is_depth_image_path(p)) << p;
-  for (const char* p : {"a.pcd", "b.ply", "tiff", "c.tiff.txt", "dir.png/readme"}) EXPECT_FALSE(is_depth_image_path(p)) << p;
 }
 
 }  // namespace

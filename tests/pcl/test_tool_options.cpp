@@ -1,3 +1,13 @@
+#include "occ_improve/tools/frame_fusion.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/output_files.hpp"
+#include "occ_improve/tools/plan_flags.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/segmentation_flags.hpp"
+#include "occ_improve/tools/signals.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+#include "occ_improve/tools/tool_main.hpp"
+#include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
 #include "occ_improve/errors.hpp"

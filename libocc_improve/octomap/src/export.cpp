@@ -4,9 +4,9 @@
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
+#include "occ_improve/timing.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -625,7 +625,7 @@ std::unique_ptr<octomap::OcTree> make_octree(const ColumnGrid& grid, double reso
 
 OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
                                   const Eigen::Isometry3d& world_from_sensor, const OctomapExportOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   options.validate();
   require_rigid(world_from_sensor);
   const GridGeometry& geometry = grid.geometry();
@@ -669,7 +669,7 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
   // children of equal value (uniform free space at the clamp) as OctoMap's own insertion does.
   tree.updateInnerOccupancy();
   tree.prune();
-  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.seconds = seconds_since(start);
   return report;
 }
 

@@ -3,12 +3,12 @@
 #include "support/fast_math.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "occ_improve/timing.hpp"
 #include "sensor/opdf_bounds.hpp"
 #include "sensor/opdf_kernel.hpp"
 #include "support/parallel.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -383,7 +383,7 @@ namespace {
 // Both public insert_points: `surface` null, or the surface to keep current and where to list its changes.
 InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
                        SurfaceMap* surface, std::vector<ColumnIndex>* surface_changed) {
-  const auto start = std::chrono::steady_clock::now();
+  const auto start = SteadyClock::now();
   options.validate();
   if (points.count > 0 && points.xyz == nullptr) throw InvalidInput("insert_points: null point buffer with count > 0");
   if (points.stride_floats < 3) {
@@ -519,7 +519,7 @@ InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan poi
     surface_changed->clear();
     for (const auto& part : changed) surface_changed->insert(surface_changed->end(), part.begin(), part.end());
   }
-  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.seconds = seconds_since(start);
   return report;
 }
 

@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
+#include "occ_improve/timing.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
@@ -11,7 +12,6 @@
 #include <pcl/segmentation/organized_multi_plane_segmentation.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -27,10 +27,6 @@ namespace {
 
 bool has_field(const pcl::PCLPointCloud2& blob, const char* name) {
   return std::any_of(blob.fields.begin(), blob.fields.end(), [&](const pcl::PCLPointField& f) { return f.name == name; });
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // Pixels on a boundary: a 4-neighbour with another label, both labelled (label != 0) and valid.
@@ -218,7 +214,7 @@ PclSegmentationResult pcl_organized_segmentation(const pcl::PointCloud<pcl::Poin
   params.validate();
   if (!cloud.isOrganized() || cloud.height <= 1)
     throw InvalidInput("PCL's organized segmentation needs an organized cloud (height > 1)");
-  using Clock = std::chrono::steady_clock;
+  using Clock = SteadyClock;
   PclSegmentationResult result;
   const auto input = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>(cloud);
 

@@ -4,7 +4,8 @@
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
-#include "occ_improve/tools/tool_options.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/output_files.hpp"
 
 #include <algorithm>
 #include <cstdint>

@@ -2,7 +2,6 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/io/map_io.hpp"
-#include "occ_improve/tools/tool_options.hpp"
 
 #include <filesystem>
 #include <vector>
@@ -71,6 +70,19 @@ std::string MapSaveTarget::staged_path() {
 
 void MapSaveTarget::commit() {
   if (file_) file_->commit();
+}
+
+void create_parent_folders(const std::string& path) {
+  const std::filesystem::path parent = std::filesystem::path(path).lexically_normal().parent_path();
+  std::error_code ec;
+  if (!parent.empty() && !std::filesystem::exists(parent, ec)) std::filesystem::create_directories(parent, ec);
+}
+
+OutputFolder open_output_folder(const CommandLine& c) {
+  const auto folder = c.text("-o");
+  if (!folder) throw InvalidParameter("-o OUTDIR is required (see -h)");
+  create_parent_folders(*folder);  // the folder itself is staged and moved into place
+  return OutputFolder(*folder, c.tool().tool, c.has("-overwrite"), run_inputs(c));
 }
 
 }  // namespace occ_improve

@@ -1,5 +1,7 @@
 #pragma once
-// PNG files of the core's images (render.hpp), written through libpng (deflate, zlib levels 0-9).
+// PNG files of the core's images (render.hpp), written through libpng (deflate, zlib levels 0-9), and masks
+// read from PNG (depth PNGs: depth_image.hpp).
+#include "occ_improve/grid/mask.hpp"
 #include "occ_improve/sim/render.hpp"
 
 #include <cstdint>
@@ -29,5 +31,10 @@ struct Image16 {
 std::vector<std::uint8_t> encode_png(const Image16& image, int compression_level = 6);
 /// Writes encode_png(image) to `path` atomically, as write_png.
 void write_png(const std::string& path, const Image16& image);
+
+/// A validity / region-of-interest mask (mask.hpp): an 8-bit or 16-bit grey PNG (1, 2, 4-bit expanded),
+/// nonzero = valid. Size checks as read_depth_image16; any other pixel format is a FormatError naming the
+/// file.
+PixelMask read_mask_png(const std::string& path);
 
 }  // namespace occ_improve

@@ -1,6 +1,7 @@
 #pragma once
-// The single output files of the tools (-save MAP.occmap; occ_to_octomap's -o TREE.bt), checked before any
-// work starts and committed only after everything else succeeded, so that nothing a user owns is lost:
+// The output folder of the tools (-o) and their single output files (-save MAP.occmap; occ_to_octomap's
+// -o TREE.bt), checked before any work starts and committed only after everything else succeeded, so that
+// nothing a user owns is lost:
 //  - never an input of the run (an input file, or a file inside an input folder), even with -overwrite;
 //  - an existing file is replaced only when this project wrote it (its magic), or with -overwrite;
 //  - a -save inside the -o folder is written with the folder's files and listed in its marker, so that a
@@ -29,6 +30,15 @@ std::vector<std::string> run_inputs(const CommandLine& command_line);
 /// would silently replace the first.
 void require_distinct_outputs(const std::string& path_a, const std::string& flag_a, const std::string& path_b,
                               const std::string& flag_b);
+
+/// Creates the missing folders above `path` (like mkdir -p of its parent); an output file or folder whose
+/// parent cannot be created then fails to write with the writer's own message naming it.
+void create_parent_folders(const std::string& path);
+
+/// The output folder named by -o (or the tool's default for it; InvalidParameter when it has none), its
+/// missing parents created; refused when it already holds files the tool did not write unless -overwrite
+/// was given (see OutputFolder).
+OutputFolder open_output_folder(const CommandLine& command_line);
 
 /// An output file named by `flag`: require_not_an_input, its missing parent folders created, then an
 /// OutputFile (refused when it exists and `is_own` does not recognise it, unless -overwrite).

@@ -3,7 +3,7 @@
 // depth PNG/PGM/TIFF, dataset folders), replayed in order by the file-sequence machinery (pacing, counting,
 // clean stop) with the tools' frame rules (load_tool_frame).
 #include "occ_improve/pcl/sequence_sources.hpp"
-#include "occ_improve/tools/tool_options.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
 
 #include <vector>
 

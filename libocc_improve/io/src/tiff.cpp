@@ -1,7 +1,7 @@
-#include "occ_improve/pcl/tiff_image.hpp"
+#include "occ_improve/io/tiff.hpp"
 
 #include "occ_improve/errors.hpp"
-#include "image_size.hpp"
+#include "image_read.hpp"
 
 #include <tiffio.h>
 

@@ -1,0 +1,164 @@
+#include "occ_improve/io/depth_image.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/io/tiff.hpp"
+#include "image_read.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <vector>
+
+namespace occ_improve {
+
+void detail::require_image_size(const std::string& kind, const std::string& path, std::uint64_t width,
+                                std::uint64_t height, std::uint64_t file_can_hold) {
+  const std::uint64_t pixels = width * height;  // both < 2^32: no overflow
+  std::string problem;
+  if (pixels == 0) problem = "is empty";
+  else if (pixels > kMaxDepthImagePixels) problem = "exceeds the cap of " + std::to_string(kMaxDepthImagePixels) + " pixels";
+  else if (pixels > file_can_hold) problem = "is more than the file can hold (" + std::to_string(file_can_hold) + " pixels)";
+  if (!problem.empty())
+    throw FormatError(kind + " '" + path + "': width x height = " + std::to_string(width) + " x " +
+                      std::to_string(height) + " " + problem);
+}
+
+namespace {
+
+DepthImage16 read_pgm16(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw IoError("cannot open depth image '" + path + "'");
+  std::string magic;
+  int width = 0, height = 0, max_value = 0;
+  in >> magic >> width >> height >> max_value;
+  if (magic != "P5" || !in || width <= 0 || height <= 0 || max_value < 256 || max_value > 65535)
+    throw FormatError("'" + path + "' is not a 16-bit binary PGM (P5)");
+  in.get();  // the single whitespace after the header
+  const std::streamoff header = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::uint64_t pixel_bytes = static_cast<std::uint64_t>(in.tellg() - header);
+  in.seekg(header);
+  detail::require_image_size("depth image", path, static_cast<std::uint64_t>(width), static_cast<std::uint64_t>(height), pixel_bytes / 2);
+  DepthImage16 image{width, height, {}};
+  image.values.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
+  std::vector<unsigned char> raw(image.values.size() * 2);
+  in.read(reinterpret_cast<char*>(raw.data()), static_cast<std::streamsize>(raw.size()));
+  if (static_cast<std::size_t>(in.gcount()) != raw.size()) throw FormatError("'" + path + "' is truncated");
+  // The PGM standard says big-endian, but NYU's raw dumps are little-endian (with maximum 65535, so
+  // every value "fits"). Take the order whose values fit the header's maximum, and of two that fit, the
+  // one with the smaller largest value: depth data leaves its high byte mostly small.
+  std::size_t big_ok = 0, little_ok = 0;
+  int big_max = 0, little_max = 0;
+  for (std::size_t i = 0; i < image.values.size(); ++i) {
+    const int big = raw[2 * i] << 8 | raw[2 * i + 1], little = raw[2 * i + 1] << 8 | raw[2 * i];
+    big_ok += big <= max_value ? 1 : 0;
+    little_ok += little <= max_value ? 1 : 0;
+    big_max = std::max(big_max, big);
+    little_max = std::max(little_max, little);
+  }
+  const std::size_t n = image.values.size();
+  const bool big_endian = big_ok == n && (little_ok != n || big_max <= little_max);
+  for (std::size_t i = 0; i < image.values.size(); ++i)
+    image.values[i] = big_endian ? static_cast<std::uint16_t>(raw[2 * i] << 8 | raw[2 * i + 1])
+                                 : static_cast<std::uint16_t>(raw[2 * i + 1] << 8 | raw[2 * i]);
+  return image;
+}
+
+float decode(std::uint16_t v, DepthEncoding e) {
+  switch (e) {
+    case DepthEncoding::millimetres: return v * 1e-3f;
+    case DepthEncoding::tum_5000: return v / 5000.0f;
+    case DepthEncoding::sun_rotated_mm: {
+      const std::uint16_t mm = static_cast<std::uint16_t>((v >> 3) | (v << 13));
+      return mm * 1e-3f;
+    }
+    case DepthEncoding::kinect_disparity:
+      if (v >= 1092) return 0.0f;  // 2047 = no return; beyond 1092.5 the model has no depth
+      return 351.3f / (1092.5f - static_cast<float>(v));
+  }
+  return 0.0f;
+}
+
+}  // namespace
+
+std::string lowercase_extension(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos) return {};
+  std::string e = path.substr(dot + 1);
+  for (auto& ch : e) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  return e;
+}
+
+DepthEncoding parse_depth_encoding(const std::string& name) {
+  if (name == "mm") return DepthEncoding::millimetres;
+  if (name == "tum") return DepthEncoding::tum_5000;
+  if (name == "sun") return DepthEncoding::sun_rotated_mm;
+  if (name == "nyu") return DepthEncoding::kinect_disparity;
+  throw InvalidParameter("depth encoding '" + name + "' is invalid: must be one of mm, tum, sun, nyu");
+}
+
+const char* depth_encoding_name(DepthEncoding encoding) {
+  switch (encoding) {
+    case DepthEncoding::millimetres: return "mm";
+    case DepthEncoding::tum_5000: return "tum";
+    case DepthEncoding::sun_rotated_mm: return "sun";
+    case DepthEncoding::kinect_disparity: return "nyu";
+  }
+  return "?";
+}
+
+DepthImage16 read_depth_image16(const std::string& path) {
+  const std::string ext = lowercase_extension(path);
+  if (ext == "png") return detail::read_grey_png(path, "depth image", false);
+  if (ext == "pgm") return read_pgm16(path);
+  if (ext == "tif" || ext == "tiff") return read_tiff_depth16(path);
+  throw FormatError("'" + path + "': unsupported depth image type '." + ext + "' (expected .png, .pgm, .tif or .tiff)");
+}
+
+bool is_depth_image_path(const std::string& path) {
+  const std::string ext = lowercase_extension(path);
+  return ext == "png" || ext == "pgm" || ext == "tif" || ext == "tiff";
+}
+
+DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image) {
+  std::size_t eleven_bit = 0, multiple_of_8 = 0, multiple_of_5 = 0;
+  std::vector<std::uint16_t> nonzero;
+  nonzero.reserve(image.values.size());
+  for (const std::uint16_t v : image.values) {
+    eleven_bit += v <= 2047 ? 1 : 0;
+    if (v == 0) continue;
+    nonzero.push_back(v);
+    multiple_of_8 += v % 8 == 0 ? 1 : 0;
+    multiple_of_5 += v % 5 == 0 ? 1 : 0;
+  }
+  if (lowercase_extension(path) == "pgm" && eleven_bit == image.values.size()) return DepthEncoding::kinect_disparity;
+  if (nonzero.size() < 100) return DepthEncoding::millimetres;
+  const double n = static_cast<double>(nonzero.size());
+  // SUN RGB-D: only depths beyond 8.192 m set the low 3 bits, a few percent of a frame at most.
+  if (multiple_of_8 >= 0.9 * n) return DepthEncoding::sun_rotated_mm;
+  // TUM: the sensor's millimetres times 5 (a few interpolated pixels break the pattern).
+  if (multiple_of_5 >= 0.99 * n) return DepthEncoding::tum_5000;
+  // Other TUM frames are not multiples of 5. Their depth quantisation tells: a Kinect's adjacent
+  // distinct depths lie 2.85e-3 z^2 m apart (z in m), i.e. 2.85e-6 v^2 units in millimetres but 5 times
+  // fewer units in TUM's scale. Compare the typical step between distinct values above the median with
+  // the millimetre prediction; a sensor without that quantisation (steps of ~1 unit) stays millimetres.
+  std::sort(nonzero.begin(), nonzero.end());
+  const double median = nonzero[nonzero.size() / 2];
+  std::vector<double> steps;
+  for (std::size_t i = nonzero.size() / 2; i + 1 < nonzero.size() && steps.size() < 16; ++i)
+    if (nonzero[i + 1] != nonzero[i]) steps.push_back(nonzero[i + 1] - nonzero[i]);
+  if (steps.size() >= 8) {
+    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+    const double ratio = steps[steps.size() / 2] / (2.85e-6 * median * median);
+    if (ratio > 0.1 && ratio < 0.45) return DepthEncoding::tum_5000;
+  }
+  return DepthEncoding::millimetres;
+}
+
+std::vector<float> depth_in_metres(const DepthImage16& image, DepthEncoding encoding) {
+  std::vector<float> depth(image.values.size());
+  for (std::size_t i = 0; i < depth.size(); ++i) depth[i] = decode(image.values[i], encoding);
+  return depth;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,320 @@
+#include "occ_improve/eval/select_eval.hpp"
+
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/planning/planner.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/sim/virtual_sensor.hpp"
+#include "occ_improve/timing.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+#include <utility>
+
+namespace occ_improve {
+
+namespace {
+
+constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 full frames"
+
+const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decimation",
+                                      "d_guided",    "e_returns",       "f_reacquire",
+                                      "g_coarse_to_fine", "g_improvement", "g_residual"};
+
+bool is_coarse_to_fine(SelectStrategy s) {
+  return s == SelectStrategy::coarse_both || s == SelectStrategy::coarse_improvement ||
+         s == SelectStrategy::coarse_residual;
+}
+
+}  // namespace
+
+const char* select_strategy_name(SelectStrategy strategy) { return kStrategyNames[static_cast<int>(strategy)]; }
+
+const std::vector<SelectStrategy>& compared_select_strategies() {
+  using S = SelectStrategy;
+  static const std::vector<SelectStrategy> compared{S::uniform,         S::decimation,  S::guided,
+                                                    S::guided_returns,  S::guided_reacquire, S::coarse_both,
+                                                    S::coarse_improvement, S::coarse_residual};
+  return compared;
+}
+
+namespace {
+
+/// A run's name: the strategy's, with "_linear" for the linear predictor (the prefix b_, c_, ... stays).
+std::string run_name(SelectStrategy s, DepthPredictionRule rule) {
+  return std::string(select_strategy_name(s)) + (rule == DepthPredictionRule::linear ? "_linear" : "");
+}
+
+struct Quality {
+  double within = 0, coverage = 0, mean_abs_error_m = 0;
+  std::size_t good = 0;
+};
+
+/// How the grid's columns meet the scene's pixels: the column holding each pixel's centre ray and the
+/// pixel holding each column's centre ray (-1 where none: a column no pixel sees is not observable).
+/// With the pixel-native kinect_v1 both are the identity.
+struct PixelColumns {
+  std::vector<std::int64_t> column_of_pixel, pixel_of_column;
+  std::vector<std::uint8_t> observable;  ///< per column: observable by the grid and by a pixel
+};
+
+PixelColumns pixel_columns(const GridGeometry& g, const PinholeIntrinsics& k) {
+  PixelColumns m;
+  const auto pixels = static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height);
+  m.column_of_pixel.assign(pixels, -1);
+  for (std::size_t p = 0; p < pixels; ++p) {
+    ColumnIndex c;
+    const double u = static_cast<double>(p % static_cast<std::size_t>(k.width)), v = static_cast<double>(p / static_cast<std::size_t>(k.width));
+    if (g.column_of((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0, c)) m.column_of_pixel[p] = c;
+  }
+  m.pixel_of_column.assign(g.column_count(), -1);
+  m.observable.assign(g.column_count(), 0);
+  for (ColumnIndex c = 0; c < g.column_count(); ++c) {
+    const Eigen::Vector3d d = g.direction(g.azimuth_bin_of(c), g.elevation_bin_of(c));
+    if (d.z() <= 0 || !g.observable(c)) continue;
+    const long u = std::lround(k.fx * d.x() / d.z() + k.cx), v = std::lround(k.fy * d.y() / d.z() + k.cy);
+    if (u < 0 || v < 0 || u >= k.width || v >= k.height) continue;
+    m.pixel_of_column[c] = v * k.width + u;
+    m.observable[c] = 1;
+  }
+  return m;
+}
+
+/// The metric: for every scene pixel with a return, the map's z there (the surface sample of the
+/// pixel's column, else predict_depth) within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's z.
+Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelColumns& map, int radius,
+                    DepthPredictionRule rule) {
+  DepthPredictionParams params;
+  params.radius_columns = radius;
+  params.rule = rule;
+  const PredictedDepth predicted = predict_depth(mapper.surface(), mapper.model(), params);
+  const GridGeometry& g = mapper.geometry();
+  Quality q;
+  std::size_t returns = 0, covered = 0;
+  double abs_error = 0;
+  for (std::size_t p = 0; p < scene.depth_m.size(); ++p) {
+    const double z = scene.depth_m[p];
+    if (z <= 0) continue;
+    ++returns;
+    const std::int64_t c = map.column_of_pixel[p];
+    if (c < 0 || predicted.distance[static_cast<std::size_t>(c)] < 0) continue;
+    ++covered;
+    const auto column = static_cast<ColumnIndex>(c);
+    const double predicted_z =  // the depth axis is z (pinhole) or the range (spherical)
+        g.point(g.azimuth_bin_of(column), g.elevation_bin_of(column), predicted.depth_m[column]).z();
+    const double error = std::abs(predicted_z - z);
+    abs_error += error;
+    q.good += error <= 2 * 1.425e-3 * z * z ? 1 : 0;
+  }
+  q.within = returns ? static_cast<double>(q.good) / returns : 0;
+  q.coverage = returns ? static_cast<double>(covered) / returns : 0;
+  q.mean_abs_error_m = covered ? abs_error / covered : 0;
+  return q;
+}
+
+/// A permutation of 0..n-1 from a seeded SplitMix64 stream (the same on every platform).
+std::vector<ColumnIndex> permutation(std::size_t n, std::uint64_t seed) {
+  std::vector<ColumnIndex> p(n);
+  std::iota(p.begin(), p.end(), ColumnIndex{0});
+  std::uint64_t state = seed * 0x9e3779b97f4a7c15ull + 1;
+  for (std::size_t i = n - 1; i > 0; --i) {
+    state += 0x9e3779b97f4a7c15ull;
+    std::uint64_t z = state;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    std::swap(p[i], p[z % (i + 1)]);
+  }
+  return p;
+}
+
+/// One run: a strategy at one budget, shot after shot, with the metric at checkpoints.
+class Run {
+public:
+  Run(const SelectScene& scene, SelectStrategy strategy, int budget, const SelectEvalOptions& options,
+      DepthPredictionRule rule = DepthPredictionRule::nearest)
+      : scene_(scene), strategy_(strategy), rule_(rule), budget_(budget), options_(options),
+        mapper_(kinect_v1(scene.intrinsics)), sensor_(scene.depth_m, scene.intrinsics, sensor_params(options)),
+        returns_(ReturnRecord::for_grid(mapper_.geometry().width(), mapper_.geometry().height())),
+        map_(pixel_columns(mapper_.geometry(), scene.intrinsics)) {
+    for (ColumnIndex c = 0; c < map_.observable.size(); ++c)
+      if (map_.observable[c]) observable_columns_.push_back(c);
+  }
+
+  void run(std::ostream& csv) {
+    const auto n = static_cast<double>(scene_.depth_m.size());
+    // (a) is the reference: kReferenceFrames full frames, scored after each.
+    const double limit = strategy_ == SelectStrategy::full ? 0 : options_.frames * n;
+    const double checkpoint_every = strategy_ == SelectStrategy::full ? 0 : std::max<double>(budget_, n / 20);
+    double next_checkpoint = checkpoint_every, expected_since = 0;
+    std::size_t good_before = 0;
+    while (strategy_ == SelectStrategy::full ? shots_ < kReferenceFrames : static_cast<double>(rays_asked_) < limit - 0.5) {
+      throw_if_stop_requested();  // a run is thousands of shots; the library polls within each
+      const Shot shot = next_shot();
+      if (shot.stop && stop_rays_ == 0) stop_rays_ = rays_asked_;
+      acquire(shot.columns);
+      expected_since += shot.expected_gain;
+      if (static_cast<double>(rays_asked_) + 0.5 < next_checkpoint && static_cast<double>(rays_asked_) < limit - 0.5) continue;
+      next_checkpoint += checkpoint_every;
+      const Quality q = map_quality(mapper_, scene_, map_, options_.radius, rule_);
+      csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
+          << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
+          << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << '\n';
+      curve_.push_back({static_cast<double>(rays_asked_), q.within});
+      calibration_.push_back({expected_since, static_cast<double>(q.good) - static_cast<double>(good_before)});
+      good_before = q.good;
+      expected_since = 0;
+    }
+  }
+
+  const std::vector<std::pair<double, double>>& curve() const { return curve_; }
+  const std::vector<std::pair<double, double>>& calibration() const { return calibration_; }
+  std::size_t stop_rays() const { return stop_rays_; }
+  double seconds_per_shot() const { return shots_ ? seconds_ / static_cast<double>(shots_) : 0; }
+
+private:
+  static VirtualSensorParams sensor_params(const SelectEvalOptions& options) {
+    VirtualSensorParams p;
+    p.seed = options.seed;
+    return p;
+  }
+
+  Shot next_shot() {
+    Shot shot;
+    if (strategy_ == SelectStrategy::full) {
+      shot.columns = observable_columns_;
+    } else if (strategy_ == SelectStrategy::uniform) {
+      for (int i = 0; i < budget_; ++i) {
+        if (order_position_ == order_.size()) {  // every ray once before any twice
+          order_ = permutation(observable_columns_.size(), options_.seed + passes_++);
+          order_position_ = 0;
+        }
+        shot.columns.push_back(observable_columns_[order_[order_position_++]]);
+      }
+    } else if (strategy_ == SelectStrategy::decimation) {
+      const GridGeometry& g = mapper_.geometry();
+      const int step = decimation_step(g.width(), g.height(), budget_);
+      const int offset = static_cast<int>(shots_ % static_cast<std::size_t>(step * step));  // row-major cycle
+      for (ColumnIndex c : decimation_pattern(g.width(), g.height(), step, offset % step, offset / step))
+        if (map_.observable[c]) shot.columns.push_back(c);
+    } else {
+      PlanRequest request;
+      request.budget_rays = budget_;
+      request.negative_share = strategy_ == SelectStrategy::guided_reacquire ? options_.share : 0.0;
+      request.candidates = map_.observable;
+      if (is_coarse_to_fine(strategy_)) {
+        request.shape = ShotShape::coarse_to_fine;
+        request.refine_by = strategy_ == SelectStrategy::coarse_both          ? RefineBy::both
+                            : strategy_ == SelectStrategy::coarse_improvement ? RefineBy::improvement
+                                                              : RefineBy::residual;
+        // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
+        request.local_model = rule_ == DepthPredictionRule::linear ? LocalModel::plane : LocalModel::constant;
+      }
+      shot = plan_next_shot(mapper_, returns_, request);
+    }
+    return shot;
+  }
+
+  void acquire(const std::vector<ColumnIndex>& columns) {
+    const auto start = SteadyClock::now();
+    std::vector<std::uint32_t> pixels(columns.size());
+    for (std::size_t i = 0; i < columns.size(); ++i) pixels[i] = static_cast<std::uint32_t>(map_.pixel_of_column[columns[i]]);
+    const std::vector<float> depth = sensor_.shoot(pixels);
+    const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
+    mapper_.insert(PointSpan::from(points));
+    if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire || is_coarse_to_fine(strategy_)) {
+      std::vector<std::uint8_t> got(depth.size());
+      for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
+      returns_.record_shot(columns, got);
+    }
+    seconds_ += seconds_since(start);
+    rays_asked_ += columns.size();
+    returned_ += points.size();
+    ++shots_;
+  }
+
+  const SelectScene& scene_;
+  SelectStrategy strategy_;
+  DepthPredictionRule rule_;
+  int budget_;
+  SelectEvalOptions options_;
+  Mapper mapper_;
+  VirtualSensor sensor_;
+  ReturnRecord returns_;
+  PixelColumns map_;
+  std::vector<ColumnIndex> observable_columns_;
+  std::vector<ColumnIndex> order_;
+  std::size_t order_position_ = 0, shots_ = 0, rays_asked_ = 0, returned_ = 0, stop_rays_ = 0;
+  std::uint64_t passes_ = 0;
+  double seconds_ = 0;
+  std::vector<std::pair<double, double>> curve_, calibration_;
+};
+
+/// Points (rays asked) at which a curve first reaches `target`, -1 if never.
+double points_to_reach(const std::vector<std::pair<double, double>>& curve, double target) {
+  for (const auto& [points, quality] : curve)
+    if (quality >= target) return points;
+  return -1;
+}
+
+/// Where the quality stops rising: the first point within 99% of the run's best quality.
+double knee(const std::vector<std::pair<double, double>>& curve) {
+  double best = 0;
+  for (const auto& point : curve) best = std::max(best, point.second);
+  return points_to_reach(curve, 0.99 * best);
+}
+
+double pearson(const std::vector<std::pair<double, double>>& xy) {
+  const double n = static_cast<double>(xy.size());
+  double sx = 0, sy = 0, sxx = 0, syy = 0, sxy = 0;
+  for (const auto& [x, y] : xy) sx += x, sy += y, sxx += x * x, syy += y * y, sxy += x * y;
+  const double vx = sxx - sx * sx / n, vy = syy - sy * sy / n;
+  return vx > 0 && vy > 0 ? (sxy - sx * sy / n) / std::sqrt(vx * vy) : 0;
+}
+
+}  // namespace
+
+std::vector<SelectSummaryRow> evaluate_select_scene(const SelectScene& scene, const SelectEvalOptions& options,
+                                                    std::ostream& csv) {
+  csv << "scene,strategy,budget_rays,shot,rays_asked,returns,quality,coverage,mean_abs_error_m,expected_gain,"
+         "realised_good_rays,plan_stop\n";
+  const auto n = static_cast<int>(scene.depth_m.size());
+  Run reference(scene, SelectStrategy::full, n, options);
+  reference.run(csv);
+  const double five_frames = reference.curve().back().second;
+  std::vector<SelectSummaryRow> rows;
+  const auto frames = [n](double points) { return points < 0 ? -1.0 : points / n; };
+  const auto add = [&](const Run& run, const std::string& name, double share) {
+    rows.push_back({scene.name, name, share, run.curve().back().second,
+                    frames(points_to_reach(run.curve(), 0.95 * five_frames)),
+                    run.stop_rays() ? frames(static_cast<double>(run.stop_rays())) : -1.0, frames(knee(run.curve())),
+                    pearson(run.calibration()), 1e3 * run.seconds_per_shot()});
+  };
+  add(reference, select_strategy_name(SelectStrategy::full), 1.0);
+  for (double share : options.budgets)
+    for (DepthPredictionRule rule : options.predictors)
+      for (SelectStrategy s : options.strategies) {
+        Run run(scene, s, std::max(1, static_cast<int>(std::lround(share * n))), options, rule);
+        run.run(csv);
+        add(run, run_name(s, rule), share);
+        std::fprintf(stderr, "%s %s %.2f: quality %.4f, 95%% of 5 frames at %.3f frames\n", scene.name.c_str(),
+                     run_name(s, rule).c_str(), share, rows.back().final_quality, rows.back().points_to_95);
+      }
+  return rows;
+}
+
+void write_select_summary(const std::vector<SelectSummaryRow>& rows, const std::string& path) {
+  std::ofstream csv(path);
+  csv << "scene,strategy,budget_share,final_quality,frames_to_95pct_of_5_full,stop_frames,knee_frames,"
+         "calibration_r,ms_per_shot\n";
+  for (const auto& r : rows)
+    csv << r.scene << ',' << r.strategy << ',' << r.budget_share << ',' << r.final_quality << ',' << r.points_to_95 << ','
+        << r.stop_points << ',' << r.knee_points << ',' << r.calibration_r << ',' << r.ms_per_shot << '\n';
+  if (!csv.flush()) throw IoError("cannot write '" + path + "'");
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,60 @@
+#pragma once
+// Fusing a tool's frames into one grid: one frame in memory at a time, with the progress line, and a
+// warning when frames fused without poses look like different scenes.
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
+#include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/tool_frames.hpp"
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+
+/// How two organized frames of one view agree in depth: of the pixels valid in both (`co_valid`), those
+/// whose z differ by more than k sigma (`disagreeing`), sigma the preset's depth noise at the first frame's
+/// z (SensorModelParams: max(floor, sigma_depth_m + sigma_depth_per_m2 z^2)). Frames of one scene from one
+/// viewpoint disagree only at depth edges and in noise (a few per cent of the pixels at k = 3); frames of
+/// different scenes or viewpoints on most pixels.
+struct FrameDepthAgreement {
+  std::size_t co_valid = 0, disagreeing = 0;
+  double disagreeing_share() const { return co_valid ? static_cast<double>(disagreeing) / co_valid : 0.0; }
+};
+/// The fusion's test (fuse_tool_frames): k = 3. Both frames must be organized and of one size (else all 0).
+FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& first, const pcl::PointCloud<pcl::PointXYZ>& frame,
+                               const SensorModelParams& model, double k_sigma = 3.0);
+/// Above this share of disagreeing co-valid pixels (over at least 1000 of them) fuse_tool_frames warns.
+inline constexpr double kDifferentSceneShare = 0.5;
+
+/// What fuse_tool_frames did, for a tool's summary.
+struct FusedFrames {
+  InsertionReport insertion;
+  std::size_t frames = 0;
+  std::optional<Eigen::Isometry3d> first_pose;  ///< the grid's frame in the world (poses applied), if any
+  std::string poses;                     ///< "poses applied: ..." or "no poses", for the summary
+  std::string camera;                    ///< describe_camera of the first frame
+  std::optional<Image> colour;           ///< the first frame's colour
+  std::vector<std::string> frame_lines;  ///< "read NAME: N points" per frame
+};
+
+/// Reads every frame (ToolFrameReader), calls `prepare` with the first one (its camera sets the grid), then
+/// `insert` on each, one frame in memory at a time, with the progress line. Frames fused without poses
+/// are compared with the first (frame_depth_agreement); when some disagree on more than kDifferentSceneShare of
+/// their co-valid pixels, one warning line on stderr names them: different scenes fused as one view. Refuses a run whose points all
+/// miss the grid. Cancelled: prints how many frames were inserted ("nothing written") and rethrows.
+FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
+                             const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
+                             const std::function<InsertionReport(const ToolFrame& frame)>& insert);
+
+/// The points line of a tool's summary: read, used, skipped and beyond the depth range.
+std::string describe_points(const InsertionReport& report);
+
+}  // namespace occ_improve

@@ -1,0 +1,95 @@
+#pragma once
+// The frames of a tool's inputs: read one at a time under the tools' rules (a camera is never assumed;
+// one viewpoint, one camera), moved into the first frame's sensor frame by their poses.
+#include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/tools/tool_options.hpp"
+
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Geometry>
+
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace occ_improve {
+
+/// One input frame of a tool, with the camera it is seen through and where that camera came from.
+struct ToolFrame {
+  std::string name;  ///< the file, with its depth encoding for depth images
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  std::optional<PinholeIntrinsics> camera;
+  std::string camera_source;  ///< "-intrinsics", "camera-intrinsics.txt ...", "fitted to the cloud, ..."
+  std::optional<Image> colour;  ///< registered colour (organized PCDs with rgb/rgba)
+  /// Camera-to-world of the frame: its dataset's pose file, or a PCD's VIEWPOINT (whose points are then
+  /// moved into the sensor frame as they are read, as PCL defines the viewpoint). Unset without either.
+  std::optional<Eigen::Isometry3d> pose{};
+  std::string pose_source{};  ///< "frame-000150.pose.txt", "VIEWPOINT of FILE.pcd"
+};
+
+/// The frames of a tool's inputs (or the built-in sample, for -sample), read one at a time so that a long
+/// sequence is never all in memory. Every input is expanded at construction (expand_input: files and
+/// dataset folders, in order; IoError for a missing one). Each frame follows read_tool_frame's rules, and
+/// a frame seen through another camera than the first is refused: one viewpoint, one camera. With poses
+/// (and not -no_poses), every frame is moved into the first frame's sensor frame (the grid has one
+/// viewpoint, the first's); a frame without a pose among posed frames is refused, naming -no_poses.
+class ToolFrameReader {
+public:
+  explicit ToolFrameReader(const ToolOptions& options, bool use_sample = false);
+  /// How many frames there are.
+  std::size_t count() const { return use_sample_ ? 1 : sources_.size(); }
+  /// The next frame, or nullopt after the last.
+  std::optional<ToolFrame> next();
+  /// Time spent reading so far [s].
+  double read_seconds() const { return read_seconds_; }
+  /// The first frame's camera-to-world when poses are applied (the grid's frame in the world), once read.
+  std::optional<Eigen::Isometry3d> first_pose() const;
+  const ToolOptions& options() const { return options_; }
+
+private:
+  std::optional<ToolFrame> read_next();
+
+  const ToolOptions& options_;
+  bool use_sample_;
+  std::vector<FrameSource> sources_;
+  std::size_t next_ = 0;
+  double read_seconds_ = 0;
+  std::optional<ToolFrame> first_;  ///< its name and camera (the cloud is not kept)
+};
+
+/// The built-in generated Kinect-like frame (samples/scene) as a tool frame, with its camera.
+ToolFrame sample_tool_frame();
+
+/// Moves `frame` into the sensor frame of `first` by their poses (first^-1 * frame), when poses are used
+/// and `first` has one; refuses a frame without a pose then, and a posed frame after an unposed first.
+void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame);
+
+/// The frame's name, camera and pose without its points and colour: what the checks against a first frame
+/// (require_same_camera, move_into_first_frame) keep of it.
+ToolFrame frame_header(const ToolFrame& frame);
+
+/// Refuses (InvalidInput naming both) a frame seen through another camera than the first frame's: the
+/// frames of one map share one viewpoint and camera.
+void require_same_camera(const ToolFrame& first, const ToolFrame& frame);
+
+/// Every frame of the inputs at once (ToolFrameReader), for tools that need them together.
+std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
+/// One frame: a depth image is back-projected through -intrinsics/-intrinsics_file or its dataset's
+/// intrinsics file and refused without either (intrinsics are never assumed); a cloud's camera, when the
+/// preset needs one and none was given, is fitted to its organized points (estimate_intrinsics_fit;
+/// refused when unorganized or a poor fit, naming -intrinsics). A frame without a valid point is refused
+/// (require_valid_points). Checks for a stop signal first and names the input for run_tool's error line
+/// (InputScope).
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source);
+/// The same without the stop check and the InputScope, for a reading thread (a grabber's).
+ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source);
+
+/// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
+std::string describe_camera(const std::vector<ToolFrame>& frames);
+
+/// -h text of the positional frame inputs every frame-reading tool takes.
+std::string frame_inputs_help();
+
+}  // namespace occ_improve

@@ -1,0 +1,118 @@
+#include "occ_improve/tools/frame_fusion.hpp"
+
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace occ_improve {
+
+FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& first, const pcl::PointCloud<pcl::PointXYZ>& frame,
+                               const SensorModelParams& model, double k_sigma) {
+  FrameDepthAgreement a;
+  if (first.height <= 1 || frame.width != first.width || frame.height != first.height) return a;
+  for (std::size_t i = 0; i < first.size(); ++i) {
+    const pcl::PointXYZ &p = first[i], &q = frame[i];
+    if (!is_valid_point(p.x, p.y, p.z) || !is_valid_point(q.x, q.y, q.z)) continue;
+    ++a.co_valid;
+    const double z = p.z;
+    const double sigma = std::max(model.sigma_depth_floor_m, model.sigma_depth_m + model.sigma_depth_per_m2 * z * z);
+    a.disagreeing += std::abs(static_cast<double>(q.z) - z) > k_sigma * sigma;
+  }
+  return a;
+}
+
+namespace {
+
+// Collects the frames that disagree with the first one (frame_depth_agreement) when no poses place them, and
+// warns once at the end: fusing different scenes as one view makes a map of neither.
+class SceneCheck {
+public:
+  SceneCheck(const SensorModelParams& model, bool poses_applied) : model_(model), active_(!poses_applied) {}
+  void add(const ToolFrame& frame) {
+    if (!active_ || frame.cloud.height <= 1) return;
+    if (!first_) {
+      first_ = frame.cloud;
+      first_name_ = frame.name;
+      return;
+    }
+    const FrameDepthAgreement a = frame_depth_agreement(*first_, frame.cloud, model_);
+    if (a.co_valid < 1000 || a.disagreeing_share() <= kDifferentSceneShare) return;
+    names_.push_back(frame.name);
+    worst_share_ = std::max(worst_share_, a.disagreeing_share());
+  }
+  void warn_if_needed() const {
+    if (names_.empty()) return;
+    std::fprintf(stderr,
+                 "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to "
+                 "%.0f%% of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes "
+                 "or viewpoints? Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)\n",
+                 names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str());
+  }
+
+private:
+  SensorModelParams model_;
+  bool active_;
+  std::optional<pcl::PointCloud<pcl::PointXYZ>> first_;
+  std::string first_name_;
+  std::vector<std::string> names_;
+  double worst_share_ = 0;
+};
+
+}  // namespace
+
+FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
+                             const std::function<void(const std::optional<ToolFrame>& first)>& prepare,
+                             const std::function<InsertionReport(const ToolFrame& frame)>& insert) {
+  FusedFrames fused;
+  std::optional<ToolFrame> frame = frames.next();
+  if (frame) {
+    fused.camera = describe_camera({*frame});
+    fused.colour = frame->colour;
+  }
+  try {  // the first frame's camera sizes the grid: a grid beyond the cap is refused naming the frame
+    prepare(frame);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what() + ";" +
+                        memory_cap_hint(true));
+  }
+  // Poses move every frame into the first one's view; without them, frames of other scenes go unnoticed.
+  SceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose);
+  try {
+    for (; frame; frame = frames.next()) {
+      throw_if_stop_requested();
+      const InputScope scope(frame->name);
+      scenes.add(*frame);
+      fused.insertion += insert(*frame);
+      fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
+      progress.update(++fused.frames, frames.count(), fused.insertion.points_received);
+    }
+  } catch (const Cancelled&) {
+    progress.finish();
+    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n%s\n", fused.frames,
+                frames.count(), describe_points(fused.insertion).c_str());
+    throw;
+  }
+  progress.finish();
+  scenes.warn_if_needed();
+  fused.first_pose = frames.first_pose();
+  fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
+  if (fused.frames > 0 && fused.insertion.points_inserted == 0)
+    throw InvalidInput("no point of the input lies inside the grid's field of view");
+  return fused;
+}
+
+std::string describe_points(const InsertionReport& in) {
+  char line[400];
+  std::snprintf(line, sizeof line,
+                "points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
+                "%zu used beyond the depth range (free space only)",
+                in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
+                in.beyond_depth_range);
+  return line;
+}
+
+}  // namespace occ_improve

@@ -1,0 +1,40 @@
+#include "occ_improve/tools/plan_flags.hpp"
+
+#include "occ_improve/errors.hpp"
+
+#include <stdexcept>
+#include <string>
+
+namespace occ_improve {
+
+PlanRequest plan_request_from_flags(const CommandLine& command_line) {
+  PlanRequest request;
+  request.budget_rays = *command_line.integer("-budget");
+  const std::string shape = *command_line.text("-shape");
+  request.shape = shape == "window"       ? ShotShape::window
+                  : shape == "decimation" ? ShotShape::decimation
+                  : shape == "rays"       ? ShotShape::rays
+                                          : ShotShape::coarse_to_fine;
+  const std::string refine = *command_line.text("-refine");
+  request.refine_by = refine == "improvement" ? RefineBy::improvement
+                      : refine == "both"      ? RefineBy::both
+                                              : RefineBy::residual;
+  const std::string window = *command_line.text("-window");
+  const auto x = window.find('x');
+  try {
+    std::size_t used_w = 0, used_h = 0;
+    if (x == std::string::npos) throw std::invalid_argument("no x");
+    request.window_width_columns = std::stoi(window.substr(0, x), &used_w);
+    request.window_height_columns = std::stoi(window.substr(x + 1), &used_h);
+    if (used_w != x || used_h != window.size() - x - 1 || request.window_width_columns < 1 ||
+        request.window_height_columns < 1)
+      throw std::invalid_argument("not whole");
+  } catch (const std::logic_error&) {
+    throw InvalidParameter("-window " + window + " is invalid: must be WIDTHxHEIGHT in columns >= 1, e.g. 64x48");
+  }
+  request.negative_share = *command_line.number("-negative_share");
+  request.stop_gain_per_ray_below = *command_line.number("-stop_gain");
+  return request;
+}
+
+}  // namespace occ_improve

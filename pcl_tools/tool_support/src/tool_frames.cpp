@@ -1,0 +1,169 @@
+#include "occ_improve/tools/tool_frames.hpp"
+
+#include "occ_improve/cancel.hpp"
+#include "occ_improve/errors.hpp"
+#include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/sample_scene.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
+#include "occ_improve/timing.hpp"
+#include "occ_improve/tools/input_scope.hpp"
+
+#include <pcl/common/transforms.h>
+
+#include <sstream>
+
+namespace occ_improve {
+
+namespace {
+
+// An organized cloud is one camera image: a camera of another size would put its pixels on the wrong rays
+// (or outside the grid), so it is refused as a depth image of the wrong size is.
+void require_camera_fits(const pcl::PointCloud<pcl::PointXYZ>& cloud, const std::optional<PinholeIntrinsics>& camera,
+                         const std::string& path, const std::string& camera_source) {
+  if (!camera || cloud.height <= 1) return;
+  if (static_cast<int>(cloud.width) == camera->width && static_cast<int>(cloud.height) == camera->height) return;
+  std::ostringstream m;
+  m << "cloud '" << path << "' is " << cloud.width << " x " << cloud.height << " but the camera (" << camera_source
+    << ") is " << camera->width << " x " << camera->height << ": give the cloud's own intrinsics (FX,FY,CX,CY,"
+    << cloud.width << "," << cloud.height << ")";
+  throw InvalidInput(m.str());
+}
+
+}  // namespace
+
+ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source) {
+  ToolFrame frame;
+  std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
+  frame.camera_source = options.intrinsics ? options.intrinsics_flag : source.intrinsics ? "the dataset's camera-intrinsics.txt" : "";
+  if (!camera && is_depth_image_path(source.path))
+    throw InvalidParameter("'" + source.path + "' is a depth image and no intrinsics were found for it: give "
+                           "-intrinsics FX,FY,CX,CY[,W,H] or -intrinsics_file PATH");
+  LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
+  require_valid_points(span_of(loaded.cloud), source.path);
+  require_camera_fits(loaded.cloud, camera, source.path, frame.camera_source);
+  if (loaded.viewpoint) {
+    // PCL's VIEWPOINT: the points are in the cloud's frame, the sensor at the viewpoint; the grid is the
+    // sensor's, so the points go into the sensor frame whether or not poses are used to fuse frames.
+    pcl::transformPointCloud(loaded.cloud, loaded.cloud, loaded.viewpoint->inverse().matrix().cast<float>());
+    frame.pose = loaded.viewpoint;
+    frame.pose_source = "VIEWPOINT of " + source.path;
+  } else if (source.pose) {
+    frame.pose = source.pose;
+    frame.pose_source = source.pose_source;
+  }
+  frame.name = source.path;
+  if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
+  if (!camera && options.preset_needs_camera()) {
+    if (loaded.cloud.height <= 1)
+      throw InvalidInput("'" + source.path + "' is not organized, so its camera cannot be fitted; preset " +
+                         options.preset_name + " needs one: give -intrinsics (or -preset kinect_v1_paper)");
+    const IntrinsicsFit fit = estimate_intrinsics_fit(loaded.cloud, kMaxIntrinsicsFitResidualPx);
+    camera = fit.intrinsics;
+    std::ostringstream why;
+    why << "fitted to " << source.path << ", RMS residual " << fit.rms_residual_px << " px over " << fit.points_used
+        << " points";
+    frame.camera_source = why.str();
+  }
+  frame.camera = camera;
+  frame.cloud = std::move(loaded.cloud);
+  frame.colour = std::move(loaded.colour);
+  return frame;
+}
+
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
+  throw_if_stop_requested();
+  const InputScope scope(source.path);
+  return load_tool_frame(options, source);
+}
+
+ToolFrame sample_tool_frame() {
+  const sample::SampleFrame scene = sample::generate_scene();
+  return {"built-in sample", organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height),
+          scene.intrinsics, "the built-in sample's camera", std::nullopt};
+}
+
+ToolFrameReader::ToolFrameReader(const ToolOptions& options, bool use_sample)
+    : options_(options), use_sample_(use_sample) {
+  if (use_sample && !options.inputs.empty()) throw InvalidParameter("give either input files or -sample, not both");
+  for (const std::string& input : options.inputs) {
+    const InputScope scope(input);
+    for (FrameSource& source : expand_input(input)) sources_.push_back(std::move(source));
+  }
+}
+
+std::optional<ToolFrame> ToolFrameReader::next() {
+  const double start = now_seconds();
+  std::optional<ToolFrame> frame = read_next();
+  read_seconds_ += now_seconds() - start;
+  return frame;
+}
+
+std::optional<ToolFrame> ToolFrameReader::read_next() {
+  if (next_ == count()) return std::nullopt;
+  if (use_sample_) {
+    ++next_;
+    return sample_tool_frame();
+  }
+  ToolFrame frame = read_tool_frame(options_, sources_[next_++]);
+  if (first_) {
+    require_same_camera(*first_, frame);
+    move_into_first_frame(options_, *first_, frame);
+  } else {
+    first_ = frame_header(frame);
+  }
+  return frame;
+}
+
+std::optional<Eigen::Isometry3d> ToolFrameReader::first_pose() const {
+  if (!first_ || !options_.use_poses) return std::nullopt;
+  return first_->pose;
+}
+
+ToolFrame frame_header(const ToolFrame& frame) {
+  return ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt, frame.pose, frame.pose_source};
+}
+
+void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame) {
+  if (!options.use_poses || (!first.pose && !frame.pose)) return;
+  if (!first.pose || !frame.pose)
+    throw InvalidInput("'" + (frame.pose ? first.name : frame.name) + "' has no pose while '" +
+                       (frame.pose ? frame.name : first.name) + "' has one (" +
+                       (frame.pose ? frame.pose_source : first.pose_source) +
+                       "): give every frame a pose, or -no_poses to take every frame from the first's viewpoint");
+  const Eigen::Isometry3d into_first = first.pose->inverse() * *frame.pose;
+  pcl::transformPointCloud(frame.cloud, frame.cloud, into_first.matrix().cast<float>());
+}
+
+void require_same_camera(const ToolFrame& first, const ToolFrame& frame) {
+  if (first.camera && frame.camera && !same_camera(*first.camera, *frame.camera))
+    throw InvalidInput("'" + frame.name + "' was taken with another camera than '" + first.name + "' (" +
+                       describe_camera({frame}) + " against " + describe_camera({first}) +
+                       "): the frames of one map share one viewpoint and camera; give -intrinsics to force one");
+}
+
+std::vector<ToolFrame> read_tool_frames(const ToolOptions& options) {
+  ToolFrameReader reader(options);
+  std::vector<ToolFrame> frames;
+  while (std::optional<ToolFrame> frame = reader.next()) frames.push_back(std::move(*frame));
+  return frames;
+}
+
+std::string describe_camera(const std::vector<ToolFrame>& frames) {
+  for (const ToolFrame& f : frames) {
+    if (!f.camera) continue;
+    return "camera " + camera_text(*f.camera) + " (" + f.camera_source + ")";
+  }
+  return "no camera (the preset's grid does not depend on one)";
+}
+
+std::string frame_inputs_help() {
+  return R"(  FILE.pcd / FILE.ply       a cloud with x y z in metres, optical frame (z forward, y down); with a
+                            camera preset its intrinsics are fitted to its organized points
+  FILE.png/.pgm/.tif/.tiff  16-bit depth image, back-projected through -intrinsics or its dataset's file
+  FOLDER                    a dataset folder: 7-Scenes/3DMatch/SUN3D (*.depth.png, camera-intrinsics.txt,
+                            *.pose.txt) or PCL's image-grabber layout (*_depth.tiff)
+  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame.
+)";
+}
+
+}  // namespace occ_improve
