@@ -34,7 +34,7 @@ std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const Pixel
     throw InvalidInput("mask is " + size_text(mask.width, mask.height) + ", the camera " +
                        size_text(camera->width, camera->height) + ": they must match");
   std::vector<std::uint8_t> columns(geometry.column_count(), 0);
-  if (geometry.binning() == AngularBinning::pinhole) {  // one column per pixel
+  if (geometry.binning().columns_are_camera_pixels()) {
     for (std::size_t c = 0; c < columns.size(); ++c) columns[c] = mask.valid[c] != 0;
     return columns;
   }
