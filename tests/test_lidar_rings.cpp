@@ -83,6 +83,9 @@ TEST(LidarRings, BadRingTablesAreRefusedNamingTheField) {
   EXPECT_NE(parameter_error(o).find("ring_elevations_deg size"), std::string::npos) << parameter_error(o);
   o.ring_elevations_deg = {15, 0, -89.5};  // the lowest row would reach past straight down
   EXPECT_NE(parameter_error(o).find("row_elevations_rad"), std::string::npos) << parameter_error(o);
+  o = LidarRingsOptions{};
+  o.sigma_elevation_rad = -1e-3;
+  EXPECT_NE(parameter_error(o).find("sigma_elevation_rad"), std::string::npos) << parameter_error(o);
 
   GeometryParams g = lidar_rings().geometry;
   g.elevation_bins = 15;
