@@ -8,7 +8,9 @@
 #include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/maps/surface.hpp"
+#include "support/lidar_scene.hpp"
 #include "support/map_compare.hpp"
+#include "occ_improve/geometry/spherical_binning.hpp"
 
 #include <Eigen/Core>
 #include <gtest/gtest.h>
@@ -434,6 +436,81 @@ TEST_F(MapIo, ReturnRecordRoundTripsAndABadOneIsRefused) {
   } catch (const FormatError& e) {
     EXPECT_NE(std::string(e.what()).find("column 1199"), std::string::npos) << e.what();
   }
+}
+
+// A binning that is not the library's: saved under its tag, loaded back by the registry.
+TEST_F(MapIo, LidarRingsMapRoundTripsWithItsTagAndRings) {
+  const SensorPreset preset = test::small_lidar();
+  ColumnGrid grid(GridGeometry(preset.geometry));
+  insert_points(grid, SensorModel(preset.model), PointSpan::from(test::lidar_scan(grid.geometry())));
+  save_map(file("lidar.occmap"), grid, preset.model);
+  const std::vector<char> bytes = read_bytes(file("lidar.occmap"));
+  std::uint32_t version, tag_length;
+  std::memcpy(&version, bytes.data() + 12, 4);
+  std::memcpy(&tag_length, bytes.data() + 80, 4);
+  EXPECT_EQ(version, 4u);  // version 3 has no code for it
+  EXPECT_EQ(std::string(bytes.data() + 84, tag_length), "lidar_rings");
+  const LoadedMap loaded = load_map(file("lidar.occmap"));
+  const GeometryParams& g = loaded.grid.geometry().params();
+  EXPECT_EQ(loaded.grid.geometry().binning(), AngularBinning::lidar_rings);
+  EXPECT_EQ(g.row_elevations_rad, preset.geometry.row_elevations_rad);
+  EXPECT_TRUE(loaded.grid.geometry() == grid.geometry());
+  test::expect_identical(grid, loaded.grid);
+  expect_same_maps(grid, loaded.grid, loaded.model);
+}
+
+// A map naming a binning this program has not registered is a FormatError naming the tag.
+TEST_F(MapIo, UnknownBinningTagIsRefusedNamingIt) {
+  const SensorPreset preset = test::small_lidar();
+  save_map(file("lidar.occmap"), ColumnGrid(GridGeometry(preset.geometry)), preset.model);
+  std::vector<char> bytes = read_bytes(file("lidar.occmap"));
+  bytes[84 + 10] = 'z';  // "lidar_rings" -> "lidar_ringz"
+  reseal(bytes);
+  write_bytes(file("unknown.occmap"), bytes);
+  try {
+    load_map(file("unknown.occmap"));
+    FAIL() << "loaded a map of an unknown binning";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown angular binning 'lidar_ringz'"), std::string::npos) << e.what();
+  }
+}
+
+// A binning registered by the program (not built into the library) is saved and loaded by its tag.
+class MirroredSphericalBinning : public SphericalBinning {
+public:
+  using SphericalBinning::SphericalBinning;
+  const char* tag() const override { return "test_mirrored"; }
+  bool position(double x, double y, double z, double& h, double& v, double& depth) const override {
+    return SphericalBinning::position(-x, y, z, h, v, depth);
+  }
+  Eigen::Vector3d direction_at(double h, double v) const override {
+    Eigen::Vector3d d = SphericalBinning::direction_at(h, v);
+    d.x() = -d.x();
+    return d;
+  }
+};
+
+TEST_F(MapIo, BinningRegisteredByTheProgramRoundTrips) {
+  register_angular_binning("test_mirrored",
+                           [](const GeometryParams& p) { return std::make_shared<MirroredSphericalBinning>(p); });
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.angular_binning = "test_mirrored";
+  preset.geometry.azimuth_bins = 80;
+  preset.geometry.elevation_bins = 60;
+  preset.geometry.depth_bins = 128;
+  preset.model.sigma_azimuth_rad = preset.model.sigma_elevation_rad = 0.004;
+  const ColumnGrid grid = sample_grid(preset, {});
+  EXPECT_GT(grid.touched_column_count(), 1000u);
+  save_map(file("mirrored.occmap"), grid, preset.model);
+  const LoadedMap loaded = load_map(file("mirrored.occmap"));
+  EXPECT_EQ(loaded.grid.geometry().binning(), "test_mirrored");
+  test::expect_identical(grid, loaded.grid);
+  // Mirrored: the scene's box on the left (x < 0) lands in the right half of the columns.
+  SensorPreset plain = preset;
+  plain.geometry.angular_binning = AngularBinning::spherical;
+  const ColumnGrid unmirrored = sample_grid(plain, {});
+  const ColumnIndex left = unmirrored.geometry().column(20, 40), right = grid.geometry().column(59, 40);
+  EXPECT_EQ(compute_surface(unmirrored).bin[left], compute_surface(grid).bin[right]);
 }
 
 TEST_F(MapIo, MissingFileOrFolderIsAnIoError) {

@@ -38,12 +38,16 @@ class DepthBinning(enum.Enum):
     uniform = ...
     inverse_depth = ...
 
-class AngularBinning(enum.Enum):
-    spherical = ...
-    pinhole = ...
+class AngularBinning:
+    """The built-in binnings' tags; GeometryParams.angular_binning is a tag (str)."""
+    spherical: str = "spherical"
+    pinhole: str = "pinhole"
+    lidar_rings: str = "lidar_rings"
+
+def registered_angular_binnings() -> List[str]: ...
 
 class GeometryParams:
-    angular_binning: AngularBinning
+    angular_binning: str
     camera: Optional[PinholeIntrinsics]
     azimuth_bins: int
     elevation_bins: int
@@ -52,15 +56,17 @@ class GeometryParams:
     azimuth_max_rad: float
     elevation_min_rad: float
     elevation_max_rad: float
+    row_elevations_rad: List[float]
     depth_binning: DepthBinning
     depth_min_m: float
     depth_max_m: float
-    def __init__(self, *, angular_binning: AngularBinning = AngularBinning.spherical,
+    def __init__(self, *, angular_binning: str = "spherical",
                  camera: Optional[PinholeIntrinsics] = None, azimuth_bins: int = 640, elevation_bins: int = 480,
                  depth_bins: int = 512, azimuth_min_rad: float = -0.497418836818384,
                  azimuth_max_rad: float = 0.497418836818384, elevation_min_rad: float = -0.375245789179833,
                  elevation_max_rad: float = 0.375245789179833, depth_binning: DepthBinning = DepthBinning.uniform,
-                 depth_min_m: float = 0.0, depth_max_m: float = 5.0) -> None:
+                 depth_min_m: float = 0.0, depth_max_m: float = 5.0,
+                 row_elevations_rad: List[float] = ...) -> None:
         """The paper's Kinect v1 grid (57 x 43 deg, 640 x 480 x 512 bins, [0, 5 m))."""
     def validate(self) -> None: ...
 
@@ -88,7 +94,7 @@ class SensorPreset:
     def __init__(self, **fields: object) -> None: ...
 
 class PinholePresetOptions:
-    angular_binning: AngularBinning
+    angular_binning: str
     depth_bins: int
     depth_binning: DepthBinning
     depth_min_m: float
@@ -97,11 +103,28 @@ class PinholePresetOptions:
     sigma_depth_per_m2: float
     sigma_depth_floor_m: float
     support_k: float
-    def __init__(self, *, angular_binning: AngularBinning = AngularBinning.pinhole, depth_bins: int = 2048,
+    def __init__(self, *, angular_binning: str = "pinhole", depth_bins: int = 2048,
                  depth_binning: DepthBinning = DepthBinning.inverse_depth, depth_min_m: float = 0.5,
                  depth_max_m: float = 8.0, sigma_depth_m: float = 0.0, sigma_depth_per_m2: float = 0.001425,
                  sigma_depth_floor_m: float = 0.0005, support_k: float = 2.0) -> None: ...
 
+class LidarRingsOptions:
+    ring_elevations_deg: List[float]
+    azimuth_steps: int
+    azimuth_min_deg: float
+    azimuth_max_deg: float
+    depth_bins: int
+    depth_binning: DepthBinning
+    depth_min_m: float
+    depth_max_m: float
+    sigma_range_m: float
+    sigma_azimuth_rad: float
+    sigma_elevation_rad: float
+    support_k: float
+    def __init__(self, **fields: object) -> None:
+        """A Velodyne VLP-16 by default (16 rings -15..15 deg, 1800 steps, [0.3, 50 m))."""
+
+def lidar_rings(options: LidarRingsOptions = ..., name: str = "lidar_rings") -> SensorPreset: ...
 def kinect_v1_paper() -> SensorPreset: ...
 def kinect_v1(intrinsics: PinholeIntrinsics) -> SensorPreset: ...
 def kinect_v1_spherical(intrinsics: PinholeIntrinsics) -> SensorPreset: ...

@@ -32,9 +32,14 @@ void bind_geometry_params(py::module_& m) {
   py::enum_<DepthBinning>(m, "DepthBinning", "How the depth axis is divided.")
       .value("uniform", DepthBinning::uniform, "bins uniform in rho")
       .value("inverse_depth", DepthBinning::inverse_depth, "bins uniform in 1/rho");
-  py::enum_<AngularBinning>(m, "AngularBinning", "How directions are divided into rays (columns).")
-      .value("spherical", AngularBinning::spherical, "uniform azimuth x elevation bins; depth is the range")
-      .value("pinhole", AngularBinning::pinhole, "one column per camera pixel; depth is z");
+  // Binnings are named by their registered tags (strings); AngularBinning holds the built-in ones.
+  struct AngularBinningTags {};
+  py::class_<AngularBinningTags>(m, "AngularBinning",
+                                 "The built-in binnings' tags (GeometryParams.angular_binning is the tag).")
+      .def_property_readonly_static("spherical", [](py::object) { return AngularBinning::spherical; })
+      .def_property_readonly_static("pinhole", [](py::object) { return AngularBinning::pinhole; })
+      .def_property_readonly_static("lidar_rings", [](py::object) { return AngularBinning::lidar_rings; });
+  m.def("registered_angular_binnings", &registered_angular_binnings, "The tags angular_binning may name.");
   py::class_<GeometryParams> g(m, "GeometryParams",
                                "The grid's binning, bins and ranges (radians or pixels, metres).");
   def_keyword_init<GeometryParams>(g);
@@ -48,6 +53,8 @@ void bind_geometry_params(py::module_& m) {
       .def_readwrite("azimuth_max_rad", &GeometryParams::azimuth_max_rad)
       .def_readwrite("elevation_min_rad", &GeometryParams::elevation_min_rad)
       .def_readwrite("elevation_max_rad", &GeometryParams::elevation_max_rad)
+      .def_readwrite("row_elevations_rad", &GeometryParams::row_elevations_rad,
+                     "lidar_rings: each ring's elevation (y down), rows top to bottom; [] otherwise.")
       .def_readwrite("depth_binning", &GeometryParams::depth_binning)
       .def_readwrite("depth_min_m", &GeometryParams::depth_min_m)
       .def_readwrite("depth_max_m", &GeometryParams::depth_max_m)
@@ -103,6 +110,24 @@ void bind_preset(py::module_& m) {
       .def_readwrite("sigma_depth_floor_m", &PinholePresetOptions::sigma_depth_floor_m)
       .def_readwrite("support_k", &PinholePresetOptions::support_k);
   def_fields_repr(o, {"depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
+
+  py::class_<LidarRingsOptions> l(m, "LidarRingsOptions", "A spinning LiDAR's rings, azimuth steps, depth and noise.");
+  def_keyword_init<LidarRingsOptions>(l);
+  l.def_readwrite("ring_elevations_deg", &LidarRingsOptions::ring_elevations_deg)
+      .def_readwrite("azimuth_steps", &LidarRingsOptions::azimuth_steps)
+      .def_readwrite("azimuth_min_deg", &LidarRingsOptions::azimuth_min_deg)
+      .def_readwrite("azimuth_max_deg", &LidarRingsOptions::azimuth_max_deg)
+      .def_readwrite("depth_bins", &LidarRingsOptions::depth_bins)
+      .def_readwrite("depth_binning", &LidarRingsOptions::depth_binning)
+      .def_readwrite("depth_min_m", &LidarRingsOptions::depth_min_m)
+      .def_readwrite("depth_max_m", &LidarRingsOptions::depth_max_m)
+      .def_readwrite("sigma_range_m", &LidarRingsOptions::sigma_range_m)
+      .def_readwrite("sigma_azimuth_rad", &LidarRingsOptions::sigma_azimuth_rad)
+      .def_readwrite("sigma_elevation_rad", &LidarRingsOptions::sigma_elevation_rad)
+      .def_readwrite("support_k", &LidarRingsOptions::support_k);
+  def_fields_repr(l, {"azimuth_steps", "azimuth_min_deg", "azimuth_max_deg", "depth_bins", "depth_min_m", "depth_max_m"});
+  m.def("lidar_rings", &lidar_rings, py::arg("options") = LidarRingsOptions{}, py::arg("name") = "lidar_rings",
+        "A spinning LiDAR's range image (lidar_rings binning); the default options are a Velodyne VLP-16.");
 
   m.def("kinect_v1_paper", &kinect_v1_paper, "The paper's set-up: 640 x 480 x 512 bins, 57 x 43 deg, [0, 5 m).");
   // The camera presets take the camera's intrinsics, never a default: a grid built for another camera

@@ -39,6 +39,22 @@ def test_kinect_preset_is_built_from_its_intrinsics():
         assert spherical.locate(((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)) is not None
 
 
+def test_lidar_rings_preset_rows_are_the_rings():
+    p = oi.lidar_rings()  # a Velodyne VLP-16: 16 rings from -15 to +15 deg, 1800 azimuth steps
+    assert p.geometry.angular_binning == oi.AngularBinning.lidar_rings == "lidar_rings"
+    assert "lidar_rings" in oi.registered_angular_binnings()
+    assert p.geometry.elevation_bins == 16 and p.geometry.azimuth_bins == 1800
+    # Rows top to bottom in the optical frame (y down): the ring at +15 deg (up) first, at phi = -15 deg.
+    assert p.geometry.row_elevations_rad[0] == pytest.approx(math.radians(-15))
+    assert p.geometry.row_elevations_rad[-1] == pytest.approx(math.radians(15))
+    mapper = oi.Mapper(p)
+    up, right = math.radians(5), 0.001  # the ring at +5 deg (row 5), just right of straight ahead
+    direction = (math.sin(right) * math.cos(up), -math.sin(up), math.cos(right) * math.cos(up))
+    assert mapper.locate(direction) == (900, 5)
+    with pytest.raises(oi.InvalidParameter, match=r"ring_elevations_deg\[2\]"):
+        oi.lidar_rings(oi.LidarRingsOptions(ring_elevations_deg=[-1.0, 1.0, 0.5]))
+
+
 def test_lookup_by_name_and_its_error():
     assert oi.preset_names() == ["kinect_v1", "kinect_v1_paper", "kinect_v1_spherical"]
     k = oi.PinholeIntrinsics(fx=585, fy=585, cx=320, cy=240)

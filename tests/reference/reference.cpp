@@ -19,8 +19,8 @@ long double logit_opdf(long double d, long double b, long double s) {
 
 namespace {
 
-// A point's angular position and depth coordinate, from CONVENTIONS 1 (spherical) and CONVENTIONS 2c (pinhole) as
-// written, without the library's projection.
+// A point's angular position and depth coordinate, from CONVENTIONS 1 (spherical, and lidar_rings whose rows are
+// elevations too) and CONVENTIONS 2c (pinhole) as written, without the library's projection.
 struct Position {
   double h = 0, v = 0, depth = 0;
 };
@@ -37,6 +37,9 @@ bool reference_position(const GridGeometry& g, const Eigen::Vector3f& q, Positio
   const auto inside = [](const UniformAxis& axis, double value) { return value >= axis.min() && value < axis.max(); };
   return inside(g.azimuth(), out.h) && inside(g.elevation(), out.v);
 }
+
+// Upper edge of bin i: the bins' extents as the axis defines them (non-uniform rows: lidar_rings).
+double upper(const BinAxis& axis, int i) { return axis.uniform() ? axis.lower(i) + axis.width() : axis.lower(i + 1); }
 
 double sigma_h(const GridGeometry& g, const SensorModelParams& p) {
   return g.binning() == AngularBinning::pinhole ? p.sigma_u_px : p.sigma_azimuth_rad;
@@ -67,10 +70,10 @@ void DenseGrid::insert(const std::vector<Eigen::Vector3f>& points) {
     const double sigma = model_.sigma_depth_at(s.depth);
     for (int e = 0; e < g.height(); ++e) {
       // Column extent [lower, lower + width) overlaps [centre - k s, centre + k s].
-      const double elo = g.elevation().lower(e), ehi = elo + g.elevation().width();
+      const double elo = g.elevation().lower(e), ehi = upper(g.elevation(), e);
       if (ehi <= s.v - ke || elo > s.v + ke) continue;
       for (int a = 0; a < g.width(); ++a) {
-        const double alo = g.azimuth().lower(a), ahi = alo + g.azimuth().width();
+        const double alo = g.azimuth().lower(a), ahi = upper(g.azimuth(), a);
         if (ahi <= s.h - ka || alo > s.h + ka) continue;
         const double da = (g.azimuth().centre(a) - s.h) / sh;
         const double de = (g.elevation().centre(e) - s.v) / sv;
@@ -137,10 +140,10 @@ std::vector<double> improvement_map(const GridGeometry& g, const SensorModel& mo
       const double sigma = model.sigma_depth_at(rho_j);
       double sum = 0;
       for (int e = 0; e < g.height(); ++e) {
-        const double elo = g.elevation().lower(e), ehi = elo + g.elevation().width();
+        const double elo = g.elevation().lower(e), ehi = upper(g.elevation(), e);
         if (ehi <= phi - ke || elo > phi + ke) continue;
         for (int a = 0; a < g.width(); ++a) {
-          const double alo = g.azimuth().lower(a), ahi = alo + g.azimuth().width();
+          const double alo = g.azimuth().lower(a), ahi = upper(g.azimuth(), a);
           if (ahi <= theta - ka || alo > theta + ka) continue;
           const DenseGrid::Surface& v = surfaces[g.column(a, e)];
           const double rho_i = v.unknown ? 0.0 : v.depth_m, p_i = v.unknown ? 0.5 : v.probability;

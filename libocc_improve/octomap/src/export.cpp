@@ -59,7 +59,7 @@ double known_far_m(const ColumnGrid& grid) {
 constexpr int kSamples = 17;
 template <typename Visit>
 void for_each_lattice_position(const GridGeometry& g, Visit&& visit) {
-  const UniformAxis &h = g.azimuth(), &v = g.elevation();
+  const BinAxis &h = g.azimuth(), &v = g.elevation();
   for (int i = 0; i < kSamples; ++i)
     for (int j = 0; j < kSamples; ++j)
       visit(i, j, h.min() + i * (h.max() - h.min()) / (kSamples - 1), v.min() + j * (v.max() - v.min()) / (kSamples - 1));
@@ -509,10 +509,11 @@ constexpr double kPieceFraction = 0.25;
 
 // How far the curved faces of a spherical voxel (range caps, elevation cones) and the directions between its
 // corners stray from the corners' box: less than r alpha^2 / 8 for a column alpha wide (diagonally) at range
-// r, taken 4 times over. The pinhole binning's faces are planes. Plus a nanometre for rounding.
+// r, taken 4 times over. A binning whose depth is z (pinhole) has plane faces: alpha = 0. Plus a nanometre
+// for rounding.
 double curvature_pad_m(const GridGeometry& g, double far_m) {
-  if (g.binning() != AngularBinning::spherical) return 1e-9;
-  const double alpha = std::hypot(g.azimuth().width(), g.elevation().width());
+  const double alpha = g.binning().curvature_angle_rad();
+  if (alpha == 0) return 1e-9;
   return 1e-9 + far_m * alpha * alpha / 2;
 }
 

@@ -32,33 +32,15 @@ std::string camera_text(const PinholeIntrinsics& k) {
   return text;
 }
 
-const char* to_string(AngularBinning binning) {
-  return binning == AngularBinning::pinhole ? "pinhole" : "spherical";
-}
-
 void GeometryParams::validate() const {
   if (camera) camera->validate();
-  if (angular_binning == AngularBinning::pinhole) {
-    require_parameter(camera.has_value(), "camera", 0, "set (the pinhole binning's columns are its pixels)");
-    require_parameter(azimuth_bins == camera->width, "azimuth_bins", azimuth_bins, "equal to the camera's width");
-    require_parameter(elevation_bins == camera->height, "elevation_bins", elevation_bins,
-                      "equal to the camera's height");
-  }
   require_parameter(azimuth_bins > 0, "azimuth_bins", azimuth_bins, "> 0");
   require_parameter(elevation_bins > 0, "elevation_bins", elevation_bins, "> 0");
   require_parameter(depth_bins > 0, "depth_bins", depth_bins, "> 0");
   // Column indices are 32-bit and the store's bins are int.
   require_parameter(static_cast<double>(azimuth_bins) * elevation_bins < 4.0e9, "azimuth_bins * elevation_bins",
                     static_cast<double>(azimuth_bins) * elevation_bins, "< 4e9");
-  require_parameter(std::isfinite(azimuth_min_rad) && azimuth_min_rad > -M_PI, "azimuth_min_rad", azimuth_min_rad,
-                    "finite and > -pi");
-  require_parameter(std::isfinite(azimuth_max_rad) && azimuth_max_rad <= M_PI && azimuth_max_rad > azimuth_min_rad,
-                    "azimuth_max_rad", azimuth_max_rad, "finite, <= pi and > azimuth_min_rad");
-  require_parameter(std::isfinite(elevation_min_rad) && elevation_min_rad > -M_PI / 2, "elevation_min_rad",
-                    elevation_min_rad, "finite and > -pi/2");
-  require_parameter(std::isfinite(elevation_max_rad) && elevation_max_rad < M_PI / 2 &&
-                        elevation_max_rad > elevation_min_rad,
-                    "elevation_max_rad", elevation_max_rad, "finite, < pi/2 and > elevation_min_rad");
+  make_angular_binning(*this);  // validates the fields the binning uses
   require_parameter(std::isfinite(depth_min_m) && depth_min_m >= 0, "depth_min_m", depth_min_m, "finite and >= 0");
   require_parameter(std::isfinite(depth_max_m) && depth_max_m > depth_min_m, "depth_max_m", depth_max_m,
                     "finite and > depth_min_m");
@@ -79,22 +61,6 @@ SphericalPoint to_spherical(double x, double y, double z) {
 Eigen::Vector3d from_spherical(const SphericalPoint& s) {
   const double horizontal = s.rho * std::cos(s.elevation);
   return {horizontal * std::sin(s.azimuth), s.rho * std::sin(s.elevation), horizontal * std::cos(s.azimuth)};
-}
-
-UniformAxis::UniformAxis(double min, double max, int bins)
-    : min_(min), max_(max), width_((max - min) / bins), inv_width_(bins / (max - min)), bins_(bins) {}
-
-int UniformAxis::bin(double value) const {
-  if (!(value >= min_ && value < max_)) return -1;
-  const int i = static_cast<int>((value - min_) * inv_width_);
-  return std::min(i, bins_ - 1);  // guards rounding right below max
-}
-
-void UniformAxis::overlapping(double lo, double hi, int& first, int& last) const {
-  first = static_cast<int>(std::floor((lo - min_) * inv_width_));
-  last = static_cast<int>(std::floor((hi - min_) * inv_width_));
-  first = std::max(first, 0);
-  last = std::min(last, bins_ - 1);
 }
 
 DepthAxis::DepthAxis(DepthBinning binning, double min_m, double max_m, int bins)
@@ -138,39 +104,23 @@ double DepthAxis::width_at(double rho) const {
   return upper(b) - lower(b);
 }
 
-namespace {
-
-// Continuous pixel position of a direction; false behind the camera (z <= 0).
-bool to_pixel(const PinholeIntrinsics& k, double x, double y, double z, double& u, double& v) {
-  if (!(z > 0)) return false;
-  u = k.fx * x / z + k.cx;
-  v = k.fy * y / z + k.cy;
-  return true;
-}
-
-}  // namespace
-
 GridGeometry::GridGeometry(const GeometryParams& params) : params_(params) {
   params.validate();
-  if (params.angular_binning == AngularBinning::pinhole) {
-    // Column i spans pixel positions [i - 0.5, i + 0.5): pixel centres are the column centres.
-    azimuth_ = UniformAxis(-0.5, params.azimuth_bins - 0.5, params.azimuth_bins);
-    elevation_ = UniformAxis(-0.5, params.elevation_bins - 0.5, params.elevation_bins);
-  } else {
-    azimuth_ = UniformAxis(params.azimuth_min_rad, params.azimuth_max_rad, params.azimuth_bins);
-    elevation_ = UniformAxis(params.elevation_min_rad, params.elevation_max_rad, params.elevation_bins);
-  }
+  binning_ = make_angular_binning(params);
+  if (!binning_->horizontal().uniform())  // the improvement's row loop takes B_h per column offset
+    throw InvalidParameter(std::string("angular_binning '") + binning_->tag() +
+                           "' has a non-uniform horizontal axis: binnings must keep columns uniform");
   depth_ = DepthAxis(params.depth_binning, params.depth_min_m, params.depth_max_m, params.depth_bins);
-  if (params.angular_binning == AngularBinning::spherical && params.camera) {
+  if (params.camera && !binning_->columns_are_camera_pixels()) {
     // A column is observable when the camera sees its centre direction.
     const PinholeIntrinsics& k = *params.camera;
     observable_.assign(column_count(), 0);
     for (int e = 0; e < height(); ++e)
       for (int a = 0; a < width(); ++a) {
         const Eigen::Vector3d d = direction(a, e);
-        double u, v;
-        observable_[column(a, e)] = to_pixel(k, d.x(), d.y(), d.z(), u, v) && u >= -0.5 && u < k.width - 0.5 &&
-                                    v >= -0.5 && v < k.height - 0.5;
+        if (!(d.z() > 0)) continue;
+        const double u = k.fx * d.x() / d.z() + k.cx, v = k.fy * d.y() / d.z() + k.cy;
+        observable_[column(a, e)] = u >= -0.5 && u < k.width - 0.5 && v >= -0.5 && v < k.height - 0.5;
       }
   }
 }
@@ -181,38 +131,18 @@ std::size_t GridGeometry::observable_count() const {
 }
 
 bool GridGeometry::project(double x, double y, double z, RayPosition& p) const {
-  if (params_.angular_binning == AngularBinning::pinhole) {
-    if (!to_pixel(*params_.camera, x, y, z, p.horizontal, p.vertical)) return false;
-    p.depth = z;
-  } else {
-    const SphericalPoint s = to_spherical(x, y, z);
-    p.horizontal = s.azimuth;
-    p.vertical = s.elevation;
-    p.depth = s.rho;
-  }
-  p.horizontal_bin = azimuth_.bin(p.horizontal);
-  p.vertical_bin = elevation_.bin(p.vertical);
+  if (!binning_->position(x, y, z, p.horizontal, p.vertical, p.depth)) return false;
+  p.horizontal_bin = azimuth().bin(p.horizontal);
+  p.vertical_bin = elevation().bin(p.vertical);
   return p.horizontal_bin >= 0 && p.vertical_bin >= 0;
 }
 
 Eigen::Vector3d GridGeometry::direction_at(double horizontal, double vertical) const {
-  if (params_.angular_binning == AngularBinning::pinhole) {
-    const PinholeIntrinsics& k = *params_.camera;
-    return Eigen::Vector3d((horizontal - k.cx) / k.fx, (vertical - k.cy) / k.fy, 1.0).normalized();
-  }
-  return from_spherical({1.0, horizontal, vertical});
+  return binning_->direction_at(horizontal, vertical);
 }
 
 Eigen::Vector3d GridGeometry::direction(int azimuth_bin, int elevation_bin) const {
-  return direction_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin));
-}
-
-Eigen::Vector3d GridGeometry::point_at(double horizontal, double vertical, double depth) const {
-  if (params_.angular_binning == AngularBinning::pinhole) {  // depth is z: back-project the pixel position
-    const PinholeIntrinsics& k = *params_.camera;
-    return {(horizontal - k.cx) / k.fx * depth, (vertical - k.cy) / k.fy * depth, depth};
-  }
-  return direction_at(horizontal, vertical) * depth;
+  return direction_at(azimuth().centre(azimuth_bin), elevation().centre(elevation_bin));
 }
 
 bool GridGeometry::column_of(double x, double y, double z, ColumnIndex& c) const {
@@ -225,7 +155,7 @@ bool GridGeometry::column_of(double x, double y, double z, ColumnIndex& c) const
 
 bool GridGeometry::operator==(const GridGeometry& o) const {
   const GeometryParams &a = params_, &b = o.params_;
-  return a.angular_binning == b.angular_binning && a.camera == b.camera && a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
+  return a.angular_binning == b.angular_binning && a.row_elevations_rad == b.row_elevations_rad && a.camera == b.camera && a.azimuth_bins == b.azimuth_bins && a.elevation_bins == b.elevation_bins && a.depth_bins == b.depth_bins &&
          a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&
          a.elevation_min_rad == b.elevation_min_rad && a.elevation_max_rad == b.elevation_max_rad &&
          a.depth_binning == b.depth_binning && a.depth_min_m == b.depth_min_m && a.depth_max_m == b.depth_max_m;

@@ -31,7 +31,7 @@ std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const Pixel
                            "such as kinect_v1)");
   require_shape("mask", mask.shape(), "the camera", ColumnShape::of_grid(camera->width, camera->height));
   std::vector<std::uint8_t> columns(geometry.column_count(), 0);
-  if (geometry.binning() == AngularBinning::pinhole) {  // one column per pixel
+  if (geometry.binning().columns_are_camera_pixels()) {
     for (std::size_t c = 0; c < columns.size(); ++c) columns[c] = mask.valid[c] != 0;
     return columns;
   }

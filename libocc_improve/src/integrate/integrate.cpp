@@ -1,19 +1,18 @@
-#include "occ_improve/integrate/integrate.hpp"
+// Insertion, step 2 (eq. 2): one measurement's truncated OPDF added to a column (the column kernel and
+// its vector loops, with eq. 1's skip bounds), and a band of tile rows updated tile by tile. Step 1
+// (points -> measurements, band scheduling): measurements.cpp; the public entry points: insert.cpp;
+// depth images: depth_image.cpp.
+#include "integrate/column_updates.hpp"
 
 #include "support/fast_math.hpp"
 #include "occ_improve/cancel.hpp"
-#include "occ_improve/errors.hpp"
-#include "occ_improve/timing.hpp"
 #include "sensor/opdf_bounds.hpp"
 #include "sensor/opdf_kernel.hpp"
 #include "support/parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <utility>
-#include <sstream>
-#include <string>
+#include <cstdint>
 
 namespace occ_improve {
 
@@ -21,6 +20,8 @@ namespace {
 
 using detail::fast_exp;
 using detail::fast_log;
+using detail::Measurement;
+using detail::MeasurementChunks;
 
 // The per-voxel loops below are compiled twice, for x86-64-v3 (AVX2 + FMA: Haswell and later) and for
 // baseline x86-64, and the loader picks the clone the CPU supports: vector code without -march=native.
@@ -103,32 +104,6 @@ OCC_IMPROVE_VECTOR_KERNEL
 void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
-
-struct Measurement {
-  double rho, azimuth, elevation;  ///< depth coordinate [m] and position in the binning's unit
-  double sigma;  ///< depth sigma at rho: computed once, used in every tile the support spans
-  int azimuth_first, azimuth_last, elevation_first, elevation_last;
-};
-
-// The measurements of one call in input order: each input chunk's valid points at the chunk's start, so
-// the threads that convert the chunks write in place and nothing is merged.
-struct MeasurementChunks {
-  std::vector<Measurement> slots;
-  std::vector<std::pair<std::size_t, std::size_t>> ranges;  ///< [begin, end) of each chunk's measurements
-
-  template <typename Visit>
-  void for_each(Visit&& visit) const {
-    for (const auto& [begin, end] : ranges)
-      for (std::size_t i = begin; i < end; ++i) visit(i, slots[i]);
-  }
-};
-
-// Buffers kept by the calling thread from one call to the next: a frame's measurements alone are
-// megabytes, and fresh pages for them every frame cost more than the conversion itself.
-struct InsertionWorkspace {
-  MeasurementChunks measurements;
-  std::vector<std::vector<float>> scratch_rows;  ///< per worker, one depth row per column of a tile
-};
 
 // One measurement's bin terms, computed on demand over the bins its columns need. They are computed in
 // whole blocks of kTermsBlock bins (the vector width), so the vector loop ends in a scalar remainder only
@@ -300,54 +275,142 @@ private:
   float lmin_, lmax_, omin_, omax_;
 };
 
-bool to_measurement(const float* p, const GridGeometry& g, const SensorModel& model, Measurement& m,
-                    InsertionReport& report) {
-  const double x = p[0], y = p[1], z = p[2];
-  if (!is_valid_point(x, y, z)) {
-    ++report.skipped_invalid;
-    return false;
-  }
-  RayPosition r;
-  if (!g.project(x, y, z, r)) {
-    ++report.skipped_outside_fov;
-    return false;
-  }
-  m.rho = r.depth;
-  m.sigma = model.sigma_depth_at(r.depth);
-  m.azimuth = r.horizontal;
-  m.elevation = r.vertical;
-  const double ka = model.support_horizontal(g.binning()), ke = model.support_vertical(g.binning());
-  g.azimuth().overlapping(r.horizontal - ka, r.horizontal + ka, m.azimuth_first, m.azimuth_last);
-  g.elevation().overlapping(r.vertical - ke, r.vertical + ke, m.elevation_first, m.elevation_last);
-  if (r.depth >= g.depth().max()) ++report.beyond_depth_range;
-  ++report.points_inserted;
-  return true;
-}
+// The measurements of each tile of a band of tile rows, in input order (a counting sort): tile t's are
+// items[begin[t]] .. items[begin[t + 1] - 1], tiles numbered row by row within the band.
+struct BandTiles {
+  int first_tile_row, end_tile_row, tile_columns;
+  std::vector<std::uint32_t> begin, items;
 
-// Splits the tile rows into `parts` bands of about equal work (column updates), so that neither thread
-// waits for the other where the scene is uneven (floor below, far wall or no returns above). Returns
-// parts + 1 tile-row boundaries. Any split gives the same result: each column has one owner.
-std::vector<int> balanced_bands(const MeasurementChunks& measurements, int tile_rows, int parts) {
-  std::vector<double> work(static_cast<std::size_t>(tile_rows), 0.0);
-  measurements.for_each([&](std::size_t, const Measurement& m) {
-    const double columns = m.azimuth_last - m.azimuth_first + 1;
-    for (int e = m.elevation_first; e <= m.elevation_last; ++e)
-      work[static_cast<std::size_t>(e / ColumnGrid::kTileSize)] += columns;
-  });
-  double total = 0;
-  for (double w : work) total += w;
-  std::vector<int> begin(static_cast<std::size_t>(parts) + 1, tile_rows);
-  begin[0] = 0;
-  double sum = 0;
-  int part = 1;
-  for (int r = 0; r < tile_rows && part < parts; ++r) {
-    sum += work[static_cast<std::size_t>(r)];
-    if (sum >= total * part / parts) begin[static_cast<std::size_t>(part++)] = r + 1;
+  BandTiles(const MeasurementChunks& measurements, int first_row, int end_row, int columns)
+      : first_tile_row(first_row), end_tile_row(end_row), tile_columns(columns) {
+    begin.assign(count() + 1, 0);
+    measurements.for_each([&](std::size_t, const Measurement& m) { for_each_tile(m, [&](std::size_t t) { ++begin[t + 1]; }); });
+    for (std::size_t t = 0; t < count(); ++t) begin[t + 1] += begin[t];
+    std::vector<std::uint32_t> next(begin.begin(), begin.end() - 1);
+    items.resize(begin.back());
+    measurements.for_each([&](std::size_t mi, const Measurement& m) {
+      for_each_tile(m, [&](std::size_t t) { items[next[t]++] = static_cast<std::uint32_t>(mi); });
+    });
   }
-  return begin;
-}
+  std::size_t count() const {
+    return static_cast<std::size_t>(end_tile_row - first_tile_row) * static_cast<std::size_t>(tile_columns);
+  }
+
+private:
+  static constexpr int kTile = ColumnGrid::kTileSize;
+  template <typename Visit>
+  void for_each_tile(const Measurement& m, Visit&& visit) const {
+    const int row_first = std::max(m.elevation_first / kTile, first_tile_row);
+    const int row_last = std::min(m.elevation_last / kTile, end_tile_row - 1);
+    for (int r = row_first; r <= row_last; ++r)
+      for (int t = m.azimuth_first / kTile; t <= m.azimuth_last / kTile; ++t)
+        visit(static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns) + static_cast<std::size_t>(t));
+  }
+};
+
+// One tile's columns while its measurements are applied: a column is loaded on its first measurement and
+// stored after the tile's last. Within the tile, a measurement's depth terms are computed once for all its
+// columns, and B = B_azimuth + B_elevation, e^-B = e^-B_azimuth e^-B_elevation, once per row and column.
+class TileUpdate {
+public:
+  TileUpdate(ColumnGrid& grid, const SensorModel& model, std::vector<float>& scratch_rows)
+      : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()),
+        inv_sigma_azimuth_(1.0 / model.sigma_horizontal(g_.binning())),
+        inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())) {
+    const auto depth_bins = static_cast<std::size_t>(g_.depth().bins());
+    scratch_rows.resize(kTile * kTile * depth_bins);
+    for (int i = 0; i < kTile * kTile; ++i) scratch_[i].v = scratch_rows.data() + static_cast<std::size_t>(i) * depth_bins;
+  }
+
+  void start(int a_first, int e_first) {
+    a_first_ = a_first;
+    e_first_ = e_first;
+    a_last_ = std::min(a_first + kTile, g_.width()) - 1;
+    e_last_ = std::min(e_first + kTile, g_.height()) - 1;
+  }
+
+  void apply(const Measurement& m) {
+    const BinAxis &az = g_.azimuth(), &el = g_.elevation();
+    const int a0 = std::max(m.azimuth_first, a_first_), a1 = std::min(m.azimuth_last, a_last_);
+    const int e0 = std::max(m.elevation_first, e_first_), e1 = std::min(m.elevation_last, e_last_);
+    const double sigma = m.sigma;
+    terms_.reset(m.rho, sigma);
+    for (int a = a0; a <= a1; ++a) {
+      const double d = (az.centre(a) - m.azimuth) * inv_sigma_azimuth_;
+      azimuth_b_[a - a_first_] = d * d;
+      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-d * d));
+    }
+    for (int e = e0; e <= e1; ++e) {
+      const double d = (el.centre(e) - m.elevation) * inv_sigma_elevation_;
+      const double elevation_b = d * d;
+      const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
+      for (int a = a0; a <= a1; ++a) {
+        ColumnScratch& s = scratch_[(e - e_first_) * kTile + (a - a_first_)];
+        if (!s.loaded) kernel_.load(grid_.touch(g_.column(a, e)), s);
+        const double b = azimuth_b_[a - a_first_] + elevation_b;
+        if (b <= kMaxFactoredB) {
+          kernel_.apply(s, m.rho, b, sigma, terms_, azimuth_factor_[a - a_first_] * elevation_factor);
+        } else {
+          column_terms_.reset(m.rho, sigma, b);
+          kernel_.apply(s, m.rho, b, sigma, column_terms_, 1.0f);
+        }
+        ++column_updates_;
+      }
+    }
+  }
+
+  /// Stores the tile's loaded columns; with a surface, refreshes theirs and lists those that changed.
+  void finish(SurfaceMap* surface, std::vector<ColumnIndex>& surface_changed) {
+    for (int e = e_first_; e <= e_last_; ++e)
+      for (int a = a_first_; a <= a_last_; ++a) {
+        ColumnScratch& s = scratch_[(e - e_first_) * kTile + (a - a_first_)];
+        if (!s.loaded) continue;
+        const ColumnIndex c = g_.column(a, e);
+        ColumnData& column = grid_.touch(c);
+        kernel_.store(s, column);
+        grid_.mark_changed(c);
+        if (surface && refresh_column_surface(grid_, c, &column, *surface)) surface_changed.push_back(c);
+      }
+  }
+
+  std::size_t column_updates() const { return column_updates_; }
+
+private:
+  static constexpr int kTile = ColumnGrid::kTileSize;
+  ColumnGrid& grid_;
+  const GridGeometry& g_;
+  const ColumnKernel kernel_;
+  MeasurementTerms terms_, column_terms_;
+  const double inv_sigma_azimuth_, inv_sigma_elevation_;
+  ColumnScratch scratch_[kTile * kTile];
+  float azimuth_factor_[kTile];
+  double azimuth_b_[kTile];
+  int a_first_ = 0, e_first_ = 0, a_last_ = -1, e_last_ = -1;
+  std::size_t column_updates_ = 0;
+};
 
 }  // namespace
+
+std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, const MeasurementChunks& measurements,
+                        int first_tile_row, int end_tile_row, std::vector<float>& scratch_rows, SurfaceMap* surface,
+                        std::vector<ColumnIndex>& surface_changed) {
+  constexpr int kTile = ColumnGrid::kTileSize;
+  const GridGeometry& g = grid.geometry();
+  const detail::FlushDenormals flush_denormals;
+  const int tile_columns = (g.width() + kTile - 1) / kTile;
+  const BandTiles tiles(measurements, first_tile_row, end_tile_row, tile_columns);
+  TileUpdate update(grid, model, scratch_rows);
+  for (std::size_t t = 0; t < tiles.count(); ++t) {
+    if (tiles.begin[t] == tiles.begin[t + 1]) continue;
+    throw_if_stop_requested();  // per tile: up to 64 columns' measurements
+    update.start(static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile,
+                 (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile);
+    for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.apply(measurements.slots[tiles.items[k]]);
+    update.finish(surface, surface_changed);
+  }
+  return update.column_updates();
+}
+
 
 void logit_opdf_profile(const double* centres, std::size_t n, double rho_bar, double angular_term, double sigma_rho,
                         float* out) {
@@ -357,241 +420,6 @@ void logit_opdf_profile(const double* centres, std::size_t n, double rho_bar, do
                  e.data(), g.data());
   logit_profile_from_terms(e.data(), g.data(), static_cast<int>(n),
                            factored ? fast_exp(static_cast<float>(-angular_term)) : 1.0f, out);
-}
-
-PointSpan PointSpan::from(const std::vector<Eigen::Vector3f>& points) {
-  return {points.empty() ? nullptr : points.front().data(), points.size(), 3};
-}
-
-PointSpan PointSpan::from(const Eigen::Matrix3Xf& points) {
-  return {points.data(), static_cast<std::size_t>(points.cols()), 3};
-}
-
-InsertionReport& InsertionReport::operator+=(const InsertionReport& o) {
-  points_received += o.points_received;
-  points_inserted += o.points_inserted;
-  skipped_invalid += o.skipped_invalid;
-  skipped_outside_fov += o.skipped_outside_fov;
-  beyond_depth_range += o.beyond_depth_range;
-  column_updates += o.column_updates;
-  seconds += o.seconds;
-  return *this;
-}
-
-namespace {
-
-// Both public insert_points: `surface` null, or the surface to keep current and where to list its changes.
-InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
-                       SurfaceMap* surface, std::vector<ColumnIndex>* surface_changed) {
-  const auto start = SteadyClock::now();
-  options.validate();
-  if (points.count > 0 && points.xyz == nullptr) throw InvalidInput("insert_points: null point buffer with count > 0");
-  if (points.stride_floats < 3) {
-    std::ostringstream m;
-    m << "insert_points: stride_floats = " << points.stride_floats << " is invalid: must be >= 3";
-    throw InvalidInput(m.str());
-  }
-  if (points.count > std::numeric_limits<std::uint32_t>::max())  // tiles index measurements with 32 bits
-    throw InvalidInput("insert_points: more than 2^32 - 1 points in one call; insert them in parts");
-  const GridGeometry& g = grid.geometry();
-  const int threads = detail::resolve_thread_count(options.threads);
-
-  // 1. Points -> measurements, in input order (parallel over contiguous chunks).
-  thread_local InsertionWorkspace workspace;
-  MeasurementChunks& measurements = workspace.measurements;
-  if (measurements.slots.size() < points.count) measurements.slots.resize(points.count);
-  measurements.ranges.assign(static_cast<std::size_t>(threads), {0, 0});
-  std::vector<InsertionReport> chunk_reports(static_cast<std::size_t>(threads));
-  detail::run_parts(threads, [&](int part, int parts) {
-    const std::size_t begin = points.count * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
-    const std::size_t end = points.count * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
-    std::size_t kept = begin;
-    for (std::size_t i = begin; i < end; ++i)
-      if (poll_stop(i), to_measurement(points.xyz + i * points.stride_floats, g, model, measurements.slots[kept],
-                         chunk_reports[static_cast<std::size_t>(part)]))
-        ++kept;
-    measurements.ranges[static_cast<std::size_t>(part)] = {begin, kept};
-  });
-  InsertionReport report;
-  report.points_received = points.count;
-  for (const InsertionReport& r : chunk_reports) report += r;
-
-  // 2. Measurements -> columns, tile by tile. Each thread owns a band of tile rows, so no two threads
-  //    share a tile or a column, and every column sees its measurements in input order: results do not
-  //    depend on threads. Within a tile, a measurement's depth terms are computed once for all its
-  //    columns there, and the tile's columns stay in cache while its measurements are applied.
-  constexpr int kTile = ColumnGrid::kTileSize;
-  const int tile_rows = (g.height() + kTile - 1) / kTile, tile_columns = (g.width() + kTile - 1) / kTile;
-  const int parts = std::max(1, std::min(threads, tile_rows));
-  const std::vector<int> band_begin = balanced_bands(measurements, tile_rows, parts);
-  const ColumnKernel kernel(grid);
-  const UniformAxis &az = g.azimuth(), &el = g.elevation();
-  const double inv_sigma_azimuth = 1.0 / model.sigma_horizontal(g.binning());
-  const double inv_sigma_elevation = 1.0 / model.sigma_vertical(g.binning());
-  const auto depth_bins = static_cast<std::size_t>(g.depth().bins());
-  std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
-  std::vector<std::vector<ColumnIndex>> changed(surface ? static_cast<std::size_t>(parts) : 0);
-  auto& workspace_rows = workspace.scratch_rows;
-  if (workspace_rows.size() < static_cast<std::size_t>(parts)) workspace_rows.resize(static_cast<std::size_t>(parts));
-  detail::run_parts(parts, [&](int part, int) {
-    const int first_tile_row = band_begin[static_cast<std::size_t>(part)];
-    const int end_tile_row = band_begin[static_cast<std::size_t>(part) + 1];
-    const detail::FlushDenormals flush_denormals;
-    // 2a. The measurements of each tile of the band, in input order (a counting sort).
-    const auto band_tiles = static_cast<std::size_t>(end_tile_row - first_tile_row) * static_cast<std::size_t>(tile_columns);
-    auto for_each_tile = [&](const Measurement& m, auto&& visit) {
-      const int row_first = std::max(m.elevation_first / kTile, first_tile_row);
-      const int row_last = std::min(m.elevation_last / kTile, end_tile_row - 1);
-      for (int r = row_first; r <= row_last; ++r)
-        for (int t = m.azimuth_first / kTile; t <= m.azimuth_last / kTile; ++t)
-          visit(static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns) + static_cast<std::size_t>(t));
-    };
-    std::vector<std::uint32_t> tile_begin(band_tiles + 1, 0);
-    measurements.for_each([&](std::size_t, const Measurement& m) { for_each_tile(m, [&](std::size_t t) { ++tile_begin[t + 1]; }); });
-    for (std::size_t t = 0; t < band_tiles; ++t) tile_begin[t + 1] += tile_begin[t];
-    std::vector<std::uint32_t> tile_items(tile_begin.back()), next(tile_begin.begin(), tile_begin.end() - 1);
-    measurements.for_each([&](std::size_t mi, const Measurement& m) {
-      for_each_tile(m, [&](std::size_t t) { tile_items[next[t]++] = static_cast<std::uint32_t>(mi); });
-    });
-
-    // 2b. Tile by tile: load a column on its first measurement, store it after the tile's last.
-    std::vector<float>& scratch_rows = workspace_rows[static_cast<std::size_t>(part)];
-    scratch_rows.resize(kTile * kTile * depth_bins);
-    ColumnScratch scratch[kTile * kTile];
-    for (int i = 0; i < kTile * kTile; ++i) scratch[i].v = scratch_rows.data() + static_cast<std::size_t>(i) * depth_bins;
-    MeasurementTerms terms(g.depth()), column_terms(g.depth());
-    float azimuth_factor[kTile];
-    double azimuth_b[kTile];
-    std::size_t column_updates = 0;
-    for (std::size_t t = 0; t < band_tiles; ++t) {
-      if (tile_begin[t] == tile_begin[t + 1]) continue;
-      throw_if_stop_requested();  // per tile: up to 64 columns' measurements
-      const int a_first = static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile;
-      const int e_first = (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile;
-      const int a_last = std::min(a_first + kTile, g.width()) - 1, e_last = std::min(e_first + kTile, g.height()) - 1;
-      for (std::uint32_t k = tile_begin[t]; k < tile_begin[t + 1]; ++k) {
-        const Measurement& m = measurements.slots[tile_items[k]];
-        const int a0 = std::max(m.azimuth_first, a_first), a1 = std::min(m.azimuth_last, a_last);
-        const int e0 = std::max(m.elevation_first, e_first), e1 = std::min(m.elevation_last, e_last);
-        const double sigma = m.sigma;
-        terms.reset(m.rho, sigma);
-        // B = B_azimuth + B_elevation and e^-B = e^-B_azimuth e^-B_elevation, per row and per column once.
-        for (int a = a0; a <= a1; ++a) {
-          const double d = (az.centre(a) - m.azimuth) * inv_sigma_azimuth;
-          azimuth_b[a - a_first] = d * d;
-          azimuth_factor[a - a_first] = fast_exp(static_cast<float>(-d * d));
-        }
-        for (int e = e0; e <= e1; ++e) {
-          const double d = (el.centre(e) - m.elevation) * inv_sigma_elevation;
-          const double elevation_b = d * d;
-          const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
-          for (int a = a0; a <= a1; ++a) {
-            ColumnScratch& s = scratch[(e - e_first) * kTile + (a - a_first)];
-            if (!s.loaded) kernel.load(grid.touch(g.column(a, e)), s);
-            const double b = azimuth_b[a - a_first] + elevation_b;
-            if (b <= kMaxFactoredB) {
-              kernel.apply(s, m.rho, b, sigma, terms, azimuth_factor[a - a_first] * elevation_factor);
-            } else {
-              column_terms.reset(m.rho, sigma, b);
-              kernel.apply(s, m.rho, b, sigma, column_terms, 1.0f);
-            }
-            ++column_updates;
-          }
-        }
-      }
-      for (int e = e_first; e <= e_last; ++e)
-        for (int a = a_first; a <= a_last; ++a) {
-          ColumnScratch& s = scratch[(e - e_first) * kTile + (a - a_first)];
-          if (!s.loaded) continue;
-          const ColumnIndex c = g.column(a, e);
-          ColumnData& column = grid.touch(c);
-          kernel.store(s, column);
-          grid.mark_changed(c);
-          // Columns of this thread's band only.
-          if (surface && refresh_column_surface(grid, c, &column, *surface))
-            changed[static_cast<std::size_t>(part)].push_back(c);
-        }
-    }
-    updates[static_cast<std::size_t>(part)] = column_updates;
-  });
-  for (std::size_t u : updates) report.column_updates += u;
-  if (surface_changed) {
-    surface_changed->clear();
-    for (const auto& part : changed) surface_changed->insert(surface_changed->end(), part.begin(), part.end());
-  }
-  report.seconds = seconds_since(start);
-  return report;
-}
-
-}  // namespace
-
-InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points,
-                              const InsertionOptions& options) {
-  return insert(grid, model, points, options, nullptr, nullptr);
-}
-
-InsertionReport insert_points(ColumnGrid& grid, const SensorModel& model, PointSpan points, SurfaceMap& surface,
-                              std::vector<ColumnIndex>& surface_changed, const InsertionOptions& options) {
-  const GridGeometry& g = grid.geometry();
-  require_shape("surface map", surface.shape(), "the grid", ColumnShape::of_grid(g.width(), g.height()));
-  return insert(grid, model, points, options, &surface, &surface_changed);
-}
-
-std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image) {
-  const PinholeIntrinsics& k = image.intrinsics;
-  try {
-    k.validate();
-  } catch (const InvalidParameter& e) {
-    throw InvalidInput(std::string("depth image intrinsics: ") + e.what());
-  }
-  const std::size_t expected = static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height);
-  if (image.pixel_count != expected) {
-    std::ostringstream m;
-    m << "depth image has " << image.pixel_count << " pixels but the intrinsics say " << k.width << " x " << k.height
-      << " = " << expected;
-    throw InvalidInput(m.str());
-  }
-  if (image.depth_m == nullptr) throw InvalidInput("depth image buffer is null");
-  std::vector<Eigen::Vector3f> points(expected);
-  const float nan = std::numeric_limits<float>::quiet_NaN();
-  for (int v = 0; v < k.height; ++v)
-    for (int u = 0; u < k.width; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * static_cast<std::size_t>(k.width) + static_cast<std::size_t>(u);
-      const float z = image.depth_m[i];
-      if (!(z > 0.0f) || !std::isfinite(z)) {
-        points[i] = Eigen::Vector3f(nan, nan, nan);
-        continue;
-      }
-      points[i] = Eigen::Vector3f(static_cast<float>((u - k.cx) * z / k.fx), static_cast<float>((v - k.cy) * z / k.fy), z);
-    }
-  return points;
-}
-
-void InsertionOptions::validate() const {
-  const std::string range = "in [0, " + std::to_string(kMaxThreads) + "] (0: all cores)";
-  detail::require_parameter(threads >= 0 && threads <= kMaxThreads, "threads", threads, range.c_str());
-}
-
-void require_grid_camera(const GridGeometry& geometry, const PinholeIntrinsics& intrinsics) {
-  const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
-  if (!camera || same_camera(*camera, intrinsics)) return;
-  throw InvalidParameter("intrinsics (" + camera_text(intrinsics) + ") are not the camera the grid was built for (" +
-                         camera_text(*camera) + "): its pixels would fall in other columns or outside the field " +
-                         "of view; build the preset from these intrinsics");
-}
-
-InsertionReport insert_depth_image(ColumnGrid& grid, const SensorModel& model, const DepthImage& image,
-                                   const InsertionOptions& options) {
-  require_grid_camera(grid.geometry(), image.intrinsics);
-  const auto points = depth_image_to_points(image);
-  return insert_points(grid, model, PointSpan::from(points), options);
-}
-
-InsertionReport insert_frames(ColumnGrid& grid, const SensorModel& model, const std::vector<PointSpan>& frames,
-                              const InsertionOptions& options) {
-  InsertionReport total;
-  for (const PointSpan& f : frames) total += insert_points(grid, model, f, options);
-  return total;
 }
 
 }  // namespace occ_improve

@@ -109,7 +109,16 @@ std::vector<char> read_file(const std::string& path, std::size_t memory_cap_byte
   return bytes;
 }
 
-void write_geometry(Writer& w, const GeometryParams& g) {
+constexpr std::uint32_t kMaxBinningTagLength = 64;  // register_angular_binning's limit
+
+// Version 3 holds the binnings it has a code for (0 spherical, 1 pinhole; no row elevations): such maps are
+// written as version 3, byte for byte as before, so that older builds still read them.
+std::uint32_t version_for(const GeometryParams& g) {
+  const bool has_code = g.angular_binning == AngularBinning::spherical || g.angular_binning == AngularBinning::pinhole;
+  return has_code && g.row_elevations_rad.empty() ? 3u : kMapFormatVersion;
+}
+
+void write_geometry(Writer& w, const GeometryParams& g, std::uint32_t version) {
   w.put<std::int32_t>(g.azimuth_bins);
   w.put<std::int32_t>(g.elevation_bins);
   w.put<std::int32_t>(g.depth_bins);
@@ -120,20 +129,43 @@ void write_geometry(Writer& w, const GeometryParams& g) {
   w.put<std::uint32_t>(g.depth_binning == DepthBinning::uniform ? 0u : 1u);
   w.put<double>(g.depth_min_m);
   w.put<double>(g.depth_max_m);
-  // Since version 2: the angular binning and the camera.
-  w.put<std::uint32_t>(g.angular_binning == AngularBinning::spherical ? 0u : 1u);
+  // Since version 2: the angular binning and the camera; since version 4 the binning as its registered
+  // tag (length, characters) instead of a code, and after the camera the row elevations.
+  if (version < 4) {
+    w.put<std::uint32_t>(g.angular_binning == AngularBinning::spherical ? 0u : 1u);
+  } else {
+    w.put<std::uint32_t>(static_cast<std::uint32_t>(g.angular_binning.size()));
+    for (char c : g.angular_binning) w.put<char>(c);
+  }
   w.put<std::uint32_t>(g.camera ? 1u : 0u);
   const PinholeIntrinsics k = g.camera.value_or(PinholeIntrinsics{});
   for (double v : {k.fx, k.fy, k.cx, k.cy}) w.put<double>(v);
   w.put<std::int32_t>(k.width);
   w.put<std::int32_t>(k.height);
+  if (version < 4) return;
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(g.row_elevations_rad.size()));
+  for (double phi : g.row_elevations_rad) w.put<double>(phi);
+}
+
+// Versions 2-3 name the binning by a code: 0 spherical, 1 pinhole.
+std::string read_binning_tag(Reader& r, std::uint32_t version) {
+  if (version < 4) {
+    const auto code = r.get<std::uint32_t>("geometry");
+    if (code > 1) r.fail("unknown angular binning code " + std::to_string(code));
+    return code == 0 ? AngularBinning::spherical : AngularBinning::pinhole;
+  }
+  const auto length = r.get<std::uint32_t>("geometry");
+  if (length == 0 || length > kMaxBinningTagLength) r.fail("bad angular binning tag length " + std::to_string(length));
+  std::string tag;
+  for (std::uint32_t i = 0; i < length; ++i) tag += r.get<char>("geometry");
+  if (!is_registered_angular_binning(tag))
+    r.fail("unknown angular binning '" + tag + "' (no binning of that tag is registered in this program)");
+  return tag;
 }
 
 // Version 1 maps are spherical grids without a camera.
-void read_binning(Reader& r, GeometryParams& g) {
-  const auto binning = r.get<std::uint32_t>("geometry");
-  if (binning > 1) r.fail("unknown angular binning code " + std::to_string(binning));
-  g.angular_binning = binning == 0 ? AngularBinning::spherical : AngularBinning::pinhole;
+void read_binning(Reader& r, GeometryParams& g, std::uint32_t version) {
+  g.angular_binning = read_binning_tag(r, version);
   const auto has_camera = r.get<std::uint32_t>("geometry");
   if (has_camera > 1) r.fail("bad camera flag " + std::to_string(has_camera));
   PinholeIntrinsics k;
@@ -144,6 +176,11 @@ void read_binning(Reader& r, GeometryParams& g) {
   k.width = r.get<std::int32_t>("geometry");
   k.height = r.get<std::int32_t>("geometry");
   if (has_camera) g.camera = k;
+  if (version < 4) return;
+  const auto rows = r.get<std::uint32_t>("geometry");
+  if (rows > r.remaining() / sizeof(double)) r.fail("truncated in geometry");
+  g.row_elevations_rad.resize(rows);
+  for (double& phi : g.row_elevations_rad) phi = r.get<double>("geometry");
 }
 
 GeometryParams read_geometry(Reader& r, std::uint32_t version) {
@@ -160,7 +197,7 @@ GeometryParams read_geometry(Reader& r, std::uint32_t version) {
   g.depth_binning = binning == 0 ? DepthBinning::uniform : DepthBinning::inverse_depth;
   g.depth_min_m = r.get<double>("geometry");
   g.depth_max_m = r.get<double>("geometry");
-  if (version >= 2) read_binning(r, g);
+  if (version >= 2) read_binning(r, g, version);
   return g;
 }
 
@@ -302,8 +339,9 @@ void save_map(const std::string& path, const ColumnGrid& grid, const SensorModel
   w.reserve(256 + grid.stored_voxel_count() * sizeof(float) + grid.touched_column_count() * 16);
   for (char c : kMagic) w.put<char>(c);
   w.put<std::uint32_t>(kByteOrderMarker);
-  w.put<std::uint32_t>(kMapFormatVersion);
-  write_geometry(w, geometry.params());
+  const std::uint32_t version = version_for(geometry.params());
+  w.put<std::uint32_t>(version);
+  write_geometry(w, geometry.params(), version);
   write_model(w, model);
   write_options(w, grid.options());
 

@@ -45,27 +45,34 @@ inline float surface_term(float p, float d_rho, float inv_sigma, float b_angular
 }
 
 // The window rule and the per-offset angular factors, built once per geometry and model.
-// With uniform angular axes the centre offset between columns j and j + (da, de) is (da w_az, de w_el)
-// for every j, so B depends on the offset only.
+// B = B_h + B_v (eq. 1). The horizontal axis is uniform (AngularBinning's contract), so B_h depends on the
+// column offset da only and is constant along a row; B_v depends on the row's own centre offsets, which
+// differ from row to row on a non-uniform vertical axis (lidar_rings): B is tabulated per row and offset.
 struct WindowKernel {
   std::vector<int> az_lo, az_hi, el_lo, el_hi;  // window offsets of each azimuth bin / elevation row
   int da_min = 0, da_max = 0, de_min = 0, de_max = 0;
-  std::vector<float> angular_term;  // B per offset, at (de - de_min) * offsets_across + (da - da_min)
-  std::vector<std::uint8_t> needs_peak;  // B < kPeakNegligibleB, per offset
+  std::vector<float> angular_term;  // B per row and offset, at row_offsets(e) + offset_index(da, de)
+  std::vector<std::uint8_t> needs_peak;  // B < kPeakNegligibleB, likewise
   // Per azimuth offset da: the azimuth bins whose window holds da, as [run_first, run_end) when they are
   // contiguous (always, for the uniform axes and clipping of today; the masked loop covers the rest).
   std::vector<int> run_first, run_end;
   std::vector<std::uint8_t> run_contiguous;
 
   WindowKernel(const GridGeometry& g, const SensorModel& model) {
-    axis_offsets(g.azimuth(), model.support_horizontal(g.binning()), az_lo, az_hi, da_min, da_max);
-    axis_offsets(g.elevation(), model.support_vertical(g.binning()), el_lo, el_hi, de_min, de_max);
-    const int across = offsets_across();
-    angular_term.resize(static_cast<std::size_t>(across) * static_cast<std::size_t>(de_max - de_min + 1));
-    for (int de = de_min; de <= de_max; ++de)
-      for (int da = da_min; da <= da_max; ++da)
-        angular_term[offset_index(da, de)] =
-            static_cast<float>(model.angular_term(g.binning(), da * g.azimuth().width(), de * g.elevation().width()));
+    const AngularBinning& binning = g.binning();
+    axis_offsets(g.azimuth(), model.support_horizontal(binning), az_lo, az_hi, da_min, da_max);
+    axis_offsets(g.elevation(), model.support_vertical(binning), el_lo, el_hi, de_min, de_max);
+    const std::size_t offsets = static_cast<std::size_t>(offsets_across()) * static_cast<std::size_t>(de_max - de_min + 1);
+    angular_term.assign(offsets * static_cast<std::size_t>(g.height()), 0.0f);
+    for (int e = 0; e < g.height(); ++e) {
+      const auto ue = static_cast<std::size_t>(e);
+      for (int de = el_lo[ue]; de <= el_hi[ue]; ++de) {
+        const double b_vertical = model.vertical_term(binning, g.elevation().centre_offset(e, de));
+        for (int da = da_min; da <= da_max; ++da)
+          angular_term[row_offsets(e) + offset_index(da, de)] = static_cast<float>(
+              model.horizontal_term(binning, g.azimuth().centre_offset(0, da)) + b_vertical);
+      }
+    }
     needs_peak.resize(angular_term.size());
     for (std::size_t o = 0; o < angular_term.size(); ++o) needs_peak[o] = angular_term[o] < kPeakNegligibleB;
     for (int da = da_min; da <= da_max; ++da) {
@@ -80,13 +87,17 @@ struct WindowKernel {
       run_contiguous.push_back(count == last + 1 - first);
     }
   }
+  std::size_t row_offsets(int e) const {
+    return static_cast<std::size_t>(e) * static_cast<std::size_t>(offsets_across()) *
+           static_cast<std::size_t>(de_max - de_min + 1);
+  }
   int offsets_across() const { return da_max - da_min + 1; }
   std::size_t offset_index(int da, int de) const {
     return static_cast<std::size_t>((de - de_min) * offsets_across() + (da - da_min));
   }
 
   // Columns of this axis overlapping centre +- support, by the insertion's rule, as offsets.
-  static void axis_offsets(const UniformAxis& axis, double support, std::vector<int>& lo, std::vector<int>& hi,
+  static void axis_offsets(const BinAxis& axis, double support, std::vector<int>& lo, std::vector<int>& hi,
                            int& lo_min, int& hi_max) {
     lo.resize(static_cast<std::size_t>(axis.bins()));
     hi.resize(lo.size());
@@ -113,7 +124,7 @@ struct WindowKernel {
     for (int de = el_lo[ue]; de <= el_hi[ue]; ++de)
       for (int da = az_lo[ua]; da <= az_hi[ua]; ++da) {
         const ColumnIndex i = g.column(a + da, e + de);
-        const std::size_t o = offset_index(da, de);
+        const std::size_t o = row_offsets(e) + offset_index(da, de);
         const float p_i = s.probability[i], d_rho = s.depth_m[i] - rho_j;
         sum += needs_peak[o] ? surface_term<true>(p_i, d_rho, inv_sigma, angular_term[o])
                              : surface_term<false>(p_i, d_rho, inv_sigma, angular_term[o]);
@@ -141,7 +152,7 @@ struct WindowKernel {
       for (int da = da_min; da <= da_max; ++da) {
         const float* p_i = s.probability.data() + other_start;  // p_i[x + da]: column x + da of row e + de
         const float* rho_i = s.depth_m.data() + other_start;
-        const float b_angular = angular_term[offset_index(da, de)];
+        const float b_angular = angular_term[row_offsets(e) + offset_index(da, de)];
         // Same additions in the same order either way: the masked loop adds 0 outside the window.
         const auto accumulate = [&](auto with_peak, auto masked, int x_begin, int x_end) {
           for (int x = x_begin; x < x_end; ++x) {
@@ -155,7 +166,7 @@ struct WindowKernel {
             }
           }
         };
-        const bool peak = needs_peak[offset_index(da, de)];
+        const bool peak = needs_peak[row_offsets(e) + offset_index(da, de)];
         const auto r = static_cast<std::size_t>(da - da_min);
         if (run_contiguous[r]) {
           if (peak)

@@ -2,7 +2,9 @@
 
 #include "occ_improve/errors.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace occ_improve {
 
@@ -80,6 +82,60 @@ SensorPreset kinect_v1_spherical(const PinholeIntrinsics& intrinsics) {
   PinholePresetOptions options;
   options.angular_binning = AngularBinning::spherical;
   return preset_from_pinhole(intrinsics, options, "kinect_v1_spherical");
+}
+
+std::vector<double> LidarRingsOptions::vlp16_ring_elevations_deg() {
+  return {-15, -13, -11, -9, -7, -5, -3, -1, 1, 3, 5, 7, 9, 11, 13, 15};
+}
+
+namespace {
+
+// Datasheet ring angles (degrees, up) -> row elevations phi (radians, y down), rows top to bottom.
+std::vector<double> row_elevations(const std::vector<double>& rings_deg) {
+  require_parameter(rings_deg.size() >= 2, "ring_elevations_deg size", static_cast<double>(rings_deg.size()), ">= 2");
+  const bool ascending = rings_deg[1] > rings_deg[0];
+  for (std::size_t i = 1; i < rings_deg.size(); ++i) {
+    const std::string name = "ring_elevations_deg[" + std::to_string(i) + "]";
+    require_parameter(ascending ? rings_deg[i] > rings_deg[i - 1] : rings_deg[i] < rings_deg[i - 1], name.c_str(),
+                      rings_deg[i], "strictly monotonic like the rings before it (no repeats, one direction)");
+  }
+  std::vector<double> phi;
+  for (double deg : rings_deg) phi.push_back(-deg * M_PI / 180.0);
+  if (!ascending) return phi;  // descending up-angles are ascending phi
+  return {phi.rbegin(), phi.rend()};
+}
+
+}  // namespace
+
+SensorPreset lidar_rings(const LidarRingsOptions& o, const std::string& name) {
+  SensorPreset p;
+  p.name = name;
+  GeometryParams& g = p.geometry;
+  g.angular_binning = AngularBinning::lidar_rings;
+  g.row_elevations_rad = row_elevations(o.ring_elevations_deg);
+  g.azimuth_bins = o.azimuth_steps;
+  g.elevation_bins = static_cast<int>(g.row_elevations_rad.size());
+  g.azimuth_min_rad = o.azimuth_min_deg * M_PI / 180.0;
+  g.azimuth_max_rad = o.azimuth_max_deg * M_PI / 180.0;
+  g.depth_bins = o.depth_bins;
+  g.depth_binning = o.depth_binning;
+  g.depth_min_m = o.depth_min_m;
+  g.depth_max_m = o.depth_max_m;
+  g.validate();
+  const GridGeometry geometry(g);
+  double narrowest_gap = geometry.elevation().width(0);
+  for (int i = 1; i < geometry.height(); ++i) narrowest_gap = std::min(narrowest_gap, geometry.elevation().width(i));
+  require_parameter(std::isfinite(o.sigma_azimuth_rad) && o.sigma_azimuth_rad >= 0, "sigma_azimuth_rad",
+                    o.sigma_azimuth_rad, "finite and >= 0 (0: one azimuth step's quantisation)");
+  require_parameter(std::isfinite(o.sigma_elevation_rad) && o.sigma_elevation_rad >= 0, "sigma_elevation_rad",
+                    o.sigma_elevation_rad, "finite and >= 0 (0: the narrowest row's quantisation)");
+  p.model.sigma_azimuth_rad = o.sigma_azimuth_rad > 0 ? o.sigma_azimuth_rad : geometry.azimuth().width() / std::sqrt(12.0);
+  p.model.sigma_elevation_rad = o.sigma_elevation_rad > 0 ? o.sigma_elevation_rad : narrowest_gap / std::sqrt(12.0);
+  p.model.sigma_depth_m = o.sigma_range_m;
+  p.model.sigma_depth_per_m2 = 0.0;
+  p.model.support_k = o.support_k;
+  p.model.validate_for(g);
+  return p;
 }
 
 std::vector<std::string> preset_names() { return {"kinect_v1", "kinect_v1_paper", "kinect_v1_spherical"}; }

@@ -32,12 +32,12 @@ void SensorModelParams::validate() const {
 
 namespace {
 
-// Width of one angular bin of `g` in the binning's unit: radians (spherical) or pixels (pinhole, whose
-// columns are the camera's pixels).
-double bin_width(const GeometryParams& g, bool horizontal) {
-  if (g.angular_binning == AngularBinning::pinhole) return 1.0;
-  return horizontal ? (g.azimuth_max_rad - g.azimuth_min_rad) / g.azimuth_bins
-                    : (g.elevation_max_rad - g.elevation_min_rad) / g.elevation_bins;
+// The narrowest bin of an axis, in the binning's unit: the window in bins is widest there.
+double narrowest_bin(const BinAxis& axis) {
+  if (axis.uniform()) return axis.width();
+  double narrowest = axis.width(0);
+  for (int i = 1; i < axis.bins(); ++i) narrowest = std::min(narrowest, axis.width(i));
+  return narrowest;
 }
 
 void require_angular_bounds(const char* name, double sigma, double support_k, double width, const char* unit) {
@@ -57,12 +57,13 @@ void require_angular_bounds(const char* name, double sigma, double support_k, do
 
 void SensorModelParams::validate_for(const GeometryParams& g) const {
   validate();
-  const bool pinhole = g.angular_binning == AngularBinning::pinhole;
-  const char* unit = pinhole ? "px" : "rad";
-  require_angular_bounds(pinhole ? "sigma_u_px" : "sigma_azimuth_rad", pinhole ? sigma_u_px : sigma_azimuth_rad,
-                         support_k, bin_width(g, true), unit);
-  require_angular_bounds(pinhole ? "sigma_v_px" : "sigma_elevation_rad", pinhole ? sigma_v_px : sigma_elevation_rad,
-                         support_k, bin_width(g, false), unit);
+  const auto binning = make_angular_binning(g);
+  const bool pixels = binning->unit() == AngularUnit::pixels;
+  const char* unit = pixels ? "px" : "rad";
+  require_angular_bounds(pixels ? "sigma_u_px" : "sigma_azimuth_rad", pixels ? sigma_u_px : sigma_azimuth_rad,
+                         support_k, narrowest_bin(binning->horizontal()), unit);
+  require_angular_bounds(pixels ? "sigma_v_px" : "sigma_elevation_rad", pixels ? sigma_v_px : sigma_elevation_rad,
+                         support_k, narrowest_bin(binning->vertical()), unit);
   const double far_sigma =
       std::max(sigma_depth_floor_m, sigma_depth_m + sigma_depth_per_m2 * g.depth_max_m * g.depth_max_m);
   const double range = g.depth_max_m - g.depth_min_m;

@@ -114,6 +114,26 @@ SampleFrame generate_scene(const SceneOptions& options) {
   return f;
 }
 
+std::vector<Eigen::Vector3f> render_range_image(const GridGeometry& g, const RangeImageOptions& o) {
+  const Scene scene;
+  std::mt19937 rng(o.seed);
+  std::uniform_real_distribution<double> jitter(-1.0, 1.0);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<Eigen::Vector3f> points(g.column_count(), Eigen::Vector3f(nan, nan, nan));
+  for (int e = 0; e < g.height(); ++e)
+    for (int a = 0; a < g.width(); ++a) {
+      const BinAxis &h = g.azimuth(), &v = g.elevation();
+      const double dh = jitter(rng) * o.jitter_horizontal * h.width(a), dv = jitter(rng) * o.jitter_vertical * v.width(e);
+      const double noise = unit(rng);  // drawn for every column so frames stay aligned across options
+      const Eigen::Vector3d d = g.direction_at(h.centre(a) + dh, v.centre(e) + dv);
+      const double t = scene.cast(Eigen::Vector3d::Zero(), d);
+      if (!(t <= o.max_range_m)) continue;
+      points[g.column(a, e)] = ((t + o.sigma_range_m * noise) * d).cast<float>();
+    }
+  return points;
+}
+
 std::vector<SampleFrame> generate_sequence(int frames, std::uint32_t first_seed) {
   std::vector<SampleFrame> out;
   for (int i = 0; i < frames; ++i) {

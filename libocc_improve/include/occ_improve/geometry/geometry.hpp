@@ -1,21 +1,23 @@
 #pragma once
 // Grid geometry (CONVENTIONS 1-2, 2b, 2c): an angular binning of directions into columns (rays) and a depth
 // binning along each column (uniform or uniform in inverse depth), behind one type. The kernels ask it
-// only for a direction's continuous position (project), the columns a support overlaps (the two
-// uniform axes, in the binning's own angular unit), a column's centre (point) and, with the sensor
-// model, the angular term in that unit. A new binning is added in project()/point() and its axes;
-// insertion, surface, improvement and everything after them are unchanged.
+// only for a direction's continuous position (project), the columns a support overlaps (the binning's
+// two axes, in its own angular unit), a column's centre (point) and, with the sensor model, the angular
+// term in that unit. The binning is an open interface (angular_binning.hpp): a new one is a new file and
+// a registration; insertion, surface, improvement and everything after them are unchanged.
 //
-// Binnings:
-//  - spherical (the paper, CONVENTIONS 2): columns uniform in azimuth theta = atan2(x, z) and elevation
+// Built-in binnings (GeometryParams::angular_binning names one):
+//  - "spherical" (the paper, CONVENTIONS 2): columns uniform in azimuth theta = atan2(x, z) and elevation
 //    phi = atan2(y, hypot(x, z)), radians; the depth axis is the range rho = |p|.
-//  - pinhole (pixel-native, CONVENTIONS 2c): column (u, v) is pixel (u, v) of a pinhole camera, positions in
+//  - "pinhole" (pixel-native, CONVENTIONS 2c): column (u, v) is pixel (u, v) of a pinhole camera, positions in
 //    pixels (u = fx x / z + cx, v = fy y / z + cy); the depth axis is z. z rather than the range
 //    because the sensor measures and quantises z (a Kinect's disparity is per z), so a flat wall facing
 //    the camera falls in one depth bin at every pixel instead of in rings of range bins.
-//  - a LiDAR's rings would be a third: project() to (azimuth, ring position) with a non-uniform
-//    elevation axis; the kernels read axes only through centre() and overlapping().
+//  - "lidar_rings" (a spinning LiDAR's range image): columns uniform azimuth steps, rows the rings at
+//    their own elevations (row_elevations_rad, not evenly spaced), radians; the depth axis is the range.
 // Frame: the sensor's optical frame (x right, y down, z forward). Units: metres; radians or pixels.
+#include "occ_improve/geometry/angular_binning.hpp"
+
 #include <Eigen/Core>
 #include <cstddef>
 #include <cmath>
@@ -43,12 +45,8 @@ bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b);
 /// "fx=525.00 fy=525.00 cx=319.50 cy=239.50 640x480", for messages.
 std::string camera_text(const PinholeIntrinsics& k);
 
-enum class AngularBinning {
-  spherical,  ///< uniform azimuth x elevation bins, radians; depth is the range (the paper)
-  pinhole,    ///< one column per camera pixel, pixels; depth is z (CONVENTIONS 2c)
-};
-
-const char* to_string(AngularBinning binning);
+/// The tag itself (to_string(AngularBinning) of 0.1, whose binnings were an enum).
+inline const char* to_string(const std::string& binning_tag) { return binning_tag.c_str(); }
 
 enum class DepthBinning {
   uniform,        ///< bins uniform in rho over [depth_min_m, depth_max_m) (the paper: [0, 5 m))
@@ -56,7 +54,9 @@ enum class DepthBinning {
 };
 
 struct GeometryParams {
-  AngularBinning angular_binning = AngularBinning::spherical;
+  /// The binning's registered tag: "spherical", "pinhole", "lidar_rings" (AngularBinning::spherical, ...)
+  /// or one registered with register_angular_binning().
+  std::string angular_binning = AngularBinning::spherical;
   /// pinhole: the camera whose pixels are the columns (required; its size must equal the bin counts).
   /// spherical: when set, columns whose centre direction falls outside this camera's image are not
   /// observable (CONVENTIONS 2c): they take no part in ranking, regions, stop signals or the filter.
@@ -65,11 +65,15 @@ struct GeometryParams {
   int azimuth_bins = 640;
   int elevation_bins = 480;
   int depth_bins = 512;
-  /// Spherical binning's angular range (unused by the pinhole binning, whose range is the image).
+  /// Angular range of the spherical binning, and the azimuth range of lidar_rings (unused by the pinhole
+  /// binning, whose range is the image).
   double azimuth_min_rad = -0.497418836818384;  ///< -28.5 deg
   double azimuth_max_rad = 0.497418836818384;
   double elevation_min_rad = -0.375245789179833;  ///< -21.5 deg
   double elevation_max_rad = 0.375245789179833;
+  /// lidar_rings: the elevation phi = atan2(y, hypot(x, z)) of each ring, rows top to bottom (strictly
+  /// increasing: y points down, so the most upward ring comes first); elevation_bins rings. Others: empty.
+  std::vector<double> row_elevations_rad;
   DepthBinning depth_binning = DepthBinning::uniform;
   double depth_min_m = 0.0;
   double depth_max_m = 5.0;
@@ -87,27 +91,6 @@ struct SphericalPoint {
 
 SphericalPoint to_spherical(double x, double y, double z);
 Eigen::Vector3d from_spherical(const SphericalPoint& s);
-
-/// Uniform bins over [min, max).
-class UniformAxis {
-public:
-  UniformAxis() = default;
-  UniformAxis(double min, double max, int bins);
-  int bins() const { return bins_; }
-  double min() const { return min_; }
-  double max() const { return max_; }
-  double width() const { return width_; }
-  /// Bin containing `value`, or -1 when outside [min, max).
-  int bin(double value) const;
-  double centre(int i) const { return min_ + (i + 0.5) * width_; }
-  double lower(int i) const { return min_ + i * width_; }
-  /// Bins whose extent overlaps [lo, hi], clipped to the axis; empty (first > last) when none.
-  void overlapping(double lo, double hi, int& first, int& last) const;
-
-private:
-  double min_ = 0, max_ = 1, width_ = 1, inv_width_ = 1;
-  int bins_ = 1;
-};
 
 /// Depth bins, uniform in rho or in 1/rho. Bin 0 is the nearest.
 class DepthAxis {
@@ -159,9 +142,9 @@ inline bool is_valid_point(double x, double y, double z) {
 /// Where a point falls in the grid: continuous angular position (the binning's unit), the columns'
 /// bins containing it, and its coordinate on the depth axis (range or z).
 struct RayPosition {
-  double horizontal = 0, vertical = 0;  ///< azimuth/elevation [rad] or u/v [px]
+  double horizontal = 0, vertical = 0;  ///< in the binning's unit: azimuth/elevation [rad] or u/v [px]
   int horizontal_bin = -1, vertical_bin = -1;
-  double depth = 0;  ///< range [m] (spherical) or z [m] (pinhole)
+  double depth = 0;  ///< range [m] (spherical, lidar_rings) or z [m] (pinhole)
 };
 
 /// The whole grid's geometry: columns (rays) in rows like image pixels, each with depth bins.
@@ -171,10 +154,11 @@ class GridGeometry {
 public:
   explicit GridGeometry(const GeometryParams& params);
   const GeometryParams& params() const { return params_; }
-  AngularBinning binning() const { return params_.angular_binning; }
+  /// The angular binning; `binning() == AngularBinning::pinhole` compares its tag.
+  const AngularBinning& binning() const { return *binning_; }
   /// Horizontal / vertical angular axes, in the binning's unit (radians, or pixels from -0.5).
-  const UniformAxis& azimuth() const { return azimuth_; }
-  const UniformAxis& elevation() const { return elevation_; }
+  const BinAxis& azimuth() const { return binning_->horizontal(); }
+  const BinAxis& elevation() const { return binning_->vertical(); }
   const DepthAxis& depth() const { return depth_; }
   /// Position of a point (sensor frame); false when its direction is outside the field of view
   /// (for the pinhole binning also z <= 0). The point must be finite and not the origin.
@@ -182,12 +166,13 @@ public:
   /// The column of a point (sensor frame): the one point-to-column rule of every caller. False for an
   /// invalid point (a coordinate not finite, or the origin) and outside the field of view.
   bool column_of(double x, double y, double z, ColumnIndex& column) const;
-  /// Columns a camera can observe (every column, unless a spherical grid was given a camera).
+  /// Columns a camera can observe (every column, unless a grid whose columns are not the camera's pixels
+  /// was given a camera).
   bool observable(ColumnIndex c) const { return observable_.empty() || observable_[c] != 0; }
   bool all_observable() const { return observable_.empty(); }
   std::size_t observable_count() const;
-  int width() const { return azimuth_.bins(); }    ///< columns per elevation row (image width)
-  int height() const { return elevation_.bins(); }  ///< elevation rows (image height)
+  int width() const { return azimuth().bins(); }    ///< columns per elevation row (image width)
+  int height() const { return elevation().bins(); }  ///< elevation rows (image height)
   std::size_t column_count() const { return static_cast<std::size_t>(width()) * height(); }
   ColumnIndex column(int azimuth_bin, int elevation_bin) const {
     return static_cast<ColumnIndex>(elevation_bin) * static_cast<ColumnIndex>(width()) +
@@ -202,15 +187,17 @@ public:
   /// Point at coordinate `depth` of the depth axis (range, or z for the pinhole binning) on the ray
   /// through the centre of a column.
   Eigen::Vector3d point(int azimuth_bin, int elevation_bin, double depth) const {
-    return point_at(azimuth_.centre(azimuth_bin), elevation_.centre(elevation_bin), depth);
+    return point_at(azimuth().centre(azimuth_bin), elevation().centre(elevation_bin), depth);
   }
   /// The same at a continuous angular position.
-  Eigen::Vector3d point_at(double horizontal, double vertical, double depth) const;
+  Eigen::Vector3d point_at(double horizontal, double vertical, double depth) const {
+    return binning_->point_at(horizontal, vertical, depth);
+  }
   bool operator==(const GridGeometry& other) const;
 
 private:
   GeometryParams params_;
-  UniformAxis azimuth_, elevation_;
+  std::shared_ptr<const AngularBinning> binning_;
   DepthAxis depth_;
   std::vector<std::uint8_t> observable_;  ///< empty: every column observable
 };

@@ -18,9 +18,10 @@
 namespace occ_improve {
 
 /// The format version this build writes. Version 2 added the angular binning and the camera, version 3
-/// the return record; version 1 maps (spherical, no camera) and version 1-2 maps (no return record) still
-/// load.
-constexpr std::uint32_t kMapFormatVersion = 3;
+/// the return record, version 4 the binning's registered tag (any binning, angular_binning.hpp) and the
+/// row elevations; version 1 maps (spherical, no camera), version 1-2 maps (no return record) and version
+/// 2-3 maps (binning code 0 spherical, 1 pinhole) still load.
+constexpr std::uint32_t kMapFormatVersion = 4;
 constexpr std::uint32_t kOldestMapFormatVersion = 1;
 
 /// Writes `grid`, the sensor model it was built with and the return record of a selective sensor

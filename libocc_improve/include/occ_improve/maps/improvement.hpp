@@ -5,7 +5,7 @@
 // Conventions (docs/METHOD.md, "Improvement"):
 //  - a_j is simulated on the ray through j's bin centre at j's surface depth rho_j (0 for an unknown ray);
 //  - its window is every column whose angular extent overlaps the +-k sigma box around j's centre
-//    (UniformAxis::overlapping, the rule the insertion uses), clipped to the grid (3 x 3 with the paper
+//    (BinAxis::overlapping, the rule the insertion uses), clipped to the grid (3 x 3 with the paper
 //    preset);
 //  - for each column i of the window, v_i is i's surface voxel (rho_i, P_i; unknown: rho_i = 0, P_i = 1/2):
 //      Ps    = P_s(rho_i - rho_j, B(centre_i - centre_j), sigma_rho(rho_j))   (eq. 1)

@@ -34,7 +34,8 @@ SensorPreset kinect_v1(const PinholeIntrinsics& intrinsics = kinect_v1_intrinsic
 SensorPreset kinect_v1_spherical(const PinholeIntrinsics& intrinsics = kinect_v1_intrinsics());
 
 struct PinholePresetOptions {
-  AngularBinning angular_binning = AngularBinning::pinhole;
+  /// AngularBinning::pinhole or AngularBinning::spherical.
+  std::string angular_binning = AngularBinning::pinhole;
   int depth_bins = 2048;
   DepthBinning depth_binning = DepthBinning::inverse_depth;
   double depth_min_m = 0.5;
@@ -49,6 +50,32 @@ struct PinholePresetOptions {
 /// the image's angular extent with options.angular_binning = spherical.
 SensorPreset preset_from_pinhole(const PinholeIntrinsics& intrinsics, const PinholePresetOptions& options = {},
                                  const std::string& name = "pinhole");
+
+/// A spinning LiDAR's range image (the lidar_rings binning): one column per azimuth step, one row per ring.
+struct LidarRingsOptions {
+  /// The rings' elevation angles as datasheets list them (degrees, positive up), strictly monotonic in
+  /// either direction; e.g. vlp16_ring_elevations_deg(). Rows are ordered top to bottom.
+  std::vector<double> ring_elevations_deg = vlp16_ring_elevations_deg();
+  int azimuth_steps = 1800;  ///< columns over the azimuth span (VLP-16 at 10 Hz: 0.2 deg)
+  double azimuth_min_deg = -180.0, azimuth_max_deg = 180.0;
+  int depth_bins = 2048;
+  DepthBinning depth_binning = DepthBinning::uniform;
+  double depth_min_m = 0.3;
+  double depth_max_m = 50.0;
+  double sigma_range_m = 0.03;  ///< range noise (VLP-16 datasheet: +-3 cm)
+  /// Angular sigmas; 0 takes the quantisation of one column (azimuth step / sqrt 12) and of the
+  /// narrowest row (its width: halfway to each neighbouring ring, / sqrt 12), as the camera presets take one
+  /// pixel's.
+  double sigma_azimuth_rad = 0.0, sigma_elevation_rad = 0.0;
+  double support_k = 2.0;
+
+  /// Static: the defaults above (a Velodyne VLP-16) need it.
+  static std::vector<double> vlp16_ring_elevations_deg();
+};
+
+/// A preset for a spinning LiDAR (lidar_rings binning, range along each ring's ray, constant range noise).
+/// Throws InvalidParameter naming the bad field (ring_elevations_deg[i] out of order, ...).
+SensorPreset lidar_rings(const LidarRingsOptions& options = {}, const std::string& name = "lidar_rings");
 
 /// "kinect_v1", "kinect_v1_paper" or "kinect_v1_spherical"; throws InvalidParameter listing the known
 /// names. The camera presets take Kinect v1 intrinsics; the second form gives them the camera's own

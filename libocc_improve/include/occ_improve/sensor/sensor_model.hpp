@@ -2,8 +2,8 @@
 // The sensor occupancy PDF of eq. 1 (CONVENTIONS 3) and its noise model (CONVENTIONS 2b).
 //   P_s = 1/2 (1 + exp(-u))^-1 + 1/3 exp(-(d^2/s^2 + B)),
 //   d = rho - rho_bar, B = d_theta^2/s_theta^2 + d_phi^2/s_phi^2, u = 2 (d + 2 s)/s + B.
-// The angular offsets and sigmas are in the grid binning's unit: radians (spherical) or pixels (pinhole);
-// rho is the binning's depth coordinate (range, or z).
+// The angular offsets and sigmas are in the grid binning's unit (AngularBinning::unit()): radians
+// (spherical, lidar_rings) or pixels (pinhole); rho is the binning's depth coordinate (range, or z).
 #include "occ_improve/geometry/geometry.hpp"
 
 #include <cmath>
@@ -50,19 +50,27 @@ public:
     return s > params_.sigma_depth_floor_m ? s : params_.sigma_depth_floor_m;
   }
   /// Angular sigmas in the binning's unit: (azimuth, elevation) [rad] or (u, v) [px].
-  double sigma_horizontal(AngularBinning b) const {
-    return b == AngularBinning::pinhole ? params_.sigma_u_px : params_.sigma_azimuth_rad;
+  double sigma_horizontal(const AngularBinning& b) const {
+    return b.unit() == AngularUnit::pixels ? params_.sigma_u_px : params_.sigma_azimuth_rad;
   }
-  double sigma_vertical(AngularBinning b) const {
-    return b == AngularBinning::pinhole ? params_.sigma_v_px : params_.sigma_elevation_rad;
+  double sigma_vertical(const AngularBinning& b) const {
+    return b.unit() == AngularUnit::pixels ? params_.sigma_v_px : params_.sigma_elevation_rad;
   }
   /// Half-widths of the region of support, k sigma, in the binning's unit.
-  double support_horizontal(AngularBinning b) const { return params_.support_k * sigma_horizontal(b); }
-  double support_vertical(AngularBinning b) const { return params_.support_k * sigma_vertical(b); }
+  double support_horizontal(const AngularBinning& b) const { return params_.support_k * sigma_horizontal(b); }
+  double support_vertical(const AngularBinning& b) const { return params_.support_k * sigma_vertical(b); }
+  /// The two parts of B of eq. 1, B = B_h + B_v, for an angular offset in the binning's unit.
+  double horizontal_term(const AngularBinning& b, double d_horizontal) const {
+    const double h = d_horizontal / sigma_horizontal(b);
+    return h * h;
+  }
+  double vertical_term(const AngularBinning& b, double d_vertical) const {
+    const double v = d_vertical / sigma_vertical(b);
+    return v * v;
+  }
   /// B of eq. 1 for angular offsets in the binning's unit.
-  double angular_term(AngularBinning b, double d_horizontal, double d_vertical) const {
-    const double h = d_horizontal / sigma_horizontal(b), v = d_vertical / sigma_vertical(b);
-    return h * h + v * v;
+  double angular_term(const AngularBinning& b, double d_horizontal, double d_vertical) const {
+    return horizontal_term(b, d_horizontal) + vertical_term(b, d_vertical);
   }
 
 private:

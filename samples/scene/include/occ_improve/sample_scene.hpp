@@ -32,6 +32,21 @@ struct SampleFrame {
 
 SampleFrame generate_scene(const SceneOptions& options = {});
 
+struct RangeImageOptions {
+  std::uint32_t seed = 1;
+  double sigma_range_m = 0.0;  ///< Gaussian range noise; 0: none
+  /// Each ray leaves from a random position within its column, up to this fraction of the column's
+  /// extent either side of the centre on each axis (a LiDAR fires at encoder positions, not at bin centres).
+  double jitter_horizontal = 0.45, jitter_vertical = 0.1;
+  double max_range_m = 100.0;  ///< no return beyond
+};
+
+/// The same scene through any grid's binning (e.g. a spinning LiDAR's range image, lidar_rings): one ray
+/// per column, along the column's direction (jittered), the first surface hit as a point in the sensor
+/// frame; row-major over the grid's columns, NaN where nothing is hit. No shadow band, poster or
+/// disparity quantisation: those belong to the structured-light camera.
+std::vector<Eigen::Vector3f> render_range_image(const GridGeometry& geometry, const RangeImageOptions& options = {});
+
 /// `frames` frames of the same static view with different noise seeds (a static-camera sequence).
 std::vector<SampleFrame> generate_sequence(int frames, std::uint32_t first_seed = 1);
 

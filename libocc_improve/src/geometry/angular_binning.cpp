@@ -1,0 +1,113 @@
+#include "occ_improve/geometry/angular_binning.hpp"
+
+#include "occ_improve/errors.hpp"
+#include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/geometry/lidar_rings_binning.hpp"
+#include "occ_improve/geometry/pinhole_binning.hpp"
+#include "occ_improve/geometry/spherical_binning.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <mutex>
+
+namespace occ_improve {
+
+BinAxis::BinAxis(double min, double max, int bins)
+    : min_(min), max_(max), width_((max - min) / bins), inv_width_(bins / (max - min)), bins_(bins) {
+  centres_.resize(static_cast<std::size_t>(bins));
+  edges_.resize(static_cast<std::size_t>(bins) + 1);
+  for (int i = 0; i < bins; ++i) centres_[static_cast<std::size_t>(i)] = min_ + (i + 0.5) * width_;
+  for (int i = 0; i <= bins; ++i) edges_[static_cast<std::size_t>(i)] = min_ + i * width_;
+}
+
+BinAxis BinAxis::from_centres(std::vector<double> centres) {
+  BinAxis a;
+  const std::size_t n = centres.size();
+  a.edges_.resize(n + 1);
+  for (std::size_t i = 1; i < n; ++i) a.edges_[i] = 0.5 * (centres[i - 1] + centres[i]);
+  a.edges_[0] = centres[0] - 0.5 * (centres[1] - centres[0]);
+  a.edges_[n] = centres[n - 1] + 0.5 * (centres[n - 1] - centres[n - 2]);
+  a.bins_ = static_cast<int>(n);
+  a.min_ = a.edges_.front();
+  a.max_ = a.edges_.back();
+  a.width_ = (a.max_ - a.min_) / a.bins_;
+  a.inv_width_ = 1.0 / a.width_;
+  a.uniform_ = false;
+  a.centres_ = std::move(centres);
+  return a;
+}
+
+int BinAxis::bin(double value) const {
+  if (!(value >= min_ && value < max_)) return -1;
+  if (!uniform_) return static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), value) - edges_.begin()) - 1;
+  const int i = static_cast<int>((value - min_) * inv_width_);
+  return std::min(i, bins_ - 1);  // guards rounding right below max
+}
+
+void BinAxis::overlapping(double lo, double hi, int& first, int& last) const {
+  if (uniform_) {
+    first = static_cast<int>(std::floor((lo - min_) * inv_width_));
+    last = static_cast<int>(std::floor((hi - min_) * inv_width_));
+  } else {  // as above: the bins holding lo and hi (half-open), clipped
+    first = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), lo) - edges_.begin()) - 1;
+    last = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), hi) - edges_.begin()) - 1;
+  }
+  first = std::max(first, 0);
+  last = std::min(last, bins_ - 1);
+}
+
+namespace {
+
+// The built-ins first; register_angular_binning() adds to it.
+struct Registry {
+  std::mutex mutex;
+  std::map<std::string, AngularBinningFactory> factories{
+      {AngularBinning::spherical, [](const GeometryParams& p) { return std::make_shared<SphericalBinning>(p); }},
+      {AngularBinning::pinhole, [](const GeometryParams& p) { return std::make_shared<PinholeBinning>(p); }},
+      {AngularBinning::lidar_rings, [](const GeometryParams& p) { return std::make_shared<LidarRingsBinning>(p); }},
+  };
+};
+
+Registry& registry() {
+  static Registry r;
+  return r;
+}
+
+}  // namespace
+
+void register_angular_binning(const std::string& tag, AngularBinningFactory factory) {
+  detail::require_parameter(!tag.empty() && tag.size() <= 64, "angular binning tag length", tag.size(), "in [1, 64]");
+  std::lock_guard<std::mutex> lock(registry().mutex);
+  registry().factories[tag] = std::move(factory);
+}
+
+std::vector<std::string> registered_angular_binnings() {
+  std::lock_guard<std::mutex> lock(registry().mutex);
+  std::vector<std::string> tags;
+  for (const auto& entry : registry().factories) tags.push_back(entry.first);
+  return tags;
+}
+
+bool is_registered_angular_binning(const std::string& tag) {
+  std::lock_guard<std::mutex> lock(registry().mutex);
+  return registry().factories.count(tag) != 0;
+}
+
+std::shared_ptr<const AngularBinning> make_angular_binning(const GeometryParams& params) {
+  AngularBinningFactory factory;
+  {
+    std::lock_guard<std::mutex> lock(registry().mutex);
+    const auto found = registry().factories.find(params.angular_binning);
+    if (found != registry().factories.end()) factory = found->second;
+  }
+  if (!factory) {
+    std::string known;
+    for (const std::string& tag : registered_angular_binnings()) known += (known.empty() ? "" : ", ") + tag;
+    throw InvalidParameter("angular_binning = '" + params.angular_binning +
+                           "' is not a registered binning (registered: " + known + ")");
+  }
+  return factory(params);
+}
+
+}  // namespace occ_improve
