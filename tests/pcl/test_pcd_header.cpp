@@ -107,6 +107,19 @@ TEST_F(PcdHeaderTest, AHeaderAfterTheDataLineIsRefused) {
   EXPECT_EQ(refusal(header() + "1 2 3\n4 5 6\n"), "") << "numbers after DATA are data";
 }
 
+// Found by make fuzz: a header line of white space alone (spaces, a tab, the CR of a CRLF line) makes
+// PCL 1.13's PCDReader::read dereference null. Refused; an empty line and comments still read.
+TEST_F(PcdHeaderTest, AWhiteSpaceLineInTheHeaderIsRefusedAndEmptyLinesStillRead) {
+  for (const std::string blank : {"  \n", "\t\n", "\r\n"}) {
+    expect_refused_naming(blank + header() + "1 2 3\n4 5 6\n", "only white space");
+    expect_refused_naming("# .PCD\n" + blank + header() + "1 2 3\n4 5 6\n", "only white space");
+  }
+  EXPECT_EQ(refusal("\n# comment\n" + header() + "1 2 3\n4 5 6\n"), "");
+  pcl::PCLPointCloud2 blob;
+  read_pcd_file(write("\n# comment\n" + header() + "1 2 3\n4 5 6\n"), blob);
+  EXPECT_EQ(blob.width * blob.height, 2u);
+}
+
 TEST_F(PcdHeaderTest, DeclaredDataMustFitTheFile) {
   expect_refused_naming(header("640", "480", "307200", "4 4 4", "1 1 1", "binary") + std::string(100, '\0'),
                         "DATA binary declares");
