@@ -4,6 +4,7 @@
 #include "occ_improve/io/depth_image.hpp"
 #include "occ_improve/io/tiff.hpp"
 #include "support/temp_folder.hpp"
+#include "support/file_bytes.hpp"
 #include "support/test_data.hpp"
 #include "support/tiff_writer.hpp"
 
@@ -21,20 +22,8 @@
 namespace occ_improve {
 namespace {
 
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-void write_bytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const FormatError& e) {
-    return e.what();
-  }
-  return "no FormatError";
-}
+using test::read_bytes;
+using test::write_bytes;
 
 std::vector<std::uint8_t> as_bytes(const std::vector<std::uint16_t>& values) {
   std::vector<std::uint8_t> bytes(values.size() * 2);
@@ -123,7 +112,7 @@ std::string png_header(std::uint32_t width, std::uint32_t height) {
 // 23 bytes of PGM or 477 of PNG claiming 100000 x 100000 pixels took 14 GB before anything was refused.
 TEST_F(DepthImageFiles, ImageDimensionsAreCheckedBeforeAnyPixelBuffer) {
   const auto refusal = [&](const std::string& name, const std::string& bytes) {
-    return message_of([&] { read_depth_image16(write(name, bytes)); });
+    return test::format_error_of([&] { read_depth_image16(write(name, bytes)); });
   };
   const std::string pgm_bomb = "P5 100000 100000 65535\n";
   EXPECT_NE(refusal("bomb.pgm", pgm_bomb).find("100000 x 100000 exceeds the cap"), std::string::npos);
@@ -142,7 +131,7 @@ TEST_F(DepthTiffFiles, TruncatedRealTiffIsAFormatErrorNamingTheFile) {
   const std::string bytes = read_bytes(path), cut = file("cut_depth.tiff");
   write_bytes(cut, bytes.substr(0, bytes.size() / 2));
   testing::internal::CaptureStderr();
-  const std::string message = message_of([&] { read_depth_image16(cut); });
+  const std::string message = test::format_error_of([&] { read_depth_image16(cut); });
   EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << "libtiff must not print";
   EXPECT_NE(message.find(cut), std::string::npos) << message;
 }
@@ -166,10 +155,10 @@ TEST_F(DepthTiffFiles, OtherPixelFormatsAreRefusedNamingWhatTheyHold) {
   const std::string grey8 = file("grey8_depth.tiff"), rgb8 = file("rgb8_depth.tiff");
   ASSERT_TRUE(test::write_tiff(grey8, 4, 3, 8, 1, std::vector<std::uint8_t>(12, 7), 3));
   ASSERT_TRUE(test::write_tiff(rgb8, 4, 3, 8, 3, std::vector<std::uint8_t>(36, 7), 3));
-  const std::string m8 = message_of([&] { read_depth_image16(grey8); });
+  const std::string m8 = test::format_error_of([&] { read_depth_image16(grey8); });
   EXPECT_NE(m8.find(grey8), std::string::npos) << m8;
   EXPECT_NE(m8.find("8-bit samples, 1 per pixel"), std::string::npos) << m8;
-  const std::string m3 = message_of([&] { read_depth_image16(rgb8); });
+  const std::string m3 = test::format_error_of([&] { read_depth_image16(rgb8); });
   EXPECT_NE(m3.find("8-bit samples, 3 per pixel"), std::string::npos) << m3;
   // The colour reader takes them; as a depth frame's colour it is used only at the depth's size.
   EXPECT_EQ(read_tiff_rgb8(rgb8).width, 4);

@@ -4,6 +4,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "support/test_data.hpp"
+#include "support/file_bytes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -62,10 +63,7 @@ protected:
     std::ofstream(path, std::ios::binary) << bytes;
     return path;
   }
-  static std::string read_bytes(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  }
+  static std::string read_bytes(const std::string& path) { return test::read_bytes(path); }
   fs::path dir_;
 };
 

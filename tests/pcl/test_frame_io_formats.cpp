@@ -6,6 +6,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/tiff_image.hpp"  // the deprecated path still compiles (docs/LAYOUT.md)
 #include "support/temp_folder.hpp"
+#include "support/file_bytes.hpp"
 #include "support/test_data.hpp"
 
 #include <gtest/gtest.h>
@@ -39,20 +40,8 @@ PinholeIntrinsics grabber_intrinsics() {  // the pclzf folder's calibration XML
   return k;
 }
 
-std::string read_bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-void write_bytes(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
-
-std::string message_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const FormatError& e) {
-    return e.what();
-  }
-  return "no FormatError";
-}
+using test::read_bytes;
+using test::write_bytes;
 
 // ---------------------------------------------------------------------------------------------------
 // TIFF
@@ -235,7 +224,7 @@ TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
   for (const auto& [name, bytes] : cases) {
     const std::string path = file(name + ".ply");
     write_bytes(path, bytes);
-    const std::string message = message_of([&] { load_frame(path, std::nullopt); });
+    const std::string message = test::format_error_of([&] { load_frame(path, std::nullopt); });
     EXPECT_NE(message.find(path), std::string::npos) << name << ": " << message;
   }
 }
@@ -270,7 +259,7 @@ TEST_F(FrameIoPoseFiles, PcdViewpointIsAPoseUnlessIdentityOrTheLegacyGrabberValu
   write_bytes(file("moved.pcd"), pcd_with_viewpoint("1 0 0 0 1 0 0"));
   EXPECT_TRUE(load_frame(file("moved.pcd"), std::nullopt).viewpoint);
   write_bytes(file("zero_q.pcd"), pcd_with_viewpoint("0 0 0 0 0 0 0"));
-  EXPECT_NE(message_of([&] { load_frame(file("zero_q.pcd"), std::nullopt); }).find("unit quaternion"), std::string::npos);
+  EXPECT_NE(test::format_error_of([&] { load_frame(file("zero_q.pcd"), std::nullopt); }).find("unit quaternion"), std::string::npos);
 }
 
 TEST(FrameIoPoseReal, KinectPcdsCarryNoViewpoint) {
@@ -319,7 +308,7 @@ TEST_F(FrameIoPoseFiles, SevenScenesFolderGivesEachFrameItsPose) {
   ASSERT_EQ(one.size(), 1u);
   EXPECT_EQ(one[0].pose_source, "frame-000150.pose.txt");
   write_bytes(file("frame-000151.pose.txt"), "1 0 0\n");
-  EXPECT_NE(message_of([&] { expand_input(folder_.string()); }).find("frame-000151.pose.txt"), std::string::npos);
+  EXPECT_NE(test::format_error_of([&] { expand_input(folder_.string()); }).find("frame-000151.pose.txt"), std::string::npos);
 }
 
 TEST(FrameIoPoseReal, SevenScenesFramesComeWithTheirPoses) {

@@ -1,6 +1,8 @@
 #pragma once
 // Runs a command-line tool as a user does (through the shell) and captures what it printed, for the
 // end-to-end tool tests.
+#include "support/file_bytes.hpp"
+
 #include <sys/wait.h>
 
 #include <cstdlib>
@@ -29,10 +31,7 @@ inline ToolRun run_tool_command(const std::string& executable, const std::string
 }
 
 /// The whole of a file (empty when it cannot be read).
-inline std::string file_contents(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+inline std::string file_contents(const std::filesystem::path& path) { return read_bytes(path); }
 
 /// A tool's outcome with its two streams apart.
 struct ToolStreams {
