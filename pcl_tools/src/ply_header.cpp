@@ -36,7 +36,20 @@ struct Element {
   std::size_t properties = 0;
   std::uint64_t min_binary_bytes = 0;  ///< per element: scalars, and each list's length field
   std::uint64_t pcl_point_bytes = 0;   ///< an upper bound of PCL's point step (it widens uchar colour to float)
+  std::string colours;                 ///< the vertex's uchar colour properties in order, e.g. "red green blue"
 };
+
+// PCL 1.13 packs a vertex's uchar red, green, blue (and alpha) into one rgb(a) field that "red" opens
+// and "blue" writes; a blue or alpha without the colours before it asserts (aborts) in
+// PLYReader::vertexColorCallback (found by make fuzz). The "diffuse_" spellings count as the same.
+const char* colour_channel(const std::string& type, const std::string& name) {
+  if (type != "uchar" && type != "uint8") return nullptr;
+  const std::string base = name.rfind("diffuse_", 0) == 0 ? name.substr(8) : name;
+  for (const char* channel : {"red", "green", "blue", "alpha"})
+    if (base == channel) return channel;
+  return nullptr;
+}
+constexpr const char* kColourOrder = "red green blue alpha";
 
 class HeaderParser {
 public:
@@ -85,6 +98,8 @@ public:
       const std::uint64_t per = h.format == PlyHeader::Format::ascii ? 2 * e.properties : e.min_binary_bytes;
       least_bytes += e.count * std::max<std::uint64_t>(per, 1);  // < 2^32 x 2^14: no overflow
       if (e.name == "vertex") h.vertices = e.count;
+      if (!e.colours.empty() && e.colours != "red green blue" && e.colours != kColourOrder)
+        fail("vertex colour properties must come as red, green, blue (then alpha), found '" + e.colours + "'");
       if (e.name == "range_grid") grid = e.count;
     }
     if (least_bytes > available + 1)
@@ -131,6 +146,11 @@ private:
     }
     if (t.size() != 3) fail("property of element '" + e.name + "' needs '<type> <name>'");
     require_type(t[1], e);
+    if (const char* channel = e.name == "vertex" ? colour_channel(t[1], t[2]) : nullptr) {
+      e.colours += (e.colours.empty() ? "" : " ") + std::string(channel);
+      if (std::string(kColourOrder).rfind(e.colours, 0) != 0)
+        fail("vertex colour properties must come as red, green, blue (then alpha), found '" + e.colours + "'");
+    }
     e.min_binary_bytes += type_size(t[1]);
     e.pcl_point_bytes += std::max<std::uint64_t>(type_size(t[1]), 4);
   }

@@ -21,6 +21,7 @@
 #include <iterator>
 #include <limits>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -226,6 +227,36 @@ TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
     write_bytes(path, bytes);
     const std::string message = test::format_error_of([&] { load_frame(path, std::nullopt); });
     EXPECT_NE(message.find(path), std::string::npos) << name << ": " << message;
+  }
+}
+
+// Found by make fuzz: PCL 1.13 packs uchar red, green, blue (alpha) into one field that "red" opens, and
+// aborts (an assert in PLYReader::vertexColorCallback) on a blue or alpha without the channels before it.
+TEST_F(FrameIoPlyFiles, VertexColoursMustComeAsRedGreenBlue) {
+  const std::string vertex = std::string("element vertex 2\n") + kXyz;
+  for (const std::string colours : {"blue", "green blue", "red green", "red blue green", "alpha", "red green blue red"}) {
+    std::string lines = vertex;
+    std::string body = "1 2 3";
+    std::istringstream names(colours);
+    for (std::string name; names >> name;) {
+      lines += "property uchar " + name + "\n";
+      body += " 9";
+    }
+    const std::string path = file("colours.ply");
+    write_bytes(path, ply("ascii", lines, body + "\n" + body + "\n"));
+    EXPECT_NE(test::format_error_of([&] { load_frame(path, std::nullopt); }).find("vertex colour properties must come as red, green, blue"),
+              std::string::npos)
+        << colours;
+  }
+  for (const std::string colours : {"red green blue", "diffuse_red diffuse_green diffuse_blue", "red green blue alpha"}) {
+    std::string lines = vertex;
+    std::istringstream names(colours);
+    for (std::string name; names >> name;) lines += "property uchar " + name + "\n";
+    const std::string values = colours.find("alpha") != std::string::npos ? " 10 20 30 255" : " 10 20 30";
+    write_bytes(file("rgb.ply"), ply("ascii", lines, "1 2 3" + values + "\n4 5 6" + values + "\n"));
+    const LoadedFrame f = load_frame(file("rgb.ply"), std::nullopt);
+    ASSERT_EQ(f.cloud.size(), 2u) << colours;
+    EXPECT_FLOAT_EQ(f.cloud[1].z, 6.0f) << colours;
   }
 }
 
