@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace occ_improve {
 namespace {
@@ -39,8 +40,10 @@ void check_bins(const std::string& tag, double min_m, double max_m, int bins, co
   }
 }
 
-// Beyond this many buckets per bin the table would outgrow the bins; the walk then takes a few more steps.
-constexpr double kMaxBucketsPerBin = 16;
+// Buckets per width of the narrowest bin; beyond kMaxBucketsPerBin per bin on average the table would
+// outgrow the bins (inverse depth over [0.5, 8 m]: the narrowest bin is 1/16 of the mean), and the walk
+// takes a step more often instead.
+constexpr double kBucketsPerNarrowestBin = 4, kMaxBucketsPerBin = 16;
 
 }  // namespace
 
@@ -60,10 +63,14 @@ DepthAxis::DepthAxis(const DepthBinning& binning, double min_m, double max_m, in
     : binning_(binning.tag()), min_(min_m), max_(max_m), bins_(bins) {
   binning.bins(min_m, max_m, bins, edges_, centres_);
   check_bins(binning_, min_m, max_m, bins, edges_, centres_);
-  // Buckets no wider than the narrowest bin hold at most one centre each after their first candidate.
+  padded_centres_ = centres_;
+  padded_centres_.push_back(std::numeric_limits<double>::quiet_NaN());
+  // A bucket no wider than the narrowest bin holds at most one centre beyond its first candidate; a
+  // fraction of it, mostly none.
   double narrowest = max_m - min_m;
   for (int b = 0; b < bins; ++b) narrowest = std::min(narrowest, upper(b) - lower(b));
-  buckets_ = static_cast<int>(std::clamp(std::ceil((max_m - min_m) / narrowest), 1.0, kMaxBucketsPerBin * bins));
+  buckets_ = static_cast<int>(std::clamp(std::ceil(kBucketsPerNarrowestBin * (max_m - min_m) / narrowest), 1.0,
+                                         kMaxBucketsPerBin * bins));
   buckets_per_m_ = buckets_ / (max_m - min_m);
   first_above_.resize(static_cast<std::size_t>(buckets_));
   int b = 0;
