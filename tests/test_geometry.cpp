@@ -58,7 +58,7 @@ TEST(Geometry, PaperPresetSupportTouchesTwoToThreeColumns) {
   EXPECT_EQ(last - first + 1, 2);
 }
 
-class DepthAxisTest : public ::testing::TestWithParam<DepthBinning> {};
+class DepthAxisTest : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(DepthAxisTest, EdgesCentresAndLookupsAgree) {
   const DepthAxis d(GetParam(), GetParam() == DepthBinning::uniform ? 0.0 : 0.5, 8.0, 300);
@@ -76,7 +76,8 @@ TEST_P(DepthAxisTest, EdgesCentresAndLookupsAgree) {
   EXPECT_EQ(d.first_centre_above(9.0), d.bins());
 }
 
-INSTANTIATE_TEST_SUITE_P(Binnings, DepthAxisTest, ::testing::Values(DepthBinning::uniform, DepthBinning::inverse_depth));
+INSTANTIATE_TEST_SUITE_P(Binnings, DepthAxisTest,
+                         ::testing::Values(std::string(DepthBinning::uniform), std::string(DepthBinning::inverse_depth)));
 
 TEST(Geometry, InverseDepthBinsGrowWithTheSquareOfRange) {
   const DepthAxis d(DepthBinning::inverse_depth, 0.5, 8.0, 2048);

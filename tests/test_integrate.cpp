@@ -5,6 +5,7 @@
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/maps/surface.hpp"
 #include "reference/reference.hpp"
+#include "support/map_compare.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <random>
 #include <string>
+#include <thread>
 
 namespace occ_improve {
 namespace {
@@ -113,6 +115,66 @@ TEST(Integrate, ThreadCountDoesNotChangeTheResult) {
     EXPECT_EQ(a->uniform_end, b->uniform_end);
     EXPECT_EQ(a->window, b->window);
   }
+}
+
+// Frames of different sizes and extents (the whole image, its top half, every third point, the bottom
+// rows), so that a frame's measurements, chunks and bands differ from the previous call's.
+std::vector<std::vector<Eigen::Vector3f>> frames_of_different_sizes() {
+  std::vector<std::vector<Eigen::Vector3f>> frames;
+  for (std::uint32_t seed : {1u, 2u, 3u, 4u}) {
+    sample::SceneOptions so;
+    so.seed = seed;
+    const std::vector<Eigen::Vector3f> all = sample::generate_scene(so).points();
+    std::vector<Eigen::Vector3f> f;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const std::size_t row = i / 640;
+      if (seed == 1 || (seed == 2 && row < 240) || (seed == 3 && i % 3 == 0) || (seed == 4 && row >= 400))
+        f.push_back(all[i]);
+    }
+    frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
+// The per-thread insertion workspace (insert.cpp) is reused from call to call and must be the caller's in
+// the workers: grids fed alternately on one thread, with 1 and 2 threads and frames of different sizes,
+// equal voxel by voxel grids fed alone, single-threaded, on a fresh thread (a fresh workspace).
+TEST(Integrate, ReusedWorkspaceDoesNotLeakBetweenCallsGridsOrThreadCounts) {
+  SensorPreset p = kinect_v1_paper();
+  p.geometry.azimuth_bins = 160;
+  p.geometry.elevation_bins = 120;
+  p.geometry.depth_bins = 256;
+  p.model.sigma_azimuth_rad = p.model.sigma_elevation_rad = 0.003;
+  const GridGeometry g(p.geometry);
+  const SensorModel model(p.model);
+  const auto frames = frames_of_different_sizes();
+  ASSERT_GT(frames[0].size(), 2 * frames[1].size() - 1);
+  ASSERT_LT(frames[3].size(), frames[2].size());
+  const std::vector<std::size_t> order_a = {0, 1, 2, 3, 0}, order_b = {3, 2, 0, 1, 2};
+  const auto alone = [&](const std::vector<std::size_t>& order) {
+    ColumnGrid grid(g);
+    std::thread([&] {
+      for (std::size_t f : order) insert_points(grid, model, PointSpan::from(frames[f]), {1});
+    }).join();
+    return grid;
+  };
+  const ColumnGrid expected_a = alone(order_a), expected_b = alone(order_b);
+  // a: two threads, keeping its surface current (the Mapper's path); b: one thread; c: a's frames with
+  // 2, 1, 2, ... threads. All on this thread, call after call.
+  ColumnGrid a(g), b(g), c(g);
+  SurfaceMap a_surface = compute_surface(a);
+  std::vector<ColumnIndex> a_changed;
+  for (std::size_t i = 0; i < order_a.size(); ++i) {
+    insert_points(a, model, PointSpan::from(frames[order_a[i]]), a_surface, a_changed, {2});
+    insert_points(b, model, PointSpan::from(frames[order_b[i]]), {1});
+    insert_points(c, model, PointSpan::from(frames[order_a[i]]), {i % 2 == 0 ? 2 : 1});
+  }
+  ASSERT_GT(expected_a.touched_column_count(), g.column_count() / 2);
+  test::expect_identical(expected_a, a);
+  test::expect_identical(expected_b, b);
+  test::expect_identical(expected_a, c);
+  test::expect_same_surface(compute_surface(expected_a), a_surface);
+  test::expect_same_surface(compute_surface(expected_b), compute_surface(b));
 }
 
 TEST(Integrate, SurfaceKeptCurrentDuringInsertionMatchesASeparatePass) {

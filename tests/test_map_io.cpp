@@ -9,6 +9,7 @@
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/maps/surface.hpp"
 #include "support/lidar_scene.hpp"
+#include "support/log_depth_binning.hpp"
 #include "support/map_compare.hpp"
 #include "occ_improve/geometry/spherical_binning.hpp"
 
@@ -511,6 +512,49 @@ TEST_F(MapIo, BinningRegisteredByTheProgramRoundTrips) {
   const ColumnGrid unmirrored = sample_grid(plain, {});
   const ColumnIndex left = unmirrored.geometry().column(20, 40), right = grid.geometry().column(59, 40);
   EXPECT_EQ(compute_surface(unmirrored).bin[left], compute_surface(grid).bin[right]);
+}
+
+// A depth binning registered by the program: version 4, code 2 at offset 60 and its tag after it; loaded
+// back by the registry; a tag no binning is registered under is a FormatError naming it.
+TEST_F(MapIo, DepthBinningRegisteredByTheProgramRoundTripsWithItsTag) {
+  test::register_log_depth_binning();
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.azimuth_bins = 80;
+  preset.geometry.elevation_bins = 60;
+  preset.geometry.depth_bins = 128;
+  preset.geometry.depth_min_m = 0.4;
+  preset.geometry.depth_binning = test::LogDepthBinning::kTag;
+  preset.model.sigma_azimuth_rad = preset.model.sigma_elevation_rad = 0.004;
+  const ColumnGrid grid = sample_grid(preset, {});
+  EXPECT_GT(grid.touched_column_count(), 1000u);
+  save_map(file("log.occmap"), grid, preset.model);
+  std::vector<char> bytes = read_bytes(file("log.occmap"));
+  std::uint32_t version, code, tag_length;
+  std::memcpy(&version, bytes.data() + 12, 4);
+  std::memcpy(&code, bytes.data() + 60, 4);
+  std::memcpy(&tag_length, bytes.data() + 64, 4);
+  EXPECT_EQ(version, 4u);  // version 3 has no code for it
+  EXPECT_EQ(code, 2u);
+  ASSERT_EQ(tag_length, 8u);
+  EXPECT_EQ(std::string(bytes.data() + 68, tag_length), "test_log");
+  double depth_min;
+  std::memcpy(&depth_min, bytes.data() + 76, 8);
+  EXPECT_EQ(depth_min, 0.4);
+  const LoadedMap loaded = load_map(file("log.occmap"));
+  EXPECT_EQ(loaded.grid.geometry().params().depth_binning, "test_log");
+  EXPECT_EQ(loaded.grid.geometry().params().angular_binning, AngularBinning::spherical);
+  EXPECT_TRUE(loaded.grid.geometry() == grid.geometry());
+  test::expect_identical(grid, loaded.grid);
+  expect_same_maps(grid, loaded.grid, loaded.model);
+  bytes[68 + 7] = 'x';  // "test_log" -> "test_lox"
+  reseal(bytes);
+  write_bytes(file("unknown.occmap"), bytes);
+  try {
+    load_map(file("unknown.occmap"));
+    FAIL() << "loaded a map of an unknown depth binning";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("unknown depth binning 'test_lox'"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(MapIo, MissingFileOrFolderIsAnIoError) {

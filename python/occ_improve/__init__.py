@@ -65,6 +65,7 @@ from ._core import (  # noqa: F401  (re-exported)
     lidar_rings,
     LidarRingsOptions,
     registered_angular_binnings,
+    registered_depth_binnings,
     load_map,
     plan_next_shot,
     preset_by_name,

@@ -34,9 +34,12 @@ class PinholeIntrinsics:
 
 def kinect_v1_intrinsics() -> PinholeIntrinsics: ...
 
-class DepthBinning(enum.Enum):
-    uniform = ...
-    inverse_depth = ...
+class DepthBinning:
+    """The built-in depth binnings' tags; GeometryParams.depth_binning is a tag (str)."""
+    uniform: str = "uniform"
+    inverse_depth: str = "inverse_depth"
+
+def registered_depth_binnings() -> List[str]: ...
 
 class AngularBinning:
     """The built-in binnings' tags; GeometryParams.angular_binning is a tag (str)."""
@@ -57,14 +60,14 @@ class GeometryParams:
     elevation_min_rad: float
     elevation_max_rad: float
     row_elevations_rad: List[float]
-    depth_binning: DepthBinning
+    depth_binning: str
     depth_min_m: float
     depth_max_m: float
     def __init__(self, *, angular_binning: str = "spherical",
                  camera: Optional[PinholeIntrinsics] = None, azimuth_bins: int = 640, elevation_bins: int = 480,
                  depth_bins: int = 512, azimuth_min_rad: float = -0.497418836818384,
                  azimuth_max_rad: float = 0.497418836818384, elevation_min_rad: float = -0.375245789179833,
-                 elevation_max_rad: float = 0.375245789179833, depth_binning: DepthBinning = DepthBinning.uniform,
+                 elevation_max_rad: float = 0.375245789179833, depth_binning: str = "uniform",
                  depth_min_m: float = 0.0, depth_max_m: float = 5.0,
                  row_elevations_rad: List[float] = ...) -> None:
         """The paper's Kinect v1 grid (57 x 43 deg, 640 x 480 x 512 bins, [0, 5 m))."""
@@ -96,7 +99,7 @@ class SensorPreset:
 class PinholePresetOptions:
     angular_binning: str
     depth_bins: int
-    depth_binning: DepthBinning
+    depth_binning: str
     depth_min_m: float
     depth_max_m: float
     sigma_depth_m: float
@@ -104,7 +107,7 @@ class PinholePresetOptions:
     sigma_depth_floor_m: float
     support_k: float
     def __init__(self, *, angular_binning: str = "pinhole", depth_bins: int = 2048,
-                 depth_binning: DepthBinning = DepthBinning.inverse_depth, depth_min_m: float = 0.5,
+                 depth_binning: str = "inverse_depth", depth_min_m: float = 0.5,
                  depth_max_m: float = 8.0, sigma_depth_m: float = 0.0, sigma_depth_per_m2: float = 0.001425,
                  sigma_depth_floor_m: float = 0.0005, support_k: float = 2.0) -> None: ...
 
@@ -114,7 +117,7 @@ class LidarRingsOptions:
     azimuth_min_deg: float
     azimuth_max_deg: float
     depth_bins: int
-    depth_binning: DepthBinning
+    depth_binning: str
     depth_min_m: float
     depth_max_m: float
     sigma_range_m: float

@@ -29,9 +29,13 @@ void bind_intrinsics(py::module_& m) {
 }
 
 void bind_geometry_params(py::module_& m) {
-  py::enum_<DepthBinning>(m, "DepthBinning", "How the depth axis is divided.")
-      .value("uniform", DepthBinning::uniform, "bins uniform in rho")
-      .value("inverse_depth", DepthBinning::inverse_depth, "bins uniform in 1/rho");
+  // Depth binnings too are named by their tags; DepthBinning holds the built-in ones.
+  struct DepthBinningTags {};
+  py::class_<DepthBinningTags>(m, "DepthBinning",
+                               "The built-in depth binnings' tags (GeometryParams.depth_binning is the tag).")
+      .def_property_readonly_static("uniform", [](py::object) { return DepthBinning::uniform; })
+      .def_property_readonly_static("inverse_depth", [](py::object) { return DepthBinning::inverse_depth; });
+  m.def("registered_depth_binnings", &registered_depth_binnings, "The tags depth_binning may name.");
   // Binnings are named by their registered tags (strings); AngularBinning holds the built-in ones.
   struct AngularBinningTags {};
   py::class_<AngularBinningTags>(m, "AngularBinning",

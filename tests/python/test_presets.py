@@ -39,6 +39,16 @@ def test_kinect_preset_is_built_from_its_intrinsics():
         assert spherical.locate(((u - k.cx) / k.fx, (v - k.cy) / k.fy, 1.0)) is not None
 
 
+def test_depth_binnings_are_tags():
+    assert oi.DepthBinning.uniform == "uniform" and oi.DepthBinning.inverse_depth == "inverse_depth"
+    assert {"uniform", "inverse_depth"} <= set(oi.registered_depth_binnings())
+    g = oi.GeometryParams(depth_binning="inverse_depth", depth_min_m=0.5)
+    g.validate()
+    g.depth_binning = "no_such_binning"
+    with pytest.raises(oi.InvalidParameter, match="depth_binning = 'no_such_binning'"):
+        g.validate()
+
+
 def test_lidar_rings_preset_rows_are_the_rings():
     p = oi.lidar_rings()  # a Velodyne VLP-16: 16 rings from -15 to +15 deg, 1800 azimuth steps
     assert p.geometry.angular_binning == oi.AngularBinning.lidar_rings == "lidar_rings"

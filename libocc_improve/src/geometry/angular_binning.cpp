@@ -5,11 +5,10 @@
 #include "occ_improve/geometry/lidar_rings_binning.hpp"
 #include "occ_improve/geometry/pinhole_binning.hpp"
 #include "occ_improve/geometry/spherical_binning.hpp"
+#include "tag_registry.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <map>
-#include <mutex>
 
 namespace occ_improve {
 
@@ -59,55 +58,28 @@ void BinAxis::overlapping(double lo, double hi, int& first, int& last) const {
 
 namespace {
 
-// The built-ins first; register_angular_binning() adds to it.
-struct Registry {
-  std::mutex mutex;
-  std::map<std::string, AngularBinningFactory> factories{
-      {AngularBinning::spherical, [](const GeometryParams& p) { return std::make_shared<SphericalBinning>(p); }},
-      {AngularBinning::pinhole, [](const GeometryParams& p) { return std::make_shared<PinholeBinning>(p); }},
-      {AngularBinning::lidar_rings, [](const GeometryParams& p) { return std::make_shared<LidarRingsBinning>(p); }},
-  };
-};
-
-Registry& registry() {
-  static Registry r;
+// The built-ins from the start; register_angular_binning() adds to it.
+detail::TagRegistry<AngularBinning>& registry() {
+  static detail::TagRegistry<AngularBinning> r(
+      "angular_binning", "angular binning",
+      {{AngularBinning::spherical, [](const GeometryParams& p) { return std::make_shared<SphericalBinning>(p); }},
+       {AngularBinning::pinhole, [](const GeometryParams& p) { return std::make_shared<PinholeBinning>(p); }},
+       {AngularBinning::lidar_rings, [](const GeometryParams& p) { return std::make_shared<LidarRingsBinning>(p); }}});
   return r;
 }
 
 }  // namespace
 
 void register_angular_binning(const std::string& tag, AngularBinningFactory factory) {
-  detail::require_parameter(!tag.empty() && tag.size() <= 64, "angular binning tag length", tag.size(), "in [1, 64]");
-  std::lock_guard<std::mutex> lock(registry().mutex);
-  registry().factories[tag] = std::move(factory);
+  registry().add(tag, std::move(factory));
 }
 
-std::vector<std::string> registered_angular_binnings() {
-  std::lock_guard<std::mutex> lock(registry().mutex);
-  std::vector<std::string> tags;
-  for (const auto& entry : registry().factories) tags.push_back(entry.first);
-  return tags;
-}
+std::vector<std::string> registered_angular_binnings() { return registry().tags(); }
 
-bool is_registered_angular_binning(const std::string& tag) {
-  std::lock_guard<std::mutex> lock(registry().mutex);
-  return registry().factories.count(tag) != 0;
-}
+bool is_registered_angular_binning(const std::string& tag) { return registry().has(tag); }
 
 std::shared_ptr<const AngularBinning> make_angular_binning(const GeometryParams& params) {
-  AngularBinningFactory factory;
-  {
-    std::lock_guard<std::mutex> lock(registry().mutex);
-    const auto found = registry().factories.find(params.angular_binning);
-    if (found != registry().factories.end()) factory = found->second;
-  }
-  if (!factory) {
-    std::string known;
-    for (const std::string& tag : registered_angular_binnings()) known += (known.empty() ? "" : ", ") + tag;
-    throw InvalidParameter("angular_binning = '" + params.angular_binning +
-                           "' is not a registered binning (registered: " + known + ")");
-  }
-  return factory(params);
+  return registry().make(params.angular_binning, params);
 }
 
 }  // namespace occ_improve

@@ -44,8 +44,7 @@ void GeometryParams::validate() const {
   require_parameter(std::isfinite(depth_min_m) && depth_min_m >= 0, "depth_min_m", depth_min_m, "finite and >= 0");
   require_parameter(std::isfinite(depth_max_m) && depth_max_m > depth_min_m, "depth_max_m", depth_max_m,
                     "finite and > depth_min_m");
-  if (depth_binning == DepthBinning::inverse_depth)
-    require_parameter(depth_min_m > 0, "depth_min_m", depth_min_m, "> 0 for inverse-depth binning");
+  make_depth_binning(*this);  // validates the fields the depth binning uses
 }
 
 SphericalPoint to_spherical(double x, double y, double z) {
@@ -63,54 +62,13 @@ Eigen::Vector3d from_spherical(const SphericalPoint& s) {
   return {horizontal * std::sin(s.azimuth), s.rho * std::sin(s.elevation), horizontal * std::cos(s.azimuth)};
 }
 
-DepthAxis::DepthAxis(DepthBinning binning, double min_m, double max_m, int bins)
-    : binning_(binning),
-      min_(min_m),
-      max_(max_m),
-      inverse_min_(1.0 / min_m),
-      bins_per_unit_(binning == DepthBinning::uniform ? bins / (max_m - min_m) : bins / (1.0 / min_m - 1.0 / max_m)),
-      bins_(bins) {
-  edges_.resize(static_cast<std::size_t>(bins) + 1);
-  centres_.resize(static_cast<std::size_t>(bins));
-  if (binning == DepthBinning::uniform) {
-    const double w = (max_m - min_m) / bins;
-    for (int b = 0; b <= bins; ++b) edges_[static_cast<std::size_t>(b)] = min_m + b * w;
-    for (int b = 0; b < bins; ++b) centres_[static_cast<std::size_t>(b)] = min_m + (b + 0.5) * w;
-  } else {
-    // Uniform in inverse depth; the centre is the midpoint in inverse depth.
-    const double inv_min = 1.0 / min_m, step = (1.0 / min_m - 1.0 / max_m) / bins;
-    for (int b = 0; b <= bins; ++b) edges_[static_cast<std::size_t>(b)] = 1.0 / (inv_min - b * step);
-    for (int b = 0; b < bins; ++b) centres_[static_cast<std::size_t>(b)] = 1.0 / (inv_min - (b + 0.5) * step);
-  }
-  edges_.back() = max_m;
-}
-
-double DepthAxis::continuous_index(double rho) const {
-  if (binning_ == DepthBinning::uniform) return (rho - min_) / (max_ - min_) * bins_;
-  if (rho <= 0) return -1e300;
-  const double step = (1.0 / min_ - 1.0 / max_) / bins_;
-  return (1.0 / min_ - 1.0 / rho) / step;
-}
-
-int DepthAxis::bin(double rho) const {
-  if (rho < min_) return -1;
-  if (rho >= max_) return bins_;
-  const int b = static_cast<int>(continuous_index(rho));
-  return std::clamp(b, 0, bins_ - 1);
-}
-
-double DepthAxis::width_at(double rho) const {
-  const int b = std::clamp(bin(rho), 0, bins_ - 1);
-  return upper(b) - lower(b);
-}
-
 GridGeometry::GridGeometry(const GeometryParams& params) : params_(params) {
   params.validate();
   binning_ = make_angular_binning(params);
   if (!binning_->horizontal().uniform())  // the improvement's row loop takes B_h per column offset
     throw InvalidParameter(std::string("angular_binning '") + binning_->tag() +
                            "' has a non-uniform horizontal axis: binnings must keep columns uniform");
-  depth_ = DepthAxis(params.depth_binning, params.depth_min_m, params.depth_max_m, params.depth_bins);
+  depth_ = DepthAxis(*make_depth_binning(params), params.depth_min_m, params.depth_max_m, params.depth_bins);
   if (params.camera && !binning_->columns_are_camera_pixels()) {
     // A column is observable when the camera sees its centre direction.
     const PinholeIntrinsics& k = *params.camera;

@@ -109,13 +109,57 @@ std::vector<char> read_file(const std::string& path, std::size_t memory_cap_byte
   return bytes;
 }
 
-constexpr std::uint32_t kMaxBinningTagLength = 64;  // register_angular_binning's limit
+constexpr std::uint32_t kMaxBinningTagLength = 64;  // the registries' limit
 
-// Version 3 holds the binnings it has a code for (0 spherical, 1 pinhole; no row elevations): such maps are
-// written as version 3, byte for byte as before, so that older builds still read them.
+// Depth binnings with a code (every version); since version 4 kDepthBinningTagged says the tag follows.
+constexpr std::uint32_t kDepthBinningUniform = 0, kDepthBinningInverse = 1, kDepthBinningTagged = 2;
+
+bool has_depth_code(const GeometryParams& g) {
+  return g.depth_binning == DepthBinning::uniform || g.depth_binning == DepthBinning::inverse_depth;
+}
+
+// Version 3 holds the binnings it has a code for (angular: 0 spherical, 1 pinhole, no row elevations; depth:
+// 0 uniform, 1 inverse_depth): such maps are written as version 3, byte for byte as before, so that older
+// builds still read them.
 std::uint32_t version_for(const GeometryParams& g) {
   const bool has_code = g.angular_binning == AngularBinning::spherical || g.angular_binning == AngularBinning::pinhole;
-  return has_code && g.row_elevations_rad.empty() ? 3u : kMapFormatVersion;
+  return has_code && g.row_elevations_rad.empty() && has_depth_code(g) ? 3u : kMapFormatVersion;
+}
+
+void write_tag(Writer& w, const std::string& tag) {
+  w.put<std::uint32_t>(static_cast<std::uint32_t>(tag.size()));
+  for (char c : tag) w.put<char>(c);
+}
+
+std::string read_tag(Reader& r, const char* kind) {
+  const auto length = r.get<std::uint32_t>("geometry");
+  if (length == 0 || length > kMaxBinningTagLength)
+    r.fail(std::string("bad ") + kind + " tag length " + std::to_string(length));
+  std::string tag;
+  for (std::uint32_t i = 0; i < length; ++i) tag += r.get<char>("geometry");
+  return tag;
+}
+
+void write_depth_binning(Writer& w, const std::string& tag) {
+  if (tag == DepthBinning::uniform) {
+    w.put<std::uint32_t>(kDepthBinningUniform);
+  } else if (tag == DepthBinning::inverse_depth) {
+    w.put<std::uint32_t>(kDepthBinningInverse);
+  } else {  // version 4 (version_for)
+    w.put<std::uint32_t>(kDepthBinningTagged);
+    write_tag(w, tag);
+  }
+}
+
+std::string read_depth_binning(Reader& r, std::uint32_t version) {
+  const auto code = r.get<std::uint32_t>("geometry");
+  if (code == kDepthBinningUniform) return DepthBinning::uniform;
+  if (code == kDepthBinningInverse) return DepthBinning::inverse_depth;
+  if (code != kDepthBinningTagged || version < 4) r.fail("unknown depth binning code " + std::to_string(code));
+  const std::string tag = read_tag(r, "depth binning");
+  if (!is_registered_depth_binning(tag))
+    r.fail("unknown depth binning '" + tag + "' (no depth binning of that tag is registered in this program)");
+  return tag;
 }
 
 void write_geometry(Writer& w, const GeometryParams& g, std::uint32_t version) {
@@ -126,7 +170,7 @@ void write_geometry(Writer& w, const GeometryParams& g, std::uint32_t version) {
   w.put<double>(g.azimuth_max_rad);
   w.put<double>(g.elevation_min_rad);
   w.put<double>(g.elevation_max_rad);
-  w.put<std::uint32_t>(g.depth_binning == DepthBinning::uniform ? 0u : 1u);
+  write_depth_binning(w, g.depth_binning);
   w.put<double>(g.depth_min_m);
   w.put<double>(g.depth_max_m);
   // Since version 2: the angular binning and the camera; since version 4 the binning as its registered
@@ -134,8 +178,7 @@ void write_geometry(Writer& w, const GeometryParams& g, std::uint32_t version) {
   if (version < 4) {
     w.put<std::uint32_t>(g.angular_binning == AngularBinning::spherical ? 0u : 1u);
   } else {
-    w.put<std::uint32_t>(static_cast<std::uint32_t>(g.angular_binning.size()));
-    for (char c : g.angular_binning) w.put<char>(c);
+    write_tag(w, g.angular_binning);
   }
   w.put<std::uint32_t>(g.camera ? 1u : 0u);
   const PinholeIntrinsics k = g.camera.value_or(PinholeIntrinsics{});
@@ -154,10 +197,7 @@ std::string read_binning_tag(Reader& r, std::uint32_t version) {
     if (code > 1) r.fail("unknown angular binning code " + std::to_string(code));
     return code == 0 ? AngularBinning::spherical : AngularBinning::pinhole;
   }
-  const auto length = r.get<std::uint32_t>("geometry");
-  if (length == 0 || length > kMaxBinningTagLength) r.fail("bad angular binning tag length " + std::to_string(length));
-  std::string tag;
-  for (std::uint32_t i = 0; i < length; ++i) tag += r.get<char>("geometry");
+  const std::string tag = read_tag(r, "angular binning");
   if (!is_registered_angular_binning(tag))
     r.fail("unknown angular binning '" + tag + "' (no binning of that tag is registered in this program)");
   return tag;
@@ -192,9 +232,7 @@ GeometryParams read_geometry(Reader& r, std::uint32_t version) {
   g.azimuth_max_rad = r.get<double>("geometry");
   g.elevation_min_rad = r.get<double>("geometry");
   g.elevation_max_rad = r.get<double>("geometry");
-  const auto binning = r.get<std::uint32_t>("geometry");
-  if (binning > 1) r.fail("unknown depth binning code " + std::to_string(binning));
-  g.depth_binning = binning == 0 ? DepthBinning::uniform : DepthBinning::inverse_depth;
+  g.depth_binning = read_depth_binning(r, version);
   g.depth_min_m = r.get<double>("geometry");
   g.depth_max_m = r.get<double>("geometry");
   if (version >= 2) read_binning(r, g, version);

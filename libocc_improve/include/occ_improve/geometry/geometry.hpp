@@ -1,6 +1,7 @@
 #pragma once
 // Grid geometry (CONVENTIONS 1-2, 2b, 2c): an angular binning of directions into columns (rays) and a depth
-// binning along each column (uniform or uniform in inverse depth), behind one type. The kernels ask it
+// binning along each column (uniform, uniform in inverse depth, or one registered: depth_binning.hpp),
+// behind one type. The kernels ask it
 // only for a direction's continuous position (project), the columns a support overlaps (the binning's
 // two axes, in its own angular unit), a column's centre (point) and, with the sensor model, the angular
 // term in that unit. The binning is an open interface (angular_binning.hpp): a new one is a new file and
@@ -17,6 +18,7 @@
 //    their own elevations (row_elevations_rad, not evenly spaced), radians; the depth axis is the range.
 // Frame: the sensor's optical frame (x right, y down, z forward). Units: metres; radians or pixels.
 #include "occ_improve/geometry/angular_binning.hpp"
+#include "occ_improve/geometry/depth_binning.hpp"
 
 #include <Eigen/Core>
 #include <cstddef>
@@ -48,11 +50,6 @@ std::string camera_text(const PinholeIntrinsics& k);
 /// The tag itself (to_string(AngularBinning) of 0.1, whose binnings were an enum).
 inline const char* to_string(const std::string& binning_tag) { return binning_tag.c_str(); }
 
-enum class DepthBinning {
-  uniform,        ///< bins uniform in rho over [depth_min_m, depth_max_m) (the paper: [0, 5 m))
-  inverse_depth,  ///< bins uniform in 1/rho between depth_min_m > 0 and depth_max_m (width grows as rho^2)
-};
-
 struct GeometryParams {
   /// The binning's registered tag: "spherical", "pinhole", "lidar_rings" (AngularBinning::spherical, ...)
   /// or one registered with register_angular_binning().
@@ -74,7 +71,9 @@ struct GeometryParams {
   /// lidar_rings: the elevation phi = atan2(y, hypot(x, z)) of each ring, rows top to bottom (strictly
   /// increasing: y points down, so the most upward ring comes first); elevation_bins rings. Others: empty.
   std::vector<double> row_elevations_rad;
-  DepthBinning depth_binning = DepthBinning::uniform;
+  /// The depth binning's registered tag: "uniform" (the paper), "inverse_depth" (DepthBinning::uniform, ...)
+  /// or one registered with register_depth_binning().
+  std::string depth_binning = DepthBinning::uniform;
   double depth_min_m = 0.0;
   double depth_max_m = 5.0;
 
@@ -91,46 +90,6 @@ struct SphericalPoint {
 
 SphericalPoint to_spherical(double x, double y, double z);
 Eigen::Vector3d from_spherical(const SphericalPoint& s);
-
-/// Depth bins, uniform in rho or in 1/rho. Bin 0 is the nearest.
-class DepthAxis {
-public:
-  DepthAxis() = default;
-  DepthAxis(DepthBinning binning, double min_m, double max_m, int bins);
-  int bins() const { return bins_; }
-  DepthBinning binning() const { return binning_; }
-  double min() const { return min_; }
-  double max() const { return max_; }
-  double centre(int b) const { return centres_[static_cast<std::size_t>(b)]; }
-  double lower(int b) const { return edges_[static_cast<std::size_t>(b)]; }
-  double upper(int b) const { return edges_[static_cast<std::size_t>(b) + 1]; }
-  const std::vector<double>& centres() const { return centres_; }
-  /// Bin containing rho: -1 below min, bins() at or beyond max.
-  int bin(double rho) const;
-  /// Index of the first bin whose centre is strictly greater than rho, in [0, bins()]. Inline: the
-  /// insertion calls it several times per (measurement, column) pair. The bin is guessed in closed form
-  /// (linear in rho, or in 1/rho), then fixed up against the stored centres, so the result is exact.
-  int first_centre_above(double rho) const {
-    const double ci = binning_ == DepthBinning::uniform ? (rho - min_) * bins_per_unit_
-                                                        : (rho > 0 ? (inverse_min_ - 1.0 / rho) * bins_per_unit_ : -1.0);
-    // centre(b) > rho  <=>  b + 0.5 > ci; the cast floors because ci + 0.5 >= 0 there.
-    int b = !(ci >= -0.5) ? 0 : (ci >= bins_ ? bins_ : static_cast<int>(ci + 0.5));
-    const double* centres = centres_.data();
-    while (b > 0 && centres[b - 1] > rho) --b;
-    while (b < bins_ && centres[b] <= rho) ++b;
-    return b;
-  }
-  /// Width of the bin containing rho (the nearest or farthest bin outside the range).
-  double width_at(double rho) const;
-
-private:
-  double continuous_index(double rho) const;  // bin coordinate: bin b spans [b, b+1)
-  DepthBinning binning_ = DepthBinning::uniform;
-  double min_ = 0, max_ = 1;
-  double inverse_min_ = 0, bins_per_unit_ = 1;  ///< bins per metre (uniform) or per 1/m (inverse depth)
-  int bins_ = 1;
-  std::vector<double> centres_, edges_;
-};
 
 using ColumnIndex = std::uint32_t;
 

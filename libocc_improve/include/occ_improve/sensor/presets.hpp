@@ -37,7 +37,7 @@ struct PinholePresetOptions {
   /// AngularBinning::pinhole or AngularBinning::spherical.
   std::string angular_binning = AngularBinning::pinhole;
   int depth_bins = 2048;
-  DepthBinning depth_binning = DepthBinning::inverse_depth;
+  std::string depth_binning = DepthBinning::inverse_depth;  ///< a depth binning's tag
   double depth_min_m = 0.5;
   double depth_max_m = 8.0;
   double sigma_depth_m = 0.0;
@@ -59,7 +59,7 @@ struct LidarRingsOptions {
   int azimuth_steps = 1800;  ///< columns over the azimuth span (VLP-16 at 10 Hz: 0.2 deg)
   double azimuth_min_deg = -180.0, azimuth_max_deg = 180.0;
   int depth_bins = 2048;
-  DepthBinning depth_binning = DepthBinning::uniform;
+  std::string depth_binning = DepthBinning::uniform;  ///< a depth binning's tag
   double depth_min_m = 0.3;
   double depth_max_m = 50.0;
   double sigma_range_m = 0.03;  ///< range noise (VLP-16 datasheet: +-3 cm)
