@@ -152,18 +152,9 @@ TEST(DepthBinning, ImprovementThroughARegisteredBinningMatchesTheDenseReference)
   ColumnGrid grid(g);
   insert_points(grid, model, PointSpan::from(test::lidar_scan(g)));
   const SurfaceMap surface = compute_surface(grid);
-  std::vector<reference::DenseGrid::Surface> surfaces(surface.size());
-  for (std::size_t c = 0; c < surfaces.size(); ++c)
-    surfaces[c] = {surface.depth_m[c], surface.probability[c], surface.bin[c], surface.unknown[c] != 0};
-  const std::vector<double> expected = reference::improvement_map(g, model, surfaces);
-  const ImprovementMap fast = compute_improvement(g, model, surface);
-  double max_d = 0, max_abs = 0;
-  for (std::size_t c = 0; c < expected.size(); ++c) {
-    max_d = std::max(max_d, std::abs(expected[c] - fast.value[c]));
-    max_abs = std::max(max_abs, std::abs(expected[c]));
-  }
-  EXPECT_LE(max_d, 1e-5);
-  EXPECT_GT(max_abs, 0.1);
+  const reference::ImprovementAgreement agreement = reference::compare_improvement(g, model, surface);
+  EXPECT_LE(agreement.max_difference, 1e-5);
+  EXPECT_GT(agreement.max_abs_reference, 0.1);
   // The surface depths are the log bins' centres (a peak's bin or the midpoint of a saturated run's).
   std::size_t at_centre = 0, known = 0;
   for (std::size_t c = 0; c < surface.size(); ++c) {

@@ -18,23 +18,6 @@
 namespace occ_improve {
 namespace {
 
-struct Agreement {
-  std::size_t columns = 0, same_bin = 0;
-  double max_dp = 0;
-};
-
-Agreement compare(const ColumnGrid& fast, const reference::DenseGrid& ref) {
-  Agreement a;
-  const SurfaceMap s = compute_surface(fast);
-  for (std::size_t c = 0; c < s.size(); ++c) {
-    const auto r = ref.surface(c);
-    ++a.columns;
-    if (r.bin == s.bin[c] && (r.unknown == (s.unknown[c] != 0))) ++a.same_bin;
-    a.max_dp = std::max(a.max_dp, std::abs(r.probability - s.probability[c]));
-  }
-  return a;
-}
-
 // A window of the paper preset's columns around the sample scene's box, pole and wall.
 GridGeometry paper_crop(int a0, int e0, int w, int h, int depth_bins = 512) {
   SensorPreset p = kinect_v1_paper();
@@ -54,7 +37,7 @@ TEST(Integrate, ExactModeMatchesReferenceOnSampleScene) {
   ref.insert(points);
   EXPECT_GT(r.points_inserted, 500u);
   EXPECT_EQ(r.points_received, r.points_inserted + r.skipped_invalid + r.skipped_outside_fov);
-  const Agreement a = compare(fast, ref);
+  const reference::SurfaceAgreement a = reference::compare_surfaces(fast, ref);
   EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << a.same_bin << " / " << a.columns;
   EXPECT_LE(a.max_dp, 1e-4);
 }
@@ -77,7 +60,7 @@ TEST(Integrate, ClampedModeMatchesReferenceVoxelByVoxel) {
     for (int b = 0; b < g.depth().bins(); ++b)
       max_dl = std::max(max_dl, std::abs(ref.log_odds(c, b) - fast.log_odds(static_cast<ColumnIndex>(c), b)));
   EXPECT_LE(max_dl, 1e-4);
-  const Agreement a = compare(fast, ref);
+  const reference::SurfaceAgreement a = reference::compare_surfaces(fast, ref);
   EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << a.same_bin << " / " << a.columns;
 }
 
@@ -94,7 +77,7 @@ TEST(Integrate, RangeDependentSigmaMatchesReference) {
     const auto points = sample::generate_scene().points();
     insert_points(fast, model, PointSpan::from(points));
     ref.insert(points);
-    const Agreement a = compare(fast, ref);
+    const reference::SurfaceAgreement a = reference::compare_surfaces(fast, ref);
     EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << p.name << ": " << a.same_bin << " / " << a.columns;
     EXPECT_LE(a.max_dp, 1e-4) << p.name;
   }

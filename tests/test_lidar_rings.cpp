@@ -102,24 +102,6 @@ TEST(LidarRings, BadRingTablesAreRefusedNamingTheField) {
       << geometry_error(g);
 }
 
-struct Agreement {
-  std::size_t columns = 0, same_bin = 0, touched = 0;
-  double max_dp = 0;
-};
-
-Agreement compare(const ColumnGrid& fast, const reference::DenseGrid& ref) {
-  Agreement a;
-  const SurfaceMap s = compute_surface(fast);
-  for (std::size_t c = 0; c < s.size(); ++c) {
-    const auto r = ref.surface(c);
-    ++a.columns;
-    a.touched += r.unknown ? 0 : 1;
-    if (r.bin == s.bin[c] && (r.unknown == (s.unknown[c] != 0))) ++a.same_bin;
-    a.max_dp = std::max(a.max_dp, std::abs(r.probability - s.probability[c]));
-  }
-  return a;
-}
-
 TEST(LidarRings, InsertionMatchesTheDenseReferenceRayByRay) {
   const SensorPreset p = test::small_lidar();
   const GridGeometry g(p.geometry);
@@ -135,7 +117,7 @@ TEST(LidarRings, InsertionMatchesTheDenseReferenceRayByRay) {
       ref.insert(points);
       EXPECT_GT(r.points_inserted, 1000u);
     }
-    const Agreement a = compare(fast, ref);
+    const reference::SurfaceAgreement a = reference::compare_surfaces(fast, ref);
     EXPECT_GT(a.touched, static_cast<std::size_t>(0.7 * a.columns));
     EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << a.same_bin << " / " << a.columns;
     EXPECT_LE(a.max_dp, 1e-4);
@@ -159,18 +141,10 @@ TEST(LidarRings, ImprovementMatchesTheDenseReferenceRayByRay) {
   ColumnGrid grid(g);
   insert_points(grid, model, PointSpan::from(test::lidar_scan(g)));
   const SurfaceMap surface = compute_surface(grid);
-  std::vector<reference::DenseGrid::Surface> surfaces(surface.size());
-  for (std::size_t c = 0; c < surfaces.size(); ++c)
-    surfaces[c] = {surface.depth_m[c], surface.probability[c], surface.bin[c], surface.unknown[c] != 0};
-  const std::vector<double> expected = reference::improvement_map(g, model, surfaces);
+  const reference::ImprovementAgreement agreement = reference::compare_improvement(g, model, surface);
+  EXPECT_LE(agreement.max_difference, 1e-5);
+  EXPECT_GT(agreement.max_abs_reference, 0.1);  // not trivially flat
   const ImprovementMap fast = compute_improvement(g, model, surface);
-  double max_d = 0, max_abs = 0;
-  for (std::size_t c = 0; c < expected.size(); ++c) {
-    max_d = std::max(max_d, std::abs(expected[c] - fast.value[c]));
-    max_abs = std::max(max_abs, std::abs(expected[c]));
-  }
-  EXPECT_LE(max_d, 1e-5);
-  EXPECT_GT(max_abs, 0.1);  // not trivially flat
   // Ray by ray (the scalar path) gives the row loop's values.
   for (int e = 0; e < g.height(); ++e)
     for (int a = 0; a < g.width(); a += 7)

@@ -1,5 +1,7 @@
 #include "reference/reference.hpp"
 
+#include "occ_improve/maps/improvement.hpp"
+
 #include "occ_improve/maps/surface.hpp"
 
 #include <cmath>
@@ -183,6 +185,38 @@ GridGeometry crop(const GridGeometry& full, int azimuth_first, int elevation_fir
   p.azimuth_bins = width;
   p.elevation_bins = height;
   return GridGeometry(p);
+}
+
+std::vector<DenseGrid::Surface> surfaces_of(const SurfaceMap& surface) {
+  std::vector<DenseGrid::Surface> surfaces(surface.size());
+  for (std::size_t c = 0; c < surfaces.size(); ++c)
+    surfaces[c] = {surface.depth_m[c], surface.probability[c], surface.bin[c], surface.unknown[c] != 0};
+  return surfaces;
+}
+
+ImprovementAgreement compare_improvement(const GridGeometry& geometry, const SensorModel& model,
+                                         const SurfaceMap& surface) {
+  const std::vector<double> expected = improvement_map(geometry, model, surfaces_of(surface));
+  const ImprovementMap fast = compute_improvement(geometry, model, surface);
+  ImprovementAgreement a;
+  for (std::size_t c = 0; c < expected.size(); ++c) {
+    a.max_difference = std::max(a.max_difference, std::abs(expected[c] - fast.value[c]));
+    a.max_abs_reference = std::max(a.max_abs_reference, std::abs(expected[c]));
+  }
+  return a;
+}
+
+SurfaceAgreement compare_surfaces(const ColumnGrid& fast, const DenseGrid& ref) {
+  SurfaceAgreement a;
+  const SurfaceMap s = compute_surface(fast);
+  for (std::size_t c = 0; c < s.size(); ++c) {
+    const DenseGrid::Surface r = ref.surface(c);
+    ++a.columns;
+    a.touched += r.unknown ? 0 : 1;
+    if (r.bin == s.bin[c] && (r.unknown == (s.unknown[c] != 0))) ++a.same_bin;
+    a.max_dp = std::max(a.max_dp, std::abs(r.probability - s.probability[c]));
+  }
+  return a;
 }
 
 }  // namespace occ_improve::reference

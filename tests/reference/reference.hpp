@@ -4,6 +4,7 @@
 // in long double, no depth truncation, no tables, no threads. The fast path is checked against it.
 #include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/grid/grid.hpp"
+#include "occ_improve/maps/surface.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 
 #include <Eigen/Core>
@@ -49,6 +50,24 @@ std::vector<double> improvement_map(const GridGeometry& geometry, const SensorMo
                                     const std::vector<DenseGrid::Surface>& surfaces);
 /// The same over the dense grid's own surface.
 std::vector<double> improvement_map(const DenseGrid& grid);
+
+/// The fast path's surface map as the reference's per-column surfaces (improvement_map's input).
+std::vector<DenseGrid::Surface> surfaces_of(const SurfaceMap& surface);
+
+/// The fast improvement map (compute_improvement) against improvement_map, both over `surface`.
+struct ImprovementAgreement {
+  double max_difference = 0;      ///< largest |fast - reference| over the columns
+  double max_abs_reference = 0;   ///< largest |reference|: a flat map would agree trivially
+};
+ImprovementAgreement compare_improvement(const GridGeometry& geometry, const SensorModel& model,
+                                         const SurfaceMap& surface);
+
+/// The fast grid's surface (compute_surface) against the reference's, column by column.
+struct SurfaceAgreement {
+  std::size_t columns = 0, same_bin = 0, touched = 0;  ///< touched: columns the reference knows
+  double max_dp = 0;                                   ///< largest surface probability difference
+};
+SurfaceAgreement compare_surfaces(const ColumnGrid& fast, const DenseGrid& ref);
 
 /// A geometry covering only a window of another one's columns, with identical column extents:
 /// columns [azimuth_first, azimuth_first + width) x [elevation_first, elevation_first + height).
