@@ -124,24 +124,12 @@ TEST(DepthBinning, InsertionThroughARegisteredBinningMatchesTheDenseReference) {
       EXPECT_GT(insert_points(fast, model, PointSpan::from(points)).points_inserted, 1000u);
       ref.insert(points);
     }
-    const SurfaceMap s = compute_surface(fast);
-    std::size_t same_bin = 0, touched = 0;
-    double max_dp = 0;
-    for (std::size_t c = 0; c < s.size(); ++c) {
-      const auto r = ref.surface(c);
-      touched += r.unknown ? 0 : 1;
-      same_bin += r.bin == s.bin[c] && r.unknown == (s.unknown[c] != 0);
-      max_dp = std::max(max_dp, std::abs(r.probability - s.probability[c]));
-    }
-    EXPECT_GT(touched, s.size() * 7 / 10);
-    EXPECT_GE(same_bin, s.size() * 999 / 1000) << same_bin << " / " << s.size();
-    EXPECT_LE(max_dp, 1e-4);
+    const reference::SurfaceAgreement a = reference::compare_surfaces(fast, ref);
+    EXPECT_GT(a.touched, a.columns * 7 / 10);
+    EXPECT_GE(a.same_bin, a.columns * 999 / 1000) << a.same_bin << " / " << a.columns;
+    EXPECT_LE(a.max_dp, 1e-4);
     if (mode == UpdateMode::exact) continue;  // exact log-odds reach -1e3: float vs double (test_lidar_rings)
-    double max_dl = 0;
-    for (std::size_t c = 0; c < g.column_count(); ++c)
-      for (int b = 0; b < g.depth().bins(); ++b)
-        max_dl = std::max(max_dl, std::abs(ref.log_odds(c, b) - fast.log_odds(static_cast<ColumnIndex>(c), b)));
-    EXPECT_LE(max_dl, 1e-4);
+    EXPECT_LE(reference::max_log_odds_difference(fast, ref), 1e-4);
   }
 }
 

@@ -4,6 +4,7 @@
 
 #include "occ_improve/maps/surface.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace occ_improve::reference {
@@ -217,6 +218,15 @@ SurfaceAgreement compare_surfaces(const ColumnGrid& fast, const DenseGrid& ref) 
     a.max_dp = std::max(a.max_dp, std::abs(r.probability - s.probability[c]));
   }
   return a;
+}
+
+double max_log_odds_difference(const ColumnGrid& fast, const DenseGrid& ref) {
+  const GridGeometry& g = fast.geometry();
+  double max_dl = 0;
+  for (std::size_t c = 0; c < g.column_count(); ++c)
+    for (int b = 0; b < g.depth().bins(); ++b)
+      max_dl = std::max(max_dl, std::abs(ref.log_odds(c, b) - fast.log_odds(static_cast<ColumnIndex>(c), b)));
+  return max_dl;
 }
 
 }  // namespace occ_improve::reference

@@ -69,6 +69,10 @@ struct SurfaceAgreement {
 };
 SurfaceAgreement compare_surfaces(const ColumnGrid& fast, const DenseGrid& ref);
 
+/// Largest |fast - reference| log-odds over every voxel of the grid (clamped mode: exact-mode log-odds
+/// reach -1e3, where float sums and doubles differ by more than the tests' 1e-4).
+double max_log_odds_difference(const ColumnGrid& fast, const DenseGrid& ref);
+
 /// A geometry covering only a window of another one's columns, with identical column extents:
 /// columns [azimuth_first, azimuth_first + width) x [elevation_first, elevation_first + height).
 GridGeometry crop(const GridGeometry& full, int azimuth_first, int elevation_first, int width, int height);

@@ -7,8 +7,13 @@ namespace occ_improve::detail {
 
 namespace {
 
-bool to_measurement(const float* p, const GridGeometry& g, const SensorModel& model, Measurement& m,
-                    InsertionReport& report) {
+// The region of support's half-widths, k sigma in the binning's unit: the same for every point of a call.
+struct AngularSupport {
+  double horizontal, vertical;
+};
+
+bool to_measurement(const float* p, const GridGeometry& g, const SensorModel& model, const AngularSupport& support,
+                    Measurement& m, InsertionReport& report) {
   const double x = p[0], y = p[1], z = p[2];
   if (!is_valid_point(x, y, z)) {
     ++report.skipped_invalid;
@@ -23,9 +28,10 @@ bool to_measurement(const float* p, const GridGeometry& g, const SensorModel& mo
   m.sigma = model.sigma_depth_at(r.depth);
   m.azimuth = r.horizontal;
   m.elevation = r.vertical;
-  const double ka = model.support_horizontal(g.binning()), ke = model.support_vertical(g.binning());
-  g.azimuth().overlapping(r.horizontal - ka, r.horizontal + ka, m.azimuth_first, m.azimuth_last);
-  g.elevation().overlapping(r.vertical - ke, r.vertical + ke, m.elevation_first, m.elevation_last);
+  g.azimuth().overlapping(r.horizontal - support.horizontal, r.horizontal + support.horizontal, m.azimuth_first,
+                          m.azimuth_last);
+  g.elevation().overlapping(r.vertical - support.vertical, r.vertical + support.vertical, m.elevation_first,
+                            m.elevation_last);
   if (r.depth >= g.depth().max()) ++report.beyond_depth_range;
   ++report.points_inserted;
   return true;
@@ -38,12 +44,13 @@ InsertionReport to_measurements(PointSpan points, const GridGeometry& g, const S
   if (measurements.slots.size() < points.count) measurements.slots.resize(points.count);
   measurements.ranges.assign(static_cast<std::size_t>(threads), {0, 0});
   std::vector<InsertionReport> chunk_reports(static_cast<std::size_t>(threads));
+  const AngularSupport support{model.support_horizontal(g.binning()), model.support_vertical(g.binning())};
   run_parts(threads, [&](int part, int parts) {
     const std::size_t begin = points.count * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
     const std::size_t end = points.count * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
     std::size_t kept = begin;
     for (std::size_t i = begin; i < end; ++i)
-      if (poll_stop(i), to_measurement(points.xyz + i * points.stride_floats, g, model, measurements.slots[kept],
+      if (poll_stop(i), to_measurement(points.xyz + i * points.stride_floats, g, model, support, measurements.slots[kept],
                          chunk_reports[static_cast<std::size_t>(part)]))
         ++kept;
     measurements.ranges[static_cast<std::size_t>(part)] = {begin, kept};
