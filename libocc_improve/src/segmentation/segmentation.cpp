@@ -2,6 +2,7 @@
 
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "support/parallel.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -51,39 +52,117 @@ namespace {
 
 constexpr std::uint32_t kNone = 0;
 constexpr std::uint32_t kUnassigned = std::numeric_limits<std::uint32_t>::max();
+// Combines two per-ray masks: set where `ray` is and `excluded` is not (bitwise, so loops over it vectorise).
+constexpr auto and_not = [](std::uint8_t ray, std::uint8_t excluded) -> std::uint8_t { return ray & !excluded; };
 
-// The valid rays: a known, occupied surface inside the depth range.
-std::vector<std::uint8_t> valid_rays(const GridGeometry& geometry, const SurfaceMap& surface) {
-  std::vector<std::uint8_t> valid(surface.size(), 0);
+// Runs body(first_row, end_row) on the hardware's threads, each on its own block of [0, rows). Every
+// caller's rows are independent and each block writes only its own, so the result is the same for any split.
+template <typename Body>
+void for_row_blocks(int rows, Body&& body) {
+  const int parts = std::max(1, std::min(detail::resolve_thread_count(0), rows));
+  detail::run_parts(parts, [&](int part, int count) { body(rows * part / count, rows * (part + 1) / count); });
+}
+
+// The valid rays: a known, occupied surface inside the depth range, on an observable column (a NaN
+// improvement: outside the camera or a mask, which takes no part even where a neighbour's measurement gave
+// it a surface).
+std::vector<std::uint8_t> valid_rays(const GridGeometry& geometry, const SurfaceMap& surface,
+                                     const ImprovementMap& improvement) {
+  std::vector<std::uint8_t> valid(surface.size());
   const int bins = geometry.depth().bins();
-  for (std::size_t c = 0; c < surface.size(); ++c)
-    valid[c] = !surface.unknown[c] && surface.bin[c] >= 0 && surface.bin[c] < bins && surface.depth_m[c] > 0 &&
-               surface.probability[c] > 0.5f;
+  // Bitwise & rather than &&, and the arrays through plain pointers (a byte store through a vector's
+  // operator[] may alias the other vectors' bookkeeping): the loop runs in vector instructions.
+  const std::uint8_t* unknown = surface.unknown.data();
+  const std::int32_t* bin = surface.bin.data();
+  const float *depth = surface.depth_m.data(), *probability = surface.probability.data();
+  const float* value = improvement.value.data();
+  std::uint8_t* out = valid.data();
+  for (std::size_t c = 0, n = valid.size(); c < n; ++c)
+    out[c] = !unknown[c] & (bin[c] >= 0) & (bin[c] < bins) & (depth[c] > 0) & (probability[c] > 0.5f) &
+             !std::isnan(value[c]);
   return valid;
 }
 
+// The valid rays' surface points (zero elsewhere). The binning's back-projection is most of the cost: rows
+// run on the hardware's threads.
 std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const SurfaceMap& surface,
                                             const std::vector<std::uint8_t>& valid) {
   std::vector<Eigen::Vector3f> points(surface.size(), Eigen::Vector3f::Zero());
-  for (int e = 0; e < geometry.height(); ++e)
-    for (int a = 0; a < geometry.width(); ++a) {
-      const ColumnIndex c = geometry.column(a, e);
-      if (valid[c]) points[c] = geometry.point(a, e, surface.depth_m[c]).cast<float>();
-    }
+  for_row_blocks(geometry.height(), [&](int first_row, int end_row) {
+    for (int e = first_row; e < end_row; ++e)
+      for (int a = 0; a < geometry.width(); ++a) {
+        const ColumnIndex c = geometry.column(a, e);
+        if (valid[c]) points[c] = geometry.point(a, e, surface.depth_m[c]).cast<float>();
+      }
+  });
   return points;
+}
+
+// The RANSAC scoring subsample, one contiguous array per coordinate: it stays in cache over all iterations
+// and a plane scores it in vector instructions.
+struct ScoringSample {
+  Eigen::ArrayXf x, y, z;
+  ScoringSample(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint32_t>& candidates,
+                std::size_t stride) {
+    const auto size = static_cast<Eigen::Index>((candidates.size() + stride - 1) / stride);
+    x.resize(size), y.resize(size), z.resize(size);
+    for (Eigen::Index i = 0; i < size; ++i) {
+      const Eigen::Vector3f& p = points[candidates[static_cast<std::size_t>(i) * stride]];
+      x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
+    }
+  }
+  /// Points within `band` of the plane. The distance is summed as Eigen's Vector3f::dot sums it, x + (y + z),
+  /// so a point scores here exactly as normal.dot(p) + offset classifies it in the refinement.
+  std::size_t inliers(const Eigen::Vector3f& normal, float offset, float band) const {
+    return static_cast<std::size_t>(
+        ((normal.x() * x + (normal.y() * y + normal.z() * z) + offset).abs() < band).count());
+  }
+};
+
+// The least-squares plane through the points within `band` of a plane: its normal is the inliers'
+// covariance's smallest eigenvector. Returns the inlier count (the plane is left as it was without inliers).
+std::size_t refine_plane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint32_t>& candidates,
+                         float band, Eigen::Vector3f& normal, float& offset) {
+  // The sums of the coordinates and of their 6 distinct products (the second moment is symmetric), each
+  // summed in candidate order.
+  double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+  std::size_t inliers = 0;
+  for (std::uint32_t c : candidates)
+    if (std::abs(normal.dot(points[c]) + offset) < band) {
+      const double x = points[c].x(), y = points[c].y(), z = points[c].z();
+      sx += x, sy += y, sz += z;
+      sxx += x * x, sxy += x * y, sxz += x * z, syy += y * y, syz += y * z, szz += z * z;
+      ++inliers;
+    }
+  if (inliers == 0) return 0;
+  const auto count = static_cast<double>(inliers);
+  const Eigen::Vector3d mean = Eigen::Vector3d(sx, sy, sz) / count;
+  Eigen::Matrix3d second;
+  second << sxx, sxy, sxz, sxy, syy, syz, sxz, syz, szz;
+  const Eigen::Matrix3d covariance = second / count - mean * mean.transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+  normal = solver.eigenvectors().col(0).cast<float>();
+  offset = -normal.dot(mean.cast<float>());
+  return inliers;
 }
 
 // RANSAC for the plane with most inliers among the valid rays (scored on a subsample), refined by a
 // least-squares fit to its inliers. Marks the inliers in `plane` and returns their count (0 when the best
 // plane is smaller than params.plane_min_columns).
 std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint8_t>& valid,
-                                const SegmentationParams& params, std::vector<std::uint8_t>& plane) {
-  std::vector<std::uint32_t> candidates;
-  for (std::size_t c = 0; c < valid.size(); ++c)
-    if (valid[c]) candidates.push_back(static_cast<std::uint32_t>(c));
-  if (candidates.size() < params.plane_min_columns) return 0;
+                                std::size_t valid_columns, const SegmentationParams& params,
+                                std::vector<std::uint8_t>& plane) {
+  if (valid_columns < params.plane_min_columns) return 0;
+  // The valid rays' indices, written branch-free: every ray is written, and the next overwrites it unless valid.
+  std::vector<std::uint32_t> candidates(valid.size() + 1);
+  std::size_t kept = 0;
+  for (std::size_t c = 0; c < valid.size(); ++c) {
+    candidates[kept] = static_cast<std::uint32_t>(c);
+    kept += valid[c];
+  }
+  candidates.resize(kept);
   // A fixed stride keeps the scoring cost near 5,000 points whatever the image size.
-  const std::size_t stride = std::max<std::size_t>(1, candidates.size() / 5000);
+  const ScoringSample sample(points, candidates, std::max<std::size_t>(1, candidates.size() / 5000));
   std::uint64_t state = 0x9E3779B97F4A7C15ull ^ params.plane_seed;
   auto next_index = [&]() {  // splitmix64: deterministic and good enough for sampling
     state += 0x9E3779B97F4A7C15ull;
@@ -93,10 +172,6 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
     return candidates[(z ^ (z >> 31)) % candidates.size()];
   };
   const float band = static_cast<float>(params.plane_distance_m);
-  // The scoring subsample copied into one contiguous block: it stays in cache over all iterations.
-  std::vector<Eigen::Vector3f> sample;
-  sample.reserve(candidates.size() / stride + 1);
-  for (std::size_t i = 0; i < candidates.size(); i += stride) sample.push_back(points[candidates[i]]);
   Eigen::Vector3f best_normal = Eigen::Vector3f::UnitZ();
   float best_offset = 0;
   std::size_t best_score = 0;
@@ -109,72 +184,130 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
     if (!(norm > 1e-9f)) continue;
     normal /= norm;
     const float offset = -normal.dot(p0);
-    std::size_t score = 0;
-    for (const Eigen::Vector3f& p : sample) score += std::abs(normal.dot(p) + offset) < band;
+    const std::size_t score = sample.inliers(normal, offset, band);
     if (score > best_score) best_score = score, best_normal = normal, best_offset = offset;
   }
   if (best_score == 0) return 0;
-  // Least-squares refinement on the inliers: the normal is the covariance's smallest eigenvector.
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d second = Eigen::Matrix3d::Zero();
-  std::size_t inliers = 0;
-  for (std::uint32_t c : candidates)
-    if (std::abs(best_normal.dot(points[c]) + best_offset) < band) {
-      const Eigen::Vector3d p = points[c].cast<double>();
-      mean += p;
-      second += p * p.transpose();
-      ++inliers;
-    }
-  if (inliers < params.plane_min_columns) return 0;
-  mean /= static_cast<double>(inliers);
-  const Eigen::Matrix3d covariance = second / static_cast<double>(inliers) - mean * mean.transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-  const Eigen::Vector3f normal = solver.eigenvectors().col(0).cast<float>();
-  const float offset = -normal.dot(mean.cast<float>());
+  if (refine_plane(points, candidates, band, best_normal, best_offset) < params.plane_min_columns) return 0;
   std::size_t count = 0;
   for (std::uint32_t c : candidates)
-    if (std::abs(normal.dot(points[c]) + offset) < band) plane[c] = 1, ++count;
+    if (std::abs(best_normal.dot(points[c]) + best_offset) < band) plane[c] = 1, ++count;
   return count >= params.plane_min_columns ? count : 0;
+}
+
+// The bounding box of the member rays (width 0 when there are none).
+struct RayBox {
+  int a0 = 0, e0 = 0, width = 0, height = 0;
+};
+RayBox member_box(const std::vector<std::uint8_t>& member, int width, int height) {
+  int a_min = width, a_max = -1, e_min = height, e_max = -1;
+  for (int e = 0; e < height; ++e) {
+    const auto row = member.begin() + static_cast<std::ptrdiff_t>(e) * width;
+    const auto first = std::find(row, row + width, 1);
+    if (first == row + width) continue;
+    const auto last = std::find(std::make_reverse_iterator(row + width), std::make_reverse_iterator(first), 1);
+    a_min = std::min(a_min, static_cast<int>(first - row));
+    a_max = std::max(a_max, static_cast<int>(last.base() - row) - 1);
+    e_min = std::min(e_min, e), e_max = e;
+  }
+  if (a_max < 0) return {};
+  return {a_min, e_min, a_max - a_min + 1, e_max - e_min + 1};
 }
 
 // Summed-area tables of the surface points over the member rays, so a ray's neighbourhood mean costs four
 // look-ups whatever its radius (which follows the ray's depth). Only member rays (valid, not contour, not plane) are
-// summed, so a mean never mixes the two sides of a depth step.
+// summed, so a mean never mixes the two sides of a depth step. The table covers the member rays' bounding box
+// but holds only a window of its rows, computed as a scan down the image advances: a ray's means read only
+// rows within `reach` of its own, and the whole table (7 MB for a table-top frame) cost 1-4 ms of page
+// faults and memory traffic per frame. Each row is summed exactly as in the whole table.
+// Each mean is computed once and kept while its row is in the window: a ray's centre is an end of its
+// neighbours' sections and its ends are the centres and ends of others (of the 9 means a ray reads, most
+// were read before at the same radius).
 class PointMeans {
 public:
-  PointMeans(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint8_t>& member, int width, int height) {
-    // The tables cover only the box around the member rays (the objects, a fraction of a table-top frame).
-    int a_min = width, a_max = -1, e_min = height, e_max = -1;
-    for (int e = 0; e < height; ++e)
-      for (int a = 0; a < width; ++a)
-        if (member[static_cast<std::size_t>(e) * width + a])
-          a_min = std::min(a_min, a), a_max = std::max(a_max, a), e_min = std::min(e_min, e), e_max = std::max(e_max, e);
-    if (a_max < 0) return;
-    a0_ = a_min, e0_ = e_min, width_ = a_max - a_min + 1, height_ = e_max - e_min + 1;
-    sum_.assign(static_cast<std::size_t>(width_ + 1) * (height_ + 1), Eigen::Vector4d::Zero());
-    for (int e = 0; e < height_; ++e) {
-      Eigen::Vector4d row = Eigen::Vector4d::Zero();
-      for (int a = 0; a < width_; ++a) {
-        const std::size_t c = static_cast<std::size_t>(e + e0_) * width + a + a0_;
-        if (member[c]) row += Eigen::Vector4d(points[c].x(), points[c].y(), points[c].z(), 1.0);
-        at(a + 1, e + 1) = at(a + 1, e) + row;
-      }
-    }
+  PointMeans(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint8_t>& member, int width,
+             const RayBox& box, int reach)
+      : points_(points), member_(member), image_width_(width), box_(box), reach_(reach),
+        window_(power_of_two_at_least(std::min(box.height + 1, 2 * reach))) {
+    if (box_.width == 0) return;
+    sum_.resize(static_cast<std::size_t>(window_) * (box_.width + 1));
+    std::fill_n(&at(0, 0), box_.width + 1, Eigen::Vector4d::Zero());
   }
-  /// Mean of the member points in the square of radius r around (a, e) (zero when it holds none).
-  Eigen::Vector3f mean(int a, int e, int r) const {
-    if (sum_.empty()) return Eigen::Vector3f::Zero();
-    const int a0 = std::clamp(a - r - a0_, 0, width_), a1 = std::clamp(a + r + 1 - a0_, 0, width_);
-    const int e0 = std::clamp(e - r - e0_, 0, height_), e1 = std::clamp(e + r + 1 - e0_, 0, height_);
-    const Eigen::Vector4d s = at(a1, e1) - at(a0, e1) - at(a1, e0) + at(a0, e0);
-    return (s.head<3>() / std::max(s.w(), 1.0)).cast<float>();
+  /// Makes the rows the means around image row e read available (rows more than `reach` above it may go).
+  void advance_to(int e) {
+    for (const int last = std::min(box_.height, e - box_.e0 + reach_); summed_ < last; ++summed_) sum_next_row();
+  }
+  /// Mean of the member points in the square of radius r around the member ray (a, e) (zero when it holds
+  /// none); r and the distance from the row last advanced to together within the reach.
+  Eigen::Vector3f mean(int a, int e, int r) {
+    Memo& memo = memo_for(r);
+    const int row = e - box_.e0, slot = row & (window_ - 1);
+    const std::size_t first = static_cast<std::size_t>(slot) * box_.width;
+    if (memo.row_held[static_cast<std::size_t>(slot)] != row) {
+      std::fill_n(memo.known.begin() + static_cast<std::ptrdiff_t>(first), box_.width, 0);
+      memo.row_held[static_cast<std::size_t>(slot)] = row;
+    }
+    const std::size_t i = first + static_cast<std::size_t>(a - box_.a0);
+    if (!memo.known[i]) memo.value[i] = box_mean(a, e, r), memo.known[i] = 1;
+    return memo.value[i];
   }
 
 private:
-  Eigen::Vector4d& at(int a, int e) { return sum_[static_cast<std::size_t>(e) * (width_ + 1) + a]; }
-  const Eigen::Vector4d& at(int a, int e) const { return sum_[static_cast<std::size_t>(e) * (width_ + 1) + a]; }
-  int a0_ = 0, e0_ = 0, width_ = 0, height_ = 0;  // the member rays' bounding box
+  // The means computed at one radius, in a window of rows like the table's.
+  struct Memo {
+    std::vector<Eigen::Vector3f> value;
+    std::vector<std::uint8_t> known;
+    std::vector<int> row_held;  // per slot of the window: the box row its entries are of (-1: none yet)
+  };
+  Memo& memo_for(int r) {
+    if (memo_.size() <= static_cast<std::size_t>(r)) memo_.resize(static_cast<std::size_t>(r) + 1);
+    Memo& memo = memo_[static_cast<std::size_t>(r)];
+    if (memo.row_held.empty()) {
+      memo.value.resize(static_cast<std::size_t>(window_) * box_.width);
+      memo.known.resize(memo.value.size());
+      memo.row_held.assign(static_cast<std::size_t>(window_), -1);
+    }
+    return memo;
+  }
+  Eigen::Vector3f box_mean(int a, int e, int r) const {
+    const int a0 = std::clamp(a - r - box_.a0, 0, box_.width), a1 = std::clamp(a + r + 1 - box_.a0, 0, box_.width);
+    const int e0 = std::clamp(e - r - box_.e0, 0, box_.height), e1 = std::clamp(e + r + 1 - box_.e0, 0, box_.height);
+    const Eigen::Vector4d* top = &at(0, e0);
+    const Eigen::Vector4d* bottom = &at(0, e1);
+    const Eigen::Vector4d s = bottom[a1] - bottom[a0] - top[a1] + top[a0];
+    return (s.head<3>() / std::max(s.w(), 1.0)).cast<float>();
+  }
+  static int power_of_two_at_least(int rows) {
+    int out = 1;
+    while (out < rows) out *= 2;
+    return out;
+  }
+  // Table row summed_ + 1 (the sums over the box's first summed_ + 1 image rows) from row summed_.
+  void sum_next_row() {
+    const Eigen::Vector4d* above = &at(0, summed_);
+    Eigen::Vector4d* below = &at(0, summed_ + 1);
+    below[0] = Eigen::Vector4d::Zero();
+    Eigen::Vector4d row = Eigen::Vector4d::Zero();
+    const std::size_t first = static_cast<std::size_t>(box_.e0 + summed_) * image_width_ + box_.a0;
+    for (int a = 0; a < box_.width; ++a) {
+      const std::size_t c = first + a;
+      if (member_[c]) row += Eigen::Vector4d(points_[c].x(), points_[c].y(), points_[c].z(), 1.0);
+      below[a + 1] = above[a + 1] + row;
+    }
+  }
+  // A power-of-two window: the row in it is a mask, not a division, on every look-up.
+  Eigen::Vector4d& at(int a, int e) { return sum_[static_cast<std::size_t>(e & (window_ - 1)) * (box_.width + 1) + a]; }
+  const Eigen::Vector4d& at(int a, int e) const {
+    return sum_[static_cast<std::size_t>(e & (window_ - 1)) * (box_.width + 1) + a];
+  }
+  const std::vector<Eigen::Vector3f>& points_;
+  const std::vector<std::uint8_t>& member_;
+  int image_width_;
+  RayBox box_;
+  int reach_, window_;
+  int summed_ = 0;  // table rows 0..summed_ are summed; the last window_ of them are kept
   std::vector<Eigen::Vector4d> sum_;
+  std::vector<Memo> memo_;  // by radius
 };
 
 // The angle between the rays of two neighbouring columns at the image centre: converts the crease arm
@@ -186,16 +319,23 @@ double column_angle_rad(const GridGeometry& geometry) {
   return std::acos(std::clamp(cosine, -1.0, 1.0));
 }
 
-// The crease arm in pixels at a ray of the given range (step 3), and the smoothing radius that goes with it.
+// A crease arm of a given length in pixels (step 3), the smoothing radius that goes with it and the steps of
+// a diagonal section: each is sqrt(2) longer, so fewer of them for the same arm.
 struct ArmPixels {
-  int arm = 2, radius = 1;
+  int arm = 2, radius = 1, diagonal_steps = 1;
 };
-ArmPixels arm_pixels(double range_m, double pixel_rad, const SegmentationParams& params) {
-  ArmPixels out;
-  out.arm = std::clamp(static_cast<int>(std::lround(params.crease_arm_m / (range_m * pixel_rad))), 2,
-                       params.crease_max_arm_px);
-  out.radius = static_cast<int>(std::lround(params.crease_smoothing_share * out.arm));
-  return out;
+// Per arm length, 0 to the longest: the roundings once per frame rather than per ray.
+std::vector<ArmPixels> arm_table(const SegmentationParams& params) {
+  std::vector<ArmPixels> arms(static_cast<std::size_t>(params.crease_max_arm_px) + 1);
+  for (int arm = 0; arm <= params.crease_max_arm_px; ++arm)
+    arms[static_cast<std::size_t>(arm)] = {arm, static_cast<int>(std::lround(params.crease_smoothing_share * arm)),
+                                           std::max(1, static_cast<int>(std::lround(arm / std::sqrt(2.0))))};
+  return arms;
+}
+// The crease arm's length in pixels at a ray of the given range.
+int arm_length_px(double range_m, double pixel_rad, const SegmentationParams& params) {
+  return std::clamp(static_cast<int>(std::lround(params.crease_arm_m / (range_m * pixel_rad))), 2,
+                    params.crease_max_arm_px);
 }
 
 // A section bends wherever one arm reaches across the crease, so crease rays form a band up to an arm wide
@@ -212,10 +352,15 @@ ArmPixels arm_pixels(double range_m, double pixel_rad, const SegmentationParams&
 // Contour rays may lie on the section: the improvement's band often lines a crease too. The tests run
 // cheapest and most selective first: most rays lie on flat faces and fail the bend at once.
 std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const std::vector<Eigen::Vector3f>& points,
-                                          const PointMeans& means, const std::vector<std::uint8_t>& member,
+                                          const std::vector<std::uint8_t>& member,
                                           const std::vector<std::uint8_t>& passable, const SegmentationParams& params) {
   const int width = geometry.width(), height = geometry.height();
   std::vector<std::uint8_t> crease(member.size(), 0);
+  const RayBox box = member_box(member, width, height);
+  const std::vector<ArmPixels> arms = arm_table(params);
+  // The farthest row a ray's means read: the longest arm, its smoothing radius and the summed-area table's
+  // row past the square.
+  const int reach = arms.back().arm + arms.back().radius + 1;
   const double pixel_rad = column_angle_rad(geometry);
   const float max_cosine = static_cast<float>(std::cos(M_PI - params.crease_min_bend_deg * M_PI / 180.0));
   const float step_cosine = static_cast<float>(std::cos(params.crease_min_view_angle_deg * M_PI / 180.0));
@@ -227,13 +372,13 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
       if (!passable[ray(a0 + k * du, e0 + k * dv)]) return false;
     return true;
   };
-  auto folds = [&](int a, int e) {
-    const auto [arm, radius] = arm_pixels(points[ray(a, e)].norm(), pixel_rad, params);
+  auto folds = [&](PointMeans& means, int a, int e) {
+    const int length = arm_length_px(points[ray(a, e)].norm(), pixel_rad, params);
+    const auto [arm, radius, diagonal_steps] = arms[static_cast<std::size_t>(length)];
     const Eigen::Vector3f centre = means.mean(a, e, radius);
     const float centre_range = centre.norm();
     for (const auto& [du, dv] : kDirections) {
-      // Diagonal steps are sqrt(2) longer: fewer of them for the same arm.
-      const int steps = du != 0 && dv != 0 ? std::max(1, static_cast<int>(std::lround(arm / std::sqrt(2.0)))) : arm;
+      const int steps = du != 0 && dv != 0 ? diagonal_steps : arm;
       const int a0 = a - du * steps, e0 = e - dv * steps, a1 = a + du * steps, e1 = e + dv * steps;
       if (std::min(a0, a1) < 0 || std::max(a0, a1) >= width || e0 < 0 || e1 >= height) continue;
       if (!member[ray(a0, e0)] || !member[ray(a1, e1)]) continue;
@@ -252,10 +397,14 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
   };
   // Every ray is tested: testing every second ray each way (2 x 2 blocks) was a third cheaper, but left
   // the band closing around a stack only at the defaults (a 0.5 cm change of the arm joined learn17's boxes).
-  for (int e = 0; e < height; ++e) {
-    throw_if_stop_requested();
-    for (int a = 0; a < width; ++a) crease[ray(a, e)] = member[ray(a, e)] && folds(a, e);
-  }
+  for_row_blocks(height, [&](int first_row, int end_row) {
+    PointMeans means(points, member, width, box, reach);
+    for (int e = first_row; e < end_row; ++e) {
+      throw_if_stop_requested();
+      means.advance_to(e);
+      for (int a = 0; a < width; ++a) crease[ray(a, e)] = member[ray(a, e)] && folds(means, a, e);
+    }
+  });
   return crease;
 }
 
@@ -333,6 +482,18 @@ std::size_t attach_to_closest_in_depth(const std::vector<std::uint8_t>& valid, c
   return attached;
 }
 
+// Labels the 4-connected regions of kUnassigned rays segments + 1, segments + 2, ...; returns their number.
+std::uint32_t label_islands(int width, int height, std::uint32_t segments, std::vector<std::uint32_t>& label) {
+  std::vector<std::uint8_t> islands(label.size());
+  std::transform(label.begin(), label.end(), islands.begin(),
+                 [](std::uint32_t l) -> std::uint8_t { return l == kUnassigned; });
+  std::vector<std::uint32_t> island_label(label.size(), kUnassigned);
+  const std::vector<std::size_t> island_sizes = connected_components(islands, width, height, island_label);
+  for (std::size_t c = 0; c < label.size(); ++c)
+    if (islands[c]) label[c] = segments + island_label[c];
+  return static_cast<std::uint32_t>(island_sizes.size());
+}
+
 }  // namespace
 
 Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap& surface,
@@ -347,46 +508,36 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   Segmentation out;
   out.width = width;
   out.height = height;
-  out.contour.assign(n, 0);
-  std::vector<std::uint8_t> valid = valid_rays(geometry, surface);
-  // Columns that are not observable (NaN: outside the camera or a mask) take no part, even where a
-  // neighbour's measurement gave them a surface.
-  for (std::size_t c = 0; c < n; ++c)
-    if (std::isnan(improvement.value[c])) valid[c] = 0;
-  std::vector<std::uint8_t> interior(n, 0);  // valid, not contour, not plane: where segments grow
-  for (std::size_t c = 0; c < n; ++c) {
-    if (!valid[c]) continue;
-    ++out.valid_columns;
-    out.contour[c] = improvement.value[c] < params.contour_improvement_below;
-    out.contour_columns += out.contour[c];
-    interior[c] = !out.contour[c];
-  }
+  // The per-ray masks combine with bitwise operators in std::transform: branch-free loops over plain
+  // pointers, which the compiler vectorises.
+  const std::vector<std::uint8_t> valid = valid_rays(geometry, surface, improvement);
+  out.contour.resize(n);
+  std::transform(valid.begin(), valid.end(), improvement.value.begin(), out.contour.begin(),
+                 [&](std::uint8_t v, float i) -> std::uint8_t { return v & (i < params.contour_improvement_below); });
+  std::vector<std::uint8_t> interior(n);  // valid, not contour, not crease, not plane: where segments grow
+  std::transform(valid.begin(), valid.end(), out.contour.begin(), interior.begin(), and_not);
+  out.valid_columns = static_cast<std::size_t>(std::count(valid.begin(), valid.end(), 1));
+  out.contour_columns = static_cast<std::size_t>(std::count(out.contour.begin(), out.contour.end(), 1));
 
   const std::vector<Eigen::Vector3f> points = surface_points(geometry, surface, valid);
   std::vector<std::uint8_t> plane(n, 0);
-  if (params.remove_dominant_plane) out.plane_columns = find_dominant_plane(points, valid, params, plane);
+  if (params.remove_dominant_plane) out.plane_columns = find_dominant_plane(points, valid, out.valid_columns, params, plane);
   if (out.plane_columns == 0) std::fill(plane.begin(), plane.end(), 0);
   out.crease.assign(n, 0);
   if (params.split_concave_creases) {
     // The plane is a segment already: no crease in or across it.
-    std::vector<std::uint8_t> member(n, 0), passable(n, 0);
-    for (std::size_t c = 0; c < n; ++c) {
-      member[c] = interior[c] && !plane[c];
-      passable[c] = valid[c] && !plane[c];
-    }
-    out.crease = concave_creases(geometry, points, PointMeans(points, member, width, height), member, passable, params);
-    for (std::size_t c = 0; c < n; ++c) {
-      out.crease_columns += out.crease[c];
-      if (out.crease[c]) interior[c] = 0;
-    }
+    std::vector<std::uint8_t> member(n), passable(n);
+    std::transform(interior.begin(), interior.end(), plane.begin(), member.begin(), and_not);
+    std::transform(valid.begin(), valid.end(), plane.begin(), passable.begin(), and_not);
+    out.crease = concave_creases(geometry, points, member, passable, params);
+    out.crease_columns = static_cast<std::size_t>(std::count(out.crease.begin(), out.crease.end(), 1));
   }
+  std::transform(interior.begin(), interior.end(), out.crease.begin(), interior.begin(), and_not);
+  std::transform(interior.begin(), interior.end(), plane.begin(), interior.begin(), and_not);
 
   // Working labels: kNone where no surface, kUnassigned where valid but not yet in a segment.
-  std::vector<std::uint32_t> label(n, kUnassigned);
-  for (std::size_t c = 0; c < n; ++c) {
-    if (!valid[c]) label[c] = kNone;
-    if (plane[c]) interior[c] = 0;
-  }
+  std::vector<std::uint32_t> label(n);
+  std::transform(valid.begin(), valid.end(), label.begin(), [](std::uint8_t v) { return v ? kUnassigned : kNone; });
   std::vector<std::size_t> sizes = connected_components(interior, width, height, label);
   // Regions too small to stand alone go back to the pool that is attached by depth.
   std::vector<std::uint32_t> kept(sizes.size() + 1, kUnassigned);
@@ -400,13 +551,8 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   }
   out.attached_columns = attach_to_closest_in_depth(valid, surface, width, height, label);
   // Valid regions no segment reached (islands between holes) become segments of their own.
-  std::vector<std::uint8_t> islands(n, 0);
-  for (std::size_t c = 0; c < n; ++c) islands[c] = label[c] == kUnassigned;
-  std::vector<std::uint32_t> island_label(n, kUnassigned);
-  const std::vector<std::size_t> island_sizes = connected_components(islands, width, height, island_label);
-  for (std::size_t c = 0; c < n; ++c)
-    if (islands[c]) label[c] = segments + island_label[c];
-  segments += static_cast<std::uint32_t>(island_sizes.size());
+  if (std::find(label.begin(), label.end(), kUnassigned) != label.end())
+    segments += label_islands(width, height, segments, label);
 
   // Statistics, then labels renumbered by size (largest first) so label 1 is the largest segment.
   std::vector<Segment> stats(segments);
