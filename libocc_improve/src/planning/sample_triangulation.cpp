@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 #include <string>
 
 namespace occ_improve {
@@ -46,13 +47,11 @@ std::uint64_t hilbert_index(std::uint32_t side, std::uint32_t x, std::uint32_t y
   for (std::uint32_t s = side / 2; s > 0; s /= 2) {
     const std::uint32_t rx = (x & s) ? 1u : 0u, ry = (y & s) ? 1u : 0u;
     d += static_cast<std::uint64_t>(s) * s * ((3u * rx) ^ ry);
-    if (ry == 0) {
-      if (rx == 1) {
-        x = side - 1 - x;
-        y = side - 1 - y;
-      }
-      std::swap(x, y);
-    }
+    // The quadrant's rotation by selects, not branches: the samples come in no order along the curve.
+    const bool flip = ry == 0 && rx == 1;
+    const std::uint32_t fx = flip ? side - 1 - x : x, fy = flip ? side - 1 - y : y;
+    x = ry == 0 ? fy : fx;
+    y = ry == 0 ? fx : fy;
   }
   return d;
 }
@@ -70,7 +69,7 @@ public:
     tris_.reserve(2 * points_.size());  // 2 n + 1 triangles in the end
     mark_.reserve(2 * points_.size());
     tris_.push_back({{s - 3, s - 2, s - 1}, {-1, -1, -1}});
-    mark_.push_back(-1);
+    mark_.push_back(0);
     first_of_.assign(points_.size(), -1);
   }
 
@@ -84,7 +83,8 @@ public:
   bool alive(std::size_t t) const { return mark_[t] != kDead; }
 
 private:
-  static constexpr std::int64_t kDead = -2;
+  static constexpr std::int64_t kDead = std::numeric_limits<std::int64_t>::min();  // never a stamp
+  static constexpr std::array<int, 3> kNext{1, 2, 0}, kPrev{2, 0, 1};  // (i + 1) % 3, (i + 2) % 3
   struct Edge {
     std::int32_t a, b, outer;
   };
@@ -107,7 +107,7 @@ private:
       bool moved = false;
       for (unsigned k = 0; k < 3 && !moved; ++k) {
         const unsigned i = (k + step) % 3;
-        if (orient(pt(T.v[(i + 1) % 3]), pt(T.v[(i + 2) % 3]), p) < 0) {
+        if (orient(pt(T.v[kNext[i]]), pt(T.v[kPrev[i]]), p) < 0) {
           t = T.n[i];
           moved = true;
         }
@@ -119,7 +119,7 @@ private:
   /// The triangles whose circumcircle holds p strictly (connected, from the one containing p), and the
   /// edges that bound them.
   void dig_cavity(std::int32_t start, std::int32_t p) {
-    ++stamp_;
+    ++stamp_;  // mark_: stamp_ in the cavity, -stamp_ found outside it (a triangle beside two cavity edges)
     const Point& q = pt(p);
     bad_.clear();
     boundary_.clear();
@@ -132,13 +132,17 @@ private:
       for (int i = 0; i < 3; ++i) {
         const Triangle& U = tris_[static_cast<std::size_t>(u)];
         const std::int32_t nb = U.n[i];
-        if (nb >= 0 && mark_[static_cast<std::size_t>(nb)] == stamp_) continue;  // inside the cavity
-        if (nb >= 0 && inside_circle(nb, q)) {
-          mark_[static_cast<std::size_t>(nb)] = stamp_;
-          stack_.push_back(nb);
-          continue;
+        if (nb >= 0) {
+          std::int64_t& mark = mark_[static_cast<std::size_t>(nb)];
+          if (mark == stamp_) continue;  // inside the cavity
+          if (mark != -stamp_ && inside_circle(nb, q)) {
+            mark = stamp_;
+            stack_.push_back(nb);
+            continue;
+          }
+          mark = -stamp_;
         }
-        boundary_.push_back({U.v[(i + 1) % 3], U.v[(i + 2) % 3], nb});
+        boundary_.push_back({U.v[kNext[i]], U.v[kPrev[i]], nb});
       }
     }
   }
@@ -187,18 +191,34 @@ private:
   std::int32_t last_ = 0;
 };
 
-/// Sample indices in Hilbert-curve order of their pixels.
+/// Sample indices in Hilbert-curve order of their pixels: a least-significant-digit radix sort of their
+/// positions along the curve (distinct, one sample per pixel: the order std::sort gave on (position,
+/// index) keys), two passes over the samples at 640 x 480.
 std::vector<std::int32_t> insertion_order(const SampleTriangulation& s) {
   std::uint32_t side = 1;
-  while (side < static_cast<std::uint32_t>(std::max(s.width, s.height))) side *= 2;
-  std::vector<std::uint64_t> keys(s.vertex_count());
-  for (std::size_t v = 0; v < keys.size(); ++v) {
-    const auto i = static_cast<std::int32_t>(v);
-    keys[v] = (hilbert_index(side, static_cast<std::uint32_t>(s.x(i)), static_cast<std::uint32_t>(s.y(i))) << 22) | v;
+  int position_bits = 0;
+  while (side < static_cast<std::uint32_t>(std::max(s.width, s.height))) {
+    side *= 2;
+    position_bits += 2;
   }
-  std::sort(keys.begin(), keys.end());
-  std::vector<std::int32_t> order(keys.size());
-  for (std::size_t k = 0; k < keys.size(); ++k) order[k] = static_cast<std::int32_t>(keys[k] & ((1u << 22) - 1));
+  std::vector<std::uint64_t> position(s.vertex_count());
+  std::vector<std::int32_t> order(s.vertex_count()), sorted(s.vertex_count());
+  for (std::size_t v = 0; v < position.size(); ++v) {
+    const auto i = static_cast<std::int32_t>(v);
+    position[v] = hilbert_index(side, static_cast<std::uint32_t>(s.x(i)), static_cast<std::uint32_t>(s.y(i)));
+    order[v] = i;
+  }
+  constexpr int kDigitBits = 11;
+  for (int shift = 0; shift < position_bits; shift += kDigitBits) {
+    std::array<std::size_t, (1u << kDigitBits) + 1> start{};  // start[d + 1]: how many have digit d, then the sum
+    const auto digit = [&](std::int32_t v) {
+      return static_cast<std::size_t>((position[static_cast<std::size_t>(v)] >> shift) & ((1u << kDigitBits) - 1));
+    };
+    for (const std::int32_t v : order) ++start[digit(v) + 1];
+    for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
+    for (const std::int32_t v : order) sorted[start[digit(v)]++] = v;  // stable: keeps the lower digits' order
+    order.swap(sorted);
+  }
   return order;
 }
 
@@ -305,8 +325,12 @@ void check_sparse_depth_image(const std::vector<float>& depth, int width, int he
   detail::require_parameter(height > 0 && height <= kMaxSide, "height", height, "in [1, 2^20]");
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   require_shape("sparse depth image", ColumnShape::of_arrays(width, height, {depth.size()}));
+  const auto bad = [](float z) { return z < 0.0f || std::abs(z) == std::numeric_limits<float>::infinity(); };
+  bool any_bad = false;
+  for (std::size_t c = 0; c < n; ++c) any_bad |= bad(depth[c]);  // no early exit, no branch per pixel
+  if (!any_bad) return;
   for (std::size_t c = 0; c < n; ++c)
-    if (depth[c] < 0.0f || std::isinf(depth[c]))
+    if (bad(depth[c]))
       throw InvalidInput("sparse depth image: pixel (" + std::to_string(c % static_cast<std::size_t>(width)) + ", " +
                          std::to_string(c / static_cast<std::size_t>(width)) + ") holds depth " +
                          std::to_string(depth[c]) + " (must be >= 0 and finite; 0 or NaN = no sample)");
@@ -343,15 +367,24 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
   SampleTriangulation s;
   s.width = width;
   s.height = height;
-  for (std::size_t c = 0; c < sparse_depth_m.size(); ++c)
-    if (sparse_depth_m[c] > 0.0f) {  // NaN fails the test: no sample
-      s.vertex_column.push_back(static_cast<ColumnIndex>(c));
-      s.vertex_x.push_back(static_cast<std::int32_t>(c % static_cast<std::size_t>(width)));
-      s.vertex_y.push_back(static_cast<std::int32_t>(c / static_cast<std::size_t>(width)));
-      s.vertex_depth_m.push_back(sparse_depth_m[c]);
-    }
-  if (s.vertex_count() >= (std::size_t{1} << 22))
-    throw InvalidInput("triangulate_samples: " + std::to_string(s.vertex_count()) + " samples (at most 2^22)");
+  const auto is_sample = [&](std::size_t c) { return sparse_depth_m[c] > 0.0f; };  // NaN fails the test
+  std::size_t samples = 0;
+  for (std::size_t c = 0; c < sparse_depth_m.size(); ++c) samples += is_sample(c);
+  if (samples >= (std::size_t{1} << 22))
+    throw InvalidInput("triangulate_samples: " + std::to_string(samples) + " samples (at most 2^22)");
+  s.vertex_column.reserve(samples);
+  s.vertex_x.reserve(samples);
+  s.vertex_y.reserve(samples);
+  s.vertex_depth_m.reserve(samples);
+  std::size_t c = 0;
+  for (std::int32_t y = 0; y < height; ++y)
+    for (std::int32_t x = 0; x < width; ++x, ++c)
+      if (is_sample(c)) {
+        s.vertex_column.push_back(static_cast<ColumnIndex>(c));
+        s.vertex_x.push_back(x);
+        s.vertex_y.push_back(y);
+        s.vertex_depth_m.push_back(sparse_depth_m[c]);
+      }
   triangulate(s);
   measure_non_planarity(s, model);
   flag_interpolable(s, model, params);
