@@ -251,6 +251,14 @@ TEST(CoarseToFine, CoveragePassPutsOneRayInEveryBlockFirst) {
   EXPECT_EQ(plan_next_shot(mapper, none, coarse_to_fine(12)).columns, s.columns);  // deterministic
 }
 
+// Every 4th column and row of the 64 x 48 camera (columns 1, 5, ..., 61).
+std::vector<std::uint32_t> every_fourth_ray() {
+  std::vector<std::uint32_t> rays;
+  for (std::uint32_t v = 1; v < 48; v += 4)
+    for (std::uint32_t u = 1; u < 64; u += 4) rays.push_back(v * 64 + u);
+  return rays;
+}
+
 // A slanted wall (depth grows to the right: the nearest rule's constant model leaves a residual
 // everywhere) seen at every 4th column and row, so every block of 16 holds samples and the whole shot is
 // refinement. At most one ray per block of the refinement level, whatever the driver: 300 rays need
@@ -264,9 +272,7 @@ Mapper slanted_wall_seen_sparsely() {
   clean.disparity_step_px = 0;
   VirtualSensor sensor(depth, small_camera(), clean);
   Mapper mapper(kinect_v1(small_camera()));
-  std::vector<std::uint32_t> grid;
-  for (std::uint32_t v = 1; v < 48; v += 4)
-    for (std::uint32_t u = 1; u < 64; u += 4) grid.push_back(v * 64 + u);
+  const std::vector<std::uint32_t> grid = every_fourth_ray();
   mapper.insert(PointSpan::from(sensor.points(grid, sensor.shoot(grid))));
   return mapper;
 }
@@ -291,8 +297,8 @@ TEST(CoarseToFine, AtMostOneRayPerBlockPerShot) {
   }
 }
 
-// After a sparse pass over a wall with a box in front, refinement by the residual goes to the box's edge.
-TEST(CoarseToFine, RefinementByTheResidualGoesToTheDepthEdge) {
+// A wall at 2 m with a box at 1 m in front of its right part (columns 40-63), seen at every_fourth_ray.
+Mapper wall_and_box_seen_sparsely() {
   std::vector<float> depth(64 * 48, 2.0f);
   for (int v = 0; v < 48; ++v)
     for (int u = 40; u < 64; ++u) depth[static_cast<std::size_t>(v * 64 + u)] = 1.0f;
@@ -301,10 +307,14 @@ TEST(CoarseToFine, RefinementByTheResidualGoesToTheDepthEdge) {
   clean.disparity_step_px = 0;
   VirtualSensor sensor(depth, small_camera(), clean);
   Mapper mapper(kinect_v1(small_camera()));
-  std::vector<std::uint32_t> grid;  // every 4th column and row
-  for (std::uint32_t v = 1; v < 48; v += 4)
-    for (std::uint32_t u = 1; u < 64; u += 4) grid.push_back(v * 64 + u);
+  const std::vector<std::uint32_t> grid = every_fourth_ray();
   mapper.insert(PointSpan::from(sensor.points(grid, sensor.shoot(grid))));
+  return mapper;
+}
+
+// After a sparse pass over the wall and box, refinement by the residual goes to the box's edge.
+TEST(CoarseToFine, RefinementByTheResidualGoesToTheDepthEdge) {
+  const Mapper mapper = wall_and_box_seen_sparsely();
   const Shot s = plan_next_shot(mapper, ReturnRecord::for_grid(64, 48), coarse_to_fine(40, RefineBy::residual));
   // 40 rays: blocks of 4 (192 >= 4 x 40); the 2 x 12 blocks whose 3 x 3 neighbourhood holds the edge
   // (u 36-43) rank first, in rank order; the flat rest follows with residuals ~0.
@@ -313,6 +323,64 @@ TEST(CoarseToFine, RefinementByTheResidualGoesToTheDepthEdge) {
     const int u = static_cast<int>(s.columns[i] % 64);
     EXPECT_TRUE(u >= 36 && u < 44) << "ray " << i << " at column " << u;
   }
+}
+
+// The same wall and box: refinement by triangles goes to the triangles across the edge (their vertices
+// lie far off their neighbours' plane), each ray at a triangle's centroid, not on a sample.
+TEST(CoarseToFine, RefinementByTrianglesGoesToTheDepthEdge) {
+  const Mapper mapper = wall_and_box_seen_sparsely();
+  ReturnRecord record = ReturnRecord::for_grid(64, 48);  // the sparse pass's rays, all returned
+  const std::vector<std::uint32_t> seen = every_fourth_ray();
+  record.record_shot(seen, std::vector<std::uint8_t>(seen.size(), 1));
+  const Shot s = plan_next_shot(mapper, record, coarse_to_fine(40, RefineBy::triangles));
+  ASSERT_EQ(s.columns.size(), 40u);
+  // The triangles with a vertex on either side of the edge (columns 37 and 41) or next to one (33, 45)
+  // have their non-planarity capped; of those, the largest go first.
+  for (std::size_t i = 0; i < 20; ++i) {
+    const int u = static_cast<int>(s.columns[i] % 64), v = static_cast<int>(s.columns[i] / 64);
+    EXPECT_TRUE(u > 33 && u < 45) << "ray " << i << " at column " << u;
+    EXPECT_FALSE(u % 4 == 1 && v % 4 == 1) << "ray " << i << " on a sample";
+  }
+  EXPECT_EQ(plan_next_shot(mapper, record, coarse_to_fine(40, RefineBy::triangles)).columns, s.columns);  // deterministic
+  // The triangles are the surface's: the overload without the mapper cannot refine by them.
+  EXPECT_THROW(plan_next_shot(mapper.improvement(), mapper.pyramid(), mapper.model(), record,
+                              coarse_to_fine(40, RefineBy::triangles)),
+               InvalidParameter);
+}
+
+// Closed loop over the wall and box with a silent patch: every shot is full and asks only new rays until
+// every ray has been asked once (centroids of tiny triangles, which round onto their vertices, give way
+// to the unasked rays of highest score), then re-asks rather than stalling.
+TEST(CoarseToFine, TrianglesAskEveryRayOnceBeforeAnyTwice) {
+  std::vector<float> depth(64 * 48, 2.0f);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u) {
+      if (u >= 40) depth[static_cast<std::size_t>(v * 64 + u)] = 1.0f;
+      if (u < 12 && v < 12) depth[static_cast<std::size_t>(v * 64 + u)] = 0.0f;  // no return
+    }
+  VirtualSensorParams clean;
+  clean.sigma_depth_per_m2 = 0;
+  clean.disparity_step_px = 0;
+  VirtualSensor sensor(depth, small_camera(), clean);
+  Mapper mapper(kinect_v1(small_camera()));
+  ReturnRecord record = ReturnRecord::for_grid(64, 48);
+  const int budget = 256, shots = 64 * 48 / budget + 2;
+  std::vector<int> asked(64 * 48, 0);
+  for (int shot = 0; shot < shots; ++shot) {
+    const Shot plan = plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles));
+    ASSERT_EQ(plan.columns.size(), static_cast<std::size_t>(budget)) << "shot " << shot;
+    const std::vector<float> depth = sensor.shoot(plan.columns);
+    mapper.insert(PointSpan::from(sensor.points(plan.columns, depth)));
+    std::vector<std::uint8_t> got(depth.size());
+    for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
+    record.record_shot(plan.columns, got);
+    for (ColumnIndex c : plan.columns) ++asked[c];
+    const bool all_asked = std::count(asked.begin(), asked.end(), 0) == 0;
+    if (!all_asked) {
+      EXPECT_EQ(*std::max_element(asked.begin(), asked.end()), 1) << "a ray asked twice at shot " << shot;
+    }
+  }
+  EXPECT_EQ(std::count(asked.begin(), asked.end(), 0), 0);
 }
 
 TEST(CoarseToFine, BadRequestsThrowNamingTheValue) {

@@ -121,7 +121,8 @@ void bind_plan_request(py::module_& m) {
   py::enum_<RefineBy>(m, "RefineBy", "What ranks coarse_to_fine's refinement blocks.")
       .value("improvement", RefineBy::improvement, "the block's |mean improvement|")
       .value("residual", RefineBy::residual, "the samples' residual from the predictor's local model")
-      .value("both", RefineBy::both, "their product");
+      .value("both", RefineBy::both, "their product")
+      .value("triangles", RefineBy::triangles, "the measured samples' triangles by area x non-planarity");
   py::enum_<LocalModel>(m, "LocalModel", "The predictor's local model whose error the residual estimates.")
       .value("constant", LocalModel::constant, "nearest-sample prediction")
       .value("plane", LocalModel::plane, "linear prediction");

@@ -195,6 +195,28 @@ def test_coarse_to_fine_covers_every_block_once_on_a_fresh_view(sample):
     assert np.array_equal(np.sort(block), np.arange(blocks_u * blocks_v))
 
 
+def test_coarse_to_fine_by_triangles_asks_new_rays_between_samples(sample):
+    """Refinement by the measured samples' triangles from Python: after a sparse first shot, the second
+    shot is full, asks none of the first shot's rays, and is the same shot when planned again."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    record = empty_record(mapper)
+    request = oi.PlanRequest(budget_rays=4000, shape=oi.ShotShape.coarse_to_fine, refine_by=oi.RefineBy.triangles)
+    seen = set()
+    for _ in range(2):
+        shot = oi.plan_next_shot(mapper, record, request)
+        assert len(shot) == 4000 and not seen & set(shot.columns.tolist())
+        v, u = np.divmod(shot.columns.astype(np.int64), mapper.width)
+        z = depth[v, u]
+        got = np.isfinite(z) & (z > 0)
+        rays = np.stack([(u - intrinsics.cx) / intrinsics.fx * z, (v - intrinsics.cy) / intrinsics.fy * z, z], axis=1)
+        mapper.insert(rays[got].astype(np.float32))
+        record.record_shot(shot.columns, got)
+        seen |= set(shot.columns.tolist())
+    assert np.array_equal(oi.plan_next_shot(mapper, record, request).columns,
+                          oi.plan_next_shot(mapper, record, request).columns)
+
+
 def test_coarse_to_fine_needs_the_mapper(pixel_mapper):
     with pytest.raises(oi.Error):
         oi.plan_next_shot(pixel_mapper.improvement(), empty_record(pixel_mapper),

@@ -2,7 +2,9 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/planning/sample_triangulation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -160,8 +162,112 @@ double block_priority(const ImprovementPyramid& pyramid, int level, std::size_t 
   return request.refine_by == RefineBy::both ? geometric * improvement : geometric;
 }
 
-Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SensorModel& model,
-                         const ReturnRecord& returns, const PlanRequest& request) {
+// Refinement by blocks (improvement, residual, both): one ray per block of the level that leaves the
+// priority room to choose, blocks holding a ray of this shot (`taken`) left out.
+std::vector<ColumnIndex> refine_by_blocks(const ImprovementPyramid& pyramid, const SensorModel& model,
+                                          const std::vector<float>& score, const std::vector<float>& probability,
+                                          const std::vector<std::uint8_t>& eligible,
+                                          const std::vector<ColumnIndex>& taken, const ReturnRecord& returns,
+                                          const PlanRequest& request, std::size_t left) {
+  int level = 0;
+  for (int l = ImprovementPyramid::kLevels - 1; l >= 0; --l)
+    if (pyramid.block_count(l) >= kBlocksPerRay * left) {
+      level = l;
+      break;
+    }
+  std::vector<std::uint8_t> block_taken(pyramid.block_count(level), 0);
+  for (ColumnIndex c : taken) block_taken[pyramid.block_of_column(level, c)] = 1;
+  const BlockBest blocks = best_ray_per_block(pyramid, level, score, eligible.data(), returns);
+  const std::vector<ColumnIndex>& best = blocks.column;
+  std::vector<std::pair<std::uint64_t, std::size_t>> ranked;
+  for (std::size_t b = 0; b < best.size(); ++b) {
+    if (best[b] == kNoColumn || block_taken[b] || !(score[best[b]] > 0)) continue;
+    const double p = static_cast<double>(probability[best[b]]) * blocks.return_rate[b];
+    const BlockSummary& summary = pyramid.block(level, static_cast<int>(b % static_cast<std::size_t>(pyramid.blocks_x(level))),
+                                                static_cast<int>(b / static_cast<std::size_t>(pyramid.blocks_x(level))));
+    const double rays = summary.observable_rays ? summary.observable_rays : 1.0;
+    const double unmeasured = returns.empty() ? 1.0 - summary.samples / rays : 1.0 - blocks.measured[b] / rays;
+    const double priority = block_priority(pyramid, level, b, p, unmeasured, model, request);
+    if (priority > 0) ranked.push_back({rank_key(static_cast<float>(priority), static_cast<ColumnIndex>(b)), b});
+  }
+  const std::size_t n = std::min(left, ranked.size());
+  std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(n), ranked.end(),
+                    [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<ColumnIndex> out(n);
+  for (std::size_t i = 0; i < n; ++i) out[i] = best[ranked[i].second];
+  return out;
+}
+
+// The samples the refinement triangulates: the surface's depth at the rays that returned themselves (not
+// the neighbours their OPDF reached, whose depth is borrowed); without a record, every depth sample.
+std::vector<float> measured_depth_image(const SurfaceMap& surface, const ReturnRecord& returns) {
+  std::vector<float> image = sample_depth_image(surface);
+  if (returns.empty()) return image;
+  for (std::size_t c = 0; c < image.size(); ++c)
+    if (returns.returned()[c] == 0) image[c] = 0.0f;
+  return image;
+}
+
+// Appends to `out`, up to `size` rays, the eligible observable rays of highest score (rank_key order).
+void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8_t>& eligible, std::size_t size,
+                   std::vector<ColumnIndex>& out) {
+  if (out.size() >= size) return;
+  const std::vector<ColumnIndex> best = best_columns(score, eligible.data(), size - out.size());
+  out.insert(out.end(), best.begin(), best.end());
+}
+
+// Refinement by triangles (the independent prototype of issue 20): the measured samples are
+// triangulated in the image plane, and one ray goes to the centroid of each of the `left` triangles of
+// largest area x non-planarity x return probability. A large triangle is a region the samples leave
+// sparse; a non-planar one (a vertex off its neighbours' plane, in sigmas) is where the linear
+// prediction is wrong; a flat, small one needs nothing. The centroid lies inside the triangle, so it is
+// an unsampled ray between samples; one ray per triangle keeps a shot's rays apart.
+std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
+                                             const std::vector<float>& score, const std::vector<float>& probability,
+                                             const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
+                                             double cap_sigmas, std::size_t left) {
+  const SampleTriangulation triangulation =
+      triangulate_samples(measured_depth_image(surface, returns), surface.width, surface.height, model);
+  std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
+  // Never a ray asked before (silent, or a vertex) nor a vertex: the centroid of a triangle of a pixel
+  // or less rounds onto its vertices.
+  std::vector<std::uint8_t> unasked = eligible;
+  for (ColumnIndex v : triangulation.vertex_column) unasked[v] = 0;
+  if (!returns.empty())
+    for (std::size_t c = 0; c < unasked.size(); ++c)
+      if (returns.asked()[c] > 0) unasked[c] = 0;
+  for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
+    const ColumnIndex c = triangulation.centroid_column(t);
+    // Any observable ray (NaN: not observable), negative improvement too: a depth transition is where
+    // the paper re-acquires. The return probability discounts silent regions; the improvement's size is
+    // not used (in the ablation of the block refinement it ranked worse than geometry alone).
+    if (!unasked[c] || std::isnan(score[c])) continue;
+    const double non_planarity = std::min(triangulation.non_planarity_sigmas(t), cap_sigmas);
+    const double priority = triangulation.area_px2(t) * non_planarity * probability[c];
+    if (priority > 0) ranked.push_back({priority, c});
+  }
+  std::sort(ranked.begin(), ranked.end(),
+            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  std::vector<ColumnIndex> out;
+  for (std::size_t i = 0; i < ranked.size() && out.size() < left; ++i) {
+    const ColumnIndex c = ranked[i].second;
+    if (!unasked[c]) continue;  // two small triangles may share a centroid pixel
+    unasked[c] = 0;
+    out.push_back(c);
+  }
+  // Once the triangles are a pixel or two (about half the rays measured) their centroids fall on their
+  // own vertices: the rest of the shot goes to the unasked rays of highest score (ties spread by
+  // rank_key), so that a shot stays full and measures new rays; once every ray has been asked, to the
+  // asked ones of highest score (a second measurement settles a ray's depth).
+  fill_by_score(score, unasked, left, out);
+  std::vector<std::uint8_t> not_in_shot = eligible;
+  for (ColumnIndex c : out) not_in_shot[c] = 0;
+  fill_by_score(score, not_in_shot, left, out);
+  return out;
+}
+
+Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
+                         const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request) {
   const std::vector<float> probability = return_probability_map(returns, request.return_model);
   std::vector<float> score(probability.size());
   for (std::size_t c = 0; c < score.size(); ++c) score[c] = probability[c] * improvement.value[c];
@@ -190,38 +296,16 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
     for (std::size_t i = 0; i < open.size() && shot.columns.size() < budget; ++i) take(best[open[i].second]);
   }
   const std::size_t coverage_rays = shot.columns.size();
-  // 2. Refinement: one ray per block of the level that leaves the priority room to choose.
+  // 2. Refinement with the rays left.
   const std::size_t left = budget - coverage_rays;
   if (left > 0) {
-    int level = 0;
-    for (int l = ImprovementPyramid::kLevels - 1; l >= 0; --l)
-      if (pyramid.block_count(l) >= kBlocksPerRay * left) {
-        level = l;
-        break;
-      }
     std::vector<std::uint8_t> eligible = mask ? request.candidates : std::vector<std::uint8_t>(score.size(), 1);
-    std::vector<std::uint8_t> block_taken(pyramid.block_count(level), 0);
-    for (std::size_t i = 0; i < coverage_rays; ++i) {
-      eligible[shot.columns[i]] = 0;
-      block_taken[pyramid.block_of_column(level, shot.columns[i])] = 1;
-    }
-    const BlockBest blocks = best_ray_per_block(pyramid, level, score, eligible.data(), returns);
-    const std::vector<ColumnIndex>& best = blocks.column;
-    std::vector<std::pair<std::uint64_t, std::size_t>> ranked;
-    for (std::size_t b = 0; b < best.size(); ++b) {
-      if (best[b] == kNoColumn || block_taken[b] || !(score[best[b]] > 0)) continue;
-      const double p = static_cast<double>(probability[best[b]]) * blocks.return_rate[b];
-      const BlockSummary& summary = pyramid.block(level, static_cast<int>(b % static_cast<std::size_t>(pyramid.blocks_x(level))),
-                                                  static_cast<int>(b / static_cast<std::size_t>(pyramid.blocks_x(level))));
-      const double rays = summary.observable_rays ? summary.observable_rays : 1.0;
-      const double unmeasured = returns.empty() ? 1.0 - summary.samples / rays : 1.0 - blocks.measured[b] / rays;
-      const double priority = block_priority(pyramid, level, b, p, unmeasured, model, request);
-      if (priority > 0) ranked.push_back({rank_key(static_cast<float>(priority), static_cast<ColumnIndex>(b)), b});
-    }
-    const std::size_t n = std::min(left, ranked.size());
-    std::partial_sort(ranked.begin(), ranked.begin() + static_cast<std::ptrdiff_t>(n), ranked.end(),
-                      [](const auto& a, const auto& b) { return a.first > b.first; });
-    for (std::size_t i = 0; i < n; ++i) take(best[ranked[i].second]);
+    for (ColumnIndex c : shot.columns) eligible[c] = 0;
+    const std::vector<ColumnIndex> refined =
+        request.refine_by == RefineBy::triangles
+            ? refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas, left)
+            : refine_by_blocks(pyramid, model, score, probability, eligible, shot.columns, returns, request, left);
+    for (ColumnIndex c : refined) take(c);
   }
   shot.ranked_rays = shot.columns.size();
   return shot;
@@ -287,17 +371,28 @@ Shot plan_next_shot(const ImprovementMap& improvement, const ReturnRecord& retur
   return decide_stop(std::move(shot), request);
 }
 
-Shot plan_next_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SensorModel& model,
-                    const ReturnRecord& returns, const PlanRequest& request) {
-  if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(improvement, returns, request);
+namespace {
+// coarse_to_fine with the surface its triangle refinement reads (nullptr: none given).
+Shot plan_coarse_to_fine(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
+                         const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request) {
   request.validate(improvement.width, improvement.height);
   require_shape("multi-scale pyramid", pyramid.shape(), "the improvement map", improvement.shape());
   require_shape("return record", returns.shape(), "the improvement map", improvement.shape());
-  return decide_stop(coarse_to_fine_shot(improvement, pyramid, model, returns, request), request);
+  if (request.refine_by == RefineBy::triangles && !surface)
+    throw InvalidParameter("refine_by triangles triangulates the map's surface: call plan_next_shot with the mapper");
+  return decide_stop(coarse_to_fine_shot(improvement, pyramid, surface, model, returns, request), request);
+}
+}  // namespace
+
+Shot plan_next_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SensorModel& model,
+                    const ReturnRecord& returns, const PlanRequest& request) {
+  if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(improvement, returns, request);
+  return plan_coarse_to_fine(improvement, pyramid, nullptr, model, returns, request);
 }
 
 Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const PlanRequest& request) {
-  return plan_next_shot(mapper.improvement(), mapper.pyramid(), mapper.model(), returns, request);
+  if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(mapper.improvement(), returns, request);
+  return plan_coarse_to_fine(mapper.improvement(), mapper.pyramid(), &mapper.surface(), mapper.model(), returns, request);
 }
 
 int decimation_step(int width, int height, int budget_rays) {

@@ -23,11 +23,11 @@ constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 ful
 
 const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decimation",
                                       "d_guided",    "e_returns",       "f_reacquire",
-                                      "g_coarse_to_fine", "g_improvement", "g_residual"};
+                                      "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles"};
 
 bool is_coarse_to_fine(SelectStrategy s) {
   return s == SelectStrategy::coarse_both || s == SelectStrategy::coarse_improvement ||
-         s == SelectStrategy::coarse_residual;
+         s == SelectStrategy::coarse_residual || s == SelectStrategy::coarse_triangles;
 }
 
 }  // namespace
@@ -38,7 +38,7 @@ const std::vector<SelectStrategy>& compared_select_strategies() {
   using S = SelectStrategy;
   static const std::vector<SelectStrategy> compared{S::uniform,         S::decimation,  S::guided,
                                                     S::guided_returns,  S::guided_reacquire, S::coarse_both,
-                                                    S::coarse_improvement, S::coarse_residual};
+                                                    S::coarse_improvement, S::coarse_residual, S::coarse_triangles};
   return compared;
 }
 
@@ -155,6 +155,7 @@ public:
     while (strategy_ == SelectStrategy::full ? shots_ < kReferenceFrames : static_cast<double>(rays_asked_) < limit - 0.5) {
       throw_if_stop_requested();  // a run is thousands of shots; the library polls within each
       const Shot shot = next_shot();
+      if (shot.columns.empty()) break;  // the plan has nothing left to take: the curve ends here
       if (shot.stop && stop_rays_ == 0) stop_rays_ = rays_asked_;
       acquire(shot.columns);
       expected_since += shot.expected_gain;
@@ -210,7 +211,8 @@ private:
         request.shape = ShotShape::coarse_to_fine;
         request.refine_by = strategy_ == SelectStrategy::coarse_both          ? RefineBy::both
                             : strategy_ == SelectStrategy::coarse_improvement ? RefineBy::improvement
-                                                              : RefineBy::residual;
+                            : strategy_ == SelectStrategy::coarse_triangles   ? RefineBy::triangles
+                                                                              : RefineBy::residual;
         // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
         request.local_model = rule_ == DepthPredictionRule::linear ? LocalModel::plane : LocalModel::constant;
       }

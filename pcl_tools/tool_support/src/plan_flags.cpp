@@ -18,6 +18,7 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
   const std::string refine = *command_line.text("-refine");
   request.refine_by = refine == "improvement" ? RefineBy::improvement
                       : refine == "both"      ? RefineBy::both
+                      : refine == "triangles" ? RefineBy::triangles
                                               : RefineBy::residual;
   const std::string window = *command_line.text("-window");
   const auto x = window.find('x');

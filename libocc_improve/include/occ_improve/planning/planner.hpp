@@ -36,6 +36,12 @@
 //                    predictor's local model; a block with too few samples inherits its parent's r, and
 //                    with none up to 16 columns r = 0 (unseen: the coverage pass's; or silent)
 //       both:        the residual's priority x |mean improvement|
+//     or, with triangles, not by blocks: the rays that returned (no record: the surface's depth samples)
+//     are triangulated in the image plane (sample_triangulation.hpp) and one ray goes to the centroid of
+//     each of the R triangles of largest area x non-planarity (its vertices' largest leave-one-out plane
+//     residual, in sigmas) x the centroid ray's return probability: large triangles are where the
+//     samples are sparse, non-planar ones where a linear prediction is wrong (the independent prototype
+//     of issue 20). Needs the surface: the Mapper overload of plan_next_shot;
 //     (default residual: in the ablation the paper's measure made (g) slower on every scene)
 //     with p = the return probability of the block's best ray x the block's return rate (R + 1) / (A + 1)
 //     over the record's asks of its columns (the per-ray prior only reaches 8 neighbours; measured without
@@ -57,8 +63,9 @@ namespace occ_improve {
 
 enum class ShotShape { rays, window, decimation, coarse_to_fine };
 
-/// What ranks the refinement blocks of coarse_to_fine (the ablation of docs/SELECTIVE.md).
-enum class RefineBy { improvement, residual, both };
+/// What ranks coarse_to_fine's refinement (the ablation of docs/SELECTIVE.md): blocks (improvement,
+/// residual, both) or the measured samples' triangles (triangles).
+enum class RefineBy { improvement, residual, both, triangles };
 
 class Mapper;
 

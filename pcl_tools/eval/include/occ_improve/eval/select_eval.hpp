@@ -23,11 +23,13 @@ struct SelectScene {
 
 /// (a) full frames, (b) uniform random without replacement, (c) regular decimation, (d) improvement-guided,
 /// (e) (d) + return model, (f) (e) + re-acquisition of negative rays, (g) coarse-to-fine by the multi-scale
-/// improvement x the predictor's residual (coarse_both), or by one of them.
+/// improvement x the predictor's residual (coarse_both), by one of them, or by the samples' triangles
+/// (coarse_triangles: area x non-planarity).
 enum class SelectStrategy {
-  full, uniform, decimation, guided, guided_returns, guided_reacquire, coarse_both, coarse_improvement, coarse_residual
+  full, uniform, decimation, guided, guided_returns, guided_reacquire, coarse_both, coarse_improvement, coarse_residual,
+  coarse_triangles
 };
-/// "a_full", "b_uniform", ..., "g_coarse_to_fine", "g_improvement", "g_residual" (the CSVs' names).
+/// "a_full", "b_uniform", ..., "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles" (the CSVs' names).
 const char* select_strategy_name(SelectStrategy strategy);
 /// Every strategy but (a), which is always run (the reference), in the CSVs' order.
 const std::vector<SelectStrategy>& compared_select_strategies();
