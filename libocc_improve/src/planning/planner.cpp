@@ -218,10 +218,10 @@ void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8
 
 // Refinement by triangles (the independent prototype of issue 20): the measured samples are
 // triangulated in the image plane, and one ray goes to the centroid of each of the `left` triangles of
-// largest area x non-planarity x return probability. A large triangle is a region the samples leave
-// sparse; a non-planar one (a vertex off its neighbours' plane, in sigmas) is where the linear
-// prediction is wrong; a flat, small one needs nothing. The centroid lies inside the triangle, so it is
-// an unsampled ray between samples; one ray per triangle keeps a shot's rays apart.
+// largest area x non-planarity (capped at cap_sigmas) x return probability. A large triangle is a region
+// the samples leave sparse; a non-planar one (a vertex off its neighbours' plane, in sigmas) is where the
+// linear prediction is wrong; a flat, small one needs nothing. The centroid lies inside the triangle, so
+// it is an unsampled ray between samples; one ray per triangle keeps a shot's rays apart.
 std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
                                              const std::vector<float>& score, const std::vector<float>& probability,
                                              const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
@@ -229,8 +229,8 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
   const SampleTriangulation triangulation =
       triangulate_samples(measured_depth_image(surface, returns), surface.width, surface.height, model);
   std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
-  // Never a ray asked before (silent, or a vertex) nor a vertex: the centroid of a triangle of a pixel
-  // or less rounds onto its vertices.
+  // Neither a vertex nor a ray asked before (measured, or silent): the centroid of a triangle of a pixel
+  // or less rounds onto its own vertices.
   std::vector<std::uint8_t> unasked = eligible;
   for (ColumnIndex v : triangulation.vertex_column) unasked[v] = 0;
   if (!returns.empty())
