@@ -322,7 +322,7 @@ double column_angle_rad(const GridGeometry& geometry) {
 // A crease arm of a given length in pixels (step 3), the smoothing radius that goes with it and the steps of
 // a diagonal section: each is sqrt(2) longer, so fewer of them for the same arm.
 struct ArmPixels {
-  int arm = 2, radius = 1, diagonal_steps = 1;
+  int arm, radius, diagonal_steps;
 };
 // Per arm length, 0 to the longest: the roundings once per frame rather than per ray.
 std::vector<ArmPixels> arm_table(const SegmentationParams& params) {
@@ -514,7 +514,7 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   out.contour.resize(n);
   std::transform(valid.begin(), valid.end(), improvement.value.begin(), out.contour.begin(),
                  [&](std::uint8_t v, float i) -> std::uint8_t { return v & (i < params.contour_improvement_below); });
-  std::vector<std::uint8_t> interior(n);  // valid, not contour, not crease, not plane: where segments grow
+  std::vector<std::uint8_t> interior(n);  // valid, not contour (crease and plane rays leave below): where segments grow
   std::transform(valid.begin(), valid.end(), out.contour.begin(), interior.begin(), and_not);
   out.valid_columns = static_cast<std::size_t>(std::count(valid.begin(), valid.end(), 1));
   out.contour_columns = static_cast<std::size_t>(std::count(out.contour.begin(), out.contour.end(), 1));
