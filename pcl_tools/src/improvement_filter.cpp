@@ -156,25 +156,26 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
   return selected;
 }
 
-// The top modes' order and quota (header: "Top modes"). Keys: the ray's improvement, then its block's
-// mean improvement (what the block knows, multiscale.hpp), then the ray's spread rank (rank_key:
-// a tie is spread over the view, never taken by point index), then the point's own spread rank (several
-// points of one ray).
+// The top modes' order (header: "Top modes"): a jittered grid at the scale of the sampling, with the
+// improvement choosing inside each cell and among the cells of the last, partial round.
 template <typename PointT>
 pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray,
                                                        const std::vector<float>& point_improvement,
                                                        std::size_t keep) const {
+  if (keep == 0) return {};
   const ImprovementPyramid& pyramid = mapper_->pyramid();
   const GridGeometry& geometry = mapper_->geometry();
   struct Candidate {
     float improvement, block_mean;
     std::uint64_t ray_key, point_key;
-    std::size_t quota_block;
+    std::uint32_t cell, repeat;  ///< sampling cell; how many points of the same ray come before it
+    std::uint32_t round;         ///< its rank within its cell: the round that takes it
     pcl::index_t index;
   };
   std::vector<Candidate> candidates;
   candidates.reserve(with_ray.size());
-  std::vector<std::size_t> points_in_block(pyramid.block_count(kQuotaLevel), 0);
+  std::vector<std::uint32_t> points_of_ray(geometry.column_count(), 0);
+  std::size_t rays = 0;
   for (const auto i : with_ray) {
     const PointT& p = (*input_)[static_cast<std::size_t>(i)];
     ColumnIndex column = 0;
@@ -183,31 +184,45 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
     const int across = pyramid.blocks_x(kTieLevel);
     const float block_mean = pyramid.block(kTieLevel, static_cast<int>(b % static_cast<std::size_t>(across)),
                                            static_cast<int>(b / static_cast<std::size_t>(across))).mean_improvement();
-    const std::size_t quota_block = pyramid.block_of_column(kQuotaLevel, column);
-    ++points_in_block[quota_block];
-    candidates.push_back({point_improvement[static_cast<std::size_t>(i)], block_mean,
-                          rank_key(point_improvement[static_cast<std::size_t>(i)], column),
-                          rank_key(0.0f, static_cast<ColumnIndex>(i)), quota_block, i});
+    const std::uint32_t repeat = points_of_ray[column]++;
+    if (repeat == 0) ++rays;
+    const float value = point_improvement[static_cast<std::size_t>(i)];
+    candidates.push_back({value, block_mean, rank_key(value, column), rank_key(0.0f, static_cast<ColumnIndex>(i)),
+                          column, repeat, 0, i});
   }
-  std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
+  // Cells of side s columns hold about one kept point each: s^2 ~ rays / keep.
+  const int side = std::max(1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(rays) / static_cast<double>(keep)))));
+  const int cells_across = (geometry.width() + side - 1) / side;
+  for (Candidate& c : candidates) {
+    const ColumnIndex column = c.cell;
+    c.cell = static_cast<std::uint32_t>((geometry.elevation_bin_of(column) / side) * cells_across +
+                                        geometry.azimuth_bin_of(column) / side);
+  }
+  // Better first, by ray: the ray's improvement, its block's mean improvement, its spread rank, then the
+  // point's own spread rank.
+  const auto better = [](const Candidate& a, const Candidate& b) {
     if (a.improvement != b.improvement) return a.improvement > b.improvement;
     if (a.block_mean != b.block_mean) return a.block_mean > b.block_mean;
     if (a.ray_key != b.ray_key) return a.ray_key > b.ray_key;
     return a.point_key > b.point_key;
+  };
+  // Within a cell: distinct rays before a second point of one ray, then better first.
+  std::sort(candidates.begin(), candidates.end(), [&](const Candidate& a, const Candidate& b) {
+    if (a.cell != b.cell) return a.cell < b.cell;
+    if (a.repeat != b.repeat) return a.repeat < b.repeat;
+    return better(a, b);
   });
-  // Quota: at most kQuotaShare x its proportional share per block, so a frame's kept points cannot
-  // crowd on a few rays. The quotas add up to >= kQuotaShare x keep >= keep, so the walk always fills keep.
-  const double share = with_ray.empty() ? 0.0 : static_cast<double>(keep) / static_cast<double>(with_ray.size());
-  std::vector<std::size_t> taken(points_in_block.size(), 0);
+  for (std::size_t k = 0; k < candidates.size(); ++k)
+    candidates[k].round = k > 0 && candidates[k - 1].cell == candidates[k].cell ? candidates[k - 1].round + 1 : 0;
+  // Round by round; within a round, the cells whose candidate is better first.
+  const auto last = candidates.begin() + static_cast<std::ptrdiff_t>(std::min(keep, candidates.size()));
+  std::partial_sort(candidates.begin(), last, candidates.end(), [&](const Candidate& a, const Candidate& b) {
+    if (a.round != b.round) return a.round < b.round;
+    return better(a, b);
+  });
   pcl::Indices selected;
   selected.reserve(keep);
-  for (std::size_t k = 0; k < candidates.size() && selected.size() < keep; ++k) {
-    const std::size_t b = candidates[k].quota_block;
-    const auto quota = static_cast<std::size_t>(std::ceil(kQuotaShare * share * static_cast<double>(points_in_block[b])));
-    if (taken[b] >= quota) continue;
-    ++taken[b];
-    selected.push_back(candidates[k].index);
-  }
+  for (auto c = candidates.begin(); c != last; ++c) selected.push_back(c->index);
   return selected;
 }
 

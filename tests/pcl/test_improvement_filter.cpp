@@ -7,6 +7,7 @@
 #include "support/test_data.hpp"
 
 #include <pcl/common/io.h>
+#include <pcl/filters/random_sample.h>
 #include <pcl/io/pcd_io.h>
 
 #include <gtest/gtest.h>
@@ -323,9 +324,10 @@ void check_selective_sensing(const pcl::PointCloud<pcl::PointXYZRGBA>::Ptr& clou
 }
 
 // On a map that has seen nothing every ray ties at the no-data level: the kept points must be spread
-// over the view (not the top rows, as a tie broken by point index did), and no 16 x 16 block keeps more
-// than twice its share.
-TEST(ImprovementFilter, TiesAreSpreadAndEveryBlockKeepsAtMostTwiceItsShare) {
+// over the view (not the top rows, as a tie broken by point index did), as a jittered grid at the
+// sampling's scale: 5 % of the rays is one point per 4 x 4 cell (floor(sqrt(20)) = 4), never two in one
+// cell while cells are left, and fewer 8 x 8 blocks left empty than pcl::RandomSample leaves.
+TEST(ImprovementFilter, TiesAreSpreadAsAJitteredGridAtTheSamplingScale) {
   const Cloud::Ptr cloud = sample_cloud();
   auto mapper = std::make_shared<Mapper>(kinect_v1());
   ImprovementFilter<pcl::PointXYZ> filter;
@@ -337,24 +339,45 @@ TEST(ImprovementFilter, TiesAreSpreadAndEveryBlockKeepsAtMostTwiceItsShare) {
   filter.filter(kept);
   const pcl::Indices valid = with_ray(filter.getImprovementCloud());
   ASSERT_EQ(kept.size(), static_cast<std::size_t>(std::llround(0.05 * static_cast<double>(valid.size()))));
-  std::size_t top_half = 0;
-  std::map<std::size_t, std::size_t> kept_per_block, points_per_block;
-  const auto block_of = [&](pcl::index_t i) {
+  const GridGeometry& geometry = mapper->geometry();
+  const auto cell_of = [&](pcl::index_t i, int side) {
     ColumnIndex c = 0;
     const auto& p = (*cloud)[static_cast<std::size_t>(i)];
-    EXPECT_TRUE(mapper->geometry().column_of(p.x, p.y, p.z, c));
-    return mapper->pyramid().block_of_column(3, c);
+    EXPECT_TRUE(geometry.column_of(p.x, p.y, p.z, c));
+    return std::make_pair(geometry.elevation_bin_of(c) / side, geometry.azimuth_bin_of(c) / side);
   };
-  for (const auto i : valid) ++points_per_block[block_of(i)];
+  std::map<std::pair<int, int>, std::size_t> valid_per_cell, kept_per_cell;
+  for (const auto i : valid) ++valid_per_cell[cell_of(i, 4)];
+  ASSERT_GT(valid_per_cell.size(), kept.size());  // one round of cells is enough
+  std::size_t top_half = 0;
   for (const auto i : kept) {
     top_half += static_cast<std::size_t>(i) < cloud->size() / 2 ? 1 : 0;
-    ++kept_per_block[block_of(i)];
+    EXPECT_EQ(++kept_per_cell[cell_of(i, 4)], 1u);
   }
   EXPECT_NEAR(static_cast<double>(top_half), kept.size() / 2.0, kept.size() / 10.0);
-  const double share = static_cast<double>(kept.size()) / static_cast<double>(valid.size());
-  for (const auto& [block, count] : kept_per_block)
-    EXPECT_LE(count, static_cast<std::size_t>(std::ceil(2 * share * static_cast<double>(points_per_block[block]))));
-  EXPECT_GT(kept_per_block.size(), points_per_block.size() * 3 / 4);  // most blocks keep something
+
+  // Empty 8 x 8 blocks among those with at least 48 rays (2.4 kept points expected): the jittered grid
+  // leaves almost none, a random sample of as many points a few per cent of them (75 of the sample's).
+  pcl::RandomSample<pcl::PointXYZ> random;
+  random.setInputCloud(cloud);
+  random.setSample(static_cast<unsigned int>(kept.size()));
+  random.setSeed(1);
+  pcl::Indices random_kept;
+  random.filter(random_kept);
+  std::map<std::pair<int, int>, std::size_t> valid_per_block;
+  for (const auto i : valid) ++valid_per_block[cell_of(i, 8)];
+  const auto empty_blocks = [&](const pcl::Indices& chosen) {
+    std::map<std::pair<int, int>, std::size_t> chosen_per_block;
+    for (const auto i : chosen)
+      if (!std::isnan(filter.getImprovementCloud()[static_cast<std::size_t>(i)].improvement))
+        ++chosen_per_block[cell_of(i, 8)];
+    std::size_t empty = 0;
+    for (const auto& [block, rays] : valid_per_block) empty += rays >= 48 && chosen_per_block.count(block) == 0 ? 1 : 0;
+    return empty;
+  };
+  const std::size_t ours = empty_blocks(kept), theirs = empty_blocks(random_kept);
+  EXPECT_GT(theirs, 30u);
+  EXPECT_LT(ours * 10, theirs);
   pcl::Indices again;
   filter.filter(again);
   EXPECT_EQ(again, kept);  // deterministic

@@ -9,14 +9,18 @@
 //                   share of a frame worth keeping, cut the data where it adds least);
 //  - contour:       improvement < threshold (negative improvement marks depth discontinuities).
 // Per-point improvement = the improvement of the ray (column) the point's direction falls in.
-// Top modes (top_count, top_fraction), stratified like the planner's coarse_to_fine (docs/SELECTIVE.md):
-//  - order: the ray's improvement, then the mean improvement of its block of 4 x 4 columns (the map's
+// Top modes (top_count, top_fraction): a jittered grid at the scale of the sampling, refined by the
+// improvement (docs/SELECTIVE.md, "The same question in a PCL pipeline"):
+//  - cells: the grid's columns are cut into cells of s x s, s = floor(sqrt(rays / keep)) with `rays` the
+//    distinct rays the points fall in, so a cell holds about one kept point (5 % of a frame: 4 x 4, 20 %:
+//    2 x 2) and the kept points cover the view evenly instead of clumping as a random sample does;
+//  - rounds: round r takes the r-th point of every cell; inside a cell, distinct rays before a second
+//    point of one ray, then the better point; in the last, partial round the cells whose point is better
+//    go first;
+//  - better: the ray's improvement, then the mean improvement of its block of 4 x 4 columns (the map's
 //    multi-scale improvement, multiscale.hpp: of two unseen rays, the one in the less known block first),
 //    then the ray's spread rank (rank_key: a tie is spread over the view, never broken by point index,
-//    which on an organized frame would keep the top rows), then the point's own spread rank;
-//  - quota: a block of 16 x 16 columns keeps at most twice its proportional share of the points
-//    (ceil(2 x keep / points with a ray x its points)), so the kept points cannot crowd on a few rays or
-//    one region (the quotas add up to at least twice the kept count: it is always reached).
+//    which on an organized frame would keep the top rows), then the point's own spread rank.
 //
 // Points without a ray (NaN/Inf, rho = 0, direction outside the grid's field of view) are never kept,
 // neither in the normal nor in the negative (setNegative) output, like NaN points in pcl::PassThrough;
@@ -95,8 +99,6 @@ private:
   pcl::Indices stratified_top(const pcl::Indices& with_ray, const std::vector<float>& point_improvement,
                               std::size_t keep) const;
   static constexpr int kTieLevel = 1;      ///< pyramid level of the tie-breaking block (4 x 4 columns)
-  static constexpr int kQuotaLevel = 3;    ///< pyramid level of the quota block (16 x 16 columns)
-  static constexpr double kQuotaShare = 2; ///< a block keeps at most this x its proportional share
   bool parametersValid() const;
 
   std::shared_ptr<Mapper> mapper_;
