@@ -3,6 +3,8 @@
 #include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/planning/sample_triangulation.hpp"
+#include "occ_improve/mapper.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <gtest/gtest.h>
 
@@ -30,6 +32,53 @@ SurfaceMap unknown_surface(int w, int h) {
 
 void measure(SurfaceMap& s, int x, int y, float depth, float p = 0.8f) {
   s.set(static_cast<std::size_t>(y * s.width + x), {depth, p, 10, false});
+}
+
+// kSampleProbabilityMin is eq. 1 on the ray for a return at B = 3, and lies between what a pixel's own
+// return gives its column (B = 0) and the most a neighbour's return gives it on the pixel-native grid (B = 12)
+// even summed over a thousand frames of its 8 neighbours.
+TEST(DepthSample, ProbabilityMinIsEqOneAtTheColumnsEdge) {
+  const double sigma = 0.01;
+  EXPECT_NEAR(opdf(0.0, 3.0, sigma), kSampleProbabilityMin, 2e-4);
+  EXPECT_GE(opdf(0.0, 3.0, sigma), kSampleProbabilityMin);
+  EXPECT_GT(opdf(0.0, 0.0, sigma), 0.8);
+  double neighbour_logit = 0;
+  for (double t = -3; t <= 3; t += 0.01) neighbour_logit = std::max(neighbour_logit, logit_opdf(t * sigma, 12.0, sigma));
+  EXPECT_GT(neighbour_logit, 0.0);
+  EXPECT_LT(probability_from_logit(1000 * 8 * neighbour_logit), kSampleProbabilityMin);
+}
+
+// Four returns around a pixel of a fresh pixel-native map: their columns are samples; the pixel between
+// them, which their OPDFs all reach (B = 12), holds P just above 0.5 at about their depth (one neighbour's
+// edge alone stays within the surface's tie tolerance; four add up past it) and is not a sample, so a
+// prediction fills it from the four.
+TEST(DepthSample, NeighboursReturnsDoNotMakeAColumnASample) {
+  PinholeIntrinsics camera;
+  camera.width = 32;
+  camera.height = 24;
+  camera.cx = 15.5;
+  camera.cy = 11.5;
+  Mapper mapper(kinect_v1(camera));
+  const int u = 10, v = 7;
+  const float z = 2.0f;
+  std::vector<Eigen::Vector3f> points;
+  for (const auto& [du, dv] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}})
+    points.emplace_back(static_cast<float>((u + du - camera.cx) * z / camera.fx),
+                        static_cast<float>((v + dv - camera.cy) * z / camera.fy), z);
+  mapper.insert(PointSpan::from(points));
+  const SurfaceMap& s = mapper.surface();
+  const auto column = [&](int x, int y) { return static_cast<std::size_t>(y * camera.width + x); };
+  for (const auto& [du, dv] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+    EXPECT_TRUE(is_depth_sample(s, column(u + du, v + dv)));
+    EXPECT_GT(s.probability[column(u + du, v + dv)], 0.8f);
+  }
+  const std::size_t between = column(u, v);
+  EXPECT_GT(s.probability[between], 0.5f);  // P > 0.5, a sample by the rule before kSampleProbabilityMin
+  EXPECT_LT(s.probability[between], 0.5001f);
+  EXPECT_NEAR(s.depth_m[between], z, 0.02f);
+  EXPECT_FALSE(is_depth_sample(s, between));
+  const std::vector<float> samples = sample_depth_image(s);
+  EXPECT_EQ(std::count_if(samples.begin(), samples.end(), [](float d) { return d > 0.0f; }), 4);
 }
 
 TEST(DepthPrediction, NearestSampleWithinTheRadius) {

@@ -1,10 +1,14 @@
 #pragma once
 // A dense depth from sparse samples, by one of two rules (docs/SELECTIVE.md "Predicted depth").
 //
-// Samples: in a surface, a column is a sample when its surface is known with evidence of occupancy: not
-// unknown, P > 0.5 and inside the depth range (a column only carved free, or free to the grid's end, has
-// P <= 0.5; a column that only a neighbour's OPDF edge reached has P = 0.5 at the end of its carved free
-// space). In a sparse depth image, a pixel is a sample when its depth is > 0 (0 or NaN: none).
+// Samples: in a surface, a column is a sample when its surface is known with evidence of a return inside
+// the column: not unknown, P >= kSampleProbabilityMin and inside the depth range. A column only carved
+// free, or free to the grid's end, has P <= 0.5. A column that only the edges of its neighbours' OPDFs
+// reached has P just above 0.5 (on the pixel-native grid a neighbour's return reaches it at angular term
+// B >= 12: P_s < 0.5 + 1e-5 per return) and is not a sample: counting it made every column beside a
+// measured one a sample at the neighbour's depth, so the linear rule copied depths there instead of
+// interpolating (docs/SELECTIVE.md, "Samples"). In a sparse depth image, a pixel is a sample when its
+// depth is > 0 (0 or NaN: none).
 //
 // Rule `nearest`:
 //  - a sample keeps its own depth; any other column takes the depth of the nearest sample in chessboard
@@ -56,9 +60,16 @@ struct PredictedDepth {
   ColumnShape shape() const { return ColumnShape::of_arrays(width, height, {depth_m.size(), distance.size()}); }
 };
 
+/// The least surface probability of a sample: eq. 1 on its ray (d_rho = 0) for one return at angular term
+/// B = 3, 1/2 (1 + e^-7)^-1 + e^-3 / 3 = 0.51614, rounded down. On the pixel-native grid (angular sigma
+/// 1/sqrt(12) px) B = 3 is a return on the middle of the column's edge, half a pixel from its centre; a
+/// pixel's own return lies at the centre (B = 0, P = 0.82). On the paper's spherical grid every return
+/// inside a column gives it B <= 1.6 (P >= 0.56). tests/test_depth_prediction.cpp ties it to eq. 1.
+constexpr float kSampleProbabilityMin = 0.516f;
+
 /// True when column c of `surface` is a sample (rule above).
 inline bool is_depth_sample(const SurfaceMap& surface, std::size_t c) {
-  return surface.unknown[c] == 0 && surface.probability[c] > 0.5f && surface.depth_m[c] > 0.0f;
+  return surface.unknown[c] == 0 && surface.probability[c] >= kSampleProbabilityMin && surface.depth_m[c] > 0.0f;
 }
 
 /// The surface's samples as a sparse depth image (its depth where is_depth_sample, else 0).
