@@ -58,6 +58,43 @@ TEST(Ranking, TopRaysAreTheLargestBestFirst) {
   EXPECT_THROW(top_rays(m.improvement, other.surface, 3), InvalidInput);
 }
 
+// A tie over a 64 x 48 view, 5 % of it: one column per 4 x 4 cell (floor(sqrt(20)) = 4) and never two in
+// one cell, spread over both halves; then values that differ: each cell gives its best column first; NaN
+// and ineligible columns are never taken, and a request beyond what is left returns what is left.
+TEST(Ranking, SpreadBestColumnsIsAJitteredGridAtTheScaleOfK) {
+  const int w = 64, h = 48;
+  std::vector<float> value(static_cast<std::size_t>(w * h), 0.3f);
+  const std::size_t k = static_cast<std::size_t>(std::lround(0.05 * w * h));
+  const std::vector<ColumnIndex> tied = spread_best_columns(value, nullptr, w, k);
+  ASSERT_EQ(tied.size(), k);
+  std::vector<int> per_cell(static_cast<std::size_t>((w / 4) * (h / 4)), 0);
+  int top_half = 0;
+  for (ColumnIndex c : tied) {
+    EXPECT_EQ(++per_cell[static_cast<std::size_t>((c / w / 4) * (w / 4) + (c % w) / 4)], 1) << "column " << c;
+    top_half += static_cast<int>(c) < w * h / 2 ? 1 : 0;
+  }
+  EXPECT_NEAR(top_half, static_cast<double>(k) / 2, k / 6.0);
+  EXPECT_EQ(spread_best_columns(value, nullptr, w, k), tied);  // deterministic
+
+  for (std::size_t c = 0; c < value.size(); ++c) value[c] = static_cast<float>(c % 7);  // 6 is each row's best
+  const std::vector<ColumnIndex> best = spread_best_columns(value, nullptr, w, k);
+  for (ColumnIndex c : best) {
+    float cell_best = 0;
+    for (int dy = 0; dy < 4; ++dy)
+      for (int dx = 0; dx < 4; ++dx)
+        cell_best = std::max(cell_best, value[static_cast<std::size_t>((c / w / 4 * 4 + dy) * w + c % w / 4 * 4 + dx)]);
+    EXPECT_EQ(value[c], cell_best) << "column " << c;
+  }
+
+  std::vector<std::uint8_t> eligible(value.size(), 0);
+  eligible[5] = eligible[6] = eligible[7] = 1;
+  value[6] = std::numeric_limits<float>::quiet_NaN();
+  const std::vector<ColumnIndex> few = spread_best_columns(value, eligible.data(), w, 10);
+  EXPECT_EQ(few.size(), 2u);
+  for (ColumnIndex c : few) EXPECT_TRUE(c == 5 || c == 7);
+  EXPECT_TRUE(spread_best_columns(value, eligible.data(), w, 0).empty());
+}
+
 TEST(Ranking, RegionsAreEightConnectedAndSorted) {
   Maps m = small_maps(20, 12);
   auto set = [&](int a, int e, float v) { m.improvement.value[m.geometry.column(a, e)] = v; };

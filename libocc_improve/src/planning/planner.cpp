@@ -208,11 +208,13 @@ std::vector<float> measured_depth_image(const SurfaceMap& surface, const ReturnR
   return image;
 }
 
-// Appends to `out`, up to `size` rays, the eligible observable rays of highest score (rank_key order).
-void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8_t>& eligible, std::size_t size,
-                   std::vector<ColumnIndex>& out) {
+// Appends to `out`, up to `size` rays, the eligible observable rays of highest score, spread as a jittered
+// grid (spread_best_columns: on the first shot every ray ties, and an even cover interpolates better than
+// the clumps of a random sample).
+void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8_t>& eligible, int width,
+                   std::size_t size, std::vector<ColumnIndex>& out) {
   if (out.size() >= size) return;
-  const std::vector<ColumnIndex> best = best_columns(score, eligible.data(), size - out.size());
+  const std::vector<ColumnIndex> best = spread_best_columns(score, eligible.data(), width, size - out.size());
   out.insert(out.end(), best.begin(), best.end());
 }
 
@@ -259,10 +261,10 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
   // own vertices: the rest of the shot goes to the unasked rays of highest score (ties spread by
   // rank_key), so that a shot stays full and measures new rays; once every ray has been asked, to the
   // asked ones of highest score (a second measurement settles a ray's depth).
-  fill_by_score(score, unasked, left, out);
+  fill_by_score(score, unasked, surface.width, left, out);
   std::vector<std::uint8_t> not_in_shot = eligible;
   for (ColumnIndex c : out) not_in_shot[c] = 0;
-  fill_by_score(score, not_in_shot, left, out);
+  fill_by_score(score, not_in_shot, surface.width, left, out);
   return out;
 }
 

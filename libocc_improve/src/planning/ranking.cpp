@@ -68,6 +68,50 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
   return out;
 }
 
+std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, const std::uint8_t* eligible, int width,
+                                             std::size_t k) {
+  std::vector<std::uint8_t> open(value.size());
+  std::size_t available = 0;
+  for (std::size_t c = 0; c < value.size(); ++c) {
+    open[c] = (!eligible || eligible[c]) && !std::isnan(value[c]);
+    available += open[c];
+  }
+  k = std::min(k, available);
+  std::vector<ColumnIndex> out;
+  if (k == 0 || width <= 0) return out;
+  out.reserve(k);
+  const auto w = static_cast<std::size_t>(width);
+  const std::size_t side = std::max<std::size_t>(1, static_cast<std::size_t>(std::sqrt(static_cast<double>(available) / static_cast<double>(k))));
+  const std::size_t cells_across = (w + side - 1) / side, rows = value.size() / w;
+  const std::size_t cells = cells_across * ((rows + side - 1) / side);
+  constexpr ColumnIndex kNone = std::numeric_limits<ColumnIndex>::max();
+  struct Best {
+    std::uint64_t key;
+    ColumnIndex column;
+  };
+  std::vector<Best> best(cells);
+  while (out.size() < k) {  // one round: the best open column of every cell
+    std::fill(best.begin(), best.end(), Best{0, kNone});
+    for (std::size_t c = 0; c < value.size(); ++c) {
+      if (!open[c]) continue;
+      const std::uint64_t key = rank_key(value[c], static_cast<ColumnIndex>(c));
+      Best& b = best[(c / w / side) * cells_across + (c % w) / side];
+      if (b.column == kNone || key > b.key) b = {key, static_cast<ColumnIndex>(c)};
+    }
+    std::vector<Best> round;
+    for (const Best& b : best)
+      if (b.column != kNone) round.push_back(b);
+    const std::size_t take = std::min(round.size(), k - out.size());
+    const auto better = [](const Best& a, const Best& b) { return a.key > b.key; };
+    std::partial_sort(round.begin(), round.begin() + static_cast<std::ptrdiff_t>(take), round.end(), better);
+    for (std::size_t i = 0; i < take; ++i) {
+      out.push_back(round[i].column);
+      open[round[i].column] = 0;
+    }
+  }
+  return out;
+}
+
 std::vector<RankedRay> top_rays(const ImprovementMap& map, const SurfaceMap& surface, int k) {
   detail::require_parameter(k > 0, "k", k, "> 0");
   require_same_size(map, surface);

@@ -36,6 +36,13 @@ std::uint64_t rank_key(float value, ColumnIndex column);
 /// observable) are never taken. Returns min(k, eligible non-NaN columns) columns.
 std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k);
 
+/// The k best eligible columns of a grid `width` columns wide, spread as a jittered grid at the scale of k:
+/// cells of s x s columns, s = floor(sqrt(eligible non-NaN columns / k)), one column per cell per round
+/// (the cell's largest rank_key), each round's cells by that key; so a tie (a view nothing has reached)
+/// is covered evenly rather than as a random sample clumps it. Returns min(k, eligible non-NaN) columns.
+std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, const std::uint8_t* eligible, int width,
+                                             std::size_t k);
+
 struct RankedRay {
   ColumnIndex column;
   int azimuth_bin, elevation_bin;  ///< u (column) and v (row); the image pixel with the pixel-native presets
