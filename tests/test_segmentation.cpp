@@ -3,6 +3,7 @@
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/segmentation/segmentation.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 
 #include <gtest/gtest.h>
 
@@ -210,7 +211,28 @@ TEST(Segmentation, CreaseParametersAreValidated) {
   EXPECT_NE(refused([](SegmentationParams& p) { p.crease_smoothing_share = 1.5; }).find("crease_smoothing_share"), std::string::npos);
   EXPECT_NE(refused([](SegmentationParams& p) { p.crease_min_view_angle_deg = 90; }).find("crease_min_view_angle_deg"), std::string::npos);
   EXPECT_NE(refused([](SegmentationParams& p) { p.crease_max_arm_px = 1; }).find("crease_max_arm_px"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.threads = -1; }).find("threads"), std::string::npos);
+  EXPECT_NE(refused([](SegmentationParams& p) { p.threads = InsertionOptions::kMaxThreads + 1; }).find("threads"),
+            std::string::npos);
   EXPECT_EQ(refused([](SegmentationParams&) {}), "accepted");
+}
+
+// The thread count changes who does the work, not the result: one, two and three threads (the last does
+// not divide the rows evenly) give the same labels, creases and contours on the two touching boxes.
+TEST(Segmentation, ThreadCountDoesNotChangeTheResult) {
+  const TableScene scene({Box{{-0.30, kTable, 1.0}, {-0.12, kTable + 0.14, 1.25}},
+                          Box{{-0.12, kTable, 1.05}, {0.08, kTable + 0.08, 1.30}}});
+  SegmentationParams params = segmentation_defaults(kinect_v1());
+  params.threads = 1;
+  const SegmentedTable one(scene, params);
+  ASSERT_GT(one.segmentation.crease_columns, 0u);  // the crease scan, which the threads split, found creases
+  for (int threads : {2, 3}) {
+    params.threads = threads;
+    const SegmentedTable more(scene, params);
+    EXPECT_EQ(more.segmentation.label, one.segmentation.label) << threads << " threads";
+    EXPECT_EQ(more.segmentation.crease, one.segmentation.crease) << threads << " threads";
+    EXPECT_EQ(more.segmentation.contour, one.segmentation.contour) << threads << " threads";
+  }
 }
 
 TEST(Segmentation, EmptyMapGivesNoSegmentsAndBadParamsThrow) {

@@ -129,6 +129,7 @@ void bind_segmentation_types(py::module_& m) {
       .def_readwrite("crease_min_bend_deg", &SegmentationParams::crease_min_bend_deg)
       .def_readwrite("crease_min_view_angle_deg", &SegmentationParams::crease_min_view_angle_deg)
       .def_readwrite("crease_max_arm_px", &SegmentationParams::crease_max_arm_px)
+      .def_readwrite("threads", &SegmentationParams::threads)
       .def("validate", &SegmentationParams::validate);
   def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane", "split_concave_creases"});
   m.def("segmentation_defaults", &segmentation_defaults, py::arg("preset"),

@@ -47,3 +47,20 @@ def test_empty_map_gives_no_segments_and_bad_params_raise():
         empty.segment(oi.SegmentationParams(contour_improvement_below=0.1))
     with pytest.raises(oi.InvalidParameter):
         oi.SegmentationParams(min_segment_columns=0).validate()
+
+
+def test_thread_count_is_a_setting_that_does_not_change_the_result(sample):
+    depth, intrinsics = sample
+    preset = oi.kinect_v1(intrinsics)
+    mapper = oi.Mapper(preset)
+    mapper.insert_depth(depth, intrinsics)
+    params = oi.segmentation_defaults(preset)
+    assert params.threads == 0  # every hardware thread, as the insertion's default
+    params.threads = 1
+    one = mapper.segment(params)
+    params.threads = 2
+    two = mapper.segment(params)
+    assert one.valid_columns > 0
+    assert np.array_equal(one.label, two.label) and np.array_equal(one.crease, two.crease)
+    with pytest.raises(oi.InvalidParameter, match="threads"):
+        oi.SegmentationParams(threads=-1).validate()

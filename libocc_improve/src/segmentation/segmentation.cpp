@@ -1,5 +1,7 @@
 #include "occ_improve/segmentation/segmentation.hpp"
 
+#include "occ_improve/integrate/integrate.hpp"  // InsertionOptions::kMaxThreads: one bound for every thread count
+
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "support/parallel.hpp"
@@ -9,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <numeric>
 
 namespace occ_improve {
@@ -35,6 +38,8 @@ void SegmentationParams::validate() const {
                     "crease_min_view_angle_deg", crease_min_view_angle_deg, "in [0, 90)");
   require_parameter(crease_max_arm_px >= 2 && crease_max_arm_px <= 256, "crease_max_arm_px", crease_max_arm_px,
                     "in [2, 256]");
+  static const std::string thread_range = "in [0, " + std::to_string(InsertionOptions::kMaxThreads) + "] (0: all cores)";
+  require_parameter(threads >= 0 && threads <= InsertionOptions::kMaxThreads, "threads", threads, thread_range.c_str());
 }
 
 SegmentationParams segmentation_defaults(const SensorPreset& preset) {
@@ -55,11 +60,12 @@ constexpr std::uint32_t kUnassigned = std::numeric_limits<std::uint32_t>::max();
 // Combines two per-ray masks: set where `ray` is and `excluded` is not (bitwise, so loops over it vectorise).
 constexpr auto and_not = [](std::uint8_t ray, std::uint8_t excluded) -> std::uint8_t { return ray & !excluded; };
 
-// Runs body(first_row, end_row) on the hardware's threads, each on its own block of [0, rows). Every
-// caller's rows are independent and each block writes only its own, so the result is the same for any split.
+// Runs body(first_row, end_row) on `threads` threads (0: the hardware's), each on its own block of [0, rows).
+// Every caller's rows are independent and each block writes only its own, so the result is the same for
+// any split.
 template <typename Body>
-void for_row_blocks(int rows, Body&& body) {
-  const int parts = std::max(1, std::min(detail::resolve_thread_count(0), rows));
+void for_row_blocks(int rows, int threads, Body&& body) {
+  const int parts = std::max(1, std::min(detail::resolve_thread_count(threads), rows));
   detail::run_parts(parts, [&](int part, int count) { body(rows * part / count, rows * (part + 1) / count); });
 }
 
@@ -84,11 +90,11 @@ std::vector<std::uint8_t> valid_rays(const GridGeometry& geometry, const Surface
 }
 
 // The valid rays' surface points (zero elsewhere). The binning's back-projection is most of the cost: rows
-// run on the hardware's threads.
+// run on `threads` threads.
 std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const SurfaceMap& surface,
-                                            const std::vector<std::uint8_t>& valid) {
+                                            const std::vector<std::uint8_t>& valid, int threads) {
   std::vector<Eigen::Vector3f> points(surface.size(), Eigen::Vector3f::Zero());
-  for_row_blocks(geometry.height(), [&](int first_row, int end_row) {
+  for_row_blocks(geometry.height(), threads, [&](int first_row, int end_row) {
     for (int e = first_row; e < end_row; ++e)
       for (int a = 0; a < geometry.width(); ++a) {
         const ColumnIndex c = geometry.column(a, e);
@@ -397,7 +403,7 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
   };
   // Every ray is tested: testing every second ray each way (2 x 2 blocks) was a third cheaper, but left
   // the band closing around a stack only at the defaults (a 0.5 cm change of the arm joined learn17's boxes).
-  for_row_blocks(height, [&](int first_row, int end_row) {
+  for_row_blocks(height, params.threads, [&](int first_row, int end_row) {
     PointMeans means(points, member, width, box, reach);
     for (int e = first_row; e < end_row; ++e) {
       throw_if_stop_requested();
@@ -519,7 +525,7 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   out.valid_columns = static_cast<std::size_t>(std::count(valid.begin(), valid.end(), 1));
   out.contour_columns = static_cast<std::size_t>(std::count(out.contour.begin(), out.contour.end(), 1));
 
-  const std::vector<Eigen::Vector3f> points = surface_points(geometry, surface, valid);
+  const std::vector<Eigen::Vector3f> points = surface_points(geometry, surface, valid, params.threads);
   std::vector<std::uint8_t> plane(n, 0);
   if (params.remove_dominant_plane) out.plane_columns = find_dominant_plane(points, valid, out.valid_columns, params, plane);
   if (out.plane_columns == 0) std::fill(plane.begin(), plane.end(), 0);

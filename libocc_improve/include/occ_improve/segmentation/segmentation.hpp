@@ -63,6 +63,9 @@ struct SegmentationParams {
   /// returns little from faces seen within ~20 deg of grazing, so arms on faces it does see make more.
   double crease_min_view_angle_deg = 20.0;
   int crease_max_arm_px = 24;  ///< cap on the arm in pixels (near surfaces), bounding the cost per ray
+  /// Threads for the back-projection and the crease scan, as InsertionOptions::threads: 0 = every
+  /// hardware thread, 1 = the calling thread only; in [0, 1024]. Any value gives the same segmentation.
+  int threads = 0;
 
   /// Throws InvalidParameter naming the first bad field.
   void validate() const;
