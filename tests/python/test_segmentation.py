@@ -12,12 +12,18 @@ def label_at(mapper, segmentation, point):
     return int(segmentation.label[elevation_bin, azimuth_bin])
 
 
-def test_occluders_are_cut_from_the_background(sample):
+@pytest.fixture
+def sample_mapper(sample):
+    """The built-in sample in a kinect_v1 map, and the segmentation defaults for it."""
     depth, intrinsics = sample
     preset = oi.kinect_v1(intrinsics)
     mapper = oi.Mapper(preset)
     mapper.insert_depth(depth, intrinsics)
-    params = oi.segmentation_defaults(preset)
+    return mapper, oi.segmentation_defaults(preset)
+
+
+def test_occluders_are_cut_from_the_background(sample_mapper):
+    mapper, params = sample_mapper
     assert params.remove_dominant_plane and oi.SegmentationParams().remove_dominant_plane  # the tools' default
     s = mapper.segment(params)
     box, pole = label_at(mapper, s, (-0.6, 0.45, 1.6)), label_at(mapper, s, (0.4, -0.5, 2.3))
@@ -49,12 +55,8 @@ def test_empty_map_gives_no_segments_and_bad_params_raise():
         oi.SegmentationParams(min_segment_columns=0).validate()
 
 
-def test_thread_count_is_a_setting_that_does_not_change_the_result(sample):
-    depth, intrinsics = sample
-    preset = oi.kinect_v1(intrinsics)
-    mapper = oi.Mapper(preset)
-    mapper.insert_depth(depth, intrinsics)
-    params = oi.segmentation_defaults(preset)
+def test_thread_count_is_a_setting_that_does_not_change_the_result(sample_mapper):
+    mapper, params = sample_mapper
     assert params.threads == 0  # every hardware thread, as the insertion's default
     params.threads = 1
     one = mapper.segment(params)
