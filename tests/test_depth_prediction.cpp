@@ -36,7 +36,7 @@ void measure(SurfaceMap& s, int x, int y, float depth, float p = 0.8f) {
 
 // kSampleProbabilityMin is eq. 1 on the ray for a return at B = 3, and lies between what a pixel's own
 // return gives its column (B = 0) and the most a neighbour's return gives it on the pixel-native grid (B = 12)
-// even summed over a thousand frames of its 8 neighbours.
+// even summed over a thousand frames of its 8 neighbours, each counted at B = 12 (0.5159).
 TEST(DepthSample, ProbabilityMinIsEqOneAtTheColumnsEdge) {
   const double sigma = 0.01;
   EXPECT_NEAR(opdf(0.0, 3.0, sigma), kSampleProbabilityMin, 2e-4);
