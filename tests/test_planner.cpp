@@ -350,6 +350,27 @@ TEST(CoarseToFine, RefinementByTrianglesGoesToTheDepthEdge) {
                InvalidParameter);
 }
 
+// Refinement by triangles counts the gain of the best rays left, as the rays shape does with as many
+// rays, not its centroids' own scores (low by construction: their neighbours' OPDFs reach them): so its
+// stop follows the map, not the triangles.
+TEST(CoarseToFine, TrianglesGainIsTheBestRaysLeft) {
+  const Mapper mapper = wall_and_box_seen_sparsely();
+  ReturnRecord record = ReturnRecord::for_grid(64, 48);
+  const std::vector<std::uint32_t> seen = every_fourth_ray();
+  record.record_shot(seen, std::vector<std::uint8_t>(seen.size(), 1));
+  const Shot triangles = plan_next_shot(mapper, record, coarse_to_fine(40, RefineBy::triangles));
+  PlanRequest rays;
+  rays.budget_rays = static_cast<int>(triangles.ranked_rays);
+  const Shot best = plan_next_shot(mapper, record, rays);
+  EXPECT_EQ(triangles.ranked_rays, 40u);
+  EXPECT_NEAR(triangles.expected_gain, best.expected_gain, 1e-9 * std::abs(best.expected_gain));
+  EXPECT_EQ(triangles.stop, best.stop);
+  double centroids = 0;  // what the centroids themselves score: less
+  const std::vector<float> p = return_probability_map(record, PlanRequest{}.return_model);
+  for (ColumnIndex c : triangles.columns) centroids += p[c] * mapper.improvement().value[c];
+  EXPECT_LT(centroids, triangles.expected_gain);
+}
+
 // Closed loop over the wall and box with a silent patch: every shot is full and asks only new rays until
 // every ray has been asked once (centroids of tiny triangles, which round onto their vertices, give way
 // to the unasked rays of highest score), then re-asks rather than stalling.

@@ -215,10 +215,10 @@ std::vector<FlagSpec> plan_and_octomap_flags() {
              "shot shape: coarse-to-fine (a coverage pass, then one ray per block by the multi-scale\n"
              "improvement and the predictor's residual; docs/SELECTIVE.md), the best single rays, the best\n"
              "WxH window, or every n-th column and row", "coarse_to_fine"),
-      choice("-refine", {"residual", "both", "improvement", "triangles"}, kPlan,
-             "coarse_to_fine: what ranks the refinement (blocks by the predictor's residual, x the\n"
-             "improvement, or the improvement alone; or the measured samples' triangles by area x\n"
-             "non-planarity)", "residual"),
+      choice("-refine", {"triangles", "residual", "both", "improvement"}, kPlan,
+             "coarse_to_fine: what ranks the refinement (the measured samples' triangles by area x\n"
+             "non-planarity, the best with -predicted_depth linear; or blocks by the predictor's residual,\n"
+             "x the improvement, or the improvement alone)", "triangles"),
       value_flag("-window", K::text, "WxH", kPlan, "window shape in columns; its area <= the budget", "64x64"),
       bounded(value_flag("-negative_share", K::number, "S", kPlan, "share of a shot re-acquiring negative rays", "0"), 0,
               1, false, true),

@@ -41,7 +41,9 @@
 //     each of the R triangles of largest area x non-planarity (its vertices' largest leave-one-out plane
 //     residual, in sigmas) x the centroid ray's return probability: large triangles are where the
 //     samples are sparse, non-planar ones where a linear prediction is wrong (the independent prototype
-//     of issue 20). Needs the surface: the Mapper overload of plan_next_shot;
+//     of issue 20). Needs the surface: the Mapper overload of plan_next_shot. Its expected gain (and so
+//     its stop) is that of the best `budget` rays left by score, as the rays shape would take them: the
+//     centroids' own scores are low by construction (their neighbours' OPDFs reach them);
 //     (default residual: in the ablation the paper's measure made (g) slower on every scene)
 //     with p = the return probability of the block's best ray x the block's return rate (R + 1) / (A + 1)
 //     over the record's asks of its columns (the per-ray prior only reaches 8 neighbours; measured without
@@ -86,7 +88,9 @@ struct PlanRequest {
   /// coarse_to_fine: side of the coverage pass's blocks, 2, 4, 8 or 16 columns. 16 = the evaluation's
   /// predictor radius (DepthPredictionParams::radius_columns).
   int coverage_block_columns = 16;
-  /// Default residual: the best of the ablation (docs/SELECTIVE.md, "Issue 20 results").
+  /// Default residual, which both overloads of plan_next_shot can compute. The tools (occ_plan,
+  /// occ_improve_live -simulate) default to triangles, the best with the linear predictor
+  /// (docs/SELECTIVE.md, "Samples"), which needs the Mapper overload.
   RefineBy refine_by = RefineBy::residual;
   /// coarse_to_fine: the predictor's local model (nearest sample: constant; linear: plane).
   LocalModel local_model = LocalModel::constant;
