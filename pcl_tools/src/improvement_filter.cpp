@@ -168,8 +168,10 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
   struct Candidate {
     float improvement, block_mean;
     std::uint64_t ray_key, point_key;
-    std::uint32_t cell, repeat;  ///< sampling cell; how many points of the same ray come before it
-    std::uint32_t round;         ///< its rank within its cell: the round that takes it
+    ColumnIndex column;
+    std::size_t cell;      ///< its SamplingCells cell
+    std::uint32_t repeat;  ///< how many points of the same ray come before it
+    std::uint32_t round;   ///< its rank within its cell: the round that takes it
     pcl::index_t index;
   };
   std::vector<Candidate> candidates;
@@ -188,16 +190,11 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
     if (repeat == 0) ++rays;
     const float value = point_improvement[static_cast<std::size_t>(i)];
     candidates.push_back({value, block_mean, rank_key(value, column), rank_key(0.0f, static_cast<ColumnIndex>(i)),
-                          column, repeat, 0, i});
+                          column, 0, repeat, 0, i});
   }
-  // Cells of side s columns hold about one kept point each: s^2 ~ rays / keep.
-  const int side = std::max(1, static_cast<int>(std::floor(std::sqrt(static_cast<double>(rays) / static_cast<double>(keep)))));
-  const int cells_across = (geometry.width() + side - 1) / side;
-  for (Candidate& c : candidates) {
-    const ColumnIndex column = c.cell;
-    c.cell = static_cast<std::uint32_t>((geometry.elevation_bin_of(column) / side) * cells_across +
-                                        geometry.azimuth_bin_of(column) / side);
-  }
+  // About one kept point per cell (the cells need the count of distinct rays, known only now).
+  const SamplingCells cells(rays, keep, geometry.width());
+  for (Candidate& c : candidates) c.cell = cells.cell_of(geometry.azimuth_bin_of(c.column), geometry.elevation_bin_of(c.column));
   // Better first, by ray: the ray's improvement, its block's mean improvement, its spread rank, then the
   // point's own spread rank.
   const auto better = [](const Candidate& a, const Candidate& b) {

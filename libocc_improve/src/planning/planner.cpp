@@ -258,9 +258,10 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
     out.push_back(c);
   }
   // Once the triangles are a pixel or two (about half the rays measured) their centroids fall on their
-  // own vertices: the rest of the shot goes to the unasked rays of highest score (ties spread by
-  // rank_key), so that a shot stays full and measures new rays; once every ray has been asked, to the
-  // asked ones of highest score (a second measurement settles a ray's depth).
+  // own vertices: the rest of the shot goes to the unasked rays of highest score, spread as a jittered
+  // grid (fill_by_score; so does the first shot, which has no triangles), so that a shot stays full and
+  // measures new rays; once every ray has been asked, to the asked ones of highest score (a second
+  // measurement settles a ray's depth).
   fill_by_score(score, unasked, surface.width, left, out);
   std::vector<std::uint8_t> not_in_shot = eligible;
   for (ColumnIndex c : out) not_in_shot[c] = 0;
@@ -276,10 +277,6 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
   const std::uint8_t* mask = request.candidates.empty() ? nullptr : request.candidates.data();
   const auto budget = static_cast<std::size_t>(request.budget_rays);
   Shot shot;
-  const auto take = [&](ColumnIndex c) {
-    shot.columns.push_back(c);
-    shot.expected_gain += score[c];
-  };
   // 1. Coverage: blocks without a sample, one jittered ray each, spread over the view by rank_key.
   const int coverage_level = ImprovementPyramid::level_of_block_size(request.coverage_block_columns);
   {
@@ -295,7 +292,7 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
       if (block.samples == 0) open.push_back({rank_key(score[c], static_cast<ColumnIndex>(b)), b});
     }
     std::sort(open.begin(), open.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
-    for (std::size_t i = 0; i < open.size() && shot.columns.size() < budget; ++i) take(best[open[i].second]);
+    for (std::size_t i = 0; i < open.size() && shot.columns.size() < budget; ++i) shot.columns.push_back(best[open[i].second]);
   }
   const std::size_t coverage_rays = shot.columns.size();
   // 2. Refinement with the rays left.
@@ -307,17 +304,17 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
         request.refine_by == RefineBy::triangles
             ? refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas, left)
             : refine_by_blocks(pyramid, model, score, probability, eligible, shot.columns, returns, request, left);
-    for (ColumnIndex c : refined) take(c);
+    shot.columns.insert(shot.columns.end(), refined.begin(), refined.end());
   }
   shot.ranked_rays = shot.columns.size();
-  if (request.refine_by == RefineBy::triangles) {
-    // The gain is the best rays left's, as the rays shape counts it, not the centroids': a centroid lies
-    // between samples whose OPDFs already inform it (improvement ~0.1, the stop level), while what it adds
-    // is to the linear prediction. Measured: with the centroids' scores the plan stopped at 0.05-0.1
-    // frames; with this gain at 2.55-2.95 frames, 11-16 % after the knee (docs/SELECTIVE.md).
-    shot.expected_gain = 0;
-    for (ColumnIndex c : best_columns(score, mask, shot.ranked_rays)) shot.expected_gain += score[c];
-  }
+  // 3. Expected gain: the taken rays' scores; under triangles, the best rays left's, as the rays shape
+  // counts them, not the centroids': a centroid lies between samples whose OPDFs already inform it
+  // (improvement ~0.1, the stop level), while what it adds is to the linear prediction. Measured: with the
+  // centroids' scores the plan stopped at 0.05-0.1 frames; with this gain at 2.55-2.95 frames, 11-16 %
+  // after the knee (docs/SELECTIVE.md).
+  const std::vector<ColumnIndex> counted =
+      request.refine_by == RefineBy::triangles ? best_columns(score, mask, shot.ranked_rays) : shot.columns;
+  for (ColumnIndex c : counted) shot.expected_gain += score[c];
   return shot;
 }
 }  // namespace

@@ -68,6 +68,11 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
   return out;
 }
 
+SamplingCells::SamplingCells(std::size_t candidates, std::size_t k, int width) {
+  if (k > 0) side = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(candidates) / static_cast<double>(k))));
+  across = std::max(1, (width + side - 1) / side);
+}
+
 std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, const std::uint8_t* eligible, int width,
                                              std::size_t k) {
   std::vector<std::uint8_t> open(value.size());
@@ -81,21 +86,19 @@ std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, co
   if (k == 0 || width <= 0) return out;
   out.reserve(k);
   const auto w = static_cast<std::size_t>(width);
-  const std::size_t side = std::max<std::size_t>(1, static_cast<std::size_t>(std::sqrt(static_cast<double>(available) / static_cast<double>(k))));
-  const std::size_t cells_across = (w + side - 1) / side, rows = value.size() / w;
-  const std::size_t cells = cells_across * ((rows + side - 1) / side);
+  const SamplingCells cells(available, k, width);
   constexpr ColumnIndex kNone = std::numeric_limits<ColumnIndex>::max();
   struct Best {
     std::uint64_t key;
     ColumnIndex column;
   };
-  std::vector<Best> best(cells);
+  std::vector<Best> best(cells.count(static_cast<int>(value.size() / w)));
   while (out.size() < k) {  // one round: the best open column of every cell
     std::fill(best.begin(), best.end(), Best{0, kNone});
     for (std::size_t c = 0; c < value.size(); ++c) {
       if (!open[c]) continue;
       const std::uint64_t key = rank_key(value[c], static_cast<ColumnIndex>(c));
-      Best& b = best[(c / w / side) * cells_across + (c % w) / side];
+      Best& b = best[cells.cell_of(static_cast<int>(c % w), static_cast<int>(c / w))];
       if (b.column == kNone || key > b.key) b = {key, static_cast<ColumnIndex>(c)};
     }
     std::vector<Best> round;

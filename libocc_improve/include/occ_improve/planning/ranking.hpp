@@ -36,6 +36,19 @@ std::uint64_t rank_key(float value, ColumnIndex column);
 /// observable) are never taken. Returns min(k, eligible non-NaN columns) columns.
 std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k);
 
+/// The cells of a jittered grid at the scale of a sampling of k among `candidates` columns of a grid
+/// `width` columns wide: s x s columns with s = floor(sqrt(candidates / k)) (at least 1), so that the k
+/// samples put about one in each cell. Shared by spread_best_columns and ImprovementFilter's top modes.
+struct SamplingCells {
+  SamplingCells(std::size_t candidates, std::size_t k, int width);
+  int side = 1;    ///< columns a side
+  int across = 1;  ///< cells per row of cells
+  std::size_t count(int height) const { return static_cast<std::size_t>(across) * static_cast<std::size_t>((height + side - 1) / side); }
+  std::size_t cell_of(int column_u, int row_v) const {
+    return static_cast<std::size_t>(row_v / side) * static_cast<std::size_t>(across) + static_cast<std::size_t>(column_u / side);
+  }
+};
+
 /// The k best eligible columns of a grid `width` columns wide, spread as a jittered grid at the scale of k:
 /// cells of s x s columns, s = floor(sqrt(eligible non-NaN columns / k)), one column per cell per round
 /// (the cell's largest rank_key), each round's cells by that key; so a tie (a view nothing has reached)
