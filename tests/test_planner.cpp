@@ -2,6 +2,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/planning/planner.hpp"
+#include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/sim/virtual_sensor.hpp"
 #include "support/small_camera.hpp"
@@ -371,20 +372,34 @@ TEST(CoarseToFine, TrianglesGainIsTheBestRaysLeft) {
   EXPECT_LT(centroids, triangles.expected_gain);
 }
 
-// Closed loop over the wall and box with a silent patch: every shot is full and asks only new rays until
-// every ray has been asked once (centroids of tiny triangles, which round onto their vertices, give way
-// to the unasked rays of highest score), then re-asks rather than stalling.
-TEST(CoarseToFine, TrianglesAskEveryRayOnceBeforeAnyTwice) {
+// A noise-free wall at 2 m with a box at 1 m (u >= 40), optionally a silent 12 x 12 patch (no return).
+VirtualSensor wall_and_box_sensor(bool silent_patch) {
   std::vector<float> depth(64 * 48, 2.0f);
   for (int v = 0; v < 48; ++v)
     for (int u = 0; u < 64; ++u) {
       if (u >= 40) depth[static_cast<std::size_t>(v * 64 + u)] = 1.0f;
-      if (u < 12 && v < 12) depth[static_cast<std::size_t>(v * 64 + u)] = 0.0f;  // no return
+      if (silent_patch && u < 12 && v < 12) depth[static_cast<std::size_t>(v * 64 + u)] = 0.0f;
     }
   VirtualSensorParams clean;
   clean.sigma_depth_per_m2 = 0;
   clean.disparity_step_px = 0;
-  VirtualSensor sensor(depth, small_camera(), clean);
+  return VirtualSensor(depth, small_camera(), clean);
+}
+
+/// Measures a planned shot: inserts its returns and records which rays returned.
+void acquire(VirtualSensor& sensor, const Shot& plan, Mapper& mapper, ReturnRecord& record) {
+  const std::vector<float> depth = sensor.shoot(plan.columns);
+  mapper.insert(PointSpan::from(sensor.points(plan.columns, depth)));
+  std::vector<std::uint8_t> got(depth.size());
+  for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
+  record.record_shot(plan.columns, got);
+}
+
+// Closed loop over the wall and box with a silent patch: every shot is full and asks only new rays until
+// every ray has been asked once (centroids of tiny triangles, which round onto their vertices, give way
+// to the unasked rays of highest score), then re-asks rather than stalling.
+TEST(CoarseToFine, TrianglesAskEveryRayOnceBeforeAnyTwice) {
+  VirtualSensor sensor = wall_and_box_sensor(true);
   Mapper mapper(kinect_v1(small_camera()));
   ReturnRecord record = ReturnRecord::for_grid(64, 48);
   const int budget = 256, shots = 64 * 48 / budget + 2;
@@ -392,11 +407,7 @@ TEST(CoarseToFine, TrianglesAskEveryRayOnceBeforeAnyTwice) {
   for (int shot = 0; shot < shots; ++shot) {
     const Shot plan = plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles));
     ASSERT_EQ(plan.columns.size(), static_cast<std::size_t>(budget)) << "shot " << shot;
-    const std::vector<float> depth = sensor.shoot(plan.columns);
-    mapper.insert(PointSpan::from(sensor.points(plan.columns, depth)));
-    std::vector<std::uint8_t> got(depth.size());
-    for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
-    record.record_shot(plan.columns, got);
+    acquire(sensor, plan, mapper, record);
     for (ColumnIndex c : plan.columns) ++asked[c];
     const bool all_asked = std::count(asked.begin(), asked.end(), 0) == 0;
     if (!all_asked) {
@@ -404,6 +415,23 @@ TEST(CoarseToFine, TrianglesAskEveryRayOnceBeforeAnyTwice) {
     }
   }
   EXPECT_EQ(std::count(asked.begin(), asked.end(), 0), 0);
+}
+
+// Once every ray has been asked (and, with every ray returning, every coverage block holds samples), no
+// centroid can be taken: the plan skips the triangulation and its shot is the spread best rays by score.
+TEST(CoarseToFine, TrianglesOnceEveryRayIsAskedAreTheSpreadBestRays) {
+  VirtualSensor sensor = wall_and_box_sensor(false);
+  Mapper mapper(kinect_v1(small_camera()));
+  ReturnRecord record = ReturnRecord::for_grid(64, 48);
+  const int budget = 256;
+  for (int shot = 0; shot < 64 * 48 / budget; ++shot)
+    acquire(sensor, plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles)), mapper, record);
+  ASSERT_EQ(std::count(record.asked().begin(), record.asked().end(), 0), 0);
+  const Shot plan = plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles));
+  const std::vector<float> p = return_probability_map(record, PlanRequest{}.return_model);
+  std::vector<float> score(p.size());
+  for (std::size_t c = 0; c < p.size(); ++c) score[c] = p[c] * mapper.improvement().value[c];
+  EXPECT_EQ(plan.columns, spread_best_columns(score, nullptr, 64, static_cast<std::size_t>(budget)));
 }
 
 TEST(CoarseToFine, BadRequestsThrowNamingTheValue) {

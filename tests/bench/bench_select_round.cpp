@@ -1,8 +1,10 @@
 // One closed-loop round of selective acquisition with the real-use preset (kinect_v1) on 2 threads:
 // insert the returns of a 4096-ray shot (surface kept current), update the improvement incrementally,
 // plan the next shot (improvement x return model): /0 the rays shape (highest first), /1 coarse_to_fine
-// (strategy (g); the insertion then also keeps the multi-scale pyramid, timed with the improvement). The map starts from one full frame of
-// the built-in sample; the virtual sensor looks at the noise-free sample.
+// refined by blocks (strategy (g), PlanRequest's default refinement), /2 coarse_to_fine refined by the
+// samples' triangles (the tools' default, `-refine triangles`); under (g) the insertion also keeps the
+// multi-scale pyramid, timed with the improvement. The map starts from one full frame of the built-in
+// sample; the virtual sensor looks at the noise-free sample.
 // Run: cmake --build <build> --target bench_select_round && <build>/tests/bench_select_round
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/planning/planner.hpp"
@@ -16,6 +18,15 @@
 namespace {
 
 using namespace occ_improve;
+
+/// A 4096-ray shot of the benchmark's argument: 0 rays, 1 coarse_to_fine by blocks, 2 by triangles.
+PlanRequest request_of(std::int64_t shape) {
+  PlanRequest request;
+  request.budget_rays = 4096;
+  request.shape = shape == 0 ? ShotShape::rays : ShotShape::coarse_to_fine;
+  if (shape == 2) request.refine_by = RefineBy::triangles;
+  return request;
+}
 
 double ms_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
@@ -33,9 +44,7 @@ void BM_SelectRound(benchmark::State& state) {
   mapper.insert(PointSpan::from(first), two_threads);
   VirtualSensor sensor(clean.depth_m, clean.intrinsics);
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
-  PlanRequest request;
-  request.budget_rays = 4096;
-  request.shape = state.range(0) == 1 ? ShotShape::coarse_to_fine : ShotShape::rays;
+  const PlanRequest request = request_of(state.range(0));
   Shot shot = plan_next_shot(mapper, returns, request);
   double insert_ms = 0, improvement_ms = 0, plan_ms = 0;
   for (auto _ : state) {
@@ -58,7 +67,7 @@ void BM_SelectRound(benchmark::State& state) {
   state.counters["improvement_ms"] = improvement_ms / n;
   state.counters["plan_ms"] = plan_ms / n;
 }
-BENCHMARK(BM_SelectRound)->Arg(0)->Arg(1)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
+BENCHMARK(BM_SelectRound)->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
 
 /// The plan alone, on the map after one frame and a record of a few shots: its share of the round.
 void BM_Plan(benchmark::State& state) {
@@ -66,16 +75,14 @@ void BM_Plan(benchmark::State& state) {
   const auto first = sample::generate_scene().points();
   mapper.insert(PointSpan::from(first));
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
-  PlanRequest request;
-  request.budget_rays = 4096;
-  request.shape = state.range(0) == 1 ? ShotShape::coarse_to_fine : ShotShape::rays;
+  const PlanRequest request = request_of(state.range(0));
   for (int i = 0; i < 5; ++i) {
     const Shot shot = plan_next_shot(mapper, returns, request);
     returns.record_shot(shot.columns, std::vector<std::uint8_t>(shot.columns.size(), i % 2));
   }
   for (auto _ : state) benchmark::DoNotOptimize(plan_next_shot(mapper, returns, request));
 }
-BENCHMARK(BM_Plan)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Plan)->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
 
 void BM_ShotScores(benchmark::State& state) {
   Mapper mapper(kinect_v1());

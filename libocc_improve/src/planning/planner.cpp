@@ -228,16 +228,20 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
                                              const std::vector<float>& score, const std::vector<float>& probability,
                                              const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
                                              double cap_sigmas, std::size_t left) {
-  const SampleTriangulation triangulation =
-      triangulate_samples(measured_depth_image(surface, returns), surface.width, surface.height, model);
-  std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
-  // Neither a vertex nor a ray asked before (measured, or silent): the centroid of a triangle of a pixel
-  // or less rounds onto its own vertices.
+  const std::vector<float> samples = measured_depth_image(surface, returns);
+  // Neither a vertex (a sample) nor a ray asked before (measured, or silent): the centroid of a triangle
+  // of a pixel or less rounds onto its own vertices.
   std::vector<std::uint8_t> unasked = eligible;
-  for (ColumnIndex v : triangulation.vertex_column) unasked[v] = 0;
-  if (!returns.empty())
-    for (std::size_t c = 0; c < unasked.size(); ++c)
-      if (returns.asked()[c] > 0) unasked[c] = 0;
+  std::size_t unasked_count = 0;
+  for (std::size_t c = 0; c < unasked.size(); ++c) {
+    if (samples[c] > 0.0f || (!returns.empty() && returns.asked()[c] > 0)) unasked[c] = 0;
+    unasked_count += unasked[c];
+  }
+  // No centroid can be taken once every ray has been asked: the triangulation (~150 ms for a whole
+  // frame's samples) is then skipped, and the shot is the fill below.
+  const SampleTriangulation triangulation =
+      unasked_count == 0 ? SampleTriangulation{} : triangulate_samples(samples, surface.width, surface.height, model);
+  std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
   for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
     const ColumnIndex c = triangulation.centroid_column(t);
     // Any observable ray (NaN: not observable), negative improvement too: a depth transition is where
