@@ -71,7 +71,9 @@ void for_row_blocks(int rows, int threads, Body&& body) {
 
 // The valid rays: a known, occupied surface inside the depth range, on an observable column (a NaN
 // improvement: outside the camera or a mask, which takes no part even where a neighbour's measurement gave
-// it a surface).
+// it a surface). Occupied is P > 0.5, not the planner's depth-sample rule (P >= 0.516, is_depth_sample):
+// the columns only neighbours' OPDF tails reach lie along depth edges and carry the contours; with the
+// sample rule the mosd_learn boundary recall fell from 0.75 to 0.27 and the pooled F from 0.932 to 0.919.
 std::vector<std::uint8_t> valid_rays(const GridGeometry& geometry, const SurfaceMap& surface,
                                      const ImprovementMap& improvement) {
   std::vector<std::uint8_t> valid(surface.size());
