@@ -7,6 +7,7 @@
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/maps/surface.hpp"
 #include "reference/reference.hpp"
+#include "support/small_camera.hpp"
 
 #include <gtest/gtest.h>
 
@@ -146,6 +147,36 @@ TEST(Improvement, RayDefinitionEqualsFullMapForAnyThreadCount) {
   // Corners and edges: the window is clipped to the grid.
   for (const auto& [a, e] : {std::pair{0, 0}, std::pair{g.width() - 1, g.height() - 1}, std::pair{0, 100}})
     EXPECT_NEAR(ray_improvement(g, model, surface, a, e), one.value[g.column(a, e)], 1e-6);
+}
+
+// The full map reuses a row's values for a row with bitwise the same inputs (an empty map's interior
+// rows): every ray still equals the one-ray definition, on an empty map and beside a measured band, for a
+// pixel-native camera, the paper's spherical grid and uneven LiDAR rings (rows of unequal angular terms).
+TEST(Improvement, RowsWithTheSameInputsStillMatchTheOneRayDefinition) {
+  LidarRingsOptions rings;  // unevenly spaced rings whose windows span their neighbours: B differs by row
+  rings.ring_elevations_deg = {-25, -15, -10, -7, -5, -4, -3, -2, -1, 0, 1, 2};
+  rings.sigma_elevation_rad = 0.02;
+  rings.azimuth_steps = 90;
+  for (const SensorPreset& p : {kinect_v1(test::small_camera()), kinect_v1_paper(), lidar_rings(rings)}) {
+    const GridGeometry g = p.geometry.azimuth_bins > 400 ? reference::crop(GridGeometry(p.geometry), 0, 0, 80, 60)
+                                                         : GridGeometry(p.geometry);
+    const SensorModel model(p.model);
+    ColumnGrid grid(g);
+    for (const bool measured : {false, true}) {
+      if (measured) {  // a band of rows measured at 2 m, the rest of the grid empty
+        std::vector<Eigen::Vector3f> points;
+        for (int a = 0; a < g.width(); ++a)
+          for (int e = g.height() / 3; e < g.height() / 2; ++e) points.push_back(2.0f * g.direction(a, e).cast<float>());
+        insert_points(grid, model, PointSpan::from(points));
+      }
+      const SurfaceMap surface = compute_surface(grid);
+      const ImprovementMap map = compute_improvement(g, model, surface, 1);
+      for (int e = 0; e < g.height(); ++e)
+        for (int a = 0; a < g.width(); ++a)
+          ASSERT_NEAR(ray_improvement(g, model, surface, a, e), map.value[g.column(a, e)], 1e-6)
+              << p.name << (measured ? " with a band" : " empty") << " at " << a << ", " << e;
+    }
+  }
 }
 
 // k sigma exactly half a bin: whether the neighbour bin overlaps the box depends on the rounding of each

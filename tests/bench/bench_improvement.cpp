@@ -1,6 +1,6 @@
 // The improvement map (eqs. 3-4) on the paper preset after one sample frame: the whole 640 x 480 map
-// at 1 and 2 threads (target <= 3 ms with 2 threads), one ray, and the incremental update after a
-// second frame. Run: cmake --build <build> --target bench_improvement && <build>/tests/bench_improvement
+// at 1 and 2 threads (target <= 3 ms with 2 threads), one ray, a fresh map, and the incremental update
+// after a second frame. Run: cmake --build <build> --target bench_improvement && <build>/tests/bench_improvement
 #include "bench_support.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/mapper.hpp"
@@ -31,6 +31,17 @@ void BM_FullMap(benchmark::State& state) {
   state.counters["rays"] = static_cast<double>(m.geometry().column_count());
 }
 BENCHMARK(BM_FullMap)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// A fresh map for a 640 x 480 camera, as every one-shot use starts (occ_segment, occ_improve_map, the
+// filter, Python): the grid, the empty surface and its improvement. /0 kinect_v1, /1 kinect_v1_paper.
+void BM_NewMapper(benchmark::State& state) {
+  const SensorPreset preset = state.range(0) == bench::kPaper ? kinect_v1_paper() : kinect_v1();
+  for (auto _ : state) {
+    Mapper mapper(preset);
+    benchmark::DoNotOptimize(mapper.improvement().value.data());
+  }
+}
+BENCHMARK(BM_NewMapper)->ArgName("paper")->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_OneRay(benchmark::State& state) {
   const Mapper& m = one_frame_mapper();

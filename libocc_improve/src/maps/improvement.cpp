@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -185,6 +186,27 @@ struct WindowKernel {
   }
 };
 
+// Whether row e's rays have bitwise the inputs of row `other`'s, so that the row loop would give the same
+// values: the same window rows and angular terms, and the same surface depths and probabilities in every
+// row of the window. An empty map's interior rows do (a fresh 640 x 480 map has a handful of distinct
+// rows, ~0.3 ms instead of ~5 ms); a measured map's rows differ at the first compare of depths.
+bool same_row_inputs(const WindowKernel& kernel, const SurfaceMap& s, int width, int e, int other) {
+  const auto ue = static_cast<std::size_t>(e), uo = static_cast<std::size_t>(other);
+  if (kernel.el_lo[ue] != kernel.el_lo[uo] || kernel.el_hi[ue] != kernel.el_hi[uo]) return false;
+  const std::size_t terms_per_row = kernel.row_offsets(1);
+  if (std::memcmp(kernel.angular_term.data() + kernel.row_offsets(e), kernel.angular_term.data() + kernel.row_offsets(other),
+                  terms_per_row * sizeof(float)) != 0)
+    return false;
+  const auto w = static_cast<std::size_t>(width);
+  for (int de = kernel.el_lo[ue]; de <= kernel.el_hi[ue]; ++de) {
+    const std::size_t row = static_cast<std::size_t>(e + de) * w, other_row = static_cast<std::size_t>(other + de) * w;
+    if (std::memcmp(s.depth_m.data() + row, s.depth_m.data() + other_row, w * sizeof(float)) != 0 ||
+        std::memcmp(s.probability.data() + row, s.probability.data() + other_row, w * sizeof(float)) != 0)
+      return false;
+  }
+  return true;
+}
+
 // Rays whose window holds a changed column: j with lo[j] <= c - j <= hi[j] on both axes. A few changed
 // columns are scattered to the rays around them (cost proportional to the change); a whole frame's are
 // gathered row by row over a mask, one byte OR per window offset and ray, in the row loop's offset order
@@ -271,12 +293,18 @@ ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorMod
   map.value.resize(geometry.column_count());
   const int h = geometry.height();
   const int parts = std::min(detail::resolve_thread_count(threads), h);
+  const int w = geometry.width();
   detail::run_parts(parts, [&](int part, int count) {
-    std::vector<float> inv_sigma(static_cast<std::size_t>(geometry.width()));
+    std::vector<float> inv_sigma(static_cast<std::size_t>(w)), computed(static_cast<std::size_t>(w));
+    int computed_row = -1;  // the last row the loop evaluated; `computed` holds its values before masking
     for (int e = h * part / count; e < h * (part + 1) / count; ++e) {
       throw_if_stop_requested();
-      float* row = map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(geometry.width());
-      kernel.row(geometry, model, surface, e, row, inv_sigma);
+      float* row = map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
+      if (computed_row < 0 || !same_row_inputs(kernel, surface, w, e, computed_row)) {
+        kernel.row(geometry, model, surface, e, computed.data(), inv_sigma);
+        computed_row = e;
+      }
+      std::copy(computed.begin(), computed.end(), row);
       mask_unobservable(geometry, e, row);
     }
   });
