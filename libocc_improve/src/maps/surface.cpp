@@ -102,6 +102,7 @@ SurfaceMap compute_surface(const ColumnGrid& grid, int threads) {
   m.probability.assign(n, 0.5f);
   m.bin.assign(n, -1);
   m.unknown.assign(n, 1);
+  if (grid.allocated_tile_count() == 0) return m;  // a fresh grid: every column unknown, nothing to look up
   detail::run_parts(detail::resolve_thread_count(threads), [&](int part, int parts) {
     GridAccessor access(grid);
     const std::size_t begin = n * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
