@@ -428,9 +428,7 @@ TEST(CoarseToFine, TrianglesOnceEveryRayIsAskedAreTheSpreadBestRays) {
     acquire(sensor, plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles)), mapper, record);
   ASSERT_EQ(std::count(record.asked().begin(), record.asked().end(), 0), 0);
   const Shot plan = plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles));
-  const std::vector<float> p = return_probability_map(record, PlanRequest{}.return_model);
-  std::vector<float> score(p.size());
-  for (std::size_t c = 0; c < p.size(); ++c) score[c] = p[c] * mapper.improvement().value[c];
+  const std::vector<float> score = shot_scores(mapper.improvement(), record, PlanRequest{}.return_model);
   EXPECT_EQ(plan.columns, spread_best_columns(score, nullptr, 64, static_cast<std::size_t>(budget)));
 }
 

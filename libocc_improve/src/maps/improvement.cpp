@@ -88,10 +88,11 @@ struct WindowKernel {
       run_contiguous.push_back(count == last + 1 - first);
     }
   }
-  std::size_t row_offsets(int e) const {
-    return static_cast<std::size_t>(e) * static_cast<std::size_t>(offsets_across()) *
-           static_cast<std::size_t>(de_max - de_min + 1);
+  /// Angular terms per row: every (da, de) offset of the widest window.
+  std::size_t terms_per_row() const {
+    return static_cast<std::size_t>(offsets_across()) * static_cast<std::size_t>(de_max - de_min + 1);
   }
+  std::size_t row_offsets(int e) const { return static_cast<std::size_t>(e) * terms_per_row(); }
   int offsets_across() const { return da_max - da_min + 1; }
   std::size_t offset_index(int da, int de) const {
     return static_cast<std::size_t>((de - de_min) * offsets_across() + (da - da_min));
@@ -193,9 +194,8 @@ struct WindowKernel {
 bool same_row_inputs(const WindowKernel& kernel, const SurfaceMap& s, int width, int e, int other) {
   const auto ue = static_cast<std::size_t>(e), uo = static_cast<std::size_t>(other);
   if (kernel.el_lo[ue] != kernel.el_lo[uo] || kernel.el_hi[ue] != kernel.el_hi[uo]) return false;
-  const std::size_t terms_per_row = kernel.row_offsets(1);
   if (std::memcmp(kernel.angular_term.data() + kernel.row_offsets(e), kernel.angular_term.data() + kernel.row_offsets(other),
-                  terms_per_row * sizeof(float)) != 0)
+                  kernel.terms_per_row() * sizeof(float)) != 0)
     return false;
   const auto w = static_cast<std::size_t>(width);
   for (int de = kernel.el_lo[ue]; de <= kernel.el_hi[ue]; ++de) {
