@@ -34,9 +34,10 @@ configure: deps
 build: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS)
 
-# The whole suite, the find_package consumer build included (a ctest test).
+# The whole suite, the find_package consumer build included (a ctest test); the real-data tests read
+# DATA_DIR (below) and skip, saying so, where it is absent.
 test: build
-	cd $(BUILD_DIR) && ctest --output-on-failure -j $(JOBS)
+	cd $(BUILD_DIR) && OCC_IMPROVE_DATA_DIR=$(DATA_DIR) ctest --output-on-failure -j $(JOBS)
 
 demo: build
 	./scripts/demo.sh $(BUILD_DIR)
@@ -45,8 +46,11 @@ bench: configure
 	cmake --build $(BUILD_DIR) -j $(JOBS) --target benchmarks
 	./scripts/bench.sh $(BUILD_DIR)
 
+# The real data: DATA_DIR=..., else the environment's OCC_IMPROVE_DATA_DIR, else ../shared/data beside the
+# checkout; the tests, test-sanitize and the evaluations all read it.
+DATA_DIR ?= $(or $(OCC_IMPROVE_DATA_DIR),$(CURDIR)/../shared/data)
+
 # Our segmentation and PCL's on the labelled mOSD clouds (docs/SEGMENTATION.md).
-DATA_DIR ?= $(CURDIR)/../shared/data
 segment-eval: build
 	$(BUILD_DIR)/pcl_tools/occ_segment_eval $(DATA_DIR)/segmentation/mosd_learn/*.pcd
 
@@ -107,7 +111,7 @@ test-sanitize: deps
 	      -DOCC_IMPROVE_BUILD_BENCHMARKS=OFF -DCMAKE_CXX_FLAGS="$(SANITIZE_FLAGS) -U__SANITIZE_ADDRESS__" \
 	      -DCMAKE_EXE_LINKER_FLAGS="$(SANITIZE_FLAGS)" -DCMAKE_SHARED_LINKER_FLAGS="$(SANITIZE_FLAGS)" >/dev/null
 	cmake --build $(SANITIZE_BUILD_DIR) -j $(JOBS)
-	cd $(SANITIZE_BUILD_DIR) && \
+	cd $(SANITIZE_BUILD_DIR) && OCC_IMPROVE_DATA_DIR=$(DATA_DIR) \
 	  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/sanitize/lsan.supp:print_suppressions=0 \
 	  UBSAN_OPTIONS=suppressions=$(CURDIR)/tests/sanitize/ubsan.supp:halt_on_error=1:print_stacktrace=1 \
