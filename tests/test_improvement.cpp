@@ -178,16 +178,19 @@ TEST(Improvement, RowsWithTheSameInputsStillMatchTheOneRayDefinition) {
       std::size_t unobservable = 0;
       for (int e = 0; e < g.height(); ++e)
         for (int a = 0; a < g.width(); ++a) {
-          const std::string where = p.name + (measured ? " with a band" : " empty") + " at " + std::to_string(a) +
-                                    ", " + std::to_string(e);
+          const auto where = [&] {  // streamed only when an assertion fails
+            return p.name + (measured ? " with a band" : " empty") + " at " + std::to_string(a) + ", " + std::to_string(e);
+          };
           if (!g.observable(g.column(a, e))) {
             ++unobservable;
-            ASSERT_TRUE(std::isnan(map.value[g.column(a, e)])) << where;
+            ASSERT_TRUE(std::isnan(map.value[g.column(a, e)])) << where();
             continue;
           }
-          ASSERT_NEAR(ray_improvement(g, model, surface, a, e), map.value[g.column(a, e)], 1e-6) << where;
+          ASSERT_NEAR(ray_improvement(g, model, surface, a, e), map.value[g.column(a, e)], 1e-6) << where();
         }
-      if (p.name == "kinect_v1_spherical") EXPECT_GT(unobservable, 0u);  // the case the NaN check is for
+      if (p.name == "kinect_v1_spherical") {
+        EXPECT_GT(unobservable, 0u);  // the case the NaN check is for
+      }
     }
   }
 }

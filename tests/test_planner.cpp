@@ -206,8 +206,7 @@ double silent_share_late(bool return_model) {
     const Shot plan = plan_next_shot(mapper.improvement(), record, request);
     const std::vector<float> depth = sensor.shoot(plan.columns);  // pixel-native: column = pixel
     mapper.insert(PointSpan::from(sensor.points(plan.columns, depth)));
-    std::vector<std::uint8_t> got(depth.size());
-    for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
+    const std::vector<std::uint8_t> got = VirtualSensor::returned(depth);
     if (return_model) record.record_shot(plan.columns, got);
     if (shot < 50) continue;
     asked += got.size();
@@ -390,9 +389,7 @@ VirtualSensor wall_and_box_sensor(bool silent_patch) {
 void acquire(VirtualSensor& sensor, const Shot& plan, Mapper& mapper, ReturnRecord& record) {
   const std::vector<float> depth = sensor.shoot(plan.columns);
   mapper.insert(PointSpan::from(sensor.points(plan.columns, depth)));
-  std::vector<std::uint8_t> got(depth.size());
-  for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
-  record.record_shot(plan.columns, got);
+  record.record_shot(plan.columns, VirtualSensor::returned(depth));
 }
 
 // Closed loop over the wall and box with a silent patch: every shot is full and asks only new rays until

@@ -45,6 +45,14 @@ TEST(VirtualSensor, ReturnsOnlyWhatWasAskedWithKinectNoise) {
   EXPECT_EQ(s.points({0, 1, 2}, s.shoot({0, 1, 2})).size(), 1u);
 }
 
+// The rays of a shot that returned, as the return record takes them: the two silent pixels (0 and NaN
+// in the scene) and no others.
+TEST(VirtualSensor, ReturnedMarksTheRaysWithADepth) {
+  VirtualSensor s = flat_wall(2.0);
+  EXPECT_EQ(VirtualSensor::returned(s.shoot({0, 1, 2, 3})), (std::vector<std::uint8_t>{0, 0, 1, 1}));
+  EXPECT_TRUE(VirtualSensor::returned({}).empty());
+}
+
 TEST(VirtualSensor, SeededAndIndependentOfTheOrderAsked) {
   VirtualSensor a = flat_wall(1.5), b = flat_wall(1.5);
   const auto da = a.shoot({10, 20, 30});

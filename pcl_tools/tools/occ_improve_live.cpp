@@ -27,6 +27,7 @@
 
 #include <pcl/console/print.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -97,9 +98,8 @@ SimulatedShot acquire(const Shot& shot, VirtualSensor& sensor, Mapper& mapper, R
                       std::size_t asked_before) {
   const std::vector<float> depth = sensor.shoot(shot.columns);  // pixel-native: column index = pixel index
   mapper.insert(PointSpan::from(sensor.points(shot.columns, depth)));
-  std::vector<std::uint8_t> got(depth.size());
-  std::size_t returned = 0;
-  for (std::size_t i = 0; i < depth.size(); ++i) returned += got[i] = depth[i] > 0.0f;
+  const std::vector<std::uint8_t> got = VirtualSensor::returned(depth);
+  const auto returned = static_cast<std::size_t>(std::count(got.begin(), got.end(), 1));
   returns.record_shot(shot.columns, got);
   return {shot.columns.size(), returned, asked_before + shot.columns.size(), shot.expected_gain};
 }

@@ -50,8 +50,7 @@ void BM_SelectRound(benchmark::State& state) {
   for (auto _ : state) {
     const std::vector<float> depth = sensor.shoot(shot.columns);  // the sensor's time is not the library's
     const std::vector<Eigen::Vector3f> points = sensor.points(shot.columns, depth);
-    std::vector<std::uint8_t> got(depth.size());
-    for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
+    const std::vector<std::uint8_t> got = VirtualSensor::returned(depth);
     const auto start = std::chrono::steady_clock::now();
     const MapperReport report = mapper.insert(PointSpan::from(points), two_threads);
     returns.record_shot(shot.columns, got);

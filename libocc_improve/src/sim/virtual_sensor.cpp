@@ -81,4 +81,10 @@ std::vector<Eigen::Vector3f> VirtualSensor::points(const std::vector<std::uint32
   return out;
 }
 
+std::vector<std::uint8_t> VirtualSensor::returned(const std::vector<float>& depth_m) {
+  std::vector<std::uint8_t> got(depth_m.size());
+  for (std::size_t i = 0; i < depth_m.size(); ++i) got[i] = depth_m[i] > 0.0f;
+  return got;
+}
+
 }  // namespace occ_improve

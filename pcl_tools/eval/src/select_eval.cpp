@@ -229,9 +229,7 @@ private:
     const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
     mapper_.insert(PointSpan::from(points));
     if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire || is_coarse_to_fine(strategy_)) {
-      std::vector<std::uint8_t> got(depth.size());
-      for (std::size_t i = 0; i < depth.size(); ++i) got[i] = depth[i] > 0;
-      returns_.record_shot(columns, got);
+      returns_.record_shot(columns, VirtualSensor::returned(depth));
     }
     seconds_ += seconds_since(start);
     rays_asked_ += columns.size();

@@ -37,6 +37,8 @@ public:
 
   /// The returns of a shot as points in the sensor frame (pixels without a return are left out).
   std::vector<Eigen::Vector3f> points(const std::vector<std::uint32_t>& pixels, const std::vector<float>& depth_m) const;
+  /// Which rays of a shot returned (depth > 0), one byte per ray, as ReturnRecord::record_shot takes them.
+  static std::vector<std::uint8_t> returned(const std::vector<float>& depth_m);
 
   std::uint64_t shots_taken() const { return shots_; }
 
