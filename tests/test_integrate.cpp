@@ -60,6 +60,69 @@ TEST(Integrate, ClampedModeMatchesReferenceVoxelByVoxel) {
   EXPECT_GE(a.same_bin, static_cast<std::size_t>(0.999 * a.columns)) << a.same_bin << " / " << a.columns;
 }
 
+// Clamped mode settles the free space a call carves in a column before applying its measurements
+// (FreeSpaceBound, integrate.cpp): that leading run must stop at voxels already occupied (L > 0) that the
+// call's returns do not take all the way to L_min. A plane at 1 m three times, then a step behind it:
+// 4.5 sigmas (6.4 mm) behind on the left, whose returns carve the old surface by less than it holds, and
+// 0.25 m behind on the right, with the pixel-native preset (neighbours at B = 12 and 24) and the paper's
+// (neighbours at small B), against the dense reference voxel by voxel. Bound per frame: the one of
+// IntegrateReal.PixelNativeClampedMatchesReferenceVoxelByVoxel, 2.45e-5.
+TEST(Integrate, FreeSpaceOfACallStopsAtOccupiedVoxels) {
+  const PinholeIntrinsics k;
+  const auto frame = [&k](float left_m, float right_m) {
+    std::vector<Eigen::Vector3f> points;
+    for (int v = 200; v < 280; ++v)
+      for (int u = 280; u < 360; ++u) {
+        const float z = u < 320 ? left_m : right_m;
+        points.emplace_back(static_cast<float>((u - k.cx) / k.fx) * z, static_cast<float>((v - k.cy) / k.fy) * z, z);
+      }
+    return points;
+  };
+  const float behind_m = 1.0f + 4.5f * 1.425e-3f;
+  const std::vector<std::vector<Eigen::Vector3f>> frames{frame(1.0f, 1.0f), frame(1.0f, 1.0f), frame(1.0f, 1.0f),
+                                                         frame(behind_m, 1.25f)};
+  for (SensorPreset p : {kinect_v1(k), kinect_v1_paper()}) {
+    p.geometry.depth_bins = 1024;
+    const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+    const SensorModel model(p.model);
+    ColumnGrid fast(g);
+    reference::DenseGrid ref(g, model, GridOptions{});
+    const ColumnIndex c = g.column(4, 8);  // in the left half
+    int old_surface_bin = 0;
+    for (std::size_t f = 0; f < frames.size(); ++f) {
+      if (f + 1 == frames.size()) old_surface_bin = column_surface(fast.find(c), fast).bin;
+      insert_points(fast, model, PointSpan::from(frames[f]));
+      ref.insert(frames[f]);
+      EXPECT_LE(reference::max_log_odds_difference(fast, ref), static_cast<double>(f + 1) * 2.45e-5) << p.name << ", frame " << f;
+    }
+    // The old surface of the left half still holds more than L_min: the case where the run must stop.
+    EXPECT_GT(ref.log_odds(c, old_surface_bin), fast.log_odds_min() + 1.0) << p.name;
+  }
+}
+
+// The other case FreeSpaceBound's front limit is for: two returns in one column and call, the nearer first
+// (its peak raises the voxels at its depth by up to 1.6), the farther 5.3 sigmas behind it (carving them by
+// about 7.3, just beyond bound b): the nearer one's voxels end above L_min, so the farther return's free
+// space must not be settled over them.
+TEST(Integrate, FreeSpaceOfACallStopsInFrontOfANearerReturnOfTheSameColumn) {
+  const PinholeIntrinsics k;
+  for (SensorPreset p : {kinect_v1(k), kinect_v1_paper()}) {
+    p.geometry.depth_bins = 1024;
+    const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+    const SensorModel model(p.model);
+    std::vector<Eigen::Vector3f> points;
+    for (int v = 234; v < 246; ++v)
+      for (int u = 314; u < 326; ++u)
+        for (const double z : {1.3, 1.3 + 5.3 * model.sigma_depth_at(1.3)})
+          points.emplace_back(static_cast<float>((u - k.cx) / k.fx * z), static_cast<float>((v - k.cy) / k.fy * z), static_cast<float>(z));
+    ColumnGrid fast(g);
+    reference::DenseGrid ref(g, model, GridOptions{});
+    insert_points(fast, model, PointSpan::from(points));
+    ref.insert(points);
+    EXPECT_LE(reference::max_log_odds_difference(fast, ref), 2.45e-5) << p.name;
+  }
+}
+
 TEST(Integrate, RangeDependentSigmaMatchesReference) {
   // Spherical bins and the pixel-native binning, with the sample camera's own intrinsics.
   for (SensorPreset p : {kinect_v1_spherical(sample::generate_scene().intrinsics), kinect_v1(sample::generate_scene().intrinsics)}) {

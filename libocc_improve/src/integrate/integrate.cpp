@@ -13,6 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <tuple>
+#include <utility>
+#include <iterator>
+#include <limits>
 
 namespace occ_improve {
 
@@ -45,6 +49,15 @@ double skip_offset_sigmas(double angular_term) {
   const double step_offset = (step_limit - 4.0 - angular_term) / 2.0;
   if (angular_term >= peak_limit) return step_offset;
   return std::max(step_offset, std::sqrt(peak_limit - angular_term));
+}
+
+// Bound b) of integrate.hpp: at t <= this offset (in sigmas) logit P_s <= L_min - kBoundMargin, so one such
+// measurement takes a voxel holding L <= 0 to L_min: t <= -3 - B/2 (u <= -2, where logit P_s <=
+// log(1/2) + u + 0.072) and log(1/2) + u <= L_min - kBoundMargin.
+double to_lmin_offset_sigmas(double angular_term, float lmin) {
+  const double t_bound = -3.0 - 0.5 * angular_term;
+  const double t_fresh = 0.5 * (lmin - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
+  return std::min(t_bound, t_fresh);
 }
 
 // e_b = x and g_b = g of eq. 1 (opdf_kernel.hpp) at B = 0 for bins [0, n): the B-free factors, shared by
@@ -193,6 +206,18 @@ public:
     s.loaded = true;
   }
 
+  /// Clamped mode, right after load: bins below `cut` (FreeSpaceBound) that hold L <= 0 end the call at
+  /// L_min, so the leading run takes them before any measurement is applied; the run stops early at a bin
+  /// with L > 0, which is evaluated as usual.
+  void extend_run(ColumnScratch& s, int cut) const {
+    if (cut <= s.run_end) return;
+    const int materialised_end = std::min(cut, s.tail);
+    int b = s.run_end;
+    while (b < materialised_end && s.v[b] <= 1.0f) ++b;
+    s.run_end = b < materialised_end ? b : cut;
+    s.tail = std::max(s.tail, s.run_end);
+  }
+
   void store(ColumnScratch& s, ColumnData& c) const {
     if (clamped_) odds_to_log_odds(s.v + s.run_end, s.tail - s.run_end, omin_, omax_, lmin_, lmax_);
     c.uniform_end = s.run_end;
@@ -243,9 +268,7 @@ private:
     //    them one by one.)
     int first = s.run_end;
     if (s.run_end == s.tail) {
-      const double t_bound = -3.0 - 0.5 * angular_term;
-      const double t_fresh = 0.5 * (lmin_ - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
-      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * std::min(t_bound, t_fresh)), end);
+      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * to_lmin_offset_sigmas(angular_term, lmin_)), end);
       if (fresh > first) first = s.run_end = s.tail = fresh;
     }
     // 3. The remaining bins up to the support's end, evaluated; leading voxels at the lower clamp join
@@ -316,7 +339,7 @@ public:
   TileUpdate(ColumnGrid& grid, const SensorModel& model, std::vector<float>& scratch_rows)
       : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()),
         inv_sigma_azimuth_(1.0 / model.sigma_horizontal(g_.binning())),
-        inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())) {
+        inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())), lmin_(grid.log_odds_min()) {
     const auto depth_bins = static_cast<std::size_t>(g_.depth().bins());
     scratch_rows.resize(kTile * kTile * depth_bins);
     for (int i = 0; i < kTile * kTile; ++i) scratch_[i].v = scratch_rows.data() + static_cast<std::size_t>(i) * depth_bins;
@@ -327,26 +350,47 @@ public:
     e_first_ = e_first;
     a_last_ = std::min(a_first + kTile, g_.width()) - 1;
     e_last_ = std::min(e_first + kTile, g_.height()) - 1;
+    std::fill(std::begin(free_space_), std::end(free_space_), FreeSpaceBound{});
+  }
+
+  /// Clamped mode: folds one of the tile's measurements into the FreeSpaceBound of its columns. Called for
+  /// every measurement of the tile before the first apply.
+  /// front_m takes every measurement of the column; to_lmin_m only the one at the measurement's smallest B
+  /// in the tile (its own column where the tile holds it): a bound from some of the measurements is still
+  /// a bound, and that one reaches furthest.
+  void bound(const Measurement& m) {
+    const TileColumns r = columns_of(m);
+    const double front_m = m.rho + m.sigma * kNonPositiveT;
+    for (int e = r.e0; e <= r.e1; ++e)
+      for (int a = r.a0; a <= r.a1; ++a) {
+        double& f = free_space_[(e - e_first_) * kTile + (a - a_first_)].front_m;
+        f = std::min(f, front_m);
+      }
+    int a_near = r.a0, e_near = r.e0;
+    double azimuth_b = azimuth_term(a_near, m), elevation_b = elevation_term(e_near, m);
+    for (int a = r.a0 + 1; a <= r.a1; ++a)
+      if (const double b = azimuth_term(a, m); b < azimuth_b) std::tie(a_near, azimuth_b) = std::make_pair(a, b);
+    for (int e = r.e0 + 1; e <= r.e1; ++e)
+      if (const double b = elevation_term(e, m); b < elevation_b) std::tie(e_near, elevation_b) = std::make_pair(e, b);
+    double& to_lmin_m = free_space_[(e_near - e_first_) * kTile + (a_near - a_first_)].to_lmin_m;
+    to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(azimuth_b + elevation_b, lmin_));
   }
 
   void apply(const Measurement& m) {
-    const BinAxis &az = g_.azimuth(), &el = g_.elevation();
-    const int a0 = std::max(m.azimuth_first, a_first_), a1 = std::min(m.azimuth_last, a_last_);
-    const int e0 = std::max(m.elevation_first, e_first_), e1 = std::min(m.elevation_last, e_last_);
+    const TileColumns r = columns_of(m);
     const double sigma = m.sigma;
     terms_.reset(m.rho, sigma);
-    for (int a = a0; a <= a1; ++a) {
-      const double d = (az.centre(a) - m.azimuth) * inv_sigma_azimuth_;
-      azimuth_b_[a - a_first_] = d * d;
-      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-d * d));
+    for (int a = r.a0; a <= r.a1; ++a) {
+      azimuth_b_[a - a_first_] = azimuth_term(a, m);
+      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-azimuth_b_[a - a_first_]));
     }
-    for (int e = e0; e <= e1; ++e) {
-      const double d = (el.centre(e) - m.elevation) * inv_sigma_elevation_;
-      const double elevation_b = d * d;
+    for (int e = r.e0; e <= r.e1; ++e) {
+      const double elevation_b = elevation_term(e, m);
       const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
-      for (int a = a0; a <= a1; ++a) {
-        ColumnScratch& s = scratch_[(e - e_first_) * kTile + (a - a_first_)];
-        if (!s.loaded) kernel_.load(grid_.touch(g_.column(a, e)), s);
+      for (int a = r.a0; a <= r.a1; ++a) {
+        const int i = (e - e_first_) * kTile + (a - a_first_);
+        ColumnScratch& s = scratch_[i];
+        if (!s.loaded) load(g_.column(a, e), i);
         const double b = azimuth_b_[a - a_first_] + elevation_b;
         if (b <= kMaxFactoredB) {
           kernel_.apply(s, m.rho, b, sigma, terms_, azimuth_factor_[a - a_first_] * elevation_factor);
@@ -377,12 +421,54 @@ public:
 
 private:
   static constexpr int kTile = ColumnGrid::kTileSize;
+
+  // A measurement's columns within the tile.
+  struct TileColumns {
+    int a0, a1, e0, e1;
+  };
+  TileColumns columns_of(const Measurement& m) const {
+    return {std::max(m.azimuth_first, a_first_), std::min(m.azimuth_last, a_last_), std::max(m.elevation_first, e_first_),
+            std::min(m.elevation_last, e_last_)};
+  }
+  double azimuth_term(int a, const Measurement& m) const {
+    const double d = (g_.azimuth().centre(a) - m.azimuth) * inv_sigma_azimuth_;
+    return d * d;
+  }
+  double elevation_term(int e, const Measurement& m) const {
+    const double d = (g_.elevation().centre(e) - m.elevation) * inv_sigma_elevation_;
+    return d * d;
+  }
+
+  // Free space a whole call carves in one column, whatever the order of its measurements (clamped mode).
+  // Below front_m every measurement of the call has t <= kNonPositiveT, so logit P_s <= 0 for all of them;
+  // below to_lmin_m at least one of them alone takes a voxel holding L <= 0 below L_min (bound b). Under
+  // clamping after each update a voxel that only receives non-positive terms ends at max(L_min, L + sum),
+  // so every voxel below both that holds L <= 0 ends the call at L_min: the column's leading run takes
+  // it at load (ColumnKernel::extend_run) and no measurement evaluates it. A neighbour whose update lies
+  // wholly in front of the column's own return then costs O(1), and its free-space carving never
+  // materialises bins the return would clamp anyway.
+  struct FreeSpaceBound {
+    double front_m = std::numeric_limits<double>::infinity();
+    double to_lmin_m = -std::numeric_limits<double>::infinity();
+  };
+
+  void load(ColumnIndex c, int i) {
+    ColumnScratch& s = scratch_[i];
+    kernel_.load(grid_.touch(c), s);
+    if (grid_.clamped()) {
+      const FreeSpaceBound& f = free_space_[i];
+      kernel_.extend_run(s, g_.depth().first_centre_above(std::min(f.front_m, f.to_lmin_m)));
+    }
+  }
+
   ColumnGrid& grid_;
   const GridGeometry& g_;
   const ColumnKernel kernel_;
   MeasurementTerms terms_, column_terms_;
   const double inv_sigma_azimuth_, inv_sigma_elevation_;
+  const float lmin_;
   ColumnScratch scratch_[kTile * kTile];
+  FreeSpaceBound free_space_[kTile * kTile];
   float azimuth_factor_[kTile];
   double azimuth_b_[kTile];
   int a_first_ = 0, e_first_ = 0, a_last_ = -1, e_last_ = -1;
@@ -405,6 +491,8 @@ std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, cons
     throw_if_stop_requested();  // per tile: up to 64 columns' measurements
     update.start(static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile,
                  (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile);
+    if (grid.clamped())
+      for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.bound(measurements.slots[tiles.items[k]]);
     for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.apply(measurements.slots[tiles.items[k]]);
     update.finish(surface, surface_changed);
   }
