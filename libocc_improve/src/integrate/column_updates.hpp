@@ -9,11 +9,12 @@
 namespace occ_improve::detail {
 
 /// Adds every measurement's truncated OPDF to the columns it overlaps in tile rows [first_tile_row,
-/// end_tile_row), tile by tile, each column receiving its measurements in input order. scratch_rows is
-/// the caller's buffer (kept from call to call). With a surface, the band's columns' surfaces are kept
-/// current and those that changed are appended to surface_changed. Returns the column updates.
+/// end_tile_row) (`rows` lists each tile row's measurements), tile by tile, each column receiving its
+/// measurements in input order. scratch_rows is the caller's buffer (kept from call to call). With a
+/// surface, the band's columns' surfaces are kept current and those that changed are appended to
+/// surface_changed. Returns the column updates.
 std::size_t update_band(ColumnGrid& grid, const SensorModel& model, const MeasurementChunks& measurements,
-                        int first_tile_row, int end_tile_row, std::vector<float>& scratch_rows, SurfaceMap* surface,
-                        std::vector<ColumnIndex>& surface_changed);
+                        const TileRows& rows, int first_tile_row, int end_tile_row, std::vector<float>& scratch_rows,
+                        SurfaceMap* surface, std::vector<ColumnIndex>& surface_changed);
 
 }  // namespace occ_improve::detail

@@ -52,6 +52,9 @@ void require_valid_span(PointSpan points) {
     throw InvalidInput("insert_points: more than 2^32 - 1 points in one call; insert them in parts");
 }
 
+// Bands of tile rows per insertion thread (see insert).
+constexpr int kBandsPerThread = 4;
+
 // Buffers kept by the calling thread from one call to the next: a frame's measurements alone are
 // megabytes, and fresh pages for them every frame cost more than the conversion itself.
 struct InsertionWorkspace {
@@ -78,15 +81,19 @@ InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan poi
   InsertionReport report = detail::to_measurements(points, g, model, threads, measurements);
 
   const int tile_rows = (g.height() + ColumnGrid::kTileSize - 1) / ColumnGrid::kTileSize;
-  const int parts = std::max(1, std::min(threads, tile_rows));
-  const std::vector<int> band_begin = detail::balanced_bands(measurements, tile_rows, parts);
-  std::vector<std::size_t> updates(static_cast<std::size_t>(parts), 0);
-  std::vector<std::vector<ColumnIndex>> changed(static_cast<std::size_t>(parts));
-  if (scratch_rows.size() < static_cast<std::size_t>(parts)) scratch_rows.resize(static_cast<std::size_t>(parts));
-  detail::run_parts(parts, [&](int part, int) {
-    const auto p = static_cast<std::size_t>(part);
-    updates[p] = detail::update_band(grid, model, measurements, band_begin[p], band_begin[p + 1], scratch_rows[p],
-                                     surface, changed[p]);
+  const detail::TileRows rows = detail::bucket_by_tile_row(measurements, tile_rows, threads);
+  // More bands than threads, taken in turn: the work estimate (pairs per tile row) misses how much a
+  // pair costs, which varies with the scene by 10-30 % between halves of a frame.
+  const int workers = std::max(1, std::min(threads, tile_rows));
+  const int bands = workers == 1 ? 1 : std::min(tile_rows, kBandsPerThread * workers);
+  const std::vector<int> band_begin = detail::balanced_bands(rows, bands);
+  std::vector<std::size_t> updates(static_cast<std::size_t>(bands), 0);
+  std::vector<std::vector<ColumnIndex>> changed(static_cast<std::size_t>(bands));
+  if (scratch_rows.size() < static_cast<std::size_t>(workers)) scratch_rows.resize(static_cast<std::size_t>(workers));
+  detail::run_chunks(workers, bands, [&](int band, int worker) {
+    const auto b = static_cast<std::size_t>(band);
+    updates[b] = detail::update_band(grid, model, measurements, rows, band_begin[b], band_begin[b + 1],
+                                     scratch_rows[static_cast<std::size_t>(worker)], surface, changed[b]);
   });
   for (std::size_t u : updates) report.column_updates += u;
   if (surface_changed) {

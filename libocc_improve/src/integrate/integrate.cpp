@@ -298,22 +298,21 @@ private:
   float lmin_, lmax_, omin_, omax_;
 };
 
-// The measurements of each tile of a band of tile rows, in input order (a counting sort): tile t's are
-// items[begin[t]] .. items[begin[t + 1] - 1], tiles numbered row by row within the band.
+// The measurements of each tile of a band of tile rows, in input order (a counting sort over the band's
+// rows of TileRows): tile t's are items[begin[t]] .. items[begin[t + 1] - 1], tiles numbered row by row
+// within the band.
 struct BandTiles {
   int first_tile_row, end_tile_row, tile_columns;
   std::vector<std::uint32_t> begin, items;
 
-  BandTiles(const MeasurementChunks& measurements, int first_row, int end_row, int columns)
+  BandTiles(const MeasurementChunks& measurements, const detail::TileRows& rows, int first_row, int end_row, int columns)
       : first_tile_row(first_row), end_tile_row(end_row), tile_columns(columns) {
     begin.assign(count() + 1, 0);
-    measurements.for_each([&](std::size_t, const Measurement& m) { for_each_tile(m, [&](std::size_t t) { ++begin[t + 1]; }); });
+    for_each_tile(measurements, rows, [&](std::size_t t, std::uint32_t) { ++begin[t + 1]; });
     for (std::size_t t = 0; t < count(); ++t) begin[t + 1] += begin[t];
     std::vector<std::uint32_t> next(begin.begin(), begin.end() - 1);
     items.resize(begin.back());
-    measurements.for_each([&](std::size_t mi, const Measurement& m) {
-      for_each_tile(m, [&](std::size_t t) { items[next[t]++] = static_cast<std::uint32_t>(mi); });
-    });
+    for_each_tile(measurements, rows, [&](std::size_t t, std::uint32_t mi) { items[next[t]++] = mi; });
   }
   std::size_t count() const {
     return static_cast<std::size_t>(end_tile_row - first_tile_row) * static_cast<std::size_t>(tile_columns);
@@ -321,13 +320,17 @@ struct BandTiles {
 
 private:
   static constexpr int kTile = ColumnGrid::kTileSize;
+  // visit(tile, measurement) for each tile of the band each measurement overlaps, row by row in input order.
   template <typename Visit>
-  void for_each_tile(const Measurement& m, Visit&& visit) const {
-    const int row_first = std::max(m.elevation_first / kTile, first_tile_row);
-    const int row_last = std::min(m.elevation_last / kTile, end_tile_row - 1);
-    for (int r = row_first; r <= row_last; ++r)
-      for (int t = m.azimuth_first / kTile; t <= m.azimuth_last / kTile; ++t)
-        visit(static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns) + static_cast<std::size_t>(t));
+  void for_each_tile(const MeasurementChunks& measurements, const detail::TileRows& rows, Visit&& visit) const {
+    for (int r = first_tile_row; r < end_tile_row; ++r) {
+      const std::size_t row_start = static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns);
+      for (std::uint32_t k = rows.begin[static_cast<std::size_t>(r)]; k < rows.begin[static_cast<std::size_t>(r) + 1]; ++k) {
+        const std::uint32_t mi = rows.items[k];
+        const Measurement& m = measurements.slots[mi];
+        for (int t = m.azimuth_first / kTile; t <= m.azimuth_last / kTile; ++t) visit(row_start + static_cast<std::size_t>(t), mi);
+      }
+    }
   }
 };
 
@@ -478,13 +481,14 @@ private:
 }  // namespace
 
 std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, const MeasurementChunks& measurements,
-                        int first_tile_row, int end_tile_row, std::vector<float>& scratch_rows, SurfaceMap* surface,
-                        std::vector<ColumnIndex>& surface_changed) {
+                                const TileRows& rows, int first_tile_row, int end_tile_row,
+                                std::vector<float>& scratch_rows, SurfaceMap* surface,
+                                std::vector<ColumnIndex>& surface_changed) {
   constexpr int kTile = ColumnGrid::kTileSize;
   const GridGeometry& g = grid.geometry();
   const detail::FlushDenormals flush_denormals;
   const int tile_columns = (g.width() + kTile - 1) / kTile;
-  const BandTiles tiles(measurements, first_tile_row, end_tile_row, tile_columns);
+  const BandTiles tiles(measurements, rows, first_tile_row, end_tile_row, tile_columns);
   TileUpdate update(grid, model, scratch_rows);
   for (std::size_t t = 0; t < tiles.count(); ++t) {
     if (tiles.begin[t] == tiles.begin[t + 1]) continue;

@@ -3,6 +3,8 @@
 #include "occ_improve/cancel.hpp"
 #include "support/parallel.hpp"
 
+#include <algorithm>
+
 namespace occ_improve::detail {
 
 namespace {
@@ -61,21 +63,62 @@ InsertionReport to_measurements(PointSpan points, const GridGeometry& g, const S
   return report;
 }
 
-std::vector<int> balanced_bands(const MeasurementChunks& measurements, int tile_rows, int parts) {
-  std::vector<double> work(static_cast<std::size_t>(tile_rows), 0.0);
-  measurements.for_each([&](std::size_t, const Measurement& m) {
-    const double columns = m.azimuth_last - m.azimuth_first + 1;
-    for (int e = m.elevation_first; e <= m.elevation_last; ++e)
-      work[static_cast<std::size_t>(e / ColumnGrid::kTileSize)] += columns;
+TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows, int threads) {
+  constexpr int kTile = ColumnGrid::kTileSize;
+  const auto rows = static_cast<std::size_t>(tile_rows), chunks = measurements.ranges.size();
+  // Per chunk and row: how many measurements, then where the chunk's first one goes; and the work.
+  std::vector<std::vector<std::uint32_t>> slot(chunks, std::vector<std::uint32_t>(rows, 0));
+  std::vector<std::vector<double>> work(chunks, std::vector<double>(rows, 0.0));
+  const auto for_each_row = [](const Measurement& m, auto&& visit) {
+    for (int r = m.elevation_first / kTile; r <= m.elevation_last / kTile; ++r) {
+      const int rows_in_tile = std::min(m.elevation_last, r * kTile + kTile - 1) - std::max(m.elevation_first, r * kTile) + 1;
+      visit(static_cast<std::size_t>(r), rows_in_tile * (m.azimuth_last - m.azimuth_first + 1));
+    }
+  };
+  const auto each_chunk = [&](auto&& body) {
+    run_parts(std::max(1, std::min(threads, static_cast<int>(chunks))), [&](int part, int parts) {
+      for (std::size_t c = static_cast<std::size_t>(part); c < chunks; c += static_cast<std::size_t>(parts)) body(c);
+    });
+  };
+  each_chunk([&](std::size_t c) {
+    const auto [begin, end] = measurements.ranges[c];
+    for (std::size_t i = begin; i < end; ++i)
+      for_each_row(measurements.slots[i], [&](std::size_t r, int pairs) {
+        ++slot[c][r];
+        work[c][r] += pairs;
+      });
   });
+  TileRows out;
+  out.begin.assign(rows + 1, 0);
+  out.work.assign(rows, 0.0);
+  for (std::size_t r = 0; r < rows; ++r) {  // rows in order, chunks in input order within a row
+    std::uint32_t next = out.begin[r];
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const std::uint32_t n = slot[c][r];
+      slot[c][r] = next;
+      next += n;
+      out.work[r] += work[c][r];
+    }
+    out.begin[r + 1] = next;
+  }
+  out.items.resize(out.begin[rows]);
+  each_chunk([&](std::size_t c) {
+    const auto [begin, end] = measurements.ranges[c];
+    for (std::size_t i = begin; i < end; ++i)
+      for_each_row(measurements.slots[i], [&](std::size_t r, int) { out.items[slot[c][r]++] = static_cast<std::uint32_t>(i); });
+  });
+  return out;
+}
+
+std::vector<int> balanced_bands(const TileRows& rows, int parts) {
   double total = 0;
-  for (double w : work) total += w;
-  std::vector<int> begin(static_cast<std::size_t>(parts) + 1, tile_rows);
+  for (double w : rows.work) total += w;
+  std::vector<int> begin(static_cast<std::size_t>(parts) + 1, rows.count());
   begin[0] = 0;
   double sum = 0;
   int part = 1;
-  for (int r = 0; r < tile_rows && part < parts; ++r) {
-    sum += work[static_cast<std::size_t>(r)];
+  for (int r = 0; r < rows.count() && part < parts; ++r) {
+    sum += rows.work[static_cast<std::size_t>(r)];
     if (sum >= total * part / parts) begin[static_cast<std::size_t>(part++)] = r + 1;
   }
   return begin;

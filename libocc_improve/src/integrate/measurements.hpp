@@ -5,6 +5,7 @@
 #include "occ_improve/integrate/integrate.hpp"
 
 #include <cstddef>
+#include <cstdint>
 #include <utility>
 #include <vector>
 
@@ -34,9 +35,21 @@ struct MeasurementChunks {
 InsertionReport to_measurements(PointSpan points, const GridGeometry& g, const SensorModel& model, int threads,
                                 MeasurementChunks& measurements);
 
-/// Splits the tile rows into `parts` bands of about equal work (column updates), so that neither thread
-/// waits for the other where the scene is uneven (floor below, far wall or no returns above). Returns
-/// parts + 1 tile-row boundaries. Any split gives the same result: each column has one owner.
-std::vector<int> balanced_bands(const MeasurementChunks& measurements, int tile_rows, int parts);
+// The measurements of each tile row in input order (a measurement whose support spans two tile rows is
+// in both), and each row's work in column updates: what the bands are balanced on and their tiles built
+// from, so that a band reads its own rows' measurements rather than the whole frame's.
+struct TileRows {
+  std::vector<std::uint32_t> begin, items;  ///< row r's: items[begin[r]] .. items[begin[r + 1] - 1]
+  std::vector<double> work;                 ///< row r's (measurement, column) pairs
+  int count() const { return static_cast<int>(work.size()); }
+};
+
+/// The tile rows' measurements (a counting sort, on `threads` threads over the conversion's chunks).
+TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows, int threads);
+
+/// Splits the tile rows into `parts` bands of about equal work (column updates), so that no thread waits
+/// for another where the scene is uneven (floor below, far wall or no returns above). Returns parts + 1
+/// tile-row boundaries. Any split gives the same result: each column has one owner.
+std::vector<int> balanced_bands(const TileRows& rows, int parts);
 
 }  // namespace occ_improve::detail

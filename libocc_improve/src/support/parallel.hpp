@@ -2,6 +2,7 @@
 // A minimal fork-join helper: runs body(part, parts) on `parts` threads (the caller's thread is one of
 // them) and rethrows the first exception after all have joined, so no thread outlives the call.
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <system_error>
 #include <thread>
@@ -43,6 +44,17 @@ void run_parts(int parts, Body&& body) {
   for (auto& t : threads) t.join();
   for (auto& e : errors)
     if (e) std::rethrow_exception(e);
+}
+
+/// Runs body(chunk, worker) for every chunk in [0, chunks) on up to `workers` threads (run_parts): each
+/// worker takes the next chunk nobody has taken, in ascending order, so a worker whose chunks were quick
+/// takes more and an uneven split does not leave a thread idle. A worker whose body throws takes no more.
+template <typename Body>
+void run_chunks(int workers, int chunks, Body&& body) {
+  std::atomic<int> next{0};
+  run_parts(std::max(1, std::min(workers, chunks)), [&](int worker, int) {
+    for (int chunk = next++; chunk < chunks; chunk = next++) body(chunk, worker);
+  });
 }
 
 }  // namespace occ_improve::detail
