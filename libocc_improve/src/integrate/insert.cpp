@@ -1,5 +1,5 @@
-// Insertion's entry points (eq. 2, integrate.hpp): points -> measurements (measurements.cpp), then each
-// thread updates its own band of tile rows (integrate.cpp).
+// Insertion's entry points (eq. 2, integrate.hpp): points -> measurements (measurements.cpp), then the
+// threads update bands of tile rows, one band at a time each (integrate.cpp).
 #include "integrate/column_updates.hpp"
 
 #include "occ_improve/errors.hpp"
@@ -64,9 +64,9 @@ struct InsertionWorkspace {
 
 // Both public insert_points: `surface` null, or the surface to keep current and where to list its changes.
 //  1. Points -> measurements, in input order (parallel over contiguous chunks).
-//  2. Measurements -> columns, tile by tile. Each thread owns a band of tile rows, so no two threads
-//     share a tile or a column, and every column sees its measurements in input order: results do not
-//     depend on threads.
+//  2. Measurements -> columns, tile by tile. Each band of tile rows is updated by one thread, so no two
+//     threads share a tile or a column, and every column sees its measurements in input order: results do
+//     not depend on threads.
 InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan points, const InsertionOptions& options,
                        SurfaceMap* surface, std::vector<ColumnIndex>* surface_changed) {
   const auto start = SteadyClock::now();
