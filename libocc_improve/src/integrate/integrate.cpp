@@ -13,10 +13,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <tuple>
-#include <utility>
 #include <iterator>
 #include <limits>
+#include <tuple>
+#include <utility>
 
 namespace occ_improve {
 
