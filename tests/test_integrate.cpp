@@ -69,24 +69,26 @@ TEST(Integrate, ClampedModeMatchesReferenceVoxelByVoxel) {
 // IntegrateReal.PixelNativeClampedMatchesReferenceVoxelByVoxel, 2.45e-5.
 TEST(Integrate, FreeSpaceOfACallStopsAtOccupiedVoxels) {
   const PinholeIntrinsics k;
-  const auto frame = [&k](float left_m, float right_m) {
+  const auto frame = [&k](double left_m, double right_m) {
     std::vector<Eigen::Vector3f> points;
     for (int v = 200; v < 280; ++v)
       for (int u = 280; u < 360; ++u) {
-        const float z = u < 320 ? left_m : right_m;
-        points.emplace_back(static_cast<float>((u - k.cx) / k.fx) * z, static_cast<float>((v - k.cy) / k.fy) * z, z);
+        const double z = u < 320 ? left_m : right_m;
+        points.emplace_back(static_cast<float>((u - k.cx) / k.fx * z), static_cast<float>((v - k.cy) / k.fy * z), static_cast<float>(z));
       }
     return points;
   };
-  const float behind_m = 1.0f + 4.5f * 1.425e-3f;
-  const std::vector<std::vector<Eigen::Vector3f>> frames{frame(1.0f, 1.0f), frame(1.0f, 1.0f), frame(1.0f, 1.0f),
-                                                         frame(behind_m, 1.25f)};
   for (SensorPreset p : {kinect_v1(k), kinect_v1_paper()}) {
     p.geometry.depth_bins = 1024;
     const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
     const SensorModel model(p.model);
-    ColumnGrid fast(g);
-    reference::DenseGrid ref(g, model, GridOptions{});
+    const double behind_m = 1.0 + 4.5 * model.sigma_depth_at(1.0);
+    const std::vector<std::vector<Eigen::Vector3f>> frames{frame(1.0, 1.0), frame(1.0, 1.0), frame(1.0, 1.0),
+                                                           frame(behind_m, 1.25)};
+    GridOptions clamped;
+    clamped.probability_min = 0.001;  // L_min = -6.9: bound b) reaches -5.2 sigmas at B = 0
+    ColumnGrid fast(g, clamped);
+    reference::DenseGrid ref(g, model, clamped);
     const ColumnIndex c = g.column(4, 8);  // in the left half
     int old_surface_bin = 0;
     for (std::size_t f = 0; f < frames.size(); ++f) {
@@ -115,11 +117,19 @@ TEST(Integrate, FreeSpaceOfACallStopsInFrontOfANearerReturnOfTheSameColumn) {
       for (int u = 314; u < 326; ++u)
         for (const double z : {1.3, 1.3 + 5.3 * model.sigma_depth_at(1.3)})
           points.emplace_back(static_cast<float>((u - k.cx) / k.fx * z), static_cast<float>((v - k.cy) / k.fy * z), static_cast<float>(z));
-    ColumnGrid fast(g);
-    reference::DenseGrid ref(g, model, GridOptions{});
+    GridOptions clamped;
+    clamped.probability_min = 0.001;  // L_min = -6.9: bound b) reaches -5.2 sigmas at B = 0, short of 5.3
+    ColumnGrid fast(g, clamped);
+    reference::DenseGrid ref(g, model, clamped);
     insert_points(fast, model, PointSpan::from(points));
     ref.insert(points);
     EXPECT_LE(reference::max_log_odds_difference(fast, ref), 2.45e-5) << p.name;
+    // The case itself: voxels of the nearer return end above L_min.
+    const ColumnIndex c = g.column(8, 8);
+    double highest = -1e9;
+    for (int b = g.depth().first_centre_above(1.3 - 2 * model.sigma_depth_at(1.3)); g.depth().centre(b) < 1.3 + 2 * model.sigma_depth_at(1.3); ++b)
+      highest = std::max(highest, ref.log_odds(c, b));
+    EXPECT_GT(highest, fast.log_odds_min() + 0.5) << p.name;
   }
 }
 

@@ -90,7 +90,7 @@ InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan poi
   std::vector<std::size_t> updates(static_cast<std::size_t>(bands), 0);
   std::vector<std::vector<ColumnIndex>> changed(static_cast<std::size_t>(bands));
   if (scratch_rows.size() < static_cast<std::size_t>(workers)) scratch_rows.resize(static_cast<std::size_t>(workers));
-  detail::run_chunks(workers, bands, [&](int band, int worker) {
+  detail::run_in_turn(workers, bands, [&](int band, int worker) {
     const auto b = static_cast<std::size_t>(band);
     updates[b] = detail::update_band(grid, model, measurements, rows, band_begin[b], band_begin[b + 1],
                                      scratch_rows[static_cast<std::size_t>(worker)], surface, changed[b]);

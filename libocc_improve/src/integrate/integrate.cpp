@@ -51,9 +51,9 @@ double skip_offset_sigmas(double angular_term) {
   return std::max(step_offset, std::sqrt(peak_limit - angular_term));
 }
 
-// Bound b) of integrate.hpp: at t <= this offset (in sigmas) logit P_s <= L_min - kBoundMargin, so one such
-// measurement takes a voxel holding L <= 0 to L_min: t <= -3 - B/2 (u <= -2, where logit P_s <=
-// log(1/2) + u + 0.072) and log(1/2) + u <= L_min - kBoundMargin.
+// Bound b) of integrate.hpp: at t <= this offset (in sigmas) t <= -3 - B/2 (u <= -2, where logit P_s <=
+// log(1/2) + u + 0.072) and log(1/2) + u <= L_min - kBoundMargin, so logit P_s <= L_min - 0.128 and one
+// such measurement takes a voxel holding L <= 0 to L_min.
 double to_lmin_offset_sigmas(double angular_term, float lmin) {
   const double t_bound = -3.0 - 0.5 * angular_term;
   const double t_fresh = 0.5 * (lmin - kBoundMargin - (std::log(0.5) + 4.0 + angular_term));
@@ -444,7 +444,8 @@ private:
 
   // Free space a whole call carves in one column, whatever the order of its measurements (clamped mode).
   // Below front_m every measurement of the call has t <= kNonPositiveT, so logit P_s <= 0 for all of them;
-  // below to_lmin_m at least one of them alone takes a voxel holding L <= 0 below L_min (bound b). Under
+  // below to_lmin_m at least one of them alone takes a voxel holding L <= 0 below L_min (bound b: by 0.128 at
+// least, far beyond float rounding in the odds). Under
   // clamping after each update a voxel that only receives non-positive terms ends at max(L_min, L + sum),
   // so every voxel below both that holds L <= 0 ends the call at L_min: the column's leading run takes
   // it at load (ColumnKernel::extend_run) and no measurement evaluates it. A neighbour whose update lies

@@ -22,12 +22,6 @@ struct Measurement {
 struct MeasurementChunks {
   std::vector<Measurement> slots;
   std::vector<std::pair<std::size_t, std::size_t>> ranges;  ///< [begin, end) of each chunk's measurements
-
-  template <typename Visit>
-  void for_each(Visit&& visit) const {
-    for (const auto& [begin, end] : ranges)
-      for (std::size_t i = begin; i < end; ++i) visit(i, slots[i]);
-  }
 };
 
 /// The points' measurements, in input order, converted in `threads` contiguous chunks in parallel; the
@@ -47,9 +41,10 @@ struct TileRows {
 /// The tile rows' measurements (a counting sort, on `threads` threads over the conversion's chunks).
 TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows, int threads);
 
-/// Splits the tile rows into `parts` bands of about equal work (column updates), so that no thread waits
-/// for another where the scene is uneven (floor below, far wall or no returns above). Returns parts + 1
-/// tile-row boundaries. Any split gives the same result: each column has one owner.
+/// Splits the tile rows into `parts` bands of about equal estimated work (column updates); the insertion
+/// makes several bands per thread and the threads take them in turn, so that an uneven scene (floor
+/// below, far wall or no returns above) or a wrong estimate leaves no thread idle for long. Returns
+/// parts + 1 tile-row boundaries. Any split gives the same result: each column has one owner.
 std::vector<int> balanced_bands(const TileRows& rows, int parts);
 
 }  // namespace occ_improve::detail

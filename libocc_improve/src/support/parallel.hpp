@@ -46,14 +46,23 @@ void run_parts(int parts, Body&& body) {
     if (e) std::rethrow_exception(e);
 }
 
-/// Runs body(chunk, worker) for every chunk in [0, chunks) on up to `workers` threads (run_parts): each
-/// worker takes the next chunk nobody has taken, in ascending order, so a worker whose chunks were quick
-/// takes more and an uneven split does not leave a thread idle. A worker whose body throws takes no more.
+/// Runs body(task, worker) for every task in [0, tasks) on up to `workers` threads (run_parts): each
+/// worker takes the next task nobody has taken, in ascending order, so a worker whose tasks were quick
+/// takes more and an uneven split does not leave a thread idle. Once a body throws, no worker takes
+/// another task; run_parts rethrows.
 template <typename Body>
-void run_chunks(int workers, int chunks, Body&& body) {
+void run_in_turn(int workers, int tasks, Body&& body) {
   std::atomic<int> next{0};
-  run_parts(std::max(1, std::min(workers, chunks)), [&](int worker, int) {
-    for (int chunk = next++; chunk < chunks; chunk = next++) body(chunk, worker);
+  std::atomic<bool> failed{false};
+  run_parts(std::max(1, std::min(workers, tasks)), [&](int worker, int) {
+    for (int task = next++; task < tasks && !failed; task = next++) {
+      try {
+        body(task, worker);
+      } catch (...) {
+        failed = true;
+        throw;
+      }
+    }
   });
 }
 
