@@ -133,6 +133,40 @@ TEST(Integrate, FreeSpaceOfACallStopsInFrontOfANearerReturnOfTheSameColumn) {
   }
 }
 
+// A leading run the kernel did not make (a map from elsewhere: L = -1, or +0.5, over the first 300 bins of
+// every column, not L_min): the column is loaded with it as voxels, the call's free space is settled over
+// them from bin 0 where they hold L <= 0 and not at all where L > 0, and the result still matches the
+// reference voxel by voxel.
+TEST(Integrate, FreeSpaceOfACallOverALeadingRunTheKernelDidNotMake) {
+  const PinholeIntrinsics k;
+  SensorPreset p = kinect_v1(k);
+  p.geometry.depth_bins = 1024;
+  const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+  const SensorModel model(p.model);
+  GridOptions clamped;
+  clamped.probability_min = 0.001;
+  std::vector<Eigen::Vector3f> points;
+  for (int v = 228; v < 252; ++v)
+    for (int u = 308; u < 332; ++u) {
+      const double z = u < 320 ? 1.0 : 1.25;
+      points.emplace_back(static_cast<float>((u - k.cx) / k.fx * z), static_cast<float>((v - k.cy) / k.fy * z), static_cast<float>(z));
+    }
+  constexpr int kRunBins = 300;
+  ASSERT_LT(g.depth().centre(kRunBins), 1.0 - 10 * model.sigma_depth_at(1.0));  // the run lies in the free space
+  for (const float run_value : {-1.0f, 0.5f}) {
+    ColumnGrid fast(g, clamped);
+    reference::DenseGrid ref(g, model, clamped);
+    for (std::size_t c = 0; c < g.column_count(); ++c) {
+      fast.touch(static_cast<ColumnIndex>(c)) = ColumnData{kRunBins, run_value, {}};
+      for (int b = 0; b < kRunBins; ++b) ref.set_log_odds(c, b, run_value);
+    }
+    insert_points(fast, model, PointSpan::from(points));
+    ref.insert(points);
+    EXPECT_LE(reference::max_log_odds_difference(fast, ref), 2.45e-5) << run_value;
+    EXPECT_EQ(fast.log_odds(g.column(8, 8), kRunBins / 2), fast.log_odds_min()) << run_value;  // carved to L_min
+  }
+}
+
 TEST(Integrate, RangeDependentSigmaMatchesReference) {
   // Spherical bins and the pixel-native binning, with the sample camera's own intrinsics.
   for (SensorPreset p : {kinect_v1_spherical(sample::generate_scene().intrinsics), kinect_v1(sample::generate_scene().intrinsics)}) {

@@ -21,6 +21,11 @@ public:
   /// Inserts points in order (NaN/zero and out-of-field points are skipped, as CONVENTIONS 1 says).
   void insert(const std::vector<Eigen::Vector3f>& points);
   double log_odds(std::size_t column, int bin) const { return values_[column * bins_ + static_cast<std::size_t>(bin)]; }
+  /// Starts a voxel from a given state (a map made elsewhere), before any insert.
+  void set_log_odds(std::size_t column, int bin, double value) {
+    values_[column * bins_ + static_cast<std::size_t>(bin)] = value;
+    touched_[column] = 1;
+  }
   bool touched(std::size_t column) const { return touched_[column] != 0; }
   const GridGeometry& geometry() const { return geometry_; }
   const SensorModel& model() const { return model_; }
