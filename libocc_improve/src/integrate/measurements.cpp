@@ -76,9 +76,7 @@ TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows
     }
   };
   const auto each_chunk = [&](auto&& body) {
-    run_parts(std::max(1, std::min(threads, static_cast<int>(chunks))), [&](int part, int parts) {
-      for (std::size_t c = static_cast<std::size_t>(part); c < chunks; c += static_cast<std::size_t>(parts)) body(c);
-    });
+    run_in_turn(threads, static_cast<int>(chunks), [&](int c, int) { body(static_cast<std::size_t>(c)); });
   };
   each_chunk([&](std::size_t c) {
     const auto [begin, end] = measurements.ranges[c];
