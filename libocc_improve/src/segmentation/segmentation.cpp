@@ -97,8 +97,9 @@ std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const 
                                             const std::vector<std::uint8_t>& valid, int threads) {
   std::vector<Eigen::Vector3f> points(surface.size(), Eigen::Vector3f::Zero());
   for_row_blocks(geometry.height(), threads, [&](int first_row, int end_row) {
+    const int width = geometry.width();
     for (int e = first_row; e < end_row; ++e)
-      for (int a = 0; a < geometry.width(); ++a) {
+      for (int a = 0; a < width; ++a) {
         const ColumnIndex c = geometry.column(a, e);
         if (valid[c]) points[c] = geometry.point(a, e, surface.depth_m[c]).cast<float>();
       }
@@ -119,11 +120,23 @@ struct ScoringSample {
       x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
     }
   }
-  /// Points within `band` of the plane. The distance is summed as Eigen's Vector3f::dot sums it, x + (y + z),
-  /// so a point scores here exactly as normal.dot(p) + offset classifies it in the refinement.
-  std::size_t inliers(const Eigen::Vector3f& normal, float offset, float band) const {
-    return static_cast<std::size_t>(
-        ((normal.x() * x + (normal.y() * y + normal.z() * z) + offset).abs() < band).count());
+  /// Points within `band` of the plane, or some count <= `to_beat` once the plane cannot have more than
+  /// that (most hypotheses stop there: only a larger count changes the search). The distance is summed as
+  /// Eigen's Vector3f::dot sums it, x + (y + z), so a point scores here exactly as normal.dot(p) + offset
+  /// classifies it in the refinement.
+  std::size_t inliers(const Eigen::Vector3f& normal, float offset, float band, std::size_t to_beat) const {
+    constexpr Eigen::Index kBlock = 256;  // points between two checks of the bound
+    const float nx = normal.x(), ny = normal.y(), nz = normal.z();
+    const Eigen::Index size = x.size();
+    std::size_t count = 0;
+    for (Eigen::Index begin = 0; begin < size; begin += kBlock) {
+      const Eigen::Index end = std::min(size, begin + kBlock);
+      int in_block = 0;  // a plain counted loop over plain arrays: vector instructions
+      for (Eigen::Index i = begin; i < end; ++i) in_block += std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + offset) < band;
+      count += static_cast<std::size_t>(in_block);
+      if (count + static_cast<std::size_t>(size - end) <= to_beat) return count;
+    }
+    return count;
   }
 };
 
@@ -192,7 +205,7 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
     if (!(norm > 1e-9f)) continue;
     normal /= norm;
     const float offset = -normal.dot(p0);
-    const std::size_t score = sample.inliers(normal, offset, band);
+    const std::size_t score = sample.inliers(normal, offset, band, best_score);
     if (score > best_score) best_score = score, best_normal = normal, best_offset = offset;
   }
   if (best_score == 0) return 0;
@@ -245,20 +258,9 @@ public:
   void advance_to(int e) {
     for (const int last = std::min(box_.height, e - box_.e0 + reach_); summed_ < last; ++summed_) sum_next_row();
   }
-  /// Mean of the member points in the square of radius r around the member ray (a, e) (zero when it holds
-  /// none); r and the distance from the row last advanced to together within the reach.
-  Eigen::Vector3f mean(int a, int e, int r) {
-    Memo& memo = memo_for(r);
-    const int row = e - box_.e0, slot = row & (window_ - 1);
-    const std::size_t first = static_cast<std::size_t>(slot) * box_.width;
-    if (memo.row_held[static_cast<std::size_t>(slot)] != row) {
-      std::fill_n(memo.known.begin() + static_cast<std::ptrdiff_t>(first), box_.width, 0);
-      memo.row_held[static_cast<std::size_t>(slot)] = row;
-    }
-    const std::size_t i = first + static_cast<std::size_t>(a - box_.a0);
-    if (!memo.known[i]) memo.value[i] = box_mean(a, e, r), memo.known[i] = 1;
-    return memo.value[i];
-  }
+  class AtRadius;
+  /// The means at radius r: fetched once per ray, then read for the ray and its sections' ends.
+  AtRadius at_radius(int r);
 
 private:
   // The means computed at one radius, in a window of rows like the table's.
@@ -318,6 +320,35 @@ private:
   std::vector<Memo> memo_;  // by radius
 };
 
+// Means at one radius. mean(a, e): of the member points in the square of radius r around the member ray
+// (a, e) (zero when it holds none); r and the distance from the row last advanced to together within the
+// reach. Inline: a ray reads 9 of them and most were computed before.
+class PointMeans::AtRadius {
+public:
+  AtRadius(PointMeans& means, Memo& memo, int r) : means_(means), memo_(memo), r_(r) {}
+  Eigen::Vector3f mean(int a, int e) {
+    const RayBox& box = means_.box_;
+    const int row = e - box.e0, slot = row & (means_.window_ - 1);
+    const std::size_t first = static_cast<std::size_t>(slot) * box.width;
+    if (memo_.row_held[static_cast<std::size_t>(slot)] != row) forget_row(first, slot, row);
+    const std::size_t i = first + static_cast<std::size_t>(a - box.a0);
+    if (!memo_.known[i]) memo_.value[i] = means_.box_mean(a, e, r_), memo_.known[i] = 1;
+    return memo_.value[i];
+  }
+
+private:
+  // The slot now holds another row: none of its means is known.
+  void forget_row(std::size_t first, int slot, int row) {
+    std::fill_n(memo_.known.begin() + static_cast<std::ptrdiff_t>(first), means_.box_.width, 0);
+    memo_.row_held[static_cast<std::size_t>(slot)] = row;
+  }
+  PointMeans& means_;
+  Memo& memo_;
+  int r_;
+};
+
+PointMeans::AtRadius PointMeans::at_radius(int r) { return AtRadius(*this, memo_for(r), r); }
+
 // The angle between the rays of two neighbouring columns at the image centre: converts the crease arm
 // from metres on the surface to pixels.
 double column_angle_rad(const GridGeometry& geometry) {
@@ -342,8 +373,10 @@ std::vector<ArmPixels> arm_table(const SegmentationParams& params) {
 }
 // The crease arm's length in pixels at a ray of the given range.
 int arm_length_px(double range_m, double pixel_rad, const SegmentationParams& params) {
-  return std::clamp(static_cast<int>(std::lround(params.crease_arm_m / (range_m * pixel_rad))), 2,
-                    params.crease_max_arm_px);
+  // Clamped, then rounded half up: std::lround of the unclamped value, since the bounds are whole and x + 0.5
+  // is exact for x >= 2 (a libm call per ray was 2 % of the crease scan).
+  const double arm = std::clamp(params.crease_arm_m / (range_m * pixel_rad), 2.0, double(params.crease_max_arm_px));
+  return static_cast<int>(arm + 0.5);
 }
 
 // A section bends wherever one arm reaches across the crease, so crease rays form a band up to an arm wide
@@ -383,14 +416,15 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
   auto folds = [&](PointMeans& means, int a, int e) {
     const int length = arm_length_px(points[ray(a, e)].norm(), pixel_rad, params);
     const auto [arm, radius, diagonal_steps] = arms[static_cast<std::size_t>(length)];
-    const Eigen::Vector3f centre = means.mean(a, e, radius);
+    PointMeans::AtRadius at_radius = means.at_radius(radius);
+    const Eigen::Vector3f centre = at_radius.mean(a, e);
     const float centre_range = centre.norm();
     for (const auto& [du, dv] : kDirections) {
       const int steps = du != 0 && dv != 0 ? diagonal_steps : arm;
       const int a0 = a - du * steps, e0 = e - dv * steps, a1 = a + du * steps, e1 = e + dv * steps;
       if (std::min(a0, a1) < 0 || std::max(a0, a1) >= width || e0 < 0 || e1 >= height) continue;
       if (!member[ray(a0, e0)] || !member[ray(a1, e1)]) continue;
-      const Eigen::Vector3f before = means.mean(a0, e0, radius) - centre, after = means.mean(a1, e1, radius) - centre;
+      const Eigen::Vector3f before = at_radius.mean(a0, e0) - centre, after = at_radius.mean(a1, e1) - centre;
       const float before_norm = before.norm(), after_norm = after.norm();
       if (!(before_norm > 0 && after_norm > 0)) continue;
       // Flat: the arms point in opposite directions (cosine -1); the bend is 180 deg minus their angle.
@@ -565,15 +599,13 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   // Statistics, then labels renumbered by size (largest first) so label 1 is the largest segment.
   std::vector<Segment> stats(segments);
   std::vector<double> depth_sum(segments, 0.0);
-  for (int e = 0; e < height; ++e)
-    for (int a = 0; a < width; ++a) {
-      const ColumnIndex c = geometry.column(a, e);
-      if (label[c] == kNone) continue;
-      Segment& s = stats[label[c] - 1];
-      ++s.columns;
-      s.centroid_m += points[c].cast<double>();
-      depth_sum[label[c] - 1] += surface.depth_m[c];
-    }
+  for (std::size_t c = 0; c < n; ++c) {
+    if (label[c] == kNone) continue;
+    Segment& s = stats[label[c] - 1];
+    ++s.columns;
+    s.centroid_m += points[c].cast<double>();
+    depth_sum[label[c] - 1] += surface.depth_m[c];
+  }
   std::vector<std::uint32_t> order(segments);
   std::iota(order.begin(), order.end(), 0u);
   std::stable_sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) { return stats[x].columns > stats[y].columns; });
