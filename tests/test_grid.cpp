@@ -46,25 +46,119 @@ TEST(Grid, UntouchedColumnsCostNoTileAndReadAsUnknown) {
   EXPECT_EQ(g.find(1234), nullptr);
   EXPECT_EQ(g.log_odds(1234, 10), 0.0f);
   EXPECT_DOUBLE_EQ(g.probability(1234, 10), 0.5);
-  g.touch(1234).window = {1.0f};
+  const float one = 1.0f;
+  g.assign({1234, 0, 0.0f, &one, 1});
   EXPECT_EQ(g.allocated_tile_count(), 1u);
   EXPECT_EQ(g.touched_column_count(), 1u);
   g.clear();
   EXPECT_EQ(g.allocated_tile_count(), 0u);
 }
 
-TEST(Grid, CompactMergesLeadingUniformVoxels) {
-  ColumnData c;
-  c.uniform_end = 3;
-  c.uniform_value = -6.9f;
-  c.window = {-6.9f, -6.9f, -1.0f, 2.0f};
-  ColumnGrid::compact(c);
+TEST(Grid, WrittenLeadingVoxelsEqualToTheRunJoinIt) {
+  ColumnGrid g(paper_geometry());
+  const std::vector<float> window{-6.9f, -6.9f, -1.0f, 2.0f};
+  g.assign({77, 3, -6.9f, window.data(), 4});
+  const ColumnData& c = *g.find(77);
   EXPECT_EQ(c.uniform_end, 5);
   ASSERT_EQ(c.window.size(), 2u);
   EXPECT_EQ(c.value(4), -6.9f);
   EXPECT_EQ(c.value(5), -1.0f);
   EXPECT_EQ(c.value(6), 2.0f);
   EXPECT_EQ(c.value(7), 0.0f);
+  g.assign({78, 0, 0.0f, window.data(), 4});  // no run: nothing joins it
+  EXPECT_EQ(g.find(78)->uniform_end, 0);
+  EXPECT_EQ(g.find(78)->window.size(), 4u);
+}
+
+// The tiles' window storage against plain per-column vectors: windows growing, shrinking and emptying,
+// written one by one and a tile at a time, in random order; every value read back after every write.
+TEST(Grid, TileStorageKeepsEveryWindowThroughGrowingAndShrinkingWrites) {
+  ColumnGrid g(paper_geometry());
+  const int width = g.geometry().width();
+  std::vector<ColumnIndex> columns;  // two tiles' columns: the first tile's 64 and 3 of the next
+  for (int e = 0; e < ColumnGrid::kTileSize; ++e)
+    for (int a = 0; a < ColumnGrid::kTileSize; ++a) columns.push_back(static_cast<ColumnIndex>(e * width + a));
+  for (int a = 8; a < 11; ++a) columns.push_back(static_cast<ColumnIndex>(a));
+  std::vector<std::vector<float>> expected(columns.size());
+  std::uint32_t state = 12345;
+  auto next = [&](std::uint32_t n) { return ((state = state * 1664525u + 1013904223u) >> 8) % n; };
+  auto contents = [&](std::size_t i) {
+    expected[i].resize(next(40));  // 0..39 bins
+    for (float& v : expected[i]) v = static_cast<float>(next(1000)) - 500.0f;  // never the run's value
+    return ColumnContents{columns[i], 10, 600.0f, expected[i].data(), static_cast<std::uint32_t>(expected[i].size())};
+  };
+  auto check_all = [&](int round) {
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      const ColumnData* c = g.find(columns[i]);
+      if (!c) continue;
+      ASSERT_EQ(c->window.size(), expected[i].size()) << "round " << round << " column " << columns[i];
+      for (std::size_t k = 0; k < expected[i].size(); ++k) ASSERT_EQ(c->window[k], expected[i][k]);
+    }
+  };
+  for (int round = 0; round < 200; ++round) {
+    if (round % 2 == 0) {
+      g.assign(contents(next(static_cast<std::uint32_t>(columns.size()))));
+    } else {  // a random subset of the first tile, in one write
+      std::vector<ColumnContents> batch;
+      for (std::size_t i = 0; i < 64; ++i)
+        if (next(3) == 0) batch.push_back(contents(i));
+      g.store_windows(batch.data(), batch.size());
+    }
+    check_all(round);
+  }
+  g.shrink_to_fit();
+  check_all(-1);
+  // Trimmed, the storage holds the windows and nothing else: the same tiles with empty windows cost the
+  // rest.
+  ColumnGrid empty_windows(paper_geometry());
+  std::size_t bins = 0;
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    bins += expected[i].size();
+    empty_windows.assign({columns[i], 10, 600.0f, nullptr, 0});
+  }
+  EXPECT_EQ(g.memory_bytes(), empty_windows.memory_bytes() + bins * sizeof(float));
+}
+
+// A tile whose windows narrow (a static view's first frames) gives the room back once a quarter of it
+// is spare, and a tile's first store holds no spare room at all.
+TEST(Grid, TileStorageIsExactAtFirstAndTrimmedWhenWindowsNarrow) {
+  ColumnGrid g(paper_geometry());
+  ColumnGrid empty_windows(paper_geometry());
+  const std::vector<float> wide(40, 1.0f);
+  std::vector<ColumnContents> tile(64);
+  for (std::size_t i = 0; i < tile.size(); ++i) {
+    const auto column = static_cast<ColumnIndex>((i / 8) * static_cast<std::size_t>(g.geometry().width()) + i % 8);
+    tile[i] = {column, 0, 0.0f, wide.data(), 40};
+    empty_windows.assign({column, 10, -1.0f, nullptr, 0});
+  }
+  g.store_windows(tile.data(), tile.size());
+  const std::size_t overhead = empty_windows.memory_bytes();
+  EXPECT_EQ(g.memory_bytes(), overhead + 64 * 40 * sizeof(float));
+  for (auto& c : tile) c.count = 2;
+  g.store_windows(tile.data(), tile.size());
+  EXPECT_EQ(g.memory_bytes(), overhead + 64 * 2 * sizeof(float));
+  EXPECT_EQ(g.find(tile[5].column)->window.size(), 2u);
+}
+
+// A column given another's contents through touch() reads them, and its next write goes to its own
+// tile's storage, not over the bins it was given.
+TEST(Grid, AColumnCopiedFromAnotherGridIsWrittenInItsOwnStorage) {
+  ColumnGrid a(paper_geometry()), b(paper_geometry());
+  const std::vector<float> values{1.0f, 2.0f, 3.0f}, other{7.0f, 8.0f};
+  a.assign({5, 0, 0.0f, values.data(), 3});
+  b.touch(5) = *a.find(5);
+  EXPECT_EQ(b.log_odds(5, 2), 3.0f);
+  b.assign({5, 0, 0.0f, other.data(), 2});
+  EXPECT_EQ(b.log_odds(5, 1), 8.0f);
+  EXPECT_EQ(a.log_odds(5, 0), 1.0f);  // a's bins untouched
+  EXPECT_EQ(a.log_odds(5, 1), 2.0f);
+}
+
+TEST(Grid, StoreWindowsRefusesColumnsOfTwoTiles) {
+  ColumnGrid g(paper_geometry());
+  const float v = 1.0f;
+  const ColumnContents two[2] = {{0, 0, 0.0f, &v, 1}, {8, 0, 0.0f, &v, 1}};  // columns 0 and 8: tiles 0 and 1
+  EXPECT_THROW(g.store_windows(two, 2), InvalidInput);
 }
 
 TEST(Grid, OneFrameStoresFreeSpaceAsUniformRuns) {

@@ -25,7 +25,9 @@ inline bool same_model(const SensorModelParams& a, const SensorModelParams& b) {
          a.sigma_depth_floor_m == b.sigma_depth_floor_m && a.support_k == b.support_k;
 }
 
-inline bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+/// Two float arrays (std::vector, ColumnWindow) of the same size and bit patterns.
+template <typename Floats>
+bool same_bits(const Floats& a, const Floats& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 

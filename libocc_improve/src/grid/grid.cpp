@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <string>
 #include <sstream>
 #include <thread>
 
@@ -126,10 +128,7 @@ std::size_t ColumnGrid::stored_voxel_count() const {
 std::size_t ColumnGrid::memory_bytes() const {
   std::size_t n = tiles_.capacity() * sizeof(tiles_[0]) + changed_.capacity();
   for (const auto& t : tiles_)
-    if (t) {
-      n += sizeof(Tile);
-      for (const auto& c : t->columns) n += c.window.capacity() * sizeof(float);
-    }
+    if (t) n += sizeof(Tile) + t->storage.capacity() * sizeof(float);
   return n;
 }
 
@@ -144,13 +143,113 @@ void ColumnGrid::clear() {
   std::fill(changed_.begin(), changed_.end(), 0);
 }
 
-void ColumnGrid::compact(ColumnData& column) {
-  if (column.uniform_end == 0) return;
-  std::size_t n = 0;
-  while (n < column.window.size() && column.window[n] == column.uniform_value) ++n;
-  if (n == 0) return;
-  column.window.erase(column.window.begin(), column.window.begin() + static_cast<std::ptrdiff_t>(n));
-  column.uniform_end += static_cast<std::int32_t>(n);
+namespace {
+
+// The contents with the leading values equal to the run's value joined to the run.
+ColumnContents merge_leading_run(ColumnContents c) {
+  if (c.uniform_end == 0) return c;
+  std::uint32_t n = 0;
+  while (n < c.count && c.values[n] == c.uniform_value) ++n;
+  return {c.column, c.uniform_end + static_cast<std::int32_t>(n), c.uniform_value, c.values + n, c.count - n};
+}
+
+}  // namespace
+
+void ColumnGrid::assign(const ColumnContents& contents) {
+  std::size_t slot;
+  auto& tile = tiles_[tile_of(contents.column, slot)];
+  if (!tile) tile = std::make_unique<Tile>();
+  write_tile(*tile, &contents, &slot, 1, true);
+}
+
+void ColumnGrid::store_windows(const ColumnContents* contents, std::size_t count) {
+  if (count == 0) return;
+  constexpr std::size_t kColumns = kTileSize * kTileSize;
+  if (count > kColumns) throw InvalidInput("store_windows: " + std::to_string(count) + " columns for one tile");
+  std::size_t slots[kColumns];
+  const std::size_t tile_index = tile_of(contents[0].column, slots[0]);
+  for (std::size_t i = 1; i < count; ++i)
+    if (tile_of(contents[i].column, slots[i]) != tile_index)
+      throw InvalidInput("store_windows: column " + std::to_string(contents[i].column) + " is not in the tile of column " +
+                         std::to_string(contents[0].column));
+  auto& tile = tiles_[tile_index];
+  if (!tile) tile = std::make_unique<Tile>();
+  write_tile(*tile, contents, slots, count, false);
+}
+
+void ColumnGrid::write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
+                            bool grow_geometrically) {
+  ColumnContents merged[kTileSize * kTileSize];
+  std::size_t outgrowing = 0;  // room needed after the tile's windows: the windows that outgrow their place
+  for (std::size_t i = 0; i < count; ++i) {
+    merged[i] = merge_leading_run(contents[i]);
+    if (merged[i].count > tile.columns[slots[i]].window.slot_) outgrowing += merged[i].count;
+  }
+  if (outgrowing > tile.storage.capacity() - tile.storage.size()) {
+    // Spare room after the rebuild: column by column, as much again (geometric growth); a tile's first
+    // store, none; a stored tile that outgrew its room, an eighth of its windows, so that its next
+    // growth moves a window or two rather than the whole tile.
+    const std::size_t held = window_bins(tile);
+    rebuild(tile, merged, slots, count, grow_geometrically ? held + outgrowing : held / 8);
+    return;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    const ColumnContents& c = merged[i];
+    ColumnData& column = tile.columns[slots[i]];
+    column.uniform_end = c.uniform_end;
+    column.uniform_value = c.uniform_value;
+    ColumnWindow& w = column.window;
+    if (c.count > w.slot_) {  // after the windows, within the capacity: no window moves
+      const std::size_t at = tile.storage.size();
+      tile.storage.resize(at + c.count);
+      w.data_ = tile.storage.data() + at;
+      w.slot_ = c.count;
+    }
+    if (c.count > 0) std::memmove(w.data_, c.values, c.count * sizeof(float));  // the values may be the tile's
+    w.size_ = c.count;
+  }
+  // Windows that shrank keep their places: once a quarter of the storage is spare, it is trimmed (a static
+  // view's windows narrow over its first frames).
+  constexpr std::size_t kSpareBinsKept = 16;
+  const std::size_t held = window_bins(tile);
+  if (!grow_geometrically && tile.storage.capacity() - held > held / 4 + kSpareBinsKept) rebuild(tile, nullptr, nullptr, 0, 0);
+}
+
+std::size_t ColumnGrid::window_bins(const Tile& tile) {
+  std::size_t bins = 0;
+  for (const ColumnData& c : tile.columns) bins += c.window.size_;
+  return bins;
+}
+
+// Every window of the tile back to back in new storage (the written ones from their merged contents), then
+// `spare` bins of capacity.
+void ColumnGrid::rebuild(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
+                         std::size_t spare) {
+  constexpr std::size_t kColumns = kTileSize * kTileSize;
+  ColumnContents next[kColumns];
+  for (std::size_t s = 0; s < kColumns; ++s) {
+    const ColumnData& c = tile.columns[s];
+    next[s] = {0, c.uniform_end, c.uniform_value, c.window.data_, c.window.size_};
+  }
+  for (std::size_t i = 0; i < count; ++i) next[slots[i]] = contents[i];
+  std::size_t live = 0;
+  for (const ColumnContents& c : next) live += c.count;
+  std::vector<float> storage;
+  storage.reserve(live + spare);
+  for (std::size_t s = 0; s < kColumns; ++s) {
+    ColumnData& column = tile.columns[s];
+    column.uniform_end = next[s].uniform_end;
+    column.uniform_value = next[s].uniform_value;
+    column.window.data_ = storage.data() + storage.size();
+    column.window.size_ = column.window.slot_ = next[s].count;
+    storage.insert(storage.end(), next[s].values, next[s].values + next[s].count);
+  }
+  tile.storage.swap(storage);
+}
+
+void ColumnGrid::shrink_to_fit() {
+  for (auto& t : tiles_)
+    if (t && t->storage.capacity() > window_bins(*t)) rebuild(*t, nullptr, nullptr, 0, 0);
 }
 
 }  // namespace occ_improve

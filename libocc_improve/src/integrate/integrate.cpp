@@ -218,18 +218,11 @@ public:
     s.tail = std::max(s.tail, s.run_end);
   }
 
-  void store(ColumnScratch& s, ColumnData& c) const {
+  /// The column's new contents, back in log-odds in its scratch row (valid until the row is loaded again).
+  ColumnContents contents(ColumnScratch& s, ColumnIndex column) const {
     if (clamped_) odds_to_log_odds(s.v + s.run_end, s.tail - s.run_end, omin_, omax_, lmin_, lmax_);
-    c.uniform_end = s.run_end;
-    c.uniform_value = s.run_end > 0 ? lmin_ : 0.0f;
-    // Exact capacity unless the old one is close: after the first call a window keeps about its size.
-    const auto size = static_cast<std::size_t>(s.tail - s.run_end);
-    if (c.window.capacity() < size || c.window.capacity() > size + kWindowSlack)
-      std::vector<float>(s.v + s.run_end, s.v + s.tail).swap(c.window);
-    else
-      c.window.assign(s.v + s.run_end, s.v + s.tail);
-    ColumnGrid::compact(c);
     s.loaded = false;
+    return {column, s.run_end, s.run_end > 0 ? lmin_ : 0.0f, s.v + s.run_end, static_cast<std::uint32_t>(s.tail - s.run_end)};
   }
 
   /// `terms` are the measurement's, with a = e^-B the column's factor (or B folded in and a = 1).
@@ -243,9 +236,6 @@ public:
   }
 
 private:
-  // A window may keep this many spare bins of capacity from an earlier call before it is reallocated.
-  static constexpr std::size_t kWindowSlack = 4;
-
   static void extend_tail(ColumnScratch& s, int end, float fill) {
     if (end <= s.tail) return;
     std::fill(s.v + s.tail, s.v + end, fill);
@@ -406,18 +396,21 @@ public:
     }
   }
 
-  /// Stores the tile's loaded columns; with a surface, refreshes theirs and lists those that changed.
+  /// Stores the tile's loaded columns (one write of the tile); with a surface, refreshes theirs and lists
+  /// those that changed.
   void finish(SurfaceMap* surface, std::vector<ColumnIndex>& surface_changed) {
+    std::size_t stored = 0;
     for (int e = e_first_; e <= e_last_; ++e)
       for (int a = a_first_; a <= a_last_; ++a) {
         ColumnScratch& s = scratch_[(e - e_first_) * kTile + (a - a_first_)];
-        if (!s.loaded) continue;
-        const ColumnIndex c = g_.column(a, e);
-        ColumnData& column = grid_.touch(c);
-        kernel_.store(s, column);
-        grid_.mark_changed(c);
-        if (surface && refresh_column_surface(grid_, c, &column, *surface)) surface_changed.push_back(c);
+        if (s.loaded) contents_[stored++] = kernel_.contents(s, g_.column(a, e));
       }
+    grid_.store_windows(contents_, stored);
+    for (std::size_t i = 0; i < stored; ++i) {
+      const ColumnIndex c = contents_[i].column;
+      grid_.mark_changed(c);
+      if (surface && refresh_column_surface(grid_, c, grid_.find(c), *surface)) surface_changed.push_back(c);
+    }
   }
 
   std::size_t column_updates() const { return column_updates_; }
@@ -472,6 +465,7 @@ private:
   const double inv_sigma_azimuth_, inv_sigma_elevation_;
   const float lmin_;
   ColumnScratch scratch_[kTile * kTile];
+  ColumnContents contents_[kTile * kTile];  // the loaded columns' contents, stored together
   FreeSpaceBound free_space_[kTile * kTile];
   float azimuth_factor_[kTile];
   double azimuth_b_[kTile];

@@ -48,10 +48,10 @@ public:
     bytes_.resize(at + sizeof(T));
     std::memcpy(bytes_.data() + at, &value, sizeof(T));
   }
-  void put_floats(const std::vector<float>& values) {
+  void put_floats(const float* values, std::size_t count) {
     const std::size_t at = bytes_.size();
-    bytes_.resize(at + values.size() * sizeof(float));
-    if (!values.empty()) std::memcpy(bytes_.data() + at, values.data(), values.size() * sizeof(float));
+    bytes_.resize(at + count * sizeof(float));
+    if (count) std::memcpy(bytes_.data() + at, values, count * sizeof(float));
   }
   void reserve(std::size_t n) { bytes_.reserve(n); }
   std::vector<char>& bytes() { return bytes_; }
@@ -303,6 +303,7 @@ void read_columns(Reader& r, ColumnGrid& grid) {
   const float lo = grid.log_odds_min(), hi = grid.log_odds_max();
   auto value_ok = [&](float v) { return std::isfinite(v) && (!clamped || (v >= lo && v <= hi)); };
   std::int64_t previous = -1;
+  std::vector<float> window;
   for (std::uint64_t n = 0; n < count; ++n) {
     poll_stop(static_cast<std::size_t>(n));
     const auto index = r.get<std::uint32_t>("column record");
@@ -320,13 +321,12 @@ void read_columns(Reader& r, ColumnGrid& grid) {
              std::to_string(bins) + " depth bins");
     if (uniform_end == 0 && window_length == 0) r.fail(where + " is stored but holds nothing");
     if (uniform_end > 0 && !value_ok(uniform_value)) r.fail(where + ": uniform value out of range");
-    ColumnData& column = grid.touch(index);
-    column.uniform_end = uniform_end;
-    column.uniform_value = uniform_value;
-    r.get_floats(column.window, window_length, "column window");
-    for (float v : column.window)
+    r.get_floats(window, window_length, "column window");
+    for (float v : window)
       if (!value_ok(v)) r.fail(where + ": window value out of range");
+    grid.assign({index, uniform_end, uniform_value, window.data(), window_length});
   }
+  grid.shrink_to_fit();  // columns came one by one: the tiles' storage grew geometrically
 }
 
 // Since version 3: a flag, then the columns ever asked for (ascending) with their asks and returns.
@@ -352,6 +352,7 @@ ReturnRecord read_returns(Reader& r, const GridGeometry& g, std::uint32_t versio
                               std::to_string(columns));
   std::vector<std::uint32_t> asked(columns, 0), returned(columns, 0);
   std::int64_t previous = -1;
+  std::vector<float> window;
   for (std::uint64_t n = 0; n < count; ++n) {
     const auto c = r.get<std::uint32_t>("return record");
     if (c >= columns || static_cast<std::int64_t>(c) <= previous)
@@ -395,7 +396,7 @@ void save_map(const std::string& path, const ColumnGrid& grid, const SensorModel
     w.put<std::int32_t>(column.uniform_end);
     w.put<float>(column.uniform_value);
     w.put<std::uint32_t>(static_cast<std::uint32_t>(column.window.size()));
-    w.put_floats(column.window);
+    w.put_floats(column.window.data(), column.window.size());
   }
   write_returns(w, returns);
   std::vector<char>& bytes = w.bytes();

@@ -6,7 +6,10 @@
 //    untouched tile costs one null pointer (an octree's missing child);
 //  - each column holds a leading uniform run [0, uniform_end) as ONE value (in clamped mode: the free
 //    space carved to the clamp, an octree's pruned node), then a dense window of the voxels whose
-//    values differ, then an implicit tail of untouched voxels (log-odds 0, P = 0.5).
+//    values differ, then an implicit tail of untouched voxels (log-odds 0, P = 0.5);
+//  - a tile's windows lie back to back in one array of the tile (one allocation per tile, none per
+//    column on the insertion's path): a window that shrinks keeps its place, one that outgrows it moves
+//    to the tile's spare room, or the tile's array is rebuilt.
 // Memory is therefore proportional to the voxels a truncated OPDF touched and left non-uniform.
 #include "occ_improve/geometry/geometry.hpp"
 
@@ -56,11 +59,39 @@ double grid_worst_case_bytes(const GeometryParams& g);
 /// Called before a geometry is built, since building it allocates the depth axis.
 void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_bytes);
 
+/// A column's dense window: a read-only view of its bins in its tile's storage (ColumnGrid::assign and
+/// ColumnGrid::store_windows write it). Valid until the next write to a column of the same tile.
+class ColumnWindow {
+public:
+  ColumnWindow() = default;
+  // A copy reads the same bins (while their grid lives) but owns no place in any tile's storage: a column
+  // given it (ColumnGrid::touch(c) = ...) is written in its own tile's storage next time, never over them.
+  ColumnWindow(const ColumnWindow& other) : data_(other.data_), size_(other.size_) {}
+  ColumnWindow& operator=(const ColumnWindow& other) {
+    data_ = other.data_;
+    size_ = other.size_;
+    slot_ = 0;
+    return *this;
+  }
+  std::size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const float* data() const { return data_; }
+  const float* begin() const { return data_; }
+  const float* end() const { return data_ + size_; }
+  float operator[](std::size_t i) const { return data_[i]; }
+
+private:
+  friend class ColumnGrid;
+  float* data_ = nullptr;
+  std::uint32_t size_ = 0;
+  std::uint32_t slot_ = 0;  // bins its place in the tile's storage holds (>= size_)
+};
+
 /// One ray's voxels: a uniform run, a dense window, an untouched tail.
 struct ColumnData {
   std::int32_t uniform_end = 0;  ///< bins [0, uniform_end) hold uniform_value
   float uniform_value = 0.0f;
-  std::vector<float> window;  ///< bins [uniform_end, uniform_end + window.size())
+  ColumnWindow window;  ///< bins [uniform_end, uniform_end + window.size())
 
   std::int32_t window_end() const { return uniform_end + static_cast<std::int32_t>(window.size()); }
   float value(int bin) const {
@@ -69,6 +100,16 @@ struct ColumnData {
     return i < static_cast<int>(window.size()) ? window[static_cast<std::size_t>(i)] : 0.0f;
   }
   bool touched() const { return uniform_end > 0 || !window.empty(); }
+};
+
+/// A column's new contents: bins [0, uniform_end) hold uniform_value, then `count` values from `values`.
+/// Written, leading values equal to uniform_value (when uniform_end > 0) join the run.
+struct ColumnContents {
+  ColumnIndex column = 0;
+  std::int32_t uniform_end = 0;
+  float uniform_value = 0.0f;
+  const float* values = nullptr;
+  std::uint32_t count = 0;
 };
 
 class ColumnGrid {
@@ -89,6 +130,16 @@ public:
   /// Column contents, allocating its tile when needed. Not thread-safe across tiles that share a
   /// tile row; the insertion splits work on tile-row boundaries for that reason.
   ColumnData& touch(ColumnIndex column);
+  /// Writes one column (touching it), e.g. while a grid is built column by column: the tile's storage
+  /// grows geometrically (shrink_to_fit trims it).
+  void assign(const ColumnContents& contents);
+  /// Writes several columns of ONE tile (the insertion's store, once per tile and call): a window that
+  /// fits its place is written there, the others after the tile's windows; when the storage lacks room it
+  /// is rebuilt once, holding every window back to back with no spare room (one allocation per tile, none
+  /// per column). Throws InvalidInput when the columns are not all of one tile.
+  void store_windows(const ColumnContents* contents, std::size_t count);
+  /// Rebuilds every tile's storage with its windows back to back and no spare room.
+  void shrink_to_fit();
 
   float log_odds(ColumnIndex column, int depth_bin) const;
   double probability(ColumnIndex column, int depth_bin) const;
@@ -103,14 +154,18 @@ public:
   std::size_t allocated_tile_count() const;
   void clear();
 
-  /// Merges leading window voxels equal to the uniform value into the uniform run.
-  static void compact(ColumnData& column);
-
 private:
+  // A tile's columns and the storage of their windows: one allocation per tile rather than per column.
   struct Tile {
     ColumnData columns[kTileSize * kTileSize];
+    std::vector<float> storage;  // the windows; spare capacity after them takes windows that outgrow their place
   };
   std::size_t tile_of(ColumnIndex column, std::size_t& slot) const;
+  void write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
+                  bool grow_geometrically);
+  static std::size_t window_bins(const Tile& tile);  // bins its windows hold
+  static void rebuild(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
+                      std::size_t spare);
 
   GridGeometry geometry_;
   GridOptions options_;
