@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 namespace occ_improve {
 
@@ -50,60 +52,101 @@ PredictedDepth nearest_fill(const std::vector<float>& sparse, int w, int h, int 
   return out;
 }
 
+constexpr std::int32_t kFar = std::numeric_limits<std::int32_t>::max() / 2;  // no sample yet; + 2 never overflows
+
+/// a where `take`, else b, by masks: the compiler makes a conditional a branch where it may (the row's
+/// chain: unpredictable; the row's fold: not vectorized).
+std::int32_t select(bool take, std::int32_t a, std::int32_t b) {
+  const std::int32_t mask = -static_cast<std::int32_t>(take);
+  return (a & mask) | (b & ~mask);
+}
+
+/// One row of a distance-transform pass (`forward`: left to right under the row above; else right to left
+/// over the row below) over distances d and depths z (a float's bits: integer selects). `next` holds the
+/// row passed last, padded with a far pixel at each end (index x + 1 is pixel x). The sequential pass
+/// relaxed each pixel from its current value, then the pixel just passed in the row, then the passed row's
+/// pixels behind, beside and ahead of it, keeping the first strict minimum. The passed row is known before
+/// the row starts, so it is folded first over the whole row into `keep` and `chain_below` (no dependency:
+/// vectorized; __restrict, as the alias checks of seven arrays exceed the compiler's limit); only the chain
+/// along the row stays sequential, one compare per pixel.
+template <bool forward>
+void relax_row(std::int32_t* d, std::int32_t* z, const std::int32_t* next_d, const std::int32_t* next_z, std::size_t W,
+               std::int32_t* __restrict keep_d, std::int32_t* __restrict keep_z, std::int32_t* __restrict chain_below) {
+  for (std::size_t x = 0; x < W; ++x) {
+    const std::size_t behind = forward ? x : x + 2, ahead = forward ? x + 2 : x;
+    const std::int32_t behind_d = next_d[behind], beside_d = next_d[x + 1], ahead_d = next_d[ahead];
+    const std::int32_t behind_z = next_z[behind], beside_z = next_z[x + 1], ahead_z = next_z[ahead];
+    const std::int32_t own_d = d[x], own_z = z[x];  // every load unconditional: selects, not branches
+    const bool beside_first = beside_d < behind_d;
+    const std::int32_t first_d = beside_first ? beside_d : behind_d, first_z = select(beside_first, beside_z, behind_z);
+    const bool ahead_first = ahead_d < first_d;
+    const std::int32_t via_d = (ahead_first ? ahead_d : first_d) + 1, via_z = select(ahead_first, ahead_z, first_z);
+    // The pixel keeps the better of its own value and the passed row's (its own on a tie); the pixel just
+    // passed wins when its distance + 1 beats its own value and does not lose to the passed row's.
+    keep_z[x] = select(via_d < own_d, via_z, own_z);
+    keep_d[x] = std::min(via_d, own_d);
+    chain_below[x] = std::min(own_d - 1, via_d);
+  }
+  std::int32_t last_d = kFar, last_z = 0;  // the pixel just passed (none at the row's start: never below the bound)
+  for (std::size_t k = 0; k < W; ++k) {
+    const std::size_t x = forward ? k : W - 1 - k;
+    last_z = select(last_d < chain_below[x], last_z, keep_z[x]);
+    last_d = std::min(last_d + 1, keep_d[x]);  // the same as by the select, with a shorter chain
+    d[x] = last_d;
+    z[x] = last_z;
+  }
+}
+
+std::int32_t float_bits(float f) {
+  std::int32_t b;
+  std::memcpy(&b, &f, sizeof b);
+  return b;
+}
+
+float bits_float(std::int32_t b) {
+  float f;
+  std::memcpy(&f, &b, sizeof f);
+  return f;
+}
+
 /// Chessboard distance to the nearest sample and that sample's depth, for every column, by the two-pass
 /// distance transform (exact for the chessboard metric, a fraction of the breadth-first search's time); of
 /// equidistant samples the first found by the passes wins. Beyond `radius`: distance -1, depth 0.
 PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h, int radius) {
-  constexpr std::int32_t kFar = std::numeric_limits<std::int32_t>::max() / 2;  // + 1 never overflows
   const std::size_t n = sparse.size();
-  PredictedDepth out{w, h, std::vector<float>(n, 0.0f), std::vector<std::int32_t>(n, kFar)};
-  for (std::size_t c = 0; c < n; ++c)
-    if (sparse[c] > 0.0f) {
-      out.depth_m[c] = sparse[c];
-      out.distance[c] = 0;
-    }
-  // Forward pass: left, up-left, up, up-right; backward pass: the mirror. Row pointers, no bounds checks
-  // inside a row (the passes run over every pixel: this is most of their time).
-  std::int32_t* d = out.distance.data();
-  float* z = out.depth_m.data();
-  const auto relax = [&](std::size_t c, std::size_t o) {  // branch-free: the comparison is unpredictable
-    const std::int32_t via = d[o] + 1;
-    const bool better = via < d[c];
-    d[c] = better ? via : d[c];
-    z[c] = better ? z[o] : z[c];
-  };
+  PredictedDepth out{w, h, std::vector<float>(n), std::vector<std::int32_t>(n)};
+  std::vector<std::int32_t> z(n);
+  for (std::size_t c = 0; c < n; ++c) {
+    const bool sample = sparse[c] > 0.0f;
+    out.distance[c] = sample ? 0 : kFar;
+    z[c] = sample ? float_bits(sparse[c]) : 0;
+  }
+  // Forward pass: left, up-left, up, up-right; backward pass: the mirror.
   const auto W = static_cast<std::size_t>(w);
-  for (int y = 0; y < h; ++y) {
-    throw_if_stop_requested();
-    const std::size_t row = static_cast<std::size_t>(y) * W;
-    for (std::size_t x = 0; x < W; ++x) {
-      const std::size_t c = row + x;
-      if (d[c] == 0) continue;
-      if (x > 0) relax(c, c - 1);
-      if (y == 0) continue;
-      if (x > 0) relax(c, c - W - 1);
-      relax(c, c - W);
-      if (x + 1 < W) relax(c, c - W + 1);
+  std::vector<std::int32_t> next_d(W + 2), next_z(W + 2), keep_d(W), keep_z(W), chain_below(W);
+  const auto pass = [&](auto forward) {
+    std::fill(next_d.begin(), next_d.end(), kFar);  // no row passed yet
+    std::fill(next_z.begin(), next_z.end(), 0);
+    for (int k = 0; k < h; ++k) {
+      throw_if_stop_requested();
+      const std::size_t row = static_cast<std::size_t>(forward ? k : h - 1 - k) * W;
+      std::int32_t* d = out.distance.data() + row;
+      relax_row<decltype(forward)::value>(d, z.data() + row, next_d.data(), next_z.data(), W, keep_d.data(),
+                                           keep_z.data(), chain_below.data());
+      std::copy(d, d + W, next_d.begin() + 1);
+      std::copy(z.begin() + static_cast<std::ptrdiff_t>(row), z.begin() + static_cast<std::ptrdiff_t>(row + W),
+                next_z.begin() + 1);
     }
+  };
+  pass(std::true_type{});
+  pass(std::false_type{});
+  std::int32_t* d = out.distance.data();
+  float* depth = out.depth_m.data();
+  for (std::size_t c = 0; c < n; ++c) {
+    const bool near = d[c] <= radius;
+    d[c] = select(near, d[c], -1);
+    depth[c] = bits_float(select(near, z[c], 0));
   }
-  for (int y = h - 1; y >= 0; --y) {
-    throw_if_stop_requested();
-    const std::size_t row = static_cast<std::size_t>(y) * W;
-    for (std::size_t x = W; x-- > 0;) {
-      const std::size_t c = row + x;
-      if (d[c] == 0) continue;
-      if (x + 1 < W) relax(c, c + 1);
-      if (y == h - 1) continue;
-      if (x + 1 < W) relax(c, c + W + 1);
-      relax(c, c + W);
-      if (x > 0) relax(c, c + W - 1);
-    }
-  }
-  for (std::size_t c = 0; c < n; ++c)
-    if (out.distance[c] > radius) {
-      out.distance[c] = -1;
-      out.depth_m[c] = 0.0f;
-    }
   return out;
 }
 
