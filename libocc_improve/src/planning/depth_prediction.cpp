@@ -150,9 +150,9 @@ PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h
   return out;
 }
 
-/// Calls f(column, e0, e1, e2) for every pixel inside triangle t or on its edges, e_i >= 0 being twice the
-/// area of the sub-triangle opposite vertex i (barycentric weights x twice the area). The edge functions
-/// step by one addition per pixel.
+/// Calls f(column, x, y, e0, e1, e2) for every pixel (x, y) inside triangle t or on its edges, e_i >= 0 being
+/// twice the area of the sub-triangle opposite vertex i (barycentric weights x twice the area). The edge
+/// functions step by one addition per pixel.
 template <class F>
 void for_each_pixel(const SampleTriangulation& s, std::size_t t, F&& f) {
   const auto& v = s.triangles[t];
@@ -172,7 +172,7 @@ void for_each_pixel(const SampleTriangulation& s, std::size_t t, F&& f) {
     bool entered = false;
     for (int x = xmin; x <= xmax; ++x, e0 += sx0, e1 += sx1, e2 += sx2) {
       if ((e0 | e1 | e2) >= 0) {  // all three non-negative
-        f(row + static_cast<std::size_t>(x), e0, e1, e2);
+        f(row + static_cast<std::size_t>(x), x, y, e0, e1, e2);
         entered = true;
       } else if (entered) {
         break;  // a triangle's row is one run of pixels
@@ -189,7 +189,7 @@ void interpolate(const SampleTriangulation& s, std::size_t t, PredictedDepth& ou
   float w[3];
   for (int i = 0; i < 3; ++i)
     w[i] = static_cast<float>(1.0 / (twice_area * s.vertex_depth_m[static_cast<std::size_t>(v[static_cast<std::size_t>(i)])]));
-  for_each_pixel(s, t, [&](std::size_t c, std::int64_t e0, std::int64_t e1, std::int64_t e2) {
+  for_each_pixel(s, t, [&](std::size_t c, int, int, std::int64_t e0, std::int64_t e1, std::int64_t e2) {
     if (!open[c]) return;
     out.depth_m[c] = 1.0f / (static_cast<float>(e0) * w[0] + static_cast<float>(e1) * w[1] + static_cast<float>(e2) * w[2]);
     open[c] = 0;
@@ -199,9 +199,8 @@ void interpolate(const SampleTriangulation& s, std::size_t t, PredictedDepth& ou
 /// Triangles across a discontinuity: the nearest vertex, the nearer surface on a tie.
 void nearest_vertex(const SampleTriangulation& s, std::size_t t, PredictedDepth& out, std::vector<std::uint8_t>& open) {
   const auto& v = s.triangles[t];
-  for_each_pixel(s, t, [&](std::size_t c, std::int64_t, std::int64_t, std::int64_t) {
+  for_each_pixel(s, t, [&](std::size_t c, int x, int y, std::int64_t, std::int64_t, std::int64_t) {
     if (!open[c]) return;
-    const int x = static_cast<int>(c % static_cast<std::size_t>(s.width)), y = static_cast<int>(c / static_cast<std::size_t>(s.width));
     long best_d2 = -1;
     float best_z = 0.0f;
     for (const std::int32_t i : v) {
@@ -217,13 +216,13 @@ void nearest_vertex(const SampleTriangulation& s, std::size_t t, PredictedDepth&
   });
 }
 
-/// The linear rule (header) on top of the distance transform's nearest samples.
+/// The linear rule (header) on top of the distance transform's nearest samples, over a checked image.
 void linear_fill(const std::vector<float>& sparse, const SensorModel& model, const DepthPredictionParams& params,
                  PredictedDepth& out) {
   TriangulationParams tp;
   tp.discontinuity_sigmas = params.discontinuity_sigmas;
   tp.max_edge_columns = std::max(1, 2 * params.radius_columns);
-  const SampleTriangulation s = triangulate_samples(sparse, out.width, out.height, model, tp);
+  const SampleTriangulation s = detail::triangulate_checked_samples(sparse, out.width, out.height, model, tp);
   std::vector<std::uint8_t> open(sparse.size());
   for (std::size_t c = 0; c < open.size(); ++c) open[c] = out.distance[c] > 0;  // predicted, not a sample
   for (std::size_t t = 0; t < s.triangles.size(); ++t) {

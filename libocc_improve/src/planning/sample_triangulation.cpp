@@ -364,6 +364,11 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
                                         const SensorModel& model, const TriangulationParams& params) {
   params.validate();
   check_sparse_depth_image(sparse_depth_m, width, height);
+  return detail::triangulate_checked_samples(sparse_depth_m, width, height, model, params);
+}
+
+SampleTriangulation detail::triangulate_checked_samples(const std::vector<float>& sparse_depth_m, int width, int height,
+                                                        const SensorModel& model, const TriangulationParams& params) {
   SampleTriangulation s;
   s.width = width;
   s.height = height;
