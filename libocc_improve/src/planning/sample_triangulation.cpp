@@ -47,11 +47,12 @@ std::uint64_t hilbert_index(std::uint32_t side, std::uint32_t x, std::uint32_t y
   for (std::uint32_t s = side / 2; s > 0; s /= 2) {
     const std::uint32_t rx = (x & s) ? 1u : 0u, ry = (y & s) ? 1u : 0u;
     d += static_cast<std::uint64_t>(s) * s * ((3u * rx) ^ ry);
-    // The quadrant's rotation by selects, not branches: the samples come in no order along the curve.
-    const bool flip = ry == 0 && rx == 1;
-    const std::uint32_t fx = flip ? side - 1 - x : x, fy = flip ? side - 1 - y : y;
-    x = ry == 0 ? fy : fx;
-    y = ry == 0 ? fx : fy;
+    // The quadrant's rotation by masks (the compiler branched on selects; the samples come in no order along
+    // the curve): side - 1 - x is x ^ (side - 1) for x < side, and an xor swaps x and y (flipping both keeps
+    // x ^ y).
+    const std::uint32_t flip = (0u - (rx & (ry ^ 1u))) & (side - 1), swap = (0u - (ry ^ 1u)) & (x ^ y);
+    x ^= flip ^ swap;
+    y ^= flip ^ swap;
   }
   return d;
 }
@@ -163,9 +164,10 @@ private:
       tris_[static_cast<std::size_t>(t)] = {{p, e.a, e.b}, {e.outer, -1, -1}};
       if (e.outer >= 0) {
         // By the edge's vertices, not by the old neighbour's index: that slot may already hold a new triangle.
+        // The outer triangle runs the edge as (b, a), so the slot opposite it follows a's (no branch).
         Triangle& O = tris_[static_cast<std::size_t>(e.outer)];
-        for (int i = 0; i < 3; ++i)
-          if (O.v[i] != e.a && O.v[i] != e.b) O.n[i] = t;
+        const int a_slot = (O.v[1] == e.a) + 2 * (O.v[2] == e.a);
+        O.n[static_cast<std::size_t>(kNext[static_cast<std::size_t>(a_slot)])] = t;
       }
       first_of_[static_cast<std::size_t>(e.a)] = t;
       new_.push_back(t);
