@@ -11,8 +11,10 @@
 // collinear or co-circular pixels (a grid is full of both). Triangles with a super corner are dropped at
 // the end; because the corners are finite, a few hull triangles may differ from the exact Delaunay
 // triangulation of the samples alone (near-collinear hull chains), which interpolation does not notice.
-// 640 x 480 at 5 % samples (12 500-15 000): 6.6-7.6 ms CPU on one thread of the build machine at load 1.1,
-// about the breadth-first nearest fill's time (tests/bench/bench_depth_prediction.cpp, docs/SELECTIVE.md).
+// 640 x 480 at 5 % samples (12 524 of capture0001): 5.6 ms CPU on one thread of the build machine, median of
+// 5 runs interleaved with the previous version's 6.1 ms at load ~2 (bench_depth_prediction
+// --benchmark_filter=TriangulateSamples/real:1 --benchmark_min_time=2), about the breadth-first nearest
+// fill's time (tests/bench/bench_depth_prediction.cpp, docs/SELECTIVE.md).
 //
 // Non-planarity of a sample: leave-one-out, the plane through its Delaunay neighbours (least squares in
 // inverse depth, in which a plane of the scene is affine in pixel coordinates for a pinhole binning) is
