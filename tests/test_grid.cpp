@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace occ_improve {
@@ -140,18 +141,25 @@ TEST(Grid, TileStorageIsExactAtFirstAndTrimmedWhenWindowsNarrow) {
   EXPECT_EQ(g.find(tile[5].column)->window.size(), 2u);
 }
 
-// A column given another's contents through touch() reads them, and its next write goes to its own
-// tile's storage, not over the bins it was given.
-TEST(Grid, AColumnCopiedFromAnotherGridIsWrittenInItsOwnStorage) {
-  ColumnGrid a(paper_geometry()), b(paper_geometry());
-  const std::vector<float> values{1.0f, 2.0f, 3.0f}, other{7.0f, 8.0f};
-  a.assign({5, 0, 0.0f, values.data(), 3});
-  b.touch(5) = *a.find(5);
-  EXPECT_EQ(b.log_odds(5, 2), 3.0f);
-  b.assign({5, 0, 0.0f, other.data(), 2});
-  EXPECT_EQ(b.log_odds(5, 1), 8.0f);
-  EXPECT_EQ(a.log_odds(5, 0), 1.0f);  // a's bins untouched
-  EXPECT_EQ(a.log_odds(5, 1), 2.0f);
+// assign's values may be a window of the same tile: another column's, or the written column's own (in
+// its place, moved after the windows, or through a rebuild).
+TEST(Grid, AssignTakesAWindowOfTheSameTile) {
+  ColumnGrid g(paper_geometry());
+  const std::vector<float> values{1.0f, 2.0f, 3.0f, 4.0f, 5.0f};
+  g.assign({0, 0, 0.0f, values.data(), 5});
+  g.assign({1, 0, 0.0f, g.find(0)->window.data() + 1, 3});  // another column's bins: 2, 3, 4
+  g.assign({0, 0, 0.0f, g.find(0)->window.data() + 2, 3});  // its own, shifted in place: 3, 4, 5
+  for (int round = 0; round < 20; ++round) {  // then column 0 shrinks from its own bins: always in place
+    const ColumnData& c = *g.find(1);
+    std::vector<float> grown(c.window.begin(), c.window.end());  // column 1 grows a bin a round: spare, rebuilds
+    grown.push_back(static_cast<float>(round));
+    g.assign({1, 0, 0.0f, grown.data(), static_cast<std::uint32_t>(grown.size())});
+    ASSERT_TRUE(std::equal(grown.begin(), grown.end(), g.find(1)->window.begin(), g.find(1)->window.end()));
+  }
+  EXPECT_EQ(g.log_odds(0, 0), 3.0f);
+  EXPECT_EQ(g.log_odds(0, 2), 5.0f);
+  EXPECT_EQ(g.log_odds(1, 0), 2.0f);
+  EXPECT_EQ(g.log_odds(1, 2), 4.0f);
 }
 
 TEST(Grid, StoreWindowsRefusesColumnsOfTwoTiles) {

@@ -157,7 +157,7 @@ TEST(Integrate, FreeSpaceOfACallOverALeadingRunTheKernelDidNotMake) {
     ColumnGrid fast(g, clamped);
     reference::DenseGrid ref(g, model, clamped);
     for (std::size_t c = 0; c < g.column_count(); ++c) {
-      fast.touch(static_cast<ColumnIndex>(c)) = ColumnData{kRunBins, run_value, {}};
+      fast.assign({static_cast<ColumnIndex>(c), kRunBins, run_value, nullptr, 0});
       for (int b = 0; b < kRunBins; ++b) ref.set_log_odds(c, b, run_value);
     }
     insert_points(fast, model, PointSpan::from(points));

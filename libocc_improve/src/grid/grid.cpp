@@ -159,14 +159,13 @@ void ColumnGrid::assign(const ColumnContents& contents) {
   std::size_t slot;
   auto& tile = tiles_[tile_of(contents.column, slot)];
   if (!tile) tile = std::make_unique<Tile>();
-  write_tile(*tile, &contents, &slot, 1, true);
+  write_tile(*tile, &contents, &slot, 1, Growth::column_by_column);
 }
 
 void ColumnGrid::store_windows(const ColumnContents* contents, std::size_t count) {
   if (count == 0) return;
-  constexpr std::size_t kColumns = kTileSize * kTileSize;
-  if (count > kColumns) throw InvalidInput("store_windows: " + std::to_string(count) + " columns for one tile");
-  std::size_t slots[kColumns];
+  if (count > kTileColumns) throw InvalidInput("store_windows: " + std::to_string(count) + " columns for one tile");
+  std::size_t slots[kTileColumns];
   const std::size_t tile_index = tile_of(contents[0].column, slots[0]);
   for (std::size_t i = 1; i < count; ++i)
     if (tile_of(contents[i].column, slots[i]) != tile_index)
@@ -174,23 +173,22 @@ void ColumnGrid::store_windows(const ColumnContents* contents, std::size_t count
                          std::to_string(contents[0].column));
   auto& tile = tiles_[tile_index];
   if (!tile) tile = std::make_unique<Tile>();
-  write_tile(*tile, contents, slots, count, false);
+  write_tile(*tile, contents, slots, count, Growth::insertion);
 }
 
 void ColumnGrid::write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
-                            bool grow_geometrically) {
-  ColumnContents merged[kTileSize * kTileSize];
+                            Growth growth) {
+  ColumnContents merged[kTileColumns];
   std::size_t outgrowing = 0;  // room needed after the tile's windows: the windows that outgrow their place
   for (std::size_t i = 0; i < count; ++i) {
     merged[i] = merge_leading_run(contents[i]);
-    if (merged[i].count > tile.columns[slots[i]].window.slot_) outgrowing += merged[i].count;
+    if (merged[i].count > tile.columns[slots[i]].window.place_bins_) outgrowing += merged[i].count;
   }
   if (outgrowing > tile.storage.capacity() - tile.storage.size()) {
-    // Spare room after the rebuild: column by column, as much again (geometric growth); a tile's first
-    // store, none; a stored tile that outgrew its room, an eighth of its windows, so that its next
-    // growth moves a window or two rather than the whole tile.
+    // An eighth spare for a stored tile that outgrew its room, so that its next growth moves a window or
+    // two rather than the whole tile (none on its first store); a quarter while building column by column.
     const std::size_t held = window_bins(tile);
-    rebuild(tile, merged, slots, count, grow_geometrically ? held + outgrowing : held / 8);
+    rebuild(tile, merged, slots, count, growth == Growth::insertion ? held / 8 : (held + outgrowing) / 4);
     return;
   }
   for (std::size_t i = 0; i < count; ++i) {
@@ -199,20 +197,22 @@ void ColumnGrid::write_tile(Tile& tile, const ColumnContents* contents, const st
     column.uniform_end = c.uniform_end;
     column.uniform_value = c.uniform_value;
     ColumnWindow& w = column.window;
-    if (c.count > w.slot_) {  // after the windows, within the capacity: no window moves
+    if (c.count > w.place_bins_) {  // after the windows, within the capacity: no window moves
       const std::size_t at = tile.storage.size();
       tile.storage.resize(at + c.count);
       w.data_ = tile.storage.data() + at;
-      w.slot_ = c.count;
+      w.place_bins_ = c.count;
     }
-    if (c.count > 0) std::memmove(w.data_, c.values, c.count * sizeof(float));  // the values may be the tile's
+    // memmove: assign's values may be a window of this tile (the written column's own included).
+    if (c.count > 0) std::memmove(w.data_, c.values, c.count * sizeof(float));
     w.size_ = c.count;
   }
-  // Windows that shrank keep their places: once a quarter of the storage is spare, it is trimmed (a static
-  // view's windows narrow over its first frames).
+  // Windows that shrank keep their places: once over a quarter of the storage (and 16 bins) is spare, the
+  // insertion trims it (a static view's windows narrow over its first frames).
   constexpr std::size_t kSpareBinsKept = 16;
   const std::size_t held = window_bins(tile);
-  if (!grow_geometrically && tile.storage.capacity() - held > held / 4 + kSpareBinsKept) rebuild(tile, nullptr, nullptr, 0, 0);
+  if (growth == Growth::insertion && tile.storage.capacity() > held + held / 4 + kSpareBinsKept)
+    rebuild(tile, nullptr, nullptr, 0, 0);
 }
 
 std::size_t ColumnGrid::window_bins(const Tile& tile) {
@@ -222,26 +222,27 @@ std::size_t ColumnGrid::window_bins(const Tile& tile) {
 }
 
 // Every window of the tile back to back in new storage (the written ones from their merged contents), then
-// `spare` bins of capacity.
+// `spare` bins of capacity, never beyond a full window per column: the worst case stays every voxel as a
+// float (grid_worst_case_bytes).
 void ColumnGrid::rebuild(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
-                         std::size_t spare) {
-  constexpr std::size_t kColumns = kTileSize * kTileSize;
-  ColumnContents next[kColumns];
-  for (std::size_t s = 0; s < kColumns; ++s) {
+                         std::size_t spare) const {
+  ColumnContents next[kTileColumns];
+  for (std::size_t s = 0; s < kTileColumns; ++s) {
     const ColumnData& c = tile.columns[s];
     next[s] = {0, c.uniform_end, c.uniform_value, c.window.data_, c.window.size_};
   }
   for (std::size_t i = 0; i < count; ++i) next[slots[i]] = contents[i];
   std::size_t live = 0;
   for (const ColumnContents& c : next) live += c.count;
+  const std::size_t most = kTileColumns * static_cast<std::size_t>(geometry_.depth().bins());
   std::vector<float> storage;
-  storage.reserve(live + spare);
-  for (std::size_t s = 0; s < kColumns; ++s) {
+  storage.reserve(std::max(live, std::min(live + spare, most)));
+  for (std::size_t s = 0; s < kTileColumns; ++s) {
     ColumnData& column = tile.columns[s];
     column.uniform_end = next[s].uniform_end;
     column.uniform_value = next[s].uniform_value;
     column.window.data_ = storage.data() + storage.size();
-    column.window.size_ = column.window.slot_ = next[s].count;
+    column.window.size_ = column.window.place_bins_ = next[s].count;
     storage.insert(storage.end(), next[s].values, next[s].values + next[s].count);
   }
   tile.storage.swap(storage);

@@ -451,7 +451,9 @@ private:
 
   void load(ColumnIndex c, int i) {
     ColumnScratch& s = scratch_[i];
-    kernel_.load(grid_.touch(c), s);
+    static const ColumnData kUntouched;
+    const ColumnData* data = grid_.find(c);
+    kernel_.load(data ? *data : kUntouched, s);
     if (grid_.clamped()) {
       const FreeSpaceBound& f = free_space_[i];
       kernel_.extend_run(s, g_.depth().first_centre_above(std::min(f.front_m, f.to_lmin_m)));

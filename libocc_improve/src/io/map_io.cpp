@@ -352,7 +352,6 @@ ReturnRecord read_returns(Reader& r, const GridGeometry& g, std::uint32_t versio
                               std::to_string(columns));
   std::vector<std::uint32_t> asked(columns, 0), returned(columns, 0);
   std::int64_t previous = -1;
-  std::vector<float> window;
   for (std::uint64_t n = 0; n < count; ++n) {
     const auto c = r.get<std::uint32_t>("return record");
     if (c >= columns || static_cast<std::int64_t>(c) <= previous)

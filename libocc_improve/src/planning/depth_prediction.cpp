@@ -1,4 +1,5 @@
 #include "occ_improve/planning/depth_prediction.hpp"
+#include "planning/checked_triangulation.hpp"
 
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
@@ -52,11 +53,11 @@ PredictedDepth nearest_fill(const std::vector<float>& sparse, int w, int h, int 
   return out;
 }
 
-constexpr std::int32_t kFar = std::numeric_limits<std::int32_t>::max() / 2;  // no sample yet; + 2 never overflows
+constexpr std::int32_t kFar = std::numeric_limits<std::int32_t>::max() / 2;  // no sample yet; + 1 never overflows
 
 /// a where `take`, else b, by masks: the compiler makes a conditional a branch where it may (the row's
 /// chain: unpredictable; the row's fold: not vectorized).
-std::int32_t select(bool take, std::int32_t a, std::int32_t b) {
+std::int32_t select_bits(bool take, std::int32_t a, std::int32_t b) {
   const std::int32_t mask = -static_cast<std::int32_t>(take);
   return (a & mask) | (b & ~mask);
 }
@@ -78,19 +79,19 @@ void relax_row(std::int32_t* d, std::int32_t* z, const std::int32_t* next_d, con
     const std::int32_t behind_z = next_z[behind], beside_z = next_z[x + 1], ahead_z = next_z[ahead];
     const std::int32_t own_d = d[x], own_z = z[x];  // every load unconditional: selects, not branches
     const bool beside_first = beside_d < behind_d;
-    const std::int32_t first_d = beside_first ? beside_d : behind_d, first_z = select(beside_first, beside_z, behind_z);
+    const std::int32_t first_d = beside_first ? beside_d : behind_d, first_z = select_bits(beside_first, beside_z, behind_z);
     const bool ahead_first = ahead_d < first_d;
-    const std::int32_t via_d = (ahead_first ? ahead_d : first_d) + 1, via_z = select(ahead_first, ahead_z, first_z);
+    const std::int32_t via_d = (ahead_first ? ahead_d : first_d) + 1, via_z = select_bits(ahead_first, ahead_z, first_z);
     // The pixel keeps the better of its own value and the passed row's (its own on a tie); the pixel just
     // passed wins when its distance + 1 beats its own value and does not lose to the passed row's.
-    keep_z[x] = select(via_d < own_d, via_z, own_z);
+    keep_z[x] = select_bits(via_d < own_d, via_z, own_z);
     keep_d[x] = std::min(via_d, own_d);
     chain_below[x] = std::min(own_d - 1, via_d);
   }
   std::int32_t last_d = kFar, last_z = 0;  // the pixel just passed (none at the row's start: never below the bound)
   for (std::size_t k = 0; k < W; ++k) {
     const std::size_t x = forward ? k : W - 1 - k;
-    last_z = select(last_d < chain_below[x], last_z, keep_z[x]);
+    last_z = select_bits(last_d < chain_below[x], last_z, keep_z[x]);
     last_d = std::min(last_d + 1, keep_d[x]);  // the same as by the select, with a shorter chain
     d[x] = last_d;
     z[x] = last_z;
@@ -115,11 +116,11 @@ float bits_float(std::int32_t b) {
 PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h, int radius) {
   const std::size_t n = sparse.size();
   PredictedDepth out{w, h, std::vector<float>(n), std::vector<std::int32_t>(n)};
-  std::vector<std::int32_t> z(n);
+  std::vector<std::int32_t> depth_bits(n);  // the nearest sample's depth, as a float's bits
   for (std::size_t c = 0; c < n; ++c) {
     const bool sample = sparse[c] > 0.0f;
     out.distance[c] = sample ? 0 : kFar;
-    z[c] = sample ? float_bits(sparse[c]) : 0;
+    depth_bits[c] = sample ? float_bits(sparse[c]) : 0;
   }
   // Forward pass: left, up-left, up, up-right; backward pass: the mirror.
   const auto W = static_cast<std::size_t>(w);
@@ -131,10 +132,10 @@ PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h
       throw_if_stop_requested();
       const std::size_t row = static_cast<std::size_t>(forward ? k : h - 1 - k) * W;
       std::int32_t* d = out.distance.data() + row;
-      relax_row<decltype(forward)::value>(d, z.data() + row, next_d.data(), next_z.data(), W, keep_d.data(),
+      relax_row<decltype(forward)::value>(d, depth_bits.data() + row, next_d.data(), next_z.data(), W, keep_d.data(),
                                            keep_z.data(), chain_below.data());
       std::copy(d, d + W, next_d.begin() + 1);
-      std::copy(z.begin() + static_cast<std::ptrdiff_t>(row), z.begin() + static_cast<std::ptrdiff_t>(row + W),
+      std::copy(depth_bits.begin() + static_cast<std::ptrdiff_t>(row), depth_bits.begin() + static_cast<std::ptrdiff_t>(row + W),
                 next_z.begin() + 1);
     }
   };
@@ -144,8 +145,8 @@ PredictedDepth distance_transform(const std::vector<float>& sparse, int w, int h
   float* depth = out.depth_m.data();
   for (std::size_t c = 0; c < n; ++c) {
     const bool near = d[c] <= radius;
-    d[c] = select(near, d[c], -1);
-    depth[c] = bits_float(select(near, z[c], 0));
+    d[c] = select_bits(near, d[c], -1);
+    depth[c] = bits_float(select_bits(near, depth_bits[c], 0));
   }
   return out;
 }

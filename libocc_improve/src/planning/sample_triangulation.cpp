@@ -1,4 +1,5 @@
 #include "occ_improve/planning/sample_triangulation.hpp"
+#include "planning/checked_triangulation.hpp"
 
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"

@@ -60,6 +60,29 @@ constexpr std::uint32_t kUnassigned = std::numeric_limits<std::uint32_t>::max();
 // Combines two per-ray masks: set where `ray` is and `excluded` is not (bitwise, so loops over it vectorise).
 constexpr auto and_not = [](std::uint8_t ray, std::uint8_t excluded) -> std::uint8_t { return ray & !excluded; };
 
+// The first row of each of `parts` blocks of [0, rows), then rows: equal numbers of rows.
+std::vector<int> even_row_blocks(int rows, int parts) {
+  std::vector<int> first_row(static_cast<std::size_t>(parts) + 1);
+  for (int part = 0; part <= parts; ++part) first_row[static_cast<std::size_t>(part)] = rows * part / parts;
+  return first_row;
+}
+
+// The same, the blocks holding about equal shares of the rows' weights (equal rows when they weigh nothing).
+std::vector<int> weighted_row_blocks(const std::vector<std::size_t>& weight_of_row, int parts) {
+  const int rows = static_cast<int>(weight_of_row.size());
+  std::vector<int> first_row = even_row_blocks(rows, parts);
+  std::size_t total = 0;
+  for (const std::size_t w : weight_of_row) total += w;
+  if (total == 0) return first_row;
+  std::size_t before = 0;
+  for (int row = 0, part = 1; row < rows && part < parts; ++row) {
+    before += weight_of_row[static_cast<std::size_t>(row)];
+    while (part < parts && before * static_cast<std::size_t>(parts) >= total * static_cast<std::size_t>(part))
+      first_row[static_cast<std::size_t>(part++)] = row + 1;
+  }
+  return first_row;
+}
+
 // Runs body(first_row, end_row) on `threads` threads (0: the hardware's), each on its own block of [0, rows).
 // Every caller's rows are independent and each block writes only its own, so the result is the same for
 // any split.
@@ -68,19 +91,7 @@ constexpr auto and_not = [](std::uint8_t ray, std::uint8_t excluded) -> std::uin
 template <typename Body>
 void for_row_blocks(int rows, int threads, Body&& body, const std::vector<std::size_t>* weight_of_row = nullptr) {
   const int parts = std::max(1, std::min(detail::resolve_thread_count(threads), rows));
-  std::vector<int> first_row(static_cast<std::size_t>(parts) + 1, rows);
-  for (int part = 0; part < parts; ++part) first_row[static_cast<std::size_t>(part)] = rows * part / parts;
-  if (weight_of_row) {
-    std::size_t total = 0;
-    for (const std::size_t w : *weight_of_row) total += w;
-    std::size_t before = 0;
-    int part = 1;
-    for (int row = 0; row < rows && part < parts; ++row) {
-      before += (*weight_of_row)[static_cast<std::size_t>(row)];
-      while (part < parts && before * static_cast<std::size_t>(parts) >= total * static_cast<std::size_t>(part))
-        first_row[static_cast<std::size_t>(part++)] = row + 1;
-    }
-  }
+  const std::vector<int> first_row = weight_of_row ? weighted_row_blocks(*weight_of_row, parts) : even_row_blocks(rows, parts);
   detail::run_parts(parts, [&](int part, int) {
     body(first_row[static_cast<std::size_t>(part)], first_row[static_cast<std::size_t>(part) + 1]);
   });
@@ -267,6 +278,7 @@ public:
              const RayBox& box, int reach)
       : points_(points), member_(member), image_width_(width), box_(box), reach_(reach),
         window_(power_of_two_at_least(std::min(box.height + 1, 2 * reach))) {
+    memo_.resize(static_cast<std::size_t>(reach) + 1);  // every radius up front: an AtRadius keeps a Memo&
     if (box_.width == 0) return;
     sum_.resize(static_cast<std::size_t>(window_) * (box_.width + 1));
     std::fill_n(&at(0, 0), box_.width + 1, Eigen::Vector4d::Zero());
@@ -287,8 +299,7 @@ private:
     std::vector<int> row_held;  // per slot of the window: the box row its entries are of (-1: none yet)
   };
   Memo& memo_for(int r) {
-    if (memo_.size() <= static_cast<std::size_t>(r)) memo_.resize(static_cast<std::size_t>(r) + 1);
-    Memo& memo = memo_[static_cast<std::size_t>(r)];
+    Memo& memo = memo_.at(static_cast<std::size_t>(r));  // a radius is within the reach
     if (memo.row_held.empty()) {
       memo.value.resize(static_cast<std::size_t>(window_) * box_.width);
       memo.known.resize(memo.value.size());
@@ -392,7 +403,8 @@ std::vector<ArmPixels> arm_table(const SegmentationParams& params) {
 int arm_length_px(double range_m, double pixel_rad, const SegmentationParams& params) {
   // Clamped, then rounded half up: std::lround of the unclamped value, since the bounds are whole and x + 0.5
   // is exact for x >= 2 (a libm call per ray was 2 % of the crease scan).
-  const double arm = std::clamp(params.crease_arm_m / (range_m * pixel_rad), 2.0, double(params.crease_max_arm_px));
+  const double arm =
+      std::clamp(params.crease_arm_m / (range_m * pixel_rad), 2.0, static_cast<double>(params.crease_max_arm_px));
   return static_cast<int>(arm + 0.5);
 }
 
@@ -459,9 +471,10 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
   // The cost is per member ray, and the objects often fill one part of the image: the threads' blocks
   // hold about as many member rays each.
   std::vector<std::size_t> members_of_row(static_cast<std::size_t>(height));
-  for (int e = 0; e < height; ++e)
-    members_of_row[static_cast<std::size_t>(e)] = static_cast<std::size_t>(
-        std::count(member.begin() + static_cast<std::ptrdiff_t>(ray(0, e)), member.begin() + static_cast<std::ptrdiff_t>(ray(0, e + 1)), 1));
+  for (int e = 0; e < height; ++e) {
+    const auto row = member.begin() + static_cast<std::ptrdiff_t>(ray(0, e));
+    members_of_row[static_cast<std::size_t>(e)] = static_cast<std::size_t>(std::count(row, row + width, 1));
+  }
   for_row_blocks(
       height, params.threads,
       [&](int first_row, int end_row) {

@@ -60,19 +60,13 @@ double grid_worst_case_bytes(const GeometryParams& g);
 void require_within_memory_cap(const GeometryParams& g, std::size_t memory_cap_bytes);
 
 /// A column's dense window: a read-only view of its bins in its tile's storage (ColumnGrid::assign and
-/// ColumnGrid::store_windows write it). Valid until the next write to a column of the same tile.
+/// ColumnGrid::store_windows write it), valid until the next write to a column of the same tile. Not
+/// copyable: a copy would silently follow, or outlive, the tile's later writes.
 class ColumnWindow {
 public:
   ColumnWindow() = default;
-  // A copy reads the same bins (while their grid lives) but owns no place in any tile's storage: a column
-  // given it (ColumnGrid::touch(c) = ...) is written in its own tile's storage next time, never over them.
-  ColumnWindow(const ColumnWindow& other) : data_(other.data_), size_(other.size_) {}
-  ColumnWindow& operator=(const ColumnWindow& other) {
-    data_ = other.data_;
-    size_ = other.size_;
-    slot_ = 0;
-    return *this;
-  }
+  ColumnWindow(const ColumnWindow&) = delete;
+  ColumnWindow& operator=(const ColumnWindow&) = delete;
   std::size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   const float* data() const { return data_; }
@@ -84,7 +78,7 @@ private:
   friend class ColumnGrid;
   float* data_ = nullptr;
   std::uint32_t size_ = 0;
-  std::uint32_t slot_ = 0;  // bins its place in the tile's storage holds (>= size_)
+  std::uint32_t place_bins_ = 0;  // bins its place in the tile's storage holds (>= size_)
 };
 
 /// One ray's voxels: a uniform run, a dense window, an untouched tail.
@@ -115,6 +109,7 @@ struct ColumnContents {
 class ColumnGrid {
 public:
   static constexpr int kTileSize = 8;
+  static constexpr std::size_t kTileColumns = kTileSize * kTileSize;
 
   /// Throws InvalidParameter for bad options, ResourceLimit when the worst case exceeds the cap.
   ColumnGrid(const GridGeometry& geometry, const GridOptions& options = {});
@@ -131,12 +126,14 @@ public:
   /// tile row; the insertion splits work on tile-row boundaries for that reason.
   ColumnData& touch(ColumnIndex column);
   /// Writes one column (touching it), e.g. while a grid is built column by column: the tile's storage
-  /// grows geometrically (shrink_to_fit trims it).
+  /// grows by a quarter at a time (shrink_to_fit trims it). The values may be any column's window.
   void assign(const ColumnContents& contents);
   /// Writes several columns of ONE tile (the insertion's store, once per tile and call): a window that
   /// fits its place is written there, the others after the tile's windows; when the storage lacks room it
-  /// is rebuilt once, holding every window back to back with no spare room (one allocation per tile, none
-  /// per column). Throws InvalidInput when the columns are not all of one tile.
+  /// is rebuilt once, every window back to back (no spare room on a tile's first store, an eighth after
+  /// that; one allocation per tile, none per column), and once more than a quarter of it is spare it is
+  /// trimmed. The values must not lie in the tile's storage. Throws InvalidInput when the columns are not
+  /// all of one tile.
   void store_windows(const ColumnContents* contents, std::size_t count);
   /// Rebuilds every tile's storage with its windows back to back and no spare room.
   void shrink_to_fit();
@@ -157,15 +154,18 @@ public:
 private:
   // A tile's columns and the storage of their windows: one allocation per tile rather than per column.
   struct Tile {
-    ColumnData columns[kTileSize * kTileSize];
+    ColumnData columns[kTileColumns];
     std::vector<float> storage;  // the windows; spare capacity after them takes windows that outgrow their place
   };
+  // Spare room a rebuilt tile keeps: the insertion's (none on a first store, an eighth after, and trimmed
+  // once a quarter is spare) or a column-by-column build's (a quarter).
+  enum class Growth { insertion, column_by_column };
   std::size_t tile_of(ColumnIndex column, std::size_t& slot) const;
   void write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
-                  bool grow_geometrically);
+                  Growth growth);
   static std::size_t window_bins(const Tile& tile);  // bins its windows hold
-  static void rebuild(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
-                      std::size_t spare);
+  void rebuild(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
+               std::size_t spare) const;
 
   GridGeometry geometry_;
   GridOptions options_;

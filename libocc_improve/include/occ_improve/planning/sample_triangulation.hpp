@@ -81,13 +81,6 @@ void check_sparse_depth_image(const std::vector<float>& sparse_depth_m, int widt
 SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m, int width, int height,
                                         const SensorModel& model, const TriangulationParams& params = {});
 
-namespace detail {
-/// triangulate_samples for valid params and an image that check_sparse_depth_image has passed
-/// (predict_dense_depth checks it once for the distance transform and the triangulation).
-SampleTriangulation triangulate_checked_samples(const std::vector<float>& sparse_depth_m, int width, int height,
-                                                const SensorModel& model, const TriangulationParams& params);
-}  // namespace detail
-
 /// Indices of the `count` triangles of highest score(), highest first (ties: lower index first); fewer
 /// when there are fewer triangles with a positive score.
 std::vector<std::size_t> top_scored_triangles(const SampleTriangulation& triangulation, std::size_t count);
