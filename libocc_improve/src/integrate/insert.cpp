@@ -86,7 +86,9 @@ InsertionReport insert(ColumnGrid& grid, const SensorModel& model, PointSpan poi
   // pair costs, which varies with the scene by 10-30 % between halves of a frame.
   const int workers = std::max(1, std::min(threads, tile_rows));
   const int bands = workers == 1 ? 1 : std::min(tile_rows, kBandsPerThread * workers);
-  const std::vector<int> band_begin = detail::balanced_bands(rows, bands);
+  // Bands of about equal estimated work (column updates); any split gives the same result: each column
+  // has one owner.
+  const std::vector<int> band_begin = detail::weighted_blocks(rows.work, bands);
   std::vector<std::size_t> updates(static_cast<std::size_t>(bands), 0);
   std::vector<std::vector<ColumnIndex>> changed(static_cast<std::size_t>(bands));
   if (scratch_rows.size() < static_cast<std::size_t>(workers)) scratch_rows.resize(static_cast<std::size_t>(workers));

@@ -108,18 +108,4 @@ TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows
   return out;
 }
 
-std::vector<int> balanced_bands(const TileRows& rows, int parts) {
-  double total = 0;
-  for (double w : rows.work) total += w;
-  std::vector<int> begin(static_cast<std::size_t>(parts) + 1, rows.count());
-  begin[0] = 0;
-  double sum = 0;
-  int part = 1;
-  for (int r = 0; r < rows.count() && part < parts; ++r) {
-    sum += rows.work[static_cast<std::size_t>(r)];
-    if (sum >= total * part / parts) begin[static_cast<std::size_t>(part++)] = r + 1;
-  }
-  return begin;
-}
-
 }  // namespace occ_improve::detail

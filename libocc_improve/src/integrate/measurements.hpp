@@ -41,10 +41,5 @@ struct TileRows {
 /// The tile rows' measurements (a counting sort, on `threads` threads over the conversion's chunks).
 TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows, int threads);
 
-/// Splits the tile rows into `parts` bands of about equal estimated work (column updates); the insertion
-/// makes several bands per thread and the threads take them in turn, so that an uneven scene (floor
-/// below, far wall or no returns above) or a wrong estimate leaves no thread idle for long. Returns
-/// parts + 1 tile-row boundaries. Any split gives the same result: each column has one owner.
-std::vector<int> balanced_bands(const TileRows& rows, int parts);
 
 }  // namespace occ_improve::detail

@@ -60,38 +60,14 @@ constexpr std::uint32_t kUnassigned = std::numeric_limits<std::uint32_t>::max();
 // Combines two per-ray masks: set where `ray` is and `excluded` is not (bitwise, so loops over it vectorise).
 constexpr auto and_not = [](std::uint8_t ray, std::uint8_t excluded) -> std::uint8_t { return ray & !excluded; };
 
-// The first row of each of `parts` blocks of [0, rows), then rows: equal numbers of rows.
-std::vector<int> even_row_blocks(int rows, int parts) {
-  std::vector<int> first_row(static_cast<std::size_t>(parts) + 1);
-  for (int part = 0; part <= parts; ++part) first_row[static_cast<std::size_t>(part)] = rows * part / parts;
-  return first_row;
-}
-
-// The same, the blocks holding about equal shares of the rows' weights (equal rows when they weigh nothing).
-std::vector<int> weighted_row_blocks(const std::vector<std::size_t>& weight_of_row, int parts) {
-  const int rows = static_cast<int>(weight_of_row.size());
-  std::vector<int> first_row = even_row_blocks(rows, parts);
-  std::size_t total = 0;
-  for (const std::size_t w : weight_of_row) total += w;
-  if (total == 0) return first_row;
-  std::size_t before = 0;
-  for (int row = 0, part = 1; row < rows && part < parts; ++row) {
-    before += weight_of_row[static_cast<std::size_t>(row)];
-    while (part < parts && before * static_cast<std::size_t>(parts) >= total * static_cast<std::size_t>(part))
-      first_row[static_cast<std::size_t>(part++)] = row + 1;
-  }
-  return first_row;
-}
-
-// Runs body(first_row, end_row) on `threads` threads (0: the hardware's), each on its own block of [0, rows).
-// Every caller's rows are independent and each block writes only its own, so the result is the same for
-// any split.
-// `weight_of_row`, when given, says how much work each row holds: the blocks then hold about equal
-// shares of it rather than of the rows.
+// Runs body(first_row, end_row) on `threads` threads (0: the hardware's), each on its own block of rows,
+// the blocks holding about equal shares of the rows' weights (the work each row holds). Every caller's rows
+// are independent and each block writes only its own, so the result is the same for any split.
 template <typename Body>
-void for_row_blocks(int rows, int threads, Body&& body, const std::vector<std::size_t>* weight_of_row = nullptr) {
+void for_row_blocks(const std::vector<std::size_t>& weight_of_row, int threads, Body&& body) {
+  const int rows = static_cast<int>(weight_of_row.size());
   const int parts = std::max(1, std::min(detail::resolve_thread_count(threads), rows));
-  const std::vector<int> first_row = weight_of_row ? weighted_row_blocks(*weight_of_row, parts) : even_row_blocks(rows, parts);
+  const std::vector<int> first_row = detail::weighted_blocks(weight_of_row, parts);
   detail::run_parts(parts, [&](int part, int) {
     body(first_row[static_cast<std::size_t>(part)], first_row[static_cast<std::size_t>(part) + 1]);
   });
@@ -124,7 +100,8 @@ std::vector<std::uint8_t> valid_rays(const GridGeometry& geometry, const Surface
 std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const SurfaceMap& surface,
                                             const std::vector<std::uint8_t>& valid, int threads) {
   std::vector<Eigen::Vector3f> points(surface.size(), Eigen::Vector3f::Zero());
-  for_row_blocks(geometry.height(), threads, [&](int first_row, int end_row) {
+  const std::vector<std::size_t> equal_rows(static_cast<std::size_t>(geometry.height()), 1);
+  for_row_blocks(equal_rows, threads, [&](int first_row, int end_row) {
     const int width = geometry.width();
     for (int e = first_row; e < end_row; ++e)
       for (int a = 0; a < width; ++a) {
@@ -475,17 +452,14 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
     const auto row = member.begin() + static_cast<std::ptrdiff_t>(ray(0, e));
     members_of_row[static_cast<std::size_t>(e)] = static_cast<std::size_t>(std::count(row, row + width, 1));
   }
-  for_row_blocks(
-      height, params.threads,
-      [&](int first_row, int end_row) {
-        PointMeans means(points, member, width, box, reach);
-        for (int e = first_row; e < end_row; ++e) {
-          throw_if_stop_requested();
-          means.advance_to(e);
-          for (int a = 0; a < width; ++a) crease[ray(a, e)] = member[ray(a, e)] && folds(means, a, e);
-        }
-      },
-      &members_of_row);
+  for_row_blocks(members_of_row, params.threads, [&](int first_row, int end_row) {
+    PointMeans means(points, member, width, box, reach);
+    for (int e = first_row; e < end_row; ++e) {
+      throw_if_stop_requested();
+      means.advance_to(e);
+      for (int a = 0; a < width; ++a) crease[ray(a, e)] = member[ray(a, e)] && folds(means, a, e);
+    }
+  });
   return crease;
 }
 

@@ -10,6 +10,26 @@
 
 namespace occ_improve::detail {
 
+/// Boundaries of `parts` blocks of consecutive items (parts + 1 values, the first 0, the last the item
+/// count) holding about equal shares of the items' weights; equal numbers of items when they weigh
+/// nothing. A block may be empty where one item outweighs a share.
+template <typename Weight>
+std::vector<int> weighted_blocks(const std::vector<Weight>& weights, int parts) {
+  const int items = static_cast<int>(weights.size());
+  std::vector<int> begin(static_cast<std::size_t>(parts) + 1);
+  for (int part = 0; part <= parts; ++part)
+    begin[static_cast<std::size_t>(part)] = static_cast<int>(static_cast<long long>(items) * part / parts);
+  Weight total = 0;
+  for (const Weight w : weights) total += w;
+  if (!(total > 0)) return begin;
+  Weight before = 0;
+  for (int item = 0, part = 1; item < items && part < parts; ++item) {
+    before += weights[static_cast<std::size_t>(item)];
+    while (part < parts && before * parts >= total * part) begin[static_cast<std::size_t>(part++)] = item + 1;
+  }
+  return begin;
+}
+
 inline int resolve_thread_count(int requested) {
   if (requested > 0) return requested;
   const unsigned hw = std::thread::hardware_concurrency();
