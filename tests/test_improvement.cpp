@@ -250,6 +250,13 @@ TEST(Improvement, IncrementalUpdateRecomputesExactlyTheAffectedRays) {
   ImprovementMap empty;
   EXPECT_EQ(update_improvement(g, model, surface, {}, empty).size(), g.column_count());
   EXPECT_EQ(empty.value, full.value);
+  // Rows with many affected rays take the row loop over spans of them (gaps of up to 16 rays bridged,
+  // longer ones skipped): bit for bit the full map's values.
+  std::vector<ColumnIndex> many;
+  for (int a : {0, 3, 6, 9, 30, 33, 55, 63}) many.push_back(g.column(a, 20));
+  for (const ColumnIndex c : many) surface.depth_m[c] = 1.5f;
+  update_improvement(g, model, surface, many, map);
+  EXPECT_EQ(map.value, compute_improvement(g, model, surface).value);
 }
 
 // CONVENTIONS 7's picture with the paper preset on the sample frame, as medians over masks of 3 x 3 windows.

@@ -134,14 +134,15 @@ struct WindowKernel {
     return sum;
   }
 
-  // Every ray of row e at once: offset by offset, j along the row (contiguous, vectorisable). On x86-64
-  // GCC also builds an AVX2 clone picked at load time (no FMA: results stay bit-identical to ray()).
-  OCC_IMPROVE_ROW_CLONES void row(const GridGeometry& g, const SensorModel& model, const SurfaceMap& s, int e, float* out,
-           std::vector<float>& inv_sigma) const {
+  // The rays [x_first, x_end) of row e at once (out[x] for those x): offset by offset, j along the row
+  // (contiguous, vectorisable). On x86-64 GCC also builds an AVX2 clone picked at load time (no FMA:
+  // results stay bit-identical to ray()).
+  OCC_IMPROVE_ROW_CLONES void row(const GridGeometry& g, const SensorModel& model, const SurfaceMap& s, int e,
+                                  int x_first, int x_end, float* out, std::vector<float>& inv_sigma) const {
     const int w = g.width();
     const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
     const float* rho_j = s.depth_m.data() + row_start;
-    for (int x = 0; x < w; ++x) {
+    for (int x = x_first; x < x_end; ++x) {
       inv_sigma[static_cast<std::size_t>(x)] = static_cast<float>(1.0 / model.sigma_depth_at(rho_j[x]));
       out[x] = 0.0f;
     }
@@ -171,16 +172,17 @@ struct WindowKernel {
         const bool peak = needs_peak[row_offsets(e) + offset_index(da, de)];
         const auto r = static_cast<std::size_t>(da - da_min);
         if (run_contiguous[r]) {
+          const int from = std::max(run_first[r], x_first), to = std::min(run_end[r], x_end);
           if (peak)
-            accumulate(std::true_type{}, std::false_type{}, run_first[r], run_end[r]);
+            accumulate(std::true_type{}, std::false_type{}, from, to);
           else
-            accumulate(std::false_type{}, std::false_type{}, run_first[r], run_end[r]);
+            accumulate(std::false_type{}, std::false_type{}, from, to);
         } else {
-          const int x_begin = std::max(0, -da), x_end = std::min(w, w - da);
+          const int from = std::max({0, -da, x_first}), to = std::min({w, w - da, x_end});
           if (peak)
-            accumulate(std::true_type{}, std::true_type{}, x_begin, x_end);
+            accumulate(std::true_type{}, std::true_type{}, from, to);
           else
-            accumulate(std::false_type{}, std::true_type{}, x_begin, x_end);
+            accumulate(std::false_type{}, std::true_type{}, from, to);
         }
       }
     }
@@ -301,7 +303,7 @@ ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorMod
       throw_if_stop_requested();
       float* row = map.value.data() + static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
       if (computed_row < 0 || !same_row_inputs(kernel, surface, w, e, computed_row)) {
-        kernel.row(geometry, model, surface, e, computed.data(), inv_sigma);
+        kernel.row(geometry, model, surface, e, 0, w, computed.data(), inv_sigma);
         computed_row = e;
       }
       std::copy(computed.begin(), computed.end(), row);
@@ -331,8 +333,10 @@ std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const 
   for (std::size_t c = 0; c < columns; ++c)
     if (affected[c]) rays.push_back(static_cast<ColumnIndex>(c));
 
-  // Rows with many affected rays go through the vectorised row loop (whole row into scratch, affected
-  // values copied), the others ray by ray; both give bit-identical values. Rows are independent.
+  // Rows with many affected rays go through the vectorised row loop over their spans of affected rays
+  // (gaps shorter than kSpanGap bridged, their values computed and not copied), the others ray by ray;
+  // both give bit-identical values. Rows are independent.
+  constexpr int kSpanGap = 16;
   const int w = geometry.width(), h = geometry.height();
   const int parts = rays.size() < 20000 ? 1 : std::min(detail::resolve_thread_count(0), h);
   detail::run_parts(parts, [&](int part, int count) {
@@ -344,7 +348,20 @@ std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const 
           std::count(affected.begin() + static_cast<std::ptrdiff_t>(row_start),
                      affected.begin() + static_cast<std::ptrdiff_t>(row_start + static_cast<std::size_t>(w)), 1));
       if (row_affected == 0) continue;
-      if (row_affected * 8 >= w) kernel.row(geometry, model, surface, e, scratch.data(), inv_sigma);
+      if (row_affected * 8 >= w) {
+        const std::uint8_t* in_row = affected.data() + row_start;
+        for (int a = 0; a < w;) {
+          if (!in_row[a]) {
+            ++a;
+            continue;
+          }
+          int span_end = a + 1, last = a;
+          for (; span_end < w && span_end - last <= kSpanGap; ++span_end)
+            if (in_row[span_end]) last = span_end;
+          kernel.row(geometry, model, surface, e, a, last + 1, scratch.data(), inv_sigma);
+          a = last + 1;
+        }
+      }
       for (int a = 0; a < w; ++a) {
         const std::size_t j = row_start + static_cast<std::size_t>(a);
         if (!affected[j]) continue;

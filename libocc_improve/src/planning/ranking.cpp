@@ -44,9 +44,10 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
   const std::size_t n = value.size();
   std::vector<std::uint32_t> histogram(1u << 16, 0);
   const auto takes = [&](std::size_t c) { return (!eligible || eligible[c]) && !std::isnan(value[c]); };
-  const auto key = [&](std::size_t c) { return rank_key(value[c], static_cast<ColumnIndex>(c)); };
+  // The key's top 16 bits are the value's (rank_key): the column's hash is needed only for candidates.
+  const auto top_bits = [&](std::size_t c) { return ordered_bits(value[c]) >> 16; };
   for (std::size_t c = 0; c < n; ++c)
-    if (takes(c)) ++histogram[key(c) >> 48];
+    if (takes(c)) ++histogram[top_bits(c)];
   std::size_t above = 0;
   std::uint64_t bound = 1u << 16;
   while (bound > 0 && above < k) above += histogram[--bound];
@@ -57,8 +58,7 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
   std::vector<Ranked> candidates;
   candidates.reserve(above);
   for (std::size_t c = 0; c < n; ++c)
-    if (const std::uint64_t kc = key(c); (kc >> 48) >= bound && takes(c))
-      candidates.push_back({kc, static_cast<ColumnIndex>(c)});
+    if (top_bits(c) >= bound && takes(c)) candidates.push_back({rank_key(value[c], static_cast<ColumnIndex>(c)), static_cast<ColumnIndex>(c)});
   k = std::min(k, candidates.size());
   const auto better = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
   std::nth_element(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), candidates.end(), better);
