@@ -94,8 +94,8 @@ TEST(IntegrateReal, SevenScenesDepthImageExactMatchesReference) {
 // the same camera, so that clamping, re-visits and neighbours arriving before a column's own return are
 // exercised. Bound: per column and frame up to 9 updates (3 x 3 pixels) each within 2e-6 of eq. 1 (float
 // kernel) plus the skipped |logit P_s| < 5e-7 (CONVENTIONS 4), plus the odds round trip (< 5e-7 + 2e-7 |L|,
-// |L| <= 6.9) once per frame; clamping is 1-Lipschitz, so two frames stay below 2 x (9 x 2.5e-6 + 2e-6)
-// = 4.9e-5.
+// |L| <= 6.9) once per frame in the bins the frame reaches; clamping is 1-Lipschitz, so two frames stay
+// below 2 x (9 x 2.5e-6 + 2e-6) = 4.9e-5.
 TEST(IntegrateReal, PixelNativeClampedMatchesReferenceVoxelByVoxel) {
   OCC_REQUIRE_DATA(first, "kinect/pcl_tutorials/pairwise/capture0001.pcd");
   OCC_REQUIRE_DATA(second, "kinect/pcl_tutorials/pairwise/capture0002.pcd");
