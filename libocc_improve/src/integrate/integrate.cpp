@@ -172,17 +172,17 @@ private:
 
 // One column's voxels while a call updates it: the whole depth axis in a scratch row. Only [run_end, tail)
 // is materialised: bins below run_end hold the leading L_min run (clamped mode), bins from tail on are
-// untouched (L = 0). In clamped mode the bins the call's measurements reach, [odds_begin, odds_end), are
-// held in odds e^L (one exp and one log per voxel and call instead of a log per voxel and measurement);
-// the rest stays in log-odds, so a bin no measurement reaches is stored back bit for bit (a conversion
-// there and back would move it by up to ~4e-7 per call, and a small shot's columns are mostly such bins).
-// Exact mode holds log-odds throughout. A column is loaded once per call, receives all its measurements
-// of the call in input order, and is stored back once, so its window is neither reallocated nor shifted
-// per measurement.
+// untouched (L = 0). Clamped mode holds [run_end, odds_end) in odds e^L (one exp and one log per voxel
+// and call instead of a log per voxel and measurement): the bins the call's measurements have reached so
+// far. The bins behind stay in log-odds and are stored back bit for bit: a conversion there and back
+// would move them by up to ~4e-7 per call, and a small shot's columns are mostly such bins. Exact mode
+// holds log-odds throughout. A column is loaded once per call, receives all its measurements of the call
+// in input order, and is stored back once, so its window is neither reallocated nor shifted per
+// measurement.
 struct ColumnScratch {
   float* v = nullptr;  ///< v[b] is bin b
   int run_end = 0, tail = 0;
-  int odds_begin = 0, odds_end = 0;  ///< run_end <= odds_begin <= odds_end <= tail
+  int odds_end = 0;  ///< clamped mode: run_end <= odds_end <= tail
   bool loaded = false;
 };
 
@@ -204,28 +204,28 @@ public:
     const bool own_run = clamped_ && c.uniform_value == lmin_;
     std::fill(s.v, s.v + (own_run ? 0 : c.uniform_end), c.uniform_value);
     std::copy(c.window.begin(), c.window.end(), s.v + c.uniform_end);
-    s.run_end = own_run ? c.uniform_end : 0;
+    s.run_end = s.odds_end = own_run ? c.uniform_end : 0;
     s.tail = window_end;
-    s.odds_begin = s.odds_end = s.run_end;
     s.loaded = true;
   }
 
-  /// Clamped mode, right after load (nothing in odds yet): bins below `cut` (FreeSpaceBound) that hold
-  /// L <= 0 end the call at L_min, so the leading run takes them before any measurement is applied; the run
-  /// stops early at a bin with L > 0, which is evaluated as usual.
+  /// Clamped mode, right after load (all in log-odds): bins below `cut` (FreeSpaceBound) that hold L <= 0
+  /// end the call at L_min, so the leading run takes them before any measurement is applied; the run stops
+  /// early at a bin with L > 0, which is evaluated as usual.
   void extend_run(ColumnScratch& s, int cut) const {
-    if (cut <= s.run_end) return;
-    const int materialised_end = std::min(cut, s.tail);
-    int b = s.run_end;
-    while (b < materialised_end && s.v[b] <= 0.0f) ++b;
-    s.run_end = b < materialised_end ? b : cut;
-    s.tail = std::max(s.tail, s.run_end);
-    s.odds_begin = s.odds_end = s.run_end;
+    if (cut > s.run_end) {
+      const int materialised_end = std::min(cut, s.tail);
+      int b = s.run_end;
+      while (b < materialised_end && s.v[b] <= 0.0f) ++b;
+      s.run_end = b < materialised_end ? b : cut;
+      s.tail = std::max(s.tail, s.run_end);
+    }
+    s.odds_end = s.run_end;
   }
 
   /// The column's new contents, back in log-odds in its scratch row (valid until the row is loaded again).
   ColumnContents contents(ColumnScratch& s, ColumnIndex column) const {
-    if (clamped_) odds_to_log_odds(s.v + s.odds_begin, s.odds_end - s.odds_begin, omin_, omax_, lmin_, lmax_);
+    if (clamped_) odds_to_log_odds(s.v + s.run_end, s.odds_end - s.run_end, omin_, omax_, lmin_, lmax_);
     s.loaded = false;
     return {column, s.run_end, s.run_end > 0 ? lmin_ : 0.0f, s.v + s.run_end, static_cast<std::uint32_t>(s.tail - s.run_end)};
   }
@@ -247,41 +247,14 @@ private:
     s.tail = end;
   }
 
-  /// Clamped mode: the materialised bins of [first, end) in odds, keeping the bins in odds one range.
-  void to_odds(ColumnScratch& s, int first, int end) const {
-    end = std::min(end, s.tail);
-    if (first >= end) return;
-    if (s.odds_begin == s.odds_end) s.odds_begin = s.odds_end = first;
-    if (first < s.odds_begin) {
-      log_odds_to_odds(s.v + first, s.odds_begin - first, omin_, omax_, lmin_, lmax_);
-      s.odds_begin = first;
-    }
-    if (end > s.odds_end) {
-      log_odds_to_odds(s.v + s.odds_end, end - s.odds_end, omin_, omax_, lmin_, lmax_);
-      s.odds_end = end;
-    }
-  }
-
-  /// Clamped mode: leading voxels at the lower clamp join the run (odds <= e^L_min, or L <= L_min where the
-  /// bin is still in log-odds).
-  void absorb_clamped_lead(ColumnScratch& s) const {
-    const float* v = s.v;
-    while (s.run_end < s.tail &&
-           (s.run_end >= s.odds_begin && s.run_end < s.odds_end ? v[s.run_end] <= omin_ : v[s.run_end] <= lmin_))
-      ++s.run_end;
-    s.odds_begin = std::max(s.odds_begin, s.run_end);
-    s.odds_end = std::max(s.odds_end, s.odds_begin);
-  }
-
   void apply_clamped(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
                      MeasurementTerms& terms) const {
     float* o = s.v;
-    // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there (in
-    //    log-odds, like every bin outside [odds_begin, odds_end)).
+    // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
     const int run_keep = terms.run_keep();
     if (angular_term >= kNegligibleB && s.run_end >= run_keep) return;
     if (s.run_end > run_keep && run_keep < end) {
-      std::fill(o + run_keep, o + s.run_end, lmin_);
+      std::fill(o + run_keep, o + s.run_end, omin_);
       s.run_end = run_keep;
     }
     // 2. Nothing materialised means untouched voxels (L = 0) from the run's end: there the bound on
@@ -291,19 +264,26 @@ private:
     int first = s.run_end;
     if (s.run_end == s.tail) {
       const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * to_lmin_offset_sigmas(angular_term, lmin_)), end);
-      if (fresh > first) first = s.run_end = s.tail = s.odds_begin = s.odds_end = fresh;
+      if (fresh > first) first = s.run_end = s.tail = s.odds_end = fresh;
     }
-    // 3. The remaining bins up to the support's end, in odds (new bins: L = 0, odds 1), evaluated;
-    //    leading voxels at the lower clamp join the run.
+    // 3. The remaining bins up to the support's end, in odds (materialised ones converted on first reach,
+    //    new ones L = 0, odds 1), evaluated; leading voxels at the lower clamp join the run (in odds, then
+    //    in log-odds behind).
     if (first >= end) return;
-    to_odds(s, first, end);
-    if (end > s.tail) {
+    if (end > s.odds_end) {
+      const int materialised_end = std::min(end, s.tail);
+      if (materialised_end > s.odds_end)
+        log_odds_to_odds(o + s.odds_end, materialised_end - s.odds_end, omin_, omax_, lmin_, lmax_);
       extend_tail(s, end, 1.0f);
-      s.odds_end = end;  // to_odds reached the old tail
+      s.odds_end = end;
     }
     terms.ensure(first, end);
     multiply_odds_clamped(o + first, terms.e() + first, terms.g() + first, end - first, a, omin_, omax_);
-    absorb_clamped_lead(s);
+    while (s.run_end < s.odds_end && o[s.run_end] <= omin_) ++s.run_end;
+    if (s.run_end == s.odds_end) {
+      while (s.run_end < s.tail && o[s.run_end] <= lmin_) ++s.run_end;
+      s.odds_end = s.run_end;
+    }
   }
 
   void apply_exact(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
