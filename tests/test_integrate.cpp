@@ -104,7 +104,7 @@ TEST(Integrate, FreeSpaceOfACallStopsAtOccupiedVoxels) {
 
 // Clamped mode holds a column's voxels in odds while a call updates them, but only the bins the call's
 // measurements reach: the others are stored back bit for bit. (Converting a whole window there and back,
-// as before, moved every voxel of every touched column by up to ~4e-7 per call: drift for a view
+// as before, could move a voxel of a touched column by up to 5e-7 + 2e-7 |L| per call: drift for a view
 // re-measured frame after frame, and most of a small shot's work.)
 TEST(Integrate, BinsNoMeasurementOfACallReachesAreStoredBitForBit) {
   const PinholeIntrinsics k;
@@ -118,7 +118,8 @@ TEST(Integrate, BinsNoMeasurementOfACallReachesAreStoredBitForBit) {
     for (int v = 232; v < 248; ++v)
       for (int u = 312; u < 328; ++u) {
         const double zp = z + 0.01 * std::sin(0.7 * u + 1.3 * v + phase);
-        points.emplace_back(static_cast<float>((u - k.cx) / k.fx * zp), static_cast<float>((v - k.cy) / k.fy * zp), static_cast<float>(zp));
+        points.emplace_back(static_cast<float>((u - k.cx) / k.fx * zp), static_cast<float>((v - k.cy) / k.fy * zp),
+                            static_cast<float>(zp));
       }
     return points;
   };

@@ -84,8 +84,9 @@ void logit_profile_from_terms(const float* e, const float* g, int n, float a, fl
   for (int i = 0; i < n; ++i) out[i] = logit_from_terms(e[i], g[i], a);
 }
 
-// Clamped mode works on odds O = e^L during a frame: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
-// with clamping after each update, without a log per voxel and measurement (one per voxel and frame).
+// Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
+// with clamping after each update, without a log per voxel and measurement (one exp and one log per voxel
+// the call reaches, ColumnScratch).
 OCC_IMPROVE_VECTOR_KERNEL
 void multiply_odds_clamped(float* o, const float* e, const float* g, int n, float a, float omin, float omax) {
   for (int i = 0; i < n; ++i) {
@@ -175,7 +176,7 @@ private:
 // untouched (L = 0). Clamped mode holds [run_end, odds_end) in odds e^L (one exp and one log per voxel
 // and call instead of a log per voxel and measurement): the bins the call's measurements have reached so
 // far. The bins behind stay in log-odds and are stored back bit for bit: a conversion there and back
-// would move them by up to ~4e-7 per call, and a small shot's columns are mostly such bins. Exact mode
+// would move them by up to 5e-7 + 2e-7 |L| per call, and a small shot's columns are mostly such bins. Exact mode
 // holds log-odds throughout. A column is loaded once per call, receives all its measurements of the call
 // in input order, and is stored back once, so its window is neither reallocated nor shifted per
 // measurement.
@@ -453,13 +454,12 @@ private:
 
   // Free space a whole call carves in one column, whatever the order of its measurements (clamped mode).
   // Below front_m every measurement of the call has t <= kNonPositiveT, so logit P_s <= 0 for all of them;
-  // below to_lmin_m at least one of them alone takes a voxel holding L <= 0 below L_min (bound b: by 0.128 at
-// least, far beyond float rounding in the odds). Under
-  // clamping after each update a voxel that only receives non-positive terms ends at max(L_min, L + sum),
-  // so every voxel below both that holds L <= 0 ends the call at L_min: the column's leading run takes
-  // it at load (ColumnKernel::extend_run) and no measurement evaluates it. A neighbour whose update lies
-  // wholly in front of the column's own return then costs O(1), and its free-space carving never
-  // materialises bins the return would clamp anyway.
+  // below to_lmin_m at least one of them alone takes a voxel holding L <= 0 below L_min (bound b: by 0.128
+  // at least, far beyond float rounding in the odds). Under clamping after each update a voxel that only
+  // receives non-positive terms ends at max(L_min, L + sum), so every voxel below both that holds L <= 0
+  // ends the call at L_min: the column's leading run takes it at load (ColumnKernel::extend_run) and no
+  // measurement evaluates it. A neighbour whose update lies wholly in front of the column's own return
+  // then costs O(1), and its free-space carving never materialises bins the return would clamp anyway.
   struct FreeSpaceBound {
     double front_m = std::numeric_limits<double>::infinity();
     double to_lmin_m = -std::numeric_limits<double>::infinity();

@@ -58,7 +58,10 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
   std::vector<Ranked> candidates;
   candidates.reserve(above);
   for (std::size_t c = 0; c < n; ++c)
-    if (top_bits(c) >= bound && takes(c)) candidates.push_back({rank_key(value[c], static_cast<ColumnIndex>(c)), static_cast<ColumnIndex>(c)});
+    if (top_bits(c) >= bound && takes(c)) {
+      const auto column = static_cast<ColumnIndex>(c);
+      candidates.push_back({rank_key(value[c], column), column});
+    }
   k = std::min(k, candidates.size());
   const auto better = [](const Ranked& a, const Ranked& b) { return a.key > b.key; };
   std::nth_element(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k), candidates.end(), better);

@@ -22,10 +22,12 @@
 //       the call at L_min whatever the order (clamped sums of non-positive terms): the leading run takes
 //       such voxels before any measurement is applied, so a neighbour's update that lies wholly in front
 //       of the column's own return costs O(1) (tests: Integrate.FreeSpaceOfACall*);
-//    c) while a column is being updated its window holds odds e^L (one exp and one log per voxel and
-//       call instead of a log per voxel and measurement); the clamps map to L_min/L_max exactly and the
-//       round trip moves other voxels by < 5e-7 + 2e-7 |L| (once per column and call: a column is loaded
-//       once, receives all its measurements of the call, and is stored once).
+//    c) while a column is being updated, the bins the call's measurements reach hold odds e^L (one exp
+//       and one log per voxel and call instead of a log per voxel and measurement); the clamps map to
+//       L_min/L_max exactly and the round trip moves other voxels by < 5e-7 + 2e-7 |L| (once per column
+//       and call: a column is loaded once, receives all its measurements of the call, and is stored
+//       once). Bins no measurement of the call reaches stay in log-odds and are stored bit for bit
+//       (Integrate.BinsNoMeasurementOfACallReachesAreStoredBitForBit).
 #include "occ_improve/grid/grid.hpp"
 #include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
