@@ -25,6 +25,12 @@ GridGeometry paper_crop(int a0, int e0, int w, int h, int depth_bins = 512) {
   return reference::crop(GridGeometry(p.geometry), a0, e0, w, h);
 }
 
+// The preset's 16 x 16 columns around the image centre, at 1024 depth bins (keeps the dense reference small).
+GridGeometry centre_crop(SensorPreset p) {
+  p.geometry.depth_bins = 1024;
+  return reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+}
+
 TEST(Integrate, ExactModeMatchesReferenceOnSampleScene) {
   const GridGeometry g = paper_crop(150, 200, 48, 40);
   const SensorModel model(kinect_v1_paper().model);
@@ -78,9 +84,8 @@ TEST(Integrate, FreeSpaceOfACallStopsAtOccupiedVoxels) {
       }
     return points;
   };
-  for (SensorPreset p : {kinect_v1(k), kinect_v1_paper()}) {
-    p.geometry.depth_bins = 1024;
-    const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+  for (const SensorPreset& p : {kinect_v1(k), kinect_v1_paper()}) {
+    const GridGeometry g = centre_crop(p);
     const SensorModel model(p.model);
     const double behind_m = 1.0 + 4.5 * model.sigma_depth_at(1.0);
     const std::vector<std::vector<Eigen::Vector3f>> frames{frame(1.0, 1.0), frame(1.0, 1.0), frame(1.0, 1.0),
@@ -108,9 +113,8 @@ TEST(Integrate, FreeSpaceOfACallStopsAtOccupiedVoxels) {
 // re-measured frame after frame, and most of a small shot's work.)
 TEST(Integrate, BinsNoMeasurementOfACallReachesAreStoredBitForBit) {
   const PinholeIntrinsics k;
-  SensorPreset p = kinect_v1(k);
-  p.geometry.depth_bins = 1024;
-  const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+  const SensorPreset p = kinect_v1(k);
+  const GridGeometry g = centre_crop(p);
   const SensorModel model(p.model);
   // A surface at about `z` whose depth varies from pixel to pixel (varied voxel values).
   const auto patch = [&k](double z, double phase) {
@@ -153,9 +157,8 @@ TEST(Integrate, BinsNoMeasurementOfACallReachesAreStoredBitForBit) {
 // space must not be settled over them.
 TEST(Integrate, FreeSpaceOfACallStopsInFrontOfANearerReturnOfTheSameColumn) {
   const PinholeIntrinsics k;
-  for (SensorPreset p : {kinect_v1(k), kinect_v1_paper()}) {
-    p.geometry.depth_bins = 1024;
-    const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+  for (const SensorPreset& p : {kinect_v1(k), kinect_v1_paper()}) {
+    const GridGeometry g = centre_crop(p);
     const SensorModel model(p.model);
     std::vector<Eigen::Vector3f> points;
     for (int v = 234; v < 246; ++v)
@@ -184,9 +187,8 @@ TEST(Integrate, FreeSpaceOfACallStopsInFrontOfANearerReturnOfTheSameColumn) {
 // reference voxel by voxel.
 TEST(Integrate, FreeSpaceOfACallOverALeadingRunTheKernelDidNotMake) {
   const PinholeIntrinsics k;
-  SensorPreset p = kinect_v1(k);
-  p.geometry.depth_bins = 1024;
-  const GridGeometry g = reference::crop(GridGeometry(p.geometry), 312, 232, 16, 16);
+  const SensorPreset p = kinect_v1(k);
+  const GridGeometry g = centre_crop(p);
   const SensorModel model(p.model);
   GridOptions clamped;
   clamped.probability_min = 0.001;
