@@ -83,11 +83,10 @@ const ColumnData* ColumnGrid::find(ColumnIndex column) const {
   return tile ? &tile->columns[slot] : nullptr;
 }
 
-ColumnData& ColumnGrid::touch(ColumnIndex column) {
-  std::size_t slot;
-  auto& tile = tiles_[tile_of(column, slot)];
+ColumnGrid::Tile& ColumnGrid::allocated_tile(std::size_t tile_index) {
+  auto& tile = tiles_[tile_index];
   if (!tile) tile = std::make_unique<Tile>();
-  return tile->columns[slot];
+  return *tile;
 }
 
 float ColumnGrid::log_odds(ColumnIndex column, int depth_bin) const {
@@ -157,9 +156,8 @@ ColumnContents merge_leading_run(ColumnContents c) {
 
 void ColumnGrid::assign(const ColumnContents& contents) {
   std::size_t slot;
-  auto& tile = tiles_[tile_of(contents.column, slot)];
-  if (!tile) tile = std::make_unique<Tile>();
-  write_tile(*tile, &contents, &slot, 1, Growth::column_by_column);
+  const std::size_t tile_index = tile_of(contents.column, slot);
+  write_tile(allocated_tile(tile_index), &contents, &slot, 1, Growth::column_by_column);
 }
 
 void ColumnGrid::store_windows(const ColumnContents* contents, std::size_t count) {
@@ -171,9 +169,7 @@ void ColumnGrid::store_windows(const ColumnContents* contents, std::size_t count
     if (tile_of(contents[i].column, slots[i]) != tile_index)
       throw InvalidInput("store_windows: column " + std::to_string(contents[i].column) + " is not in the tile of column " +
                          std::to_string(contents[0].column));
-  auto& tile = tiles_[tile_index];
-  if (!tile) tile = std::make_unique<Tile>();
-  write_tile(*tile, contents, slots, count, Growth::insertion);
+  write_tile(allocated_tile(tile_index), contents, slots, count, Growth::insertion);
 }
 
 void ColumnGrid::write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,

@@ -41,5 +41,4 @@ struct TileRows {
 /// The tile rows' measurements (a counting sort, on `threads` threads over the conversion's chunks).
 TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows, int threads);
 
-
 }  // namespace occ_improve::detail

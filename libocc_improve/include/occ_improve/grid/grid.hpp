@@ -122,10 +122,7 @@ public:
 
   /// Column contents, or nullptr when the column was never touched.
   const ColumnData* find(ColumnIndex column) const;
-  /// Column contents, allocating its tile when needed. Not thread-safe across tiles that share a
-  /// tile row; the insertion splits work on tile-row boundaries for that reason.
-  ColumnData& touch(ColumnIndex column);
-  /// Writes one column (touching it), e.g. while a grid is built column by column: the tile's storage
+  /// Writes one column (allocating its tile when needed), e.g. while a grid is built column by column: the tile's storage
   /// grows by a quarter at a time (shrink_to_fit trims it). The values may be any column's window.
   void assign(const ColumnContents& contents);
   /// Writes several columns of ONE tile (the insertion's store, once per tile and call): a window that
@@ -161,6 +158,7 @@ private:
   // once a quarter is spare) or a column-by-column build's (a quarter).
   enum class Growth { insertion, column_by_column };
   std::size_t tile_of(ColumnIndex column, std::size_t& slot) const;
+  Tile& allocated_tile(std::size_t tile_index);  // the tile, allocated when needed
   void write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
                   Growth growth);
   static std::size_t window_bins(const Tile& tile);  // bins its windows hold
