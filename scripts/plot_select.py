@@ -32,6 +32,7 @@ STYLE = {
     "g_coarse_to_fine": ("(g) coarse-to-fine", "tab:red", "-"),
     "g_improvement": ("(g) by improvement only", "tab:purple", ":"),
     "g_residual": ("(g) by residual only", "tab:pink", ":"),
+    "g_triangles": ("(g) by triangles", "tab:olive", "-"),
 }
 # Runs scored with the linear predictor are named <strategy>_linear: same colour, dashed, thinner.
 STYLE.update({s + "_linear": (label + ", linear", colour, "--") for s, (label, colour, line) in list(STYLE.items())})

@@ -1,6 +1,7 @@
 // predict_depth: nearest sample in chessboard distance within a radius; the linear rule over the samples'
 // Delaunay triangulation, never across a depth discontinuity; the triangulation itself.
 #include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/planning/sample_triangulation.hpp"
 #include "occ_improve/mapper.hpp"
@@ -12,6 +13,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
 #include <string>
 
@@ -369,6 +371,162 @@ TEST(SampleTriangulation, NonPlanarityIsTheLeaveOneOutResidualInSigmas) {
   }
   const SampleTriangulation flat = triangulate_samples(sparse_plane(w, h, 11), w, h, kinect_noise());
   EXPECT_LT(*std::max_element(flat.residual_sigmas.begin(), flat.residual_sigmas.end()), 0.02);
+}
+
+
+// The samples of `all` in batches 0..k of `batches`: batch 0 holds the border samples (the hull stays the
+// image) and a share of the others; the rest go to batches by a hash of the pixel.
+std::vector<float> first_batches(const std::vector<float>& all, int w, int h, int batches, int k) {
+  std::vector<float> image(all.size(), 0.0f);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const auto c = static_cast<std::size_t>(y * w + x);
+      const bool border = x == 0 || y == 0 || x == w - 1 || y == h - 1;
+      const int batch = border ? 0 : static_cast<int>((c * 2654435761u >> 7) % static_cast<std::size_t>(batches));
+      if (batch <= k) image[c] = all[c];
+    }
+  return image;
+}
+
+std::size_t samples_in(const std::vector<float>& image) {
+  return static_cast<std::size_t>(std::count_if(image.begin(), image.end(), [](float z) { return z > 0.0f; }));
+}
+
+// A triangle as its vertices' columns, starting from the smallest (the same triangle in any vertex order).
+std::array<ColumnIndex, 3> column_triangle(const SampleTriangulation& s, std::size_t t) {
+  std::array<ColumnIndex, 3> c{};
+  for (int i = 0; i < 3; ++i) c[static_cast<std::size_t>(i)] = s.vertex_column[static_cast<std::size_t>(s.triangles[t][static_cast<std::size_t>(i)])];
+  std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+  return c;
+}
+
+void expect_identical(const SampleTriangulation& a, const SampleTriangulation& b) {
+  EXPECT_EQ(a.vertex_column, b.vertex_column);
+  EXPECT_EQ(a.vertex_depth_m, b.vertex_depth_m);
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.residual_sigmas, b.residual_sigmas);
+  EXPECT_EQ(a.interpolable, b.interpolable);
+}
+
+// Residuals and flags exactly as from scratch, in triangulate_samples' order of vertices and triangles.
+void expect_same_triangulation(const SampleTriangulation& s, const SampleTriangulation& scratch) {
+  ASSERT_EQ(s.vertex_count(), scratch.vertex_count());
+  std::map<ColumnIndex, std::pair<float, float>> vertex;  // column -> (depth, residual)
+  for (std::size_t v = 0; v < scratch.vertex_count(); ++v)
+    vertex[scratch.vertex_column[v]] = {scratch.vertex_depth_m[v], scratch.residual_sigmas[v]};
+  for (std::size_t v = 0; v < s.vertex_count(); ++v) {
+    const auto& [depth, residual] = vertex.at(s.vertex_column[v]);
+    EXPECT_EQ(s.vertex_depth_m[v], depth) << v;
+    EXPECT_EQ(s.residual_sigmas[v], residual) << v;
+  }
+  ASSERT_EQ(s.triangles.size(), scratch.triangles.size());
+  std::map<std::array<ColumnIndex, 3>, std::uint8_t> flag;
+  for (std::size_t t = 0; t < scratch.triangles.size(); ++t) flag[column_triangle(scratch, t)] = scratch.interpolable[t];
+  for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+    const auto it = flag.find(column_triangle(s, t));
+    ASSERT_NE(it, flag.end()) << t;
+    EXPECT_EQ(s.interpolable[t], it->second) << t;
+  }
+}
+
+TEST(SampleTriangulator, GrowsByInsertionAndStaysTheDelaunayTriangulationOfItsSamples) {
+  const int w = 64, h = 48, batches = 4;
+  for (std::uint32_t seed = 1; seed <= 6; ++seed) {
+    std::vector<float> all = sparse_plane(w, h, seed);
+    // One interior sample of the last batch is lifted 10 sigma off the plane: its neighbours' residuals
+    // must follow it when it arrives.
+    std::size_t bump = static_cast<std::size_t>(24 * w + 30);
+    while (!(all[bump] > 0.0f && first_batches(all, w, h, batches, batches - 2)[bump] == 0.0f)) ++bump;
+    all[bump] = static_cast<float>(all[bump] + 10.0 * kinect_noise().sigma_depth_at(all[bump]));
+    SampleTriangulator incremental;
+    for (int k = 0; k < batches; ++k) {
+      std::vector<float> image = first_batches(all, w, h, batches, k);
+      // Depths change from update to update (fused measurements): a plane in inverse depth stays one.
+      for (float& z : image) z = z > 0.0f ? static_cast<float>(z / (1.0 + 0.01 * k)) : 0.0f;
+      const SampleTriangulation& s = incremental.update(image, w, h, kinect_noise());
+      const SampleTriangulation scratch = triangulate_samples(image, w, h, kinect_noise());
+      EXPECT_EQ(incremental.started_over_last(), k == 0);
+      EXPECT_EQ(incremental.inserted_last(), k == 0 ? samples_in(image) : samples_in(image) - samples_in(first_batches(all, w, h, batches, k - 1)));
+      if (k == 0) {
+        expect_identical(s, scratch);
+        continue;
+      }
+      // The same samples at their current depths, triangulated: Delaunay, covering the hull, as many triangles.
+      ASSERT_EQ(s.vertex_count(), scratch.vertex_count());
+      for (std::size_t v = 0; v < s.vertex_count(); ++v) ASSERT_EQ(s.vertex_depth_m[v], image[s.vertex_column[v]]) << v;
+      ASSERT_EQ(s.triangles.size(), scratch.triangles.size()) << "seed " << seed << " batch " << k;
+      double area = 0;
+      for (std::size_t t = 0; t < s.triangles.size(); ++t) {
+        ASSERT_GT(s.area_px2(t), 0.0);
+        area += s.area_px2(t);
+        for (std::size_t v = 0; v < s.vertex_count(); ++v)
+          ASSERT_FALSE(strictly_in_circumcircle(s, s.triangles[t], s.x(static_cast<std::int32_t>(v)), s.y(static_cast<std::int32_t>(v))))
+              << "seed " << seed << " batch " << k << " triangle " << t << " holds vertex " << v;
+      }
+      EXPECT_DOUBLE_EQ(area, (w - 1) * (h - 1));
+      // The same triangles (co-circular samples are decided by a fixed rule, not by their order), and the
+      // same residuals and flags at the current depths.
+      expect_same_triangulation(s, scratch);
+      if (k == batches - 1) {
+        const auto v = static_cast<std::size_t>(std::find(s.vertex_column.begin(), s.vertex_column.end(), bump) - s.vertex_column.begin());
+        ASSERT_LT(v, s.vertex_count());
+        EXPECT_NEAR(s.residual_sigmas[v], 10.0 * (1.0 + 0.01 * k), 0.05);  // depths / (1 + 0.01 k), sigma ~ z^2
+      }
+    }
+  }
+}
+
+// A few new samples and a few changed depths: only their neighbourhoods' residuals are recomputed
+// (walking around each vertex), and they are those of the triangulation from scratch.
+TEST(SampleTriangulator, AFewNewSamplesAndDepthsRecomputeTheirNeighbourhoodAsFromScratch) {
+  const int w = 64, h = 48;
+  std::vector<float> all = sparse_plane(w, h, 5);
+  std::vector<std::size_t> interior;
+  for (int y = 2; y < h - 2; ++y)
+    for (int x = 2; x < w - 2; ++x)
+      if (all[static_cast<std::size_t>(y * w + x)] > 0.0f) interior.push_back(static_cast<std::size_t>(y * w + x));
+  ASSERT_GT(interior.size(), 60u);
+  std::vector<float> before = all;
+  for (std::size_t k = 0; k < 5; ++k) before[interior[k * 11]] = 0.0f;  // five samples arrive later
+  SampleTriangulator t;
+  t.update(before, w, h, kinect_noise());
+  for (std::size_t k = 0; k < 6; ++k) all[interior[k * 7 + 3]] *= 1.0f + 0.004f * static_cast<float>(k + 1);  // six move
+  const SampleTriangulation& s = t.update(all, w, h, kinect_noise());
+  EXPECT_FALSE(t.started_over_last());
+  EXPECT_EQ(t.inserted_last(), 5u);
+  expect_same_triangulation(s, triangulate_samples(all, w, h, kinect_noise()));
+  EXPECT_EQ(t.updates(), 2u);
+  EXPECT_EQ(t.start_overs(), 1u);
+}
+
+TEST(SampleTriangulator, StartsOverWhenASampleVanishesTheSizeChangesOrAnUpdateWasInterrupted) {
+  const int w = 64, h = 48;
+  const std::vector<float> all = sparse_plane(w, h, 3);
+  SampleTriangulator t;
+  t.update(first_batches(all, w, h, 2, 0), w, h, kinect_noise());
+  t.update(all, w, h, kinect_noise());
+  EXPECT_FALSE(t.started_over_last());
+  // A sample gone (its surface lost): from scratch, exactly triangulate_samples.
+  std::vector<float> fewer = all;
+  *std::find_if(fewer.begin() + w * 10, fewer.end(), [](float z) { return z > 0.0f; }) = 0.0f;
+  expect_identical(t.update(fewer, w, h, kinect_noise()), triangulate_samples(fewer, w, h, kinect_noise()));
+  EXPECT_TRUE(t.started_over_last());
+  // Bad input throws before anything changes.
+  std::vector<float> bad = all;
+  bad[5] = -1.0f;
+  EXPECT_THROW(t.update(bad, w, h, kinect_noise()), InvalidInput);
+  expect_identical(t.triangulation(), triangulate_samples(fewer, w, h, kinect_noise()));
+  // Another size.
+  const std::vector<float> small = sparse_plane(32, 24, 4);
+  expect_identical(t.update(small, 32, 24, kinect_noise()), triangulate_samples(small, 32, 24, kinect_noise()));
+  EXPECT_TRUE(t.started_over_last());
+  // An update stopped by a cancel leaves nothing half-inserted: the next one starts over.
+  request_stop(2);
+  EXPECT_THROW(t.update(all, w, h, kinect_noise()), Cancelled);
+  clear_stop_request();
+  EXPECT_TRUE(t.triangulation().triangles.empty());
+  expect_identical(t.update(all, w, h, kinect_noise()), triangulate_samples(all, w, h, kinect_noise()));
+  EXPECT_TRUE(t.started_over_last());
 }
 
 }  // namespace

@@ -414,6 +414,34 @@ TEST(CoarseToFine, TrianglesAskEveryRayOnceBeforeAnyTwice) {
   EXPECT_EQ(std::count(asked.begin(), asked.end(), 0), 0);
 }
 
+// A PlanMemory extends the measured samples' triangulation shot by shot (SampleTriangulator) instead of
+// triangulating them all again; the triangulation and its residuals do not depend on the order the samples
+// came in (sample_triangulation.cpp), so every plan of the closed loop is the plan without memory.
+TEST(CoarseToFine, TrianglesWithAPlanMemoryPlanAsWithout) {
+  VirtualSensor sensor = wall_and_box_sensor(true);
+  Mapper mapper(kinect_v1(small_camera()));
+  ReturnRecord record = ReturnRecord::for_grid(64, 48);
+  PlanMemory memory;
+  const int budget = 128;
+  std::size_t shots = 0, started_over = 0, inserting = 0;
+  for (; std::count(record.asked().begin(), record.asked().end(), 0) > budget; ++shots) {
+    const Shot with = plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles), memory);
+    const Shot without = plan_next_shot(mapper, record, coarse_to_fine(budget, RefineBy::triangles));
+    ASSERT_EQ(with.columns, without.columns) << "shot " << shots;
+    EXPECT_EQ(with.expected_gain, without.expected_gain);
+    if (memory.triangulation.started_over_last()) {
+      ++started_over;
+    } else {
+      EXPECT_LE(memory.triangulation.inserted_last(), static_cast<std::size_t>(budget)) << "shot " << shots;
+      inserting += memory.triangulation.inserted_last() > 0;
+    }
+    acquire(sensor, with, mapper, record);
+  }
+  EXPECT_GE(shots, 20u);
+  EXPECT_LE(started_over, 2u);  // the first plan with samples, at most one lost sample: the others insert
+  EXPECT_GE(inserting + 3, shots);
+}
+
 // Once every ray has been asked (and, with every ray returning, every coverage block holds samples), no
 // centroid can be taken: the plan skips the triangulation and its shot is the spread best rays by score.
 TEST(CoarseToFine, TrianglesOnceEveryRayIsAskedAreTheSpreadBestRays) {

@@ -122,13 +122,14 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   PlanRequest request = plan_request_from_flags(command_line);
   request.candidates = mapper.column_mask();  // rays outside -mask are never asked for
   std::vector<SimulatedShot> shots;
+  PlanMemory memory;  // the measured samples' triangulation, extended shot by shot
   std::string why = "reached -max_shots " + std::to_string(max_shots);
   ProgressLine progress(command_line, "shot");
   const auto start = SteadyClock::now();
   try {
     while (static_cast<int>(shots.size()) < max_shots) {
       throw_if_stop_requested();
-      const Shot shot = plan_next_shot(mapper, returns, request);
+      const Shot shot = plan_next_shot(mapper, returns, request, memory);
       if (shot.stop) {
         why = "the plan says stop: " + shot.reason;
         break;

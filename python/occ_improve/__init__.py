@@ -35,6 +35,7 @@ from ._core import (  # noqa: F401  (re-exported)
     MapperReport,
     PinholeIntrinsics,
     PinholePresetOptions,
+    PlanMemory,
     PlanRequest,
     ProgressCriteria,
     RefineBy,

@@ -166,18 +166,27 @@ void bind_shot(py::module_& m) {
 }
 
 void bind_planning(py::module_& m) {
-  m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request) {
+  py::class_<PlanMemory>(m, "PlanMemory",
+                         "What one plan passes to the next within one acquisition (one Mapper, one ReturnRecord): "
+                         "the measured samples' triangulation, extended shot by shot instead of rebuilt "
+                         "(refine_by triangles). Pass the same one to every plan_next_shot of the acquisition.")
+      .def(py::init<>());
+  m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request,
+                             PlanMemory* memory) {
     if (py::isinstance<PyMapper>(improvement))  // the Mapper's own maps and pyramid, read under its lock
-      return with_mapper(improvement.cast<PyMapper&>(),
-                         [&](Mapper& mapper) { return plan_next_shot(mapper, returns, request); });
+      return with_mapper(improvement.cast<PyMapper&>(), [&](Mapper& mapper) {
+        return memory ? plan_next_shot(mapper, returns, request, *memory) : plan_next_shot(mapper, returns, request);
+      });
+    if (memory) throw InvalidParameter("plan_next_shot: memory is kept for a Mapper's plans, not for an improvement array");
     const ImprovementMap map = improvement_from(improvement);
     py::gil_scoped_release release;
     return plan_next_shot(map, returns, request);
-  }, py::arg("improvement"), py::arg("returns"), py::arg("request") = PlanRequest{},
+  }, py::arg("improvement"), py::arg("returns"), py::arg("request") = PlanRequest{}, py::arg("memory") = nullptr,
         "The next shot over a Mapper (every shape) or an H x W float32 improvement array (every shape but "
         "coarse_to_fine, which reads the Mapper's multi-scale improvement). returns: "
-        "ReturnRecord.for_grid(width, height) when nothing was shot yet. Raises as PlanRequest.validate, and "
-        "InvalidInput when returns is of another grid.");
+        "ReturnRecord.for_grid(width, height) when nothing was shot yet. memory: a PlanMemory kept over one "
+        "acquisition's shots (Mapper only). Raises as PlanRequest.validate, and InvalidInput when returns is "
+        "of another grid.");
   m.def("shot_scores", [](const py::object& improvement, const ReturnRecord& returns, const ReturnModelParams& params) {
     const ImprovementMap map = improvement_from(improvement);
     std::vector<float> scores;

@@ -2,8 +2,10 @@
 // insert the returns of a 4096-ray shot (surface kept current), update the improvement incrementally,
 // plan the next shot (improvement x return model): /0 the rays shape (highest first), /1 coarse_to_fine
 // refined by blocks (strategy (g), PlanRequest's default refinement), /2 coarse_to_fine refined by the
-// samples' triangles (the tools' default, `-refine triangles`); under (g) the insertion also keeps the
-// multi-scale pyramid, timed with the improvement. The map starts from one full frame of the built-in
+// samples' triangles (the tools' default, `-refine triangles`), the triangulation kept from round to round
+// in a PlanMemory as the tools keep it, /3 the same with every plan triangulating from scratch (no
+// memory: the cost the memory saves); under (g) the insertion also keeps the multi-scale pyramid, timed
+// with the improvement. The map starts from one full frame of the built-in
 // sample; the virtual sensor looks at the noise-free sample.
 // Run: cmake --build <build> --target bench_select_round && <build>/tests/bench_select_round
 #include "occ_improve/mapper.hpp"
@@ -19,12 +21,12 @@ namespace {
 
 using namespace occ_improve;
 
-/// A 4096-ray shot of the benchmark's argument: 0 rays, 1 coarse_to_fine by blocks, 2 by triangles.
+/// A 4096-ray shot of the benchmark's argument: 0 rays, 1 coarse_to_fine by blocks, 2 and 3 by triangles.
 PlanRequest request_of(std::int64_t shape) {
   PlanRequest request;
   request.budget_rays = 4096;
   request.shape = shape == 0 ? ShotShape::rays : ShotShape::coarse_to_fine;
-  if (shape == 2) request.refine_by = RefineBy::triangles;
+  if (shape >= 2) request.refine_by = RefineBy::triangles;
   return request;
 }
 
@@ -45,7 +47,11 @@ void BM_SelectRound(benchmark::State& state) {
   VirtualSensor sensor(clean.depth_m, clean.intrinsics);
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
   const PlanRequest request = request_of(state.range(0));
-  Shot shot = plan_next_shot(mapper, returns, request);
+  PlanMemory memory;
+  const auto plan = [&] {
+    return state.range(0) == 3 ? plan_next_shot(mapper, returns, request) : plan_next_shot(mapper, returns, request, memory);
+  };
+  Shot shot = plan();
   double insert_ms = 0, improvement_ms = 0, plan_ms = 0;
   for (auto _ : state) {
     const std::vector<float> depth = sensor.shoot(shot.columns);  // the sensor's time is not the library's
@@ -55,7 +61,7 @@ void BM_SelectRound(benchmark::State& state) {
     const MapperReport report = mapper.insert(PointSpan::from(points), two_threads);
     returns.record_shot(shot.columns, got);
     const auto planned = std::chrono::steady_clock::now();
-    shot = plan_next_shot(mapper, returns, request);
+    shot = plan();
     plan_ms += ms_since(planned);
     insert_ms += 1e3 * report.insertion.seconds;
     improvement_ms += 1e3 * report.improvement_seconds;
@@ -65,8 +71,11 @@ void BM_SelectRound(benchmark::State& state) {
   state.counters["insert_ms"] = insert_ms / n;
   state.counters["improvement_ms"] = improvement_ms / n;
   state.counters["plan_ms"] = plan_ms / n;
+  // The memory's triangulation updates, and those that started over (a sample lost since the last plan).
+  state.counters["triangulations"] = static_cast<double>(memory.triangulation.updates());
+  state.counters["started_over"] = static_cast<double>(memory.triangulation.start_overs());
 }
-BENCHMARK(BM_SelectRound)->DenseRange(0, 2)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
+BENCHMARK(BM_SelectRound)->DenseRange(0, 3)->UseManualTime()->Unit(benchmark::kMillisecond)->Iterations(200);
 
 /// The plan alone, on the map after one frame and a record of a few shots: its share of the round.
 void BM_Plan(benchmark::State& state) {

@@ -195,6 +195,16 @@ def test_coarse_to_fine_covers_every_block_once_on_a_fresh_view(sample):
     assert np.array_equal(np.sort(block), np.arange(blocks_u * blocks_v))
 
 
+def acquire(mapper, record, shot, depth, intrinsics):
+    """The shot's rays measured on the sample's depth image: returns inserted, the record updated."""
+    v, u = np.divmod(shot.columns.astype(np.int64), mapper.width)
+    z = depth[v, u]
+    got = np.isfinite(z) & (z > 0)
+    rays = np.stack([(u - intrinsics.cx) / intrinsics.fx * z, (v - intrinsics.cy) / intrinsics.fy * z, z], axis=1)
+    mapper.insert(rays[got].astype(np.float32))
+    record.record_shot(shot.columns, got)
+
+
 def test_coarse_to_fine_by_triangles_asks_new_rays_between_samples(sample):
     """Refinement by the measured samples' triangles from Python: after a sparse first shot, the second
     shot is full, asks none of the first shot's rays, and is the same shot when planned again."""
@@ -206,15 +216,28 @@ def test_coarse_to_fine_by_triangles_asks_new_rays_between_samples(sample):
     for _ in range(2):
         shot = oi.plan_next_shot(mapper, record, request)
         assert len(shot) == 4000 and not seen & set(shot.columns.tolist())
-        v, u = np.divmod(shot.columns.astype(np.int64), mapper.width)
-        z = depth[v, u]
-        got = np.isfinite(z) & (z > 0)
-        rays = np.stack([(u - intrinsics.cx) / intrinsics.fx * z, (v - intrinsics.cy) / intrinsics.fy * z, z], axis=1)
-        mapper.insert(rays[got].astype(np.float32))
-        record.record_shot(shot.columns, got)
+        acquire(mapper, record, shot, depth, intrinsics)
         seen |= set(shot.columns.tolist())
     assert np.array_equal(oi.plan_next_shot(mapper, record, request).columns,
                           oi.plan_next_shot(mapper, record, request).columns)
+
+
+def test_plan_memory_plans_as_without_and_only_over_a_mapper(sample):
+    """A PlanMemory kept over the shots of one acquisition extends the samples' triangulation instead of
+    rebuilding it: every plan is the plan without memory (planner.hpp). An improvement array has no
+    samples to keep: memory is refused there."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    record = empty_record(mapper)
+    request = oi.PlanRequest(budget_rays=4000, shape=oi.ShotShape.coarse_to_fine, refine_by=oi.RefineBy.triangles)
+    memory = oi.PlanMemory()
+    for _ in range(3):
+        shot = oi.plan_next_shot(mapper, record, request, memory=memory)
+        assert len(shot) == 4000
+        assert np.array_equal(shot.columns, oi.plan_next_shot(mapper, record, request).columns)
+        acquire(mapper, record, shot, depth, intrinsics)
+    with pytest.raises(oi.InvalidParameter, match="memory"):
+        oi.plan_next_shot(mapper.improvement(), record, oi.PlanRequest(budget_rays=100), memory=memory)
 
 
 def test_coarse_to_fine_needs_the_mapper(pixel_mapper):

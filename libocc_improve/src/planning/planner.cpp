@@ -227,7 +227,7 @@ void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8
 std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
                                              const std::vector<float>& score, const std::vector<float>& probability,
                                              const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
-                                             double cap_sigmas, std::size_t left) {
+                                             double cap_sigmas, std::size_t left, SampleTriangulator& triangulator) {
   const std::vector<float> samples = measured_depth_image(surface, returns);
   // Neither a vertex (a sample) nor a ray asked before (measured, or silent): the centroid of a triangle
   // of a pixel or less rounds onto its own vertices.
@@ -237,10 +237,11 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
     if (samples[c] > 0.0f || (!returns.empty() && returns.asked()[c] > 0)) unasked[c] = 0;
     unasked_count += unasked[c];
   }
-  // No centroid can be taken once every ray has been asked: the triangulation (~150 ms for a whole
-  // frame's samples) is then skipped, and the shot is the fill below.
-  const SampleTriangulation triangulation =
-      unasked_count == 0 ? SampleTriangulation{} : triangulate_samples(samples, surface.width, surface.height, model);
+  // No centroid can be taken once every ray has been asked: the triangulation is then left as it is, and
+  // the shot is the fill below.
+  static const SampleTriangulation kNone;
+  const SampleTriangulation& triangulation =
+      unasked_count == 0 ? kNone : triangulator.update(samples, surface.width, surface.height, model);
   std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
   for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
     const ColumnIndex c = triangulation.centroid_column(t);
@@ -252,10 +253,18 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
     const double priority = triangulation.area_px2(t) * non_planarity * probability[c];
     if (priority > 0) ranked.push_back({priority, c});
   }
-  std::sort(ranked.begin(), ranked.end(),
-            [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+  // In the order of a full sort, sorted a stretch at a time (twice the rays still missing: two small
+  // triangles may share a centroid pixel): a dense map has ~2 triangles per sample, a shot takes a few
+  // thousand.
+  const auto before = [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; };
   std::vector<ColumnIndex> out;
-  for (std::size_t i = 0; i < ranked.size() && out.size() < left; ++i) {
+  for (std::size_t i = 0, sorted_end = 0; i < ranked.size() && out.size() < left; ++i) {
+    if (i == sorted_end) {
+      sorted_end = std::min(ranked.size(), i + 2 * (left - out.size()));
+      const auto first = ranked.begin() + static_cast<std::ptrdiff_t>(i), last = ranked.begin() + static_cast<std::ptrdiff_t>(sorted_end);
+      std::nth_element(first, last - 1, ranked.end(), before);  // linear; a heap's partial sort was not
+      std::sort(first, last, before);
+    }
     const ColumnIndex c = ranked[i].second;
     if (!unasked[c]) continue;  // two small triangles may share a centroid pixel
     unasked[c] = 0;
@@ -274,7 +283,8 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
 }
 
 Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
-                         const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request) {
+                         const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request,
+                         SampleTriangulator& triangulator) {
   const std::vector<float> probability = return_probability_map(returns, request.return_model);
   std::vector<float> score(probability.size());
   for (std::size_t c = 0; c < score.size(); ++c) score[c] = probability[c] * improvement.value[c];
@@ -306,7 +316,8 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
     for (ColumnIndex c : shot.columns) eligible[c] = 0;
     const std::vector<ColumnIndex> refined =
         request.refine_by == RefineBy::triangles
-            ? refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas, left)
+            ? refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas, left,
+                                  triangulator)
             : refine_by_blocks(pyramid, model, score, probability, eligible, shot.columns, returns, request, left);
     shot.columns.insert(shot.columns.end(), refined.begin(), refined.end());
   }
@@ -383,15 +394,19 @@ Shot plan_next_shot(const ImprovementMap& improvement, const ReturnRecord& retur
 }
 
 namespace {
-// coarse_to_fine with the surface its triangle refinement reads (nullptr: none given).
+// coarse_to_fine with the surface its triangle refinement reads (nullptr: none given) and the triangulation
+// it extends (nullptr: one for this call).
 Shot plan_coarse_to_fine(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
-                         const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request) {
+                         const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request,
+                         SampleTriangulator* memory = nullptr) {
   request.validate(improvement.width, improvement.height);
   require_shape("multi-scale pyramid", pyramid.shape(), "the improvement map", improvement.shape());
   require_shape("return record", returns.shape(), "the improvement map", improvement.shape());
   if (request.refine_by == RefineBy::triangles && !surface)
     throw InvalidParameter("refine_by triangles triangulates the map's surface: call plan_next_shot with the mapper");
-  return decide_stop(coarse_to_fine_shot(improvement, pyramid, surface, model, returns, request), request);
+  SampleTriangulator this_call;
+  return decide_stop(
+      coarse_to_fine_shot(improvement, pyramid, surface, model, returns, request, memory ? *memory : this_call), request);
 }
 }  // namespace
 
@@ -404,6 +419,12 @@ Shot plan_next_shot(const ImprovementMap& improvement, const ImprovementPyramid&
 Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const PlanRequest& request) {
   if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(mapper.improvement(), returns, request);
   return plan_coarse_to_fine(mapper.improvement(), mapper.pyramid(), &mapper.surface(), mapper.model(), returns, request);
+}
+
+Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const PlanRequest& request, PlanMemory& memory) {
+  if (request.shape != ShotShape::coarse_to_fine) return plan_next_shot(mapper.improvement(), returns, request);
+  return plan_coarse_to_fine(mapper.improvement(), mapper.pyramid(), &mapper.surface(), mapper.model(), returns, request,
+                             &memory.triangulation);
 }
 
 int decimation_step(int width, int height, int budget_rays) {

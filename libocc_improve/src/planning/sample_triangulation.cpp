@@ -9,7 +9,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <limits>
+#include <memory>
 #include <string>
+#include <utility>
 
 namespace occ_improve {
 
@@ -34,12 +36,30 @@ std::int64_t orient(const Point& a, const Point& b, const Point& c) {
   return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
 }
 
-/// > 0 when d lies strictly inside the circle through a, b, c (orient(a, b, c) > 0).
+/// The order of the symbolic perturbation below: a strict total order on distinct points.
+bool ranks_before(const Point& p, const Point& q) { return p.y != q.y ? p.y < q.y : p.x < q.x; }
+
+/// Whether d lies inside the circle through a, b, c (orient(a, b, c) > 0), with co-circular points
+/// decided by a symbolic perturbation (simulation of simplicity): each point's lift x^2 + y^2 is raised
+/// by an infinitesimal, larger for a point that ranks later. The determinant D of rows (x, y, x^2 + y^2, 1)
+/// for a, b, c, d is linear in each lift, with cofactors orient(b, c, d), -orient(a, c, d), orient(a, b, d)
+/// and -orient(a, b, c); where D = 0 its sign is that of the cofactor of the latest-ranked point among
+/// those whose cofactor is not 0 (d's never is). Every tie is thereby decided the same way whatever the
+/// insertion order, so the triangulation of a set of samples is one and the same (SampleTriangulator
+/// inserting shot after shot gives triangulate_samples' triangles) instead of depending on which of
+/// the co-circular samples came first (on a pixel grid, most ties are such squares and rectangles).
 template <class T>
 bool in_circle(const Point& a, const Point& b, const Point& c, const Point& d) {
   const T adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
   const T ad = adx * adx + ady * ady, bd = bdx * bdx + bdy * bdy, cd = cdx * cdx + cdy * cdy;
-  return adx * (bdy * cd - bd * cdy) - ady * (bdx * cd - bd * cdx) + ad * (bdx * cdy - bdy * cdx) > 0;
+  const T det = adx * (bdy * cd - bd * cdy) - ady * (bdx * cd - bd * cdx) + ad * (bdx * cdy - bdy * cdx);
+  if (det != 0) return det > 0;
+  std::array<std::pair<const Point*, std::int64_t>, 4> cofactor{
+      {{&a, orient(b, c, d)}, {&b, -orient(a, c, d)}, {&c, orient(a, b, d)}, {&d, -orient(a, b, c)}}};
+  std::sort(cofactor.begin(), cofactor.end(), [](const auto& p, const auto& q) { return ranks_before(*q.first, *p.first); });
+  for (const auto& [point, value] : cofactor)
+    if (value != 0) return value > 0;
+  return false;  // unreachable: orient(a, b, c) > 0
 }
 
 /// Position of (x, y) along a Hilbert curve over a side x side square (side a power of two).
@@ -63,26 +83,73 @@ struct Triangle {
   std::array<std::int32_t, 3> n;  // n[i]: neighbour across the edge opposite v[i], -1 outside the super triangle
 };
 
-/// Bowyer-Watson over integer points; the last three points are the super triangle's corners.
+/// Bowyer-Watson over integer points, which may be added at any time: points 0, 1, 2 are the super
+/// triangle's corners, point kCorners + v is vertex v.
 class Delaunay {
 public:
-  Delaunay(std::vector<Point> points, bool small) : points_(std::move(points)), small_(small) {
-    const auto s = static_cast<std::int32_t>(points_.size());
-    tris_.reserve(2 * points_.size());  // 2 n + 1 triangles in the end
-    mark_.reserve(2 * points_.size());
-    tris_.push_back({{s - 3, s - 2, s - 1}, {-1, -1, -1}});
+  static constexpr std::int32_t kCorners = 3;
+
+  /// track_touched: record the vertices whose neighbours change (take_touched), for an update that
+  /// remeasures only those.
+  Delaunay(bool small, bool track_touched) : small_(small), track_touched_(track_touched) {
+    points_ = {{-kSuper, -kSuper}, {kSuper, -kSuper}, {0, kSuper}};  // counter-clockwise
+    tris_.push_back({{0, 1, 2}, {-1, -1, -1}});
     mark_.push_back(0);
     first_of_.assign(points_.size(), -1);
   }
 
-  void insert(std::int32_t p) {
-    const std::int32_t start = locate(points_[static_cast<std::size_t>(p)]);
-    dig_cavity(start, p);
-    fill_cavity(p);
+  void reserve(std::size_t vertices) {
+    points_.reserve(vertices + kCorners);
+    first_of_.reserve(vertices + kCorners);
+    tris_.reserve(2 * vertices + 1);  // 2 n + 1 triangles in the end
+    mark_.reserve(2 * vertices + 1);
   }
 
-  const std::vector<Triangle>& triangles() const { return tris_; }
-  bool alive(std::size_t t) const { return mark_[t] != kDead; }
+  /// Adds the next vertex at p, not yet inserted.
+  void add(const Point& p) {
+    points_.push_back(p);
+    first_of_.push_back(-1);
+  }
+  void insert(std::int32_t vertex) {
+    const std::int32_t i = vertex + kCorners;
+    dig_cavity(locate(pt(i)), i);
+    fill_cavity(i);
+  }
+
+  /// Calls visit(j) for the other two vertices of every triangle without a super corner around `vertex`
+  /// (each neighbour twice for an interior vertex: the entries measure_non_planarity gathers).
+  template <class Visit>
+  void for_each_neighbour_entry(std::int32_t vertex, Visit&& visit) const {
+    const std::int32_t i = vertex + kCorners, first = first_of_[static_cast<std::size_t>(i)];
+    std::int32_t t = first;
+    do {  // around i: the super triangle encloses every vertex, so its star is a closed fan
+      const Triangle& T = tris_[static_cast<std::size_t>(t)];
+      const auto k = static_cast<std::size_t>((T.v[1] == i) + 2 * (T.v[2] == i));
+      const std::int32_t a = T.v[kNext[k]], b = T.v[kPrev[k]];
+      if (a >= kCorners && b >= kCorners) {
+        visit(a - kCorners);
+        visit(b - kCorners);
+      }
+      t = T.n[kNext[k]];  // across the edge (v[k + 2], i)
+    } while (t != first);
+  }
+
+  /// Vertices whose neighbours changed since the last call (the cavities' boundaries), with repeats.
+  std::vector<std::int32_t> take_touched() {
+    std::vector<std::int32_t> out;
+    out.swap(touched_);
+    return out;
+  }
+
+  /// The triangles without a super corner, as vertex indices.
+  void vertex_triangles(std::vector<std::array<std::int32_t, 3>>& out) const {
+    out.clear();
+    for (std::size_t t = 0; t < tris_.size(); ++t) {
+      const auto& v = tris_[t].v;
+      if (mark_[t] != kDead && v[0] >= kCorners && v[1] >= kCorners && v[2] >= kCorners)
+        out.push_back({v[0] - kCorners, v[1] - kCorners, v[2] - kCorners});
+    }
+  }
 
 private:
   static constexpr std::int64_t kDead = std::numeric_limits<std::int64_t>::min();  // never a stamp
@@ -94,8 +161,7 @@ private:
   bool inside_circle(std::int32_t t, const Point& d) const {
     const Triangle& T = tris_[static_cast<std::size_t>(t)];
     const Point &a = pt(T.v[0]), &b = pt(T.v[1]), &c = pt(T.v[2]);
-    const auto super = static_cast<std::int32_t>(points_.size()) - 3;
-    if (small_ && T.v[0] < super && T.v[1] < super && T.v[2] < super) return in_circle<std::int64_t>(a, b, c, d);
+    if (small_ && T.v[0] >= kCorners && T.v[1] >= kCorners && T.v[2] >= kCorners) return in_circle<std::int64_t>(a, b, c, d);
     return in_circle<Int128>(a, b, c, d);
   }
   const Point& pt(std::int32_t i) const { return points_[static_cast<std::size_t>(i)]; }
@@ -171,6 +237,7 @@ private:
         O.n[static_cast<std::size_t>(kNext[static_cast<std::size_t>(a_slot)])] = t;
       }
       first_of_[static_cast<std::size_t>(e.a)] = t;
+      if (track_touched_ && e.a >= kCorners) touched_.push_back(e.a - kCorners);
       new_.push_back(t);
     }
     // (p, a, b) meets (p, b, c) across the edge (b, p): opposite a in the first, opposite c in the second.
@@ -180,42 +247,43 @@ private:
       tris_[static_cast<std::size_t>(T.n[1])].n[2] = t;
     }
     for (std::size_t k = boundary_.size(); k < bad_.size(); ++k) mark_[static_cast<std::size_t>(bad_[k])] = kDead;
-    last_ = new_.front();
+    last_ = first_of_[static_cast<std::size_t>(p)] = new_.front();
   }
 
   std::vector<Point> points_;
-  bool small_;
+  bool small_, track_touched_;
   std::vector<Triangle> tris_;
   std::vector<std::int64_t> mark_;  // stamp of the cavity a triangle was last found in; kDead: unused slot
   std::vector<std::int32_t> first_of_;
-  std::vector<std::int32_t> bad_, stack_, new_;
+  std::vector<std::int32_t> bad_, stack_, new_, touched_;
   std::vector<Edge> boundary_;
   std::int64_t stamp_ = 0;
   std::int32_t last_ = 0;
 };
 
-/// Sample indices in Hilbert-curve order of their pixels: a least-significant-digit radix sort of their
-/// positions along the curve (distinct, one sample per pixel: the order std::sort gave on (position,
-/// index) keys), two passes over the samples at 640 x 480.
-std::vector<std::int32_t> insertion_order(const SampleTriangulation& s) {
+/// Vertices [first, vertex_count()) in Hilbert-curve order of their pixels: a least-significant-digit radix
+/// sort of their positions along the curve (distinct, one sample per pixel: the order std::sort gave on
+/// (position, index) keys), two passes over the vertices at 640 x 480.
+std::vector<std::int32_t> insertion_order(const SampleTriangulation& s, std::size_t first) {
   std::uint32_t side = 1;
   int position_bits = 0;
   while (side < static_cast<std::uint32_t>(std::max(s.width, s.height))) {
     side *= 2;
     position_bits += 2;
   }
-  std::vector<std::uint64_t> position(s.vertex_count());
-  std::vector<std::int32_t> order(s.vertex_count()), sorted(s.vertex_count());
-  for (std::size_t v = 0; v < position.size(); ++v) {
-    const auto i = static_cast<std::int32_t>(v);
-    position[v] = hilbert_index(side, static_cast<std::uint32_t>(s.x(i)), static_cast<std::uint32_t>(s.y(i)));
-    order[v] = i;
+  const std::size_t n = s.vertex_count() - first;
+  std::vector<std::uint64_t> position(n);
+  std::vector<std::int32_t> order(n), sorted(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto i = static_cast<std::int32_t>(first + k);
+    position[k] = hilbert_index(side, static_cast<std::uint32_t>(s.x(i)), static_cast<std::uint32_t>(s.y(i)));
+    order[k] = i;
   }
   constexpr int kDigitBits = 11;
   for (int shift = 0; shift < position_bits; shift += kDigitBits) {
     std::array<std::size_t, (1u << kDigitBits) + 1> start{};  // start[d + 1]: how many have digit d, then the sum
     const auto digit = [&](std::int32_t v) {
-      return static_cast<std::size_t>((position[static_cast<std::size_t>(v)] >> shift) & ((1u << kDigitBits) - 1));
+      return static_cast<std::size_t>((position[static_cast<std::size_t>(v) - first] >> shift) & ((1u << kDigitBits) - 1));
     };
     for (const std::int32_t v : order) ++start[digit(v) + 1];
     for (std::size_t d = 1; d < start.size(); ++d) start[d] += start[d - 1];
@@ -223,27 +291,6 @@ std::vector<std::int32_t> insertion_order(const SampleTriangulation& s) {
     order.swap(sorted);
   }
   return order;
-}
-
-void triangulate(SampleTriangulation& s) {
-  std::vector<Point> points;
-  points.reserve(s.vertex_count() + 3);
-  for (std::size_t v = 0; v < s.vertex_count(); ++v)
-    points.push_back({s.x(static_cast<std::int32_t>(v)), s.y(static_cast<std::int32_t>(v))});
-  points.push_back({-kSuper, -kSuper});
-  points.push_back({kSuper, -kSuper});
-  points.push_back({0, kSuper});
-  Delaunay d(std::move(points), s.width < kSmallSide && s.height < kSmallSide);
-  const std::vector<std::int32_t> order = insertion_order(s);
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    poll_stop(k);
-    d.insert(order[k]);
-  }
-  const auto n = static_cast<std::int32_t>(s.vertex_count());
-  for (std::size_t t = 0; t < d.triangles().size(); ++t) {
-    const auto& v = d.triangles()[t].v;
-    if (d.alive(t) && v[0] < n && v[1] < n && v[2] < n) s.triangles.push_back(v);
-  }
 }
 
 int chessboard(const SampleTriangulation& s, std::int32_t a, std::int32_t b) {
@@ -272,9 +319,16 @@ void flag_interpolable(SampleTriangulation& s, const SensorModel& model, const T
 /// vertex, so that a is the fit at the vertex) through a vertex's Delaunay neighbours, gathered triangle by
 /// triangle: a neighbour counts once per triangle the two share, i.e. twice for every neighbour of an
 /// interior vertex (the same fit as once each) and once for the two hull neighbours of a hull vertex.
+/// The sums are exact integers (w in fixed point, kInverseDepthUnit: 2^-30 per metre, a depth step of
+/// ~1e-9 z, at most ~2e-6 sigma), so they do not depend on the order of the triangles: a vertex's
+/// residual is a function of the triangulation alone, whichever way it was built (SampleTriangulator).
+/// Bounds: offsets below 2^20 px and fewer than 2^23 entries per vertex (2^22 samples) keep the m sums
+/// below 2^63; w at most kMaxInverseDepth (depths below 1 um count as 1 um) keeps the r sums below 2^93.
+constexpr double kInverseDepthUnit = 1.0 / (1 << 30), kMaxInverseDepth = 1 << 20;
 struct PlaneSums {
-  double m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0, r0 = 0, r1 = 0, r2 = 0;
-  void add(double dx, double dy, double w) {
+  std::int64_t m00 = 0, m01 = 0, m02 = 0, m11 = 0, m12 = 0, m22 = 0;
+  Int128 r0 = 0, r1 = 0, r2 = 0;
+  void add(std::int64_t dx, std::int64_t dy, std::int64_t w) {
     m00 += 1;
     m01 += dx;
     m02 += dy;
@@ -282,16 +336,18 @@ struct PlaneSums {
     m12 += dx * dy;
     m22 += dy * dy;
     r0 += w;
-    r1 += dx * w;
-    r2 += dy * w;
+    r1 += Int128{dx} * w;
+    r2 += Int128{dy} * w;
   }
-  /// The fit at the vertex (Cramer's rule for a); false when the neighbours are collinear (or fewer than
-  /// 3): the sums of integer offsets are exact, so the determinant is then exactly 0 and otherwise >= 1.
+  /// The fit at the vertex in 1/m (Cramer's rule for a); false when the neighbours are collinear (or fewer
+  /// than 3): the sums of integer offsets are exact, so the determinant is then exactly 0 and otherwise >= 1.
   bool intercept(double& a) const {
-    const double c0 = m11 * m22 - m12 * m12, c1 = m01 * m22 - m12 * m02, c2 = m01 * m12 - m11 * m02;
-    const double det = m00 * c0 - m01 * c1 + m02 * c2;
+    const auto d = [](auto v) { return static_cast<double>(v); };
+    const double c0 = d(m11) * d(m22) - d(m12) * d(m12), c1 = d(m01) * d(m22) - d(m12) * d(m02),
+                 c2 = d(m01) * d(m12) - d(m11) * d(m02);
+    const double det = d(m00) * c0 - d(m01) * c1 + d(m02) * c2;
     if (det < 0.5) return false;
-    a = (r0 * c0 - m01 * (r1 * m22 - m12 * r2) + m02 * (r1 * m12 - m11 * r2)) / det;
+    a = kInverseDepthUnit * (d(r0) * c0 - d(m01) * (d(r1) * d(m22) - d(m12) * d(r2)) + d(m02) * (d(r1) * d(m12) - d(m11) * d(r2))) / det;
     return true;
   }
 };
@@ -304,10 +360,15 @@ float plane_residual_sigmas(const PlaneSums& sums, double z, const SensorModel& 
   return static_cast<float>(std::abs(1.0 / z - w_fit) * z * z / model.sigma_depth_at(z));  // plane behind the camera
 }
 
+std::int64_t fixed_inverse_depth(float z) {
+  return std::llround(std::min(1.0 / z, kMaxInverseDepth) / kInverseDepthUnit);
+}
+
+// Every vertex's residual, gathering the entries triangle by triangle.
 void measure_non_planarity(SampleTriangulation& s, const SensorModel& model) {
   std::vector<PlaneSums> sums(s.vertex_count());
-  std::vector<double> inverse(s.vertex_count());
-  for (std::size_t v = 0; v < inverse.size(); ++v) inverse[v] = 1.0 / s.vertex_depth_m[v];
+  std::vector<std::int64_t> inverse(s.vertex_count());
+  for (std::size_t v = 0; v < inverse.size(); ++v) inverse[v] = fixed_inverse_depth(s.vertex_depth_m[v]);
   for (const auto& t : s.triangles)
     for (int i = 0; i < 3; ++i) {
       const std::int32_t v = t[static_cast<std::size_t>(i)];
@@ -319,6 +380,20 @@ void measure_non_planarity(SampleTriangulation& s, const SensorModel& model) {
   s.residual_sigmas.assign(s.vertex_count(), 0.0f);
   for (std::size_t v = 0; v < s.vertex_count(); ++v)
     s.residual_sigmas[v] = plane_residual_sigmas(sums[v], s.vertex_depth_m[v], model);
+}
+
+// The residuals of `dirty` vertices only, gathering each one's entries around it in the triangulation: the
+// same exact sums as measure_non_planarity's, so the same residuals.
+void remeasure_non_planarity(SampleTriangulation& s, const Delaunay& d, const std::vector<std::int32_t>& dirty,
+                             const SensorModel& model) {
+  s.residual_sigmas.resize(s.vertex_count(), 0.0f);
+  for (const std::int32_t v : dirty) {
+    PlaneSums sums;
+    d.for_each_neighbour_entry(v, [&](std::int32_t j) {
+      sums.add(s.x(j) - s.x(v), s.y(j) - s.y(v), fixed_inverse_depth(s.vertex_depth_m[static_cast<std::size_t>(j)]));
+    });
+    s.residual_sigmas[static_cast<std::size_t>(v)] = plane_residual_sigmas(sums, s.vertex_depth_m[static_cast<std::size_t>(v)], model);
+  }
 }
 
 }  // namespace
@@ -370,34 +445,153 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
   return detail::triangulate_checked_samples(sparse_depth_m, width, height, model, params);
 }
 
+struct SampleTriangulator::State {
+  SampleTriangulation out;
+  Delaunay delaunay{true, false};
+  std::vector<std::uint8_t> has_vertex;  ///< per column, kept only by SampleTriangulator::update
+  std::vector<std::int32_t> depth_changed;  ///< vertices whose depth the last refresh changed
+  std::vector<std::uint8_t> dirty_mark;     ///< per vertex, all 0 between updates
+  std::size_t inserted_last = 0;
+  bool started_over_last = false;
+};
+
+namespace {
+
+// Whether the state can take the image's samples by insertion: the same size, and every vertex's pixel
+// still a sample (its depth refreshed).
+bool refresh_vertices(SampleTriangulator::State& st, const std::vector<float>& image, int width, int height) {
+  SampleTriangulation& s = st.out;
+  if (st.has_vertex.empty() || s.width != width || s.height != height) return false;
+  st.depth_changed.clear();
+  for (std::size_t v = 0; v < s.vertex_count(); ++v) {
+    const float z = image[s.vertex_column[v]];
+    if (!(z > 0.0f)) return false;  // NaN too
+    if (z != s.vertex_depth_m[v]) st.depth_changed.push_back(static_cast<std::int32_t>(v));
+    s.vertex_depth_m[v] = z;
+  }
+  return true;
+}
+
+// The vertices whose residual may have changed since the last update: the new ones, those whose neighbours
+// changed (the insertions' cavities), those whose depth changed and their neighbours; each once.
+std::vector<std::int32_t> dirty_vertices(SampleTriangulator::State& st, std::size_t first_new) {
+  const SampleTriangulation& s = st.out;
+  st.dirty_mark.resize(s.vertex_count(), 0);
+  std::vector<std::int32_t> dirty;
+  const auto mark = [&](std::int32_t v) {
+    if (!st.dirty_mark[static_cast<std::size_t>(v)]) {
+      st.dirty_mark[static_cast<std::size_t>(v)] = 1;
+      dirty.push_back(v);
+    }
+  };
+  for (std::size_t v = first_new; v < s.vertex_count(); ++v) mark(static_cast<std::int32_t>(v));
+  for (const std::int32_t v : st.delaunay.take_touched()) mark(v);
+  for (const std::int32_t v : st.depth_changed) {
+    mark(v);
+    st.delaunay.for_each_neighbour_entry(v, mark);
+  }
+  for (const std::int32_t v : dirty) st.dirty_mark[static_cast<std::size_t>(v)] = 0;
+  return dirty;
+}
+
+// Brings `st` to the image's samples (checked by the caller): the new ones are appended in column order and
+// inserted in Hilbert order; with `keep`, has_vertex is kept for the next call.
+void update_state(SampleTriangulator::State& st, const std::vector<float>& image, int width, int height,
+                  const SensorModel& model, const TriangulationParams& params, bool keep) {
+  st.started_over_last = !refresh_vertices(st, image, width, height);
+  if (st.started_over_last) {
+    st.out = SampleTriangulation{};
+    st.out.width = width;
+    st.out.height = height;
+    st.delaunay = Delaunay(width < kSmallSide && height < kSmallSide, keep);
+    st.has_vertex.assign(keep ? image.size() : 0, 0);
+  }
+  SampleTriangulation& s = st.out;
+  std::uint8_t* known = st.has_vertex.empty() ? nullptr : st.has_vertex.data();  // kept: has_vertex
+  // Samples without a vertex, counted, then appended in column order (two instantiations: with and
+  // without has_vertex, so that the counting loop vectorises). NaN fails `z > 0`.
+  const auto append_new = [&](auto is_new) {
+    std::size_t added = 0;
+    for (std::size_t c = 0; c < image.size(); ++c) added += is_new(c);
+    if (s.vertex_count() + added >= (std::size_t{1} << 22))
+      throw InvalidInput("triangulate_samples: " + std::to_string(s.vertex_count() + added) + " samples (at most 2^22)");
+    const std::size_t total = s.vertex_count() + added;
+    s.vertex_column.reserve(total);
+    s.vertex_x.reserve(total);
+    s.vertex_y.reserve(total);
+    s.vertex_depth_m.reserve(total);
+    st.delaunay.reserve(total);
+    std::size_t c = 0;
+    for (std::int32_t y = 0; y < height; ++y)
+      for (std::int32_t x = 0; x < width; ++x, ++c)
+        if (is_new(c)) {
+          s.vertex_column.push_back(static_cast<ColumnIndex>(c));
+          s.vertex_x.push_back(x);
+          s.vertex_y.push_back(y);
+          s.vertex_depth_m.push_back(image[c]);
+          st.delaunay.add({x, y});
+        }
+    return added;
+  };
+  const std::size_t first_new = s.vertex_count();
+  const std::size_t added = known ? append_new([&](std::size_t c) { return (image[c] > 0.0f) & (known[c] == 0); })
+                                  : append_new([&](std::size_t c) { return image[c] > 0.0f; });
+  if (known)
+    for (std::size_t v = first_new; v < s.vertex_count(); ++v) known[s.vertex_column[v]] = 1;
+  const std::vector<std::int32_t> order = insertion_order(s, first_new);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    poll_stop(k);
+    st.delaunay.insert(order[k]);
+  }
+  st.inserted_last = added;
+  st.delaunay.vertex_triangles(s.triangles);
+  // Residuals: all of them after a start-over or where most changed (a pass over the triangles is then
+  // cheaper than a walk around each vertex), else those of the dirty vertices.
+  const std::vector<std::int32_t> dirty = st.started_over_last ? st.delaunay.take_touched() : dirty_vertices(st, first_new);
+  if (st.started_over_last || 2 * dirty.size() > s.vertex_count())
+    measure_non_planarity(s, model);
+  else
+    remeasure_non_planarity(s, st.delaunay, dirty, model);
+  flag_interpolable(s, model, params);
+}
+
+}  // namespace
+
 SampleTriangulation detail::triangulate_checked_samples(const std::vector<float>& sparse_depth_m, int width, int height,
                                                         const SensorModel& model, const TriangulationParams& params) {
-  SampleTriangulation s;
-  s.width = width;
-  s.height = height;
-  const auto is_sample = [&](std::size_t c) { return sparse_depth_m[c] > 0.0f; };  // NaN fails the test
-  std::size_t samples = 0;
-  for (std::size_t c = 0; c < sparse_depth_m.size(); ++c) samples += is_sample(c);
-  if (samples >= (std::size_t{1} << 22))
-    throw InvalidInput("triangulate_samples: " + std::to_string(samples) + " samples (at most 2^22)");
-  s.vertex_column.reserve(samples);
-  s.vertex_x.reserve(samples);
-  s.vertex_y.reserve(samples);
-  s.vertex_depth_m.reserve(samples);
-  std::size_t c = 0;
-  for (std::int32_t y = 0; y < height; ++y)
-    for (std::int32_t x = 0; x < width; ++x, ++c)
-      if (is_sample(c)) {
-        s.vertex_column.push_back(static_cast<ColumnIndex>(c));
-        s.vertex_x.push_back(x);
-        s.vertex_y.push_back(y);
-        s.vertex_depth_m.push_back(sparse_depth_m[c]);
-      }
-  triangulate(s);
-  measure_non_planarity(s, model);
-  flag_interpolable(s, model, params);
-  return s;
+  SampleTriangulator::State st;
+  update_state(st, sparse_depth_m, width, height, model, params, false);
+  return std::move(st.out);
 }
+
+SampleTriangulator::SampleTriangulator() = default;
+SampleTriangulator::~SampleTriangulator() = default;
+SampleTriangulator::SampleTriangulator(SampleTriangulator&&) noexcept = default;
+SampleTriangulator& SampleTriangulator::operator=(SampleTriangulator&&) noexcept = default;
+
+const SampleTriangulation& SampleTriangulator::update(const std::vector<float>& sparse_depth_m, int width, int height,
+                                                      const SensorModel& model, const TriangulationParams& params) {
+  params.validate();
+  check_sparse_depth_image(sparse_depth_m, width, height);
+  if (!state_) state_ = std::make_unique<State>();
+  try {
+    update_state(*state_, sparse_depth_m, width, height, model, params, true);
+  } catch (...) {
+    state_.reset();  // interrupted (cancel, too many samples): the next update starts over
+    throw;
+  }
+  ++updates_;
+  start_overs_ += state_->started_over_last;
+  return state_->out;
+}
+
+const SampleTriangulation& SampleTriangulator::triangulation() const {
+  static const SampleTriangulation kNone;
+  return state_ ? state_->out : kNone;
+}
+
+std::size_t SampleTriangulator::inserted_last() const { return state_ ? state_->inserted_last : 0; }
+bool SampleTriangulator::started_over_last() const { return state_ && state_->started_over_last; }
 
 std::vector<std::size_t> top_scored_triangles(const SampleTriangulation& triangulation, std::size_t count) {
   std::vector<std::pair<double, std::size_t>> scored;

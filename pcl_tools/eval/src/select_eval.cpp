@@ -216,7 +216,7 @@ private:
         // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
         request.local_model = rule_ == DepthPredictionRule::linear ? LocalModel::plane : LocalModel::constant;
       }
-      shot = plan_next_shot(mapper_, returns_, request);
+      shot = plan_next_shot(mapper_, returns_, request, plan_memory_);
     }
     return shot;
   }
@@ -245,6 +245,7 @@ private:
   Mapper mapper_;
   VirtualSensor sensor_;
   ReturnRecord returns_;
+  PlanMemory plan_memory_;
   PixelColumns map_;
   std::vector<ColumnIndex> observable_columns_;
   std::vector<ColumnIndex> order_;

@@ -6,10 +6,13 @@
 // Choice (docs/SELECTIVE.md "Predicted depth"): the core takes no geometry library (Eigen and std only), so
 // the triangulation is written here: Bowyer-Watson insertion of the sample pixels in Hilbert-curve order
 // (each insertion starts its walk next to the previous one), inside a super triangle whose corners lie
-// 2^20 px away. Sample pixels have integer coordinates, so the orientation and in-circle tests are exact
+// 2^22 px away. Sample pixels have integer coordinates, so the orientation and in-circle tests are exact
 // integer arithmetic (64-bit, 128-bit where a super corner takes part): no tolerance, no failure on
-// collinear or co-circular pixels (a grid is full of both). Triangles with a super corner are dropped at
-// the end; because the corners are finite, a few hull triangles may differ from the exact Delaunay
+// collinear or co-circular pixels (a grid is full of both). Four co-circular pixels are decided by a
+// symbolic perturbation of the points' lifts (simulation of simplicity, ordered by (y, x)), so the
+// triangulation of a set of samples does not depend on their insertion order: SampleTriangulator, which
+// inserts a planner's samples shot by shot, builds the same triangles. Triangles with a super corner are
+// dropped at the end; because the corners are finite, a few hull triangles may differ from the exact Delaunay
 // triangulation of the samples alone (near-collinear hull chains), which interpolation does not notice.
 // 640 x 480 at 5 % samples (12 524 of capture0001): 5.6 ms CPU on one thread of the build machine, median of
 // 5 runs interleaved with the previous version's 6.1 ms at load ~2 (bench_depth_prediction
@@ -22,12 +25,15 @@
 // the sample's distance from its neighbours' plane in units of the sensor's noise there. Where the fitted
 // plane passes behind the camera (w_fit <= 0) it is |1/z - w_fit| / (sigma(z) / z^2), the same to first
 // order and finite. A sample with fewer than 3 neighbours or collinear ones has 0 (nothing to measure).
+// The plane's sums are exact (1/z in fixed point, 2^-30 per metre), so a residual depends on the
+// triangulation alone, not on the order its triangles are listed in.
 #include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace occ_improve {
@@ -46,7 +52,9 @@ struct TriangulationParams {
 
 struct SampleTriangulation {
   int width = 0, height = 0;
-  std::vector<ColumnIndex> vertex_column;  ///< the sample's column (y x width + x), ascending column order
+  /// The sample's column (y x width + x): ascending from triangulate_samples; from SampleTriangulator,
+  /// each update's new samples in ascending order after the earlier ones.
+  std::vector<ColumnIndex> vertex_column;
   std::vector<std::int32_t> vertex_x, vertex_y;  ///< its pixel (column % width, column / width)
   std::vector<float> vertex_depth_m;             ///< its depth
   std::vector<float> residual_sigmas;      ///< leave-one-out non-planarity (header comment), >= 0
@@ -80,6 +88,42 @@ void check_sparse_depth_image(const std::vector<float>& sparse_depth_m, int widt
 /// samples (or all collinear) give no triangle. Polls cancel.hpp.
 SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m, int width, int height,
                                         const SensorModel& model, const TriangulationParams& params = {});
+
+/// The triangulation of samples that accumulate from call to call (a planner's measured rays, shot after
+/// shot). Bowyer-Watson is incremental: update() inserts only the samples that are new since the previous
+/// call into the triangulation it keeps, instead of triangulating every sample again (docs/SELECTIVE.md,
+/// "Speed"), then refreshes the depths and recomputes the residuals and flags of all vertices and
+/// triangles (a sample's depth changes as measurements fuse). It starts over from scratch on the first
+/// call, when the image's size changes, when a vertex's pixel holds no sample any more, and after an
+/// update that threw (a cancel, too many samples).
+/// Every update gives triangulate_samples' triangles for the same samples, with the same residuals and
+/// flags (co-circular samples are decided by a fixed rule, not by the order they came in: header
+/// comment); only the vertices' numbering differs: they keep their index from update to update.
+class SampleTriangulator {
+public:
+  SampleTriangulator();
+  ~SampleTriangulator();
+  SampleTriangulator(SampleTriangulator&&) noexcept;
+  SampleTriangulator& operator=(SampleTriangulator&&) noexcept;
+
+  /// Throws as triangulate_samples.
+  const SampleTriangulation& update(const std::vector<float>& sparse_depth_m, int width, int height,
+                                    const SensorModel& model, const TriangulationParams& params = {});
+  /// The last update's result (empty before the first).
+  const SampleTriangulation& triangulation() const;
+  /// Samples the last update inserted, and whether it started over.
+  std::size_t inserted_last() const;
+  bool started_over_last() const;
+  /// Updates that completed since construction, and how many of them started over.
+  std::size_t updates() const { return updates_; }
+  std::size_t start_overs() const { return start_overs_; }
+
+  struct State;  ///< opaque
+
+private:
+  std::unique_ptr<State> state_;
+  std::size_t updates_ = 0, start_overs_ = 0;
+};
 
 /// Indices of the `count` triangles of highest score(), highest first (ties: lower index first); fewer
 /// when there are fewer triangles with a positive score.
