@@ -6,6 +6,7 @@
 #include "occ_improve/planning/sample_triangulation.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 
 #include <gtest/gtest.h>
 
@@ -495,7 +496,11 @@ TEST(SampleTriangulator, AFewNewSamplesAndDepthsRecomputeTheirNeighbourhoodAsFro
   EXPECT_FALSE(t.started_over_last());
   EXPECT_EQ(t.inserted_last(), 5u);
   expect_same_triangulation(s, triangulate_samples(all, w, h, kinect_noise()));
-  EXPECT_EQ(t.updates(), 2u);
+  // Another model's depth noise: every residual is in its sigmas.
+  SensorModelParams other = kinect_noise().params();
+  other.sigma_depth_per_m2 *= 2.0;
+  expect_same_triangulation(t.update(all, w, h, SensorModel(other)), triangulate_samples(all, w, h, SensorModel(other)));
+  EXPECT_EQ(t.updates(), 3u);
   EXPECT_EQ(t.start_overs(), 1u);
 }
 

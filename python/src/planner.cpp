@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include <cstring>
+#include <mutex>
 
 namespace occ_improve::python {
 namespace {
@@ -165,17 +166,26 @@ void bind_shot(py::module_& m) {
   def_fields_repr(s, {"expected_gain", "ranked_rays", "stop", "reason"});
 }
 
+// A PlanMemory with the lock that plan_next_shot holds while the plan (GIL released) updates it.
+struct PyPlanMemory {
+  PlanMemory memory;
+  std::mutex mutex;
+};
+
 void bind_planning(py::module_& m) {
-  py::class_<PlanMemory>(m, "PlanMemory",
-                         "What one plan passes to the next within one acquisition (one Mapper, one ReturnRecord): "
-                         "the measured samples' triangulation, extended shot by shot instead of rebuilt "
-                         "(refine_by triangles). Pass the same one to every plan_next_shot of the acquisition.")
+  py::class_<PyPlanMemory>(m, "PlanMemory",
+                           "What one plan passes to the next within one acquisition (one Mapper, one ReturnRecord): "
+                           "the measured samples' triangulation, extended shot by shot instead of rebuilt "
+                           "(refine_by triangles). Pass the same one to every plan_next_shot of the acquisition.")
       .def(py::init<>());
   m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request,
-                             PlanMemory* memory) {
+                             PyPlanMemory* memory) {
     if (py::isinstance<PyMapper>(improvement))  // the Mapper's own maps and pyramid, read under its lock
       return with_mapper(improvement.cast<PyMapper&>(), [&](Mapper& mapper) {
-        return memory ? plan_next_shot(mapper, returns, request, *memory) : plan_next_shot(mapper, returns, request);
+        if (!memory) return plan_next_shot(mapper, returns, request);
+        // Its own lock too, taken after the mapper's: two threads planning on two Mappers may share it.
+        std::lock_guard<std::mutex> lock(memory->mutex);
+        return plan_next_shot(mapper, returns, request, memory->memory);
       });
     if (memory) throw InvalidParameter("plan_next_shot: memory is kept for a Mapper's plans, not for an improvement array");
     const ImprovementMap map = improvement_from(improvement);

@@ -227,7 +227,7 @@ void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8
 std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
                                              const std::vector<float>& score, const std::vector<float>& probability,
                                              const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
-                                             double cap_sigmas, std::size_t left, SampleTriangulator& triangulator) {
+                                             double cap_sigmas, std::size_t left, SampleTriangulator* memory) {
   const std::vector<float> samples = measured_depth_image(surface, returns);
   // Neither a vertex (a sample) nor a ray asked before (measured, or silent): the centroid of a triangle
   // of a pixel or less rounds onto its own vertices.
@@ -238,10 +238,12 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
     unasked_count += unasked[c];
   }
   // No centroid can be taken once every ray has been asked: the triangulation is then left as it is, and
-  // the shot is the fill below.
-  static const SampleTriangulation kNone;
+  // the shot is the fill below. Without a memory, the samples are triangulated for this plan alone.
+  SampleTriangulation this_plan;
   const SampleTriangulation& triangulation =
-      unasked_count == 0 ? kNone : triangulator.update(samples, surface.width, surface.height, model);
+      unasked_count == 0 ? this_plan
+      : memory           ? memory->update(samples, surface.width, surface.height, model)
+                         : (this_plan = triangulate_samples(samples, surface.width, surface.height, model));
   std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
   for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
     const ColumnIndex c = triangulation.centroid_column(t);
@@ -284,7 +286,7 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
 
 Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
                          const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request,
-                         SampleTriangulator& triangulator) {
+                         SampleTriangulator* memory) {
   const std::vector<float> probability = return_probability_map(returns, request.return_model);
   std::vector<float> score(probability.size());
   for (std::size_t c = 0; c < score.size(); ++c) score[c] = probability[c] * improvement.value[c];
@@ -317,7 +319,7 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
     const std::vector<ColumnIndex> refined =
         request.refine_by == RefineBy::triangles
             ? refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas, left,
-                                  triangulator)
+                                  memory)
             : refine_by_blocks(pyramid, model, score, probability, eligible, shot.columns, returns, request, left);
     shot.columns.insert(shot.columns.end(), refined.begin(), refined.end());
   }
@@ -404,9 +406,7 @@ Shot plan_coarse_to_fine(const ImprovementMap& improvement, const ImprovementPyr
   require_shape("return record", returns.shape(), "the improvement map", improvement.shape());
   if (request.refine_by == RefineBy::triangles && !surface)
     throw InvalidParameter("refine_by triangles triangulates the map's surface: call plan_next_shot with the mapper");
-  SampleTriangulator this_call;
-  return decide_stop(
-      coarse_to_fine_shot(improvement, pyramid, surface, model, returns, request, memory ? *memory : this_call), request);
+  return decide_stop(coarse_to_fine_shot(improvement, pyramid, surface, model, returns, request, memory), request);
 }
 }  // namespace
 

@@ -83,6 +83,13 @@ struct Triangle {
   std::array<std::int32_t, 3> n;  // n[i]: neighbour across the edge opposite v[i], -1 outside the super triangle
 };
 
+/// Room for `size` elements; growing, at least double (an update that adds a shot's samples must not
+/// copy every vertex and triangle each time).
+template <class T>
+void reserve_geometric(std::vector<T>& v, std::size_t size) {
+  if (size > v.capacity()) v.reserve(std::max(size, 2 * v.capacity()));
+}
+
 /// Bowyer-Watson over integer points, which may be added at any time: points 0, 1, 2 are the super
 /// triangle's corners, point kCorners + v is vertex v.
 class Delaunay {
@@ -99,10 +106,10 @@ public:
   }
 
   void reserve(std::size_t vertices) {
-    points_.reserve(vertices + kCorners);
-    first_of_.reserve(vertices + kCorners);
-    tris_.reserve(2 * vertices + 1);  // 2 n + 1 triangles in the end
-    mark_.reserve(2 * vertices + 1);
+    reserve_geometric(points_, vertices + kCorners);
+    reserve_geometric(first_of_, vertices + kCorners);
+    reserve_geometric(tris_, 2 * vertices + 1);  // 2 n + 1 triangles in the end
+    reserve_geometric(mark_, 2 * vertices + 1);
   }
 
   /// Adds the next vertex at p, not yet inserted.
@@ -340,7 +347,10 @@ struct PlaneSums {
     r2 += Int128{dy} * w;
   }
   /// The fit at the vertex in 1/m (Cramer's rule for a); false when the neighbours are collinear (or fewer
-  /// than 3): the sums of integer offsets are exact, so the determinant is then exactly 0 and otherwise >= 1.
+  /// than 3): the sums of integer offsets are exact, and so is the determinant computed from them in double
+  /// while its products stay below 2^53 (offsets up to ~2^12 px): it is then exactly 0 for collinear
+  /// neighbours and otherwise >= 1. (Beyond, rounding can leave collinear neighbours a determinant of 0.5
+  /// or more and a meaningless fit: the same whatever the insertion order.)
   bool intercept(double& a) const {
     const auto d = [](auto v) { return static_cast<double>(v); };
     const double c0 = d(m11) * d(m22) - d(m12) * d(m12), c1 = d(m01) * d(m22) - d(m12) * d(m02),
@@ -451,6 +461,8 @@ struct SampleTriangulator::State {
   std::vector<std::uint8_t> has_vertex;  ///< per column, kept only by SampleTriangulator::update
   std::vector<std::int32_t> depth_changed;  ///< vertices whose depth the last refresh changed
   std::vector<std::uint8_t> dirty_mark;     ///< per vertex, all 0 between updates
+  /// The model's depth noise the residuals were measured with (sigma_depth_at's parameters).
+  std::array<double, 3> depth_noise{};
   std::size_t inserted_last = 0;
   bool started_over_last = false;
 };
@@ -516,10 +528,10 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
     if (s.vertex_count() + added >= (std::size_t{1} << 22))
       throw InvalidInput("triangulate_samples: " + std::to_string(s.vertex_count() + added) + " samples (at most 2^22)");
     const std::size_t total = s.vertex_count() + added;
-    s.vertex_column.reserve(total);
-    s.vertex_x.reserve(total);
-    s.vertex_y.reserve(total);
-    s.vertex_depth_m.reserve(total);
+    reserve_geometric(s.vertex_column, total);
+    reserve_geometric(s.vertex_x, total);
+    reserve_geometric(s.vertex_y, total);
+    reserve_geometric(s.vertex_depth_m, total);
     st.delaunay.reserve(total);
     std::size_t c = 0;
     for (std::int32_t y = 0; y < height; ++y)
@@ -545,10 +557,14 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
   }
   st.inserted_last = added;
   st.delaunay.vertex_triangles(s.triangles);
-  // Residuals: all of them after a start-over or where most changed (a pass over the triangles is then
-  // cheaper than a walk around each vertex), else those of the dirty vertices.
+  // Residuals: all of them after a start-over, with another model's noise, or where most changed (a pass
+  // over the triangles is then cheaper than a walk around each vertex), else those of the dirty vertices.
+  const SensorModelParams& noise = model.params();
+  const std::array<double, 3> depth_noise{noise.sigma_depth_m, noise.sigma_depth_per_m2, noise.sigma_depth_floor_m};
+  const bool same_noise = depth_noise == st.depth_noise;
+  st.depth_noise = depth_noise;
   const std::vector<std::int32_t> dirty = st.started_over_last ? st.delaunay.take_touched() : dirty_vertices(st, first_new);
-  if (st.started_over_last || 2 * dirty.size() > s.vertex_count())
+  if (st.started_over_last || !same_noise || 2 * dirty.size() > s.vertex_count())
     measure_non_planarity(s, model);
   else
     remeasure_non_planarity(s, st.delaunay, dirty, model);

@@ -92,8 +92,9 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
 /// The triangulation of samples that accumulate from call to call (a planner's measured rays, shot after
 /// shot). Bowyer-Watson is incremental: update() inserts only the samples that are new since the previous
 /// call into the triangulation it keeps, instead of triangulating every sample again (docs/SELECTIVE.md,
-/// "Speed"), then refreshes the depths and recomputes the residuals and flags of all vertices and
-/// triangles (a sample's depth changes as measurements fuse). It starts over from scratch on the first
+/// "Speed"), refreshes the depths (a sample's depth changes as measurements fuse), recomputes the
+/// residuals of the vertices whose neighbours or depths changed (all of them when the model's depth noise
+/// changed) and the flags of all triangles. It starts over from scratch on the first
 /// call, when the image's size changes, when a vertex's pixel holds no sample any more, and after an
 /// update that threw (a cancel, too many samples).
 /// Every update gives triangulate_samples' triangles for the same samples, with the same residuals and
@@ -106,10 +107,11 @@ public:
   SampleTriangulator(SampleTriangulator&&) noexcept;
   SampleTriangulator& operator=(SampleTriangulator&&) noexcept;
 
-  /// Throws as triangulate_samples.
+  /// Throws as triangulate_samples. The reference is valid until the next update, a move or the
+  /// destruction. Not thread-safe: one triangulator per acquisition, updated by one thread at a time.
   const SampleTriangulation& update(const std::vector<float>& sparse_depth_m, int width, int height,
                                     const SensorModel& model, const TriangulationParams& params = {});
-  /// The last update's result (empty before the first).
+  /// The last update's result (empty before the first, and after an update that threw).
   const SampleTriangulation& triangulation() const;
   /// Samples the last update inserted, and whether it started over.
   std::size_t inserted_last() const;
