@@ -124,7 +124,8 @@ Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const Pla
 
 /// What one plan passes to the next within one acquisition (one mapper, one record): the triangulation of
 /// the measured samples, which refine_by triangles then extends with each shot's new samples instead of
-/// triangulating all of them again (SampleTriangulator: a round at 150 000 samples spent ~25 ms there).
+/// triangulating all of them again (SampleTriangulator; bench_select_round's plan 48-53 -> 22-29 ms a round,
+/// docs/SELECTIVE.md "Speed"). Other shapes and refinements leave it as it is.
 struct PlanMemory {
   SampleTriangulator triangulation;
 };
