@@ -177,7 +177,21 @@ void bind_planning(py::module_& m) {
                            "What one plan passes to the next within one acquisition (one Mapper, one ReturnRecord): "
                            "the measured samples' triangulation, extended shot by shot instead of rebuilt "
                            "(refine_by triangles). Pass the same one to every plan_next_shot of the acquisition.")
-      .def(py::init<>());
+      .def(py::init<>())
+      .def_property_readonly(
+          "updates",
+          [](PyPlanMemory& m) {
+            const std::lock_guard<std::mutex> lock(m.mutex);
+            return m.memory.triangulation.updates();
+          },
+          "Triangulation updates so far (one per triangles plan that had rays left to ask).")
+      .def_property_readonly(
+          "start_overs",
+          [](PyPlanMemory& m) {
+            const std::lock_guard<std::mutex> lock(m.mutex);
+            return m.memory.triangulation.start_overs();
+          },
+          "Updates that triangulated from scratch: the first, and any after a sample was lost.");
   m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request,
                              PyPlanMemory* memory) {
     if (py::isinstance<PyMapper>(improvement))  // the Mapper's own maps and pyramid, read under its lock

@@ -236,6 +236,7 @@ def test_plan_memory_plans_as_without_and_only_over_a_mapper(sample):
         assert len(shot) == 4000
         assert np.array_equal(shot.columns, oi.plan_next_shot(mapper, record, request).columns)
         acquire(mapper, record, shot, depth, intrinsics)
+    assert memory.updates == 3 and 1 <= memory.start_overs < memory.updates  # the later plans inserted
     with pytest.raises(oi.InvalidParameter, match="memory"):
         oi.plan_next_shot(mapper.improvement(), record, oi.PlanRequest(budget_rays=100), memory=memory)
 
