@@ -95,6 +95,9 @@ void reserve_geometric(std::vector<T>& v, std::size_t size) {
 class Delaunay {
 public:
   static constexpr std::int32_t kCorners = 3;
+  /// Links longer than this are not re-triangulated by remove() (a hull vertex of a fan can have
+  /// thousands of neighbours; a sample on the image typically has 6).
+  static constexpr std::size_t kMaxLinkForRemoval = 256;
 
   /// track_touched: record the vertices whose neighbours change (take_touched), for an update that
   /// remeasures only those.
@@ -121,6 +124,88 @@ public:
     const std::int32_t i = vertex + kCorners;
     dig_cavity(locate(pt(i)), i);
     fill_cavity(i);
+  }
+
+  /// Removes vertex `vertex` (it must have been inserted; false, and the structure unusable, if no ear is
+  /// found, which cannot happen for a Delaunay star): its star gives way to the Delaunay triangulation
+  /// of its link, built ear by ear (a convex corner of the link whose circumcircle holds no other link
+  /// vertex, by the same tie rule), so the result is the triangulation of the remaining points whatever
+  /// the order of removals and insertions. Its point stays, referenced by no triangle (compact drops it).
+  bool remove(std::int32_t vertex) {
+    const std::int32_t i = vertex + kCorners, first = first_of_[static_cast<std::size_t>(i)];
+    // The star (i, link[j], link[j + 1]) counter-clockwise, and who lies across each link edge: the outer
+    // triangle and its slot that points back into the star (none beyond the super triangle).
+    star_.clear();
+    link_.clear();
+    owner_.clear();
+    std::int32_t t = first;
+    do {
+      const Triangle& T = tris_[static_cast<std::size_t>(t)];
+      const auto k = static_cast<std::size_t>((T.v[1] == i) + 2 * (T.v[2] == i));
+      star_.push_back(t);
+      link_.push_back(T.v[kNext[k]]);
+      const std::int32_t outer = T.n[k];
+      owner_.push_back({outer, outer < 0 ? -1 : slot_of_neighbour(outer, t)});
+      t = T.n[kNext[k]];
+    } while (t != first);
+    if (link_.size() > kMaxLinkForRemoval) return false;  // the ear search is quadratic in the link
+    // Ears: position j of the link (a circular list) becomes triangle (link[prev], link[j], link[next]);
+    // the new edge (prev, next) takes the place of the two edges it closes, owned by the new triangle.
+    const auto m = static_cast<std::int32_t>(link_.size());
+    std::vector<std::int32_t> next(static_cast<std::size_t>(m)), prev(static_cast<std::size_t>(m));
+    for (std::int32_t j = 0; j < m; ++j) {
+      next[static_cast<std::size_t>(j)] = (j + 1) % m;
+      prev[static_cast<std::size_t>(j)] = (j + m - 1) % m;
+    }
+    std::size_t reused = 0;
+    std::int32_t j = 0;
+    for (std::int32_t left = m; left >= 3; --left) {
+      for (std::int32_t tried = 0; left > 3 && !is_ear(prev[static_cast<std::size_t>(j)], j, next[static_cast<std::size_t>(j)], next);
+           j = next[static_cast<std::size_t>(j)])
+        if (++tried > left) return false;  // never for a Delaunay star; the caller starts over
+      const std::int32_t p = prev[static_cast<std::size_t>(j)], q = next[static_cast<std::size_t>(j)];
+      const std::int32_t nt = star_[reused++];
+      Triangle& N = tris_[static_cast<std::size_t>(nt)];
+      N.v = {link_[static_cast<std::size_t>(p)], link_[static_cast<std::size_t>(j)], link_[static_cast<std::size_t>(q)]};
+      join(nt, 0, owner_[static_cast<std::size_t>(j)]);  // across (link[j], link[q])
+      join(nt, 2, owner_[static_cast<std::size_t>(p)]);  // across (link[p], link[j])
+      if (left == 3) {
+        join(nt, 1, owner_[static_cast<std::size_t>(q)]);  // the last triangle closes (link[q], link[p])
+      } else {
+        owner_[static_cast<std::size_t>(p)] = {nt, 1};  // the edge (link[p], link[q]), across from link[j]
+        next[static_cast<std::size_t>(p)] = q;
+        prev[static_cast<std::size_t>(q)] = p;
+      }
+      for (const std::int32_t v : N.v) {
+        first_of_[static_cast<std::size_t>(v)] = nt;
+        if (track_touched_ && v >= kCorners) touched_.push_back(v - kCorners);
+      }
+      last_ = nt;
+      j = q;
+    }
+    for (; reused < star_.size(); ++reused) mark_[static_cast<std::size_t>(star_[reused])] = kDead;
+    first_of_[static_cast<std::size_t>(i)] = -1;
+    return true;
+  }
+
+  /// Drops the points of removed vertices: vertex v becomes renumbered[v] (-1: removed, else increasing).
+  void compact(const std::vector<std::int32_t>& renumbered) {
+    const auto point = [&](std::int32_t p) { return p < kCorners ? p : renumbered[static_cast<std::size_t>(p - kCorners)] + kCorners; };
+    for (std::size_t t = 0; t < tris_.size(); ++t)
+      if (mark_[t] != kDead)
+        for (std::int32_t& v : tris_[t].v) v = point(v);
+    std::size_t kept = kCorners;
+    for (std::size_t v = 0; v < renumbered.size(); ++v)
+      if (renumbered[v] >= 0) {
+        points_[kept] = points_[v + kCorners];
+        first_of_[kept++] = first_of_[v + kCorners];
+      }
+    points_.resize(kept);
+    first_of_.resize(kept);
+    std::vector<std::int32_t> touched;
+    for (const std::int32_t v : touched_)
+      if (renumbered[static_cast<std::size_t>(v)] >= 0) touched.push_back(renumbered[static_cast<std::size_t>(v)]);
+    touched_.swap(touched);
   }
 
   /// Calls visit(j) for the other two vertices of every triangle without a super corner around `vertex`
@@ -164,6 +249,30 @@ private:
   struct Edge {
     std::int32_t a, b, outer;
   };
+
+  struct Owner {
+    std::int32_t triangle, slot;  ///< the triangle across an edge and its slot that points back; -1: none
+  };
+  std::int32_t slot_of_neighbour(std::int32_t t, std::int32_t neighbour) const {
+    const Triangle& T = tris_[static_cast<std::size_t>(t)];
+    return (T.n[1] == neighbour) + 2 * (T.n[2] == neighbour);
+  }
+  void join(std::int32_t t, int slot, const Owner& o) {
+    tris_[static_cast<std::size_t>(t)].n[static_cast<std::size_t>(slot)] = o.triangle;
+    if (o.triangle >= 0) tris_[static_cast<std::size_t>(o.triangle)].n[static_cast<std::size_t>(o.slot)] = t;
+  }
+  /// Whether link position j, between p and q, is an ear: a convex corner whose circumcircle holds no other
+  /// vertex of the link still open (`next` runs around it).
+  bool is_ear(std::int32_t p, std::int32_t j, std::int32_t q, const std::vector<std::int32_t>& next) const {
+    const std::int32_t a = link_[static_cast<std::size_t>(p)], b = link_[static_cast<std::size_t>(j)], c = link_[static_cast<std::size_t>(q)];
+    if (orient(pt(a), pt(b), pt(c)) <= 0) return false;
+    for (std::int32_t r = next[static_cast<std::size_t>(q)]; r != p; r = next[static_cast<std::size_t>(r)]) {
+      const std::int32_t d = link_[static_cast<std::size_t>(r)];
+      const bool small = small_ && std::min({a, b, c, d}) >= kCorners;
+      if (small ? in_circle<std::int64_t>(pt(a), pt(b), pt(c), pt(d)) : in_circle<Int128>(pt(a), pt(b), pt(c), pt(d))) return false;
+    }
+    return true;
+  }
 
   bool inside_circle(std::int32_t t, const Point& d) const {
     const Triangle& T = tris_[static_cast<std::size_t>(t)];
@@ -262,7 +371,8 @@ private:
   std::vector<Triangle> tris_;
   std::vector<std::int64_t> mark_;  // stamp of the cavity a triangle was last found in; kDead: unused slot
   std::vector<std::int32_t> first_of_;
-  std::vector<std::int32_t> bad_, stack_, new_, touched_;
+  std::vector<std::int32_t> bad_, stack_, new_, touched_, star_, link_;
+  std::vector<Owner> owner_;
   std::vector<Edge> boundary_;
   std::int64_t stamp_ = 0;
   std::int32_t last_ = 0;
@@ -463,25 +573,64 @@ struct SampleTriangulator::State {
   std::vector<std::uint8_t> dirty_mark;     ///< per vertex, all 0 between updates
   /// The model's depth noise the residuals were measured with (sigma_depth_at's parameters).
   std::array<double, 3> depth_noise{};
-  std::size_t inserted_last = 0;
+  std::size_t inserted_last = 0, lost_last = 0;
   bool started_over_last = false;
 };
 
 namespace {
 
-// Whether the state can take the image's samples by insertion: the same size, and every vertex's pixel
-// still a sample (its depth refreshed).
+// Removes the vertices whose pixel holds no sample any more and renumbers the others in order; false
+// when a removal failed.
+bool remove_lost(SampleTriangulator::State& st, const std::vector<std::int32_t>& lost) {
+  SampleTriangulation& s = st.out;
+  for (const std::int32_t v : lost) {
+    if (!st.delaunay.remove(v)) return false;
+    st.has_vertex[s.vertex_column[static_cast<std::size_t>(v)]] = 0;
+  }
+  std::vector<std::int32_t> renumbered(s.vertex_count(), 0);
+  for (const std::int32_t v : lost) renumbered[static_cast<std::size_t>(v)] = -1;
+  std::int32_t kept = 0;
+  for (std::int32_t& r : renumbered) r = r < 0 ? -1 : kept++;
+  st.delaunay.compact(renumbered);
+  const auto keep = [&](auto& values) {
+    std::size_t out = 0;
+    for (std::size_t v = 0; v < renumbered.size(); ++v)
+      if (renumbered[v] >= 0) values[out++] = values[v];
+    values.resize(out);
+  };
+  keep(s.vertex_column);
+  keep(s.vertex_x);
+  keep(s.vertex_y);
+  keep(s.vertex_depth_m);
+  keep(s.residual_sigmas);
+  std::vector<std::int32_t> changed;
+  for (const std::int32_t v : st.depth_changed)
+    if (renumbered[static_cast<std::size_t>(v)] >= 0) changed.push_back(renumbered[static_cast<std::size_t>(v)]);
+  st.depth_changed.swap(changed);
+  return true;
+}
+
+// Whether the state can take the image's samples by insertion: the same size (its vertices' depths
+// refreshed, and those whose pixel holds no sample any more removed).
 bool refresh_vertices(SampleTriangulator::State& st, const std::vector<float>& image, int width, int height) {
   SampleTriangulation& s = st.out;
   if (st.has_vertex.empty() || s.width != width || s.height != height) return false;
   st.depth_changed.clear();
+  std::vector<std::int32_t> lost;
   for (std::size_t v = 0; v < s.vertex_count(); ++v) {
     const float z = image[s.vertex_column[v]];
-    if (!(z > 0.0f)) return false;  // NaN too
+    if (!(z > 0.0f)) {  // NaN too
+      lost.push_back(static_cast<std::int32_t>(v));
+      continue;
+    }
     if (z != s.vertex_depth_m[v]) st.depth_changed.push_back(static_cast<std::int32_t>(v));
     s.vertex_depth_m[v] = z;
   }
-  return true;
+  st.lost_last = lost.size();
+  // Many lost (a record's first returns replacing a full frame's samples): triangulating the rest anew is
+  // cheaper than removing them one by one.
+  if (lost.size() > s.vertex_count() / 8) return false;
+  return lost.empty() || remove_lost(st, lost);
 }
 
 // The vertices whose residual may have changed since the last update: the new ones, those whose neighbours
@@ -607,6 +756,9 @@ const SampleTriangulation& SampleTriangulator::triangulation() const {
 }
 
 std::size_t SampleTriangulator::inserted_last() const { return state_ ? state_->inserted_last : 0; }
+std::size_t SampleTriangulator::removed_last() const {
+  return state_ && !state_->started_over_last ? state_->lost_last : 0;
+}
 bool SampleTriangulator::started_over_last() const { return state_ && state_->started_over_last; }
 
 std::vector<std::size_t> top_scored_triangles(const SampleTriangulation& triangulation, std::size_t count) {

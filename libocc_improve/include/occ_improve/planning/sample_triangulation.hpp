@@ -53,7 +53,7 @@ struct TriangulationParams {
 struct SampleTriangulation {
   int width = 0, height = 0;
   /// The sample's column (y x width + x): ascending from triangulate_samples; from SampleTriangulator,
-  /// each update's new samples in ascending order after the earlier ones.
+  /// each update's new samples in ascending order after the earlier ones (removed ones left out).
   std::vector<ColumnIndex> vertex_column;
   std::vector<std::int32_t> vertex_x, vertex_y;  ///< its pixel (column % width, column / width)
   std::vector<float> vertex_depth_m;             ///< its depth
@@ -94,12 +94,14 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
 /// call into the triangulation it keeps, instead of triangulating every sample again (docs/SELECTIVE.md,
 /// "Speed"), refreshes the depths (a sample's depth changes as measurements fuse), recomputes the
 /// residuals of the vertices whose neighbours or depths changed (all of them when the model's depth noise
-/// changed) and the flags of all triangles. It starts over from scratch on the first
-/// call, when the image's size changes, when a vertex's pixel holds no sample any more, and after an
-/// update that threw (a cancel, too many samples).
+/// changed) and the flags of all triangles. A vertex whose pixel holds no sample any more (its surface
+/// fell below the sample rule) is removed: its star gives way to the Delaunay triangulation of its link.
+/// It starts over from scratch on the first call, when the image's size changes, and after an update that
+/// threw (a cancel, too many samples).
 /// Every update gives triangulate_samples' triangles for the same samples, with the same residuals and
-/// flags (co-circular samples are decided by a fixed rule, not by the order they came in: header
-/// comment); only the vertices' numbering differs: they keep their index from update to update.
+/// flags (co-circular samples are decided by a fixed rule, not by the order they came or went: header
+/// comment); only the vertices' numbering differs: they keep their order from update to update (a
+/// removal renumbers the later ones), and each update's new samples come after the earlier ones.
 class SampleTriangulator {
 public:
   SampleTriangulator();
@@ -113,8 +115,9 @@ public:
                                     const SensorModel& model, const TriangulationParams& params = {});
   /// The last update's result (empty before the first, and after an update that threw).
   const SampleTriangulation& triangulation() const;
-  /// Samples the last update inserted, and whether it started over.
+  /// Samples the last update inserted and removed, and whether it started over.
   std::size_t inserted_last() const;
+  std::size_t removed_last() const;
   bool started_over_last() const;
   /// Updates that completed since construction, and how many of them started over.
   std::size_t updates() const { return updates_; }
