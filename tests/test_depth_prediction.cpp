@@ -401,15 +401,8 @@ std::array<ColumnIndex, 3> column_triangle(const SampleTriangulation& s, std::si
   return c;
 }
 
-void expect_identical(const SampleTriangulation& a, const SampleTriangulation& b) {
-  EXPECT_EQ(a.vertex_column, b.vertex_column);
-  EXPECT_EQ(a.vertex_depth_m, b.vertex_depth_m);
-  EXPECT_EQ(a.triangles, b.triangles);
-  EXPECT_EQ(a.residual_sigmas, b.residual_sigmas);
-  EXPECT_EQ(a.interpolable, b.interpolable);
-}
-
-// Residuals and flags exactly as from scratch, in triangulate_samples' order of vertices and triangles.
+// The same vertices (depths, residuals) and triangles (flags) as from scratch, whatever the order of the
+// vertices and triangles.
 void expect_same_triangulation(const SampleTriangulation& s, const SampleTriangulation& scratch) {
   ASSERT_EQ(s.vertex_count(), scratch.vertex_count());
   std::map<ColumnIndex, std::pair<float, float>> vertex;  // column -> (depth, residual)
@@ -428,6 +421,13 @@ void expect_same_triangulation(const SampleTriangulation& s, const SampleTriangu
     ASSERT_NE(it, flag.end()) << t;
     EXPECT_EQ(s.interpolable[t], it->second) << t;
   }
+}
+
+// The same, in the same order.
+void expect_identical(const SampleTriangulation& a, const SampleTriangulation& b) {
+  EXPECT_EQ(a.vertex_column, b.vertex_column);
+  EXPECT_EQ(a.triangles, b.triangles);
+  expect_same_triangulation(a, b);
 }
 
 TEST(SampleTriangulator, GrowsByInsertionAndStaysTheDelaunayTriangulationOfItsSamples) {

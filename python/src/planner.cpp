@@ -170,6 +170,12 @@ void bind_shot(py::module_& m) {
 struct PyPlanMemory {
   PlanMemory memory;
   std::mutex mutex;
+  /// What `f` reads of the triangulation, under the lock.
+  template <class F>
+  auto read(F&& f) {
+    const std::lock_guard<std::mutex> lock(mutex);
+    return f(memory.triangulation);
+  }
 };
 
 void bind_planning(py::module_& m) {
@@ -179,19 +185,11 @@ void bind_planning(py::module_& m) {
                            "(refine_by triangles). Pass the same one to every plan_next_shot of the acquisition.")
       .def(py::init<>())
       .def_property_readonly(
-          "updates",
-          [](PyPlanMemory& m) {
-            const std::lock_guard<std::mutex> lock(m.mutex);
-            return m.memory.triangulation.updates();
-          },
+          "updates", [](PyPlanMemory& m) { return m.read([](const SampleTriangulator& t) { return t.updates(); }); },
           "Triangulation updates so far (one per triangles plan that had rays left to ask).")
       .def_property_readonly(
-          "start_overs",
-          [](PyPlanMemory& m) {
-            const std::lock_guard<std::mutex> lock(m.mutex);
-            return m.memory.triangulation.start_overs();
-          },
-          "Updates that triangulated from scratch: the first, and any after a sample was lost.");
+          "start_overs", [](PyPlanMemory& m) { return m.read([](const SampleTriangulator& t) { return t.start_overs(); }); },
+          "Updates that triangulated from scratch: the first, and any after many samples were lost.");
   m.def("plan_next_shot", [](const py::object& improvement, const ReturnRecord& returns, const PlanRequest& request,
                              PyPlanMemory* memory) {
     if (py::isinstance<PyMapper>(improvement))  // the Mapper's own maps and pyramid, read under its lock

@@ -71,7 +71,7 @@ void BM_SelectRound(benchmark::State& state) {
   state.counters["insert_ms"] = insert_ms / n;
   state.counters["improvement_ms"] = improvement_ms / n;
   state.counters["plan_ms"] = plan_ms / n;
-  // The memory's triangulation updates, and those that started over (a sample lost since the last plan).
+  // The memory's triangulation updates, and those that started over (many samples lost since the last plan).
   state.counters["triangulations"] = static_cast<double>(memory.triangulation.updates());
   state.counters["started_over"] = static_cast<double>(memory.triangulation.start_overs());
 }

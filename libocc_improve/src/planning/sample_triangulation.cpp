@@ -99,9 +99,7 @@ public:
   /// thousands of neighbours; a sample on the image typically has 6).
   static constexpr std::size_t kMaxLinkForRemoval = 256;
 
-  /// track_touched: record the vertices whose neighbours change (take_touched), for an update that
-  /// remeasures only those.
-  Delaunay(bool small, bool track_touched) : small_(small), track_touched_(track_touched) {
+  explicit Delaunay(bool small) : small_(small) {
     points_ = {{-kSuper, -kSuper}, {kSuper, -kSuper}, {0, kSuper}};  // counter-clockwise
     tris_.push_back({{0, 1, 2}, {-1, -1, -1}});
     mark_.push_back(0);
@@ -225,6 +223,10 @@ public:
       t = T.n[kNext[k]];  // across the edge (v[k + 2], i)
     } while (t != first);
   }
+
+  /// From now on, record the vertices whose neighbours change (take_touched), for an update that
+  /// remeasures only those.
+  void track_touched(bool on) { track_touched_ = on; }
 
   /// Vertices whose neighbours changed since the last call (the cavities' boundaries), with repeats.
   std::vector<std::int32_t> take_touched() {
@@ -367,7 +369,7 @@ private:
   }
 
   std::vector<Point> points_;
-  bool small_, track_touched_;
+  bool small_, track_touched_ = false;
   std::vector<Triangle> tris_;
   std::vector<std::int64_t> mark_;  // stamp of the cavity a triangle was last found in; kDead: unused slot
   std::vector<std::int32_t> first_of_;
@@ -567,8 +569,7 @@ SampleTriangulation triangulate_samples(const std::vector<float>& sparse_depth_m
 
 struct SampleTriangulator::State {
   SampleTriangulation out;
-  Delaunay delaunay{true, false};
-  std::vector<std::uint8_t> has_vertex;  ///< per column, kept only by SampleTriangulator::update
+  Delaunay delaunay{true};
   std::vector<std::int32_t> depth_changed;  ///< vertices whose depth the last refresh changed
   std::vector<std::uint8_t> dirty_mark;     ///< per vertex, all 0 between updates
   /// The model's depth noise the residuals were measured with (sigma_depth_at's parameters).
@@ -585,7 +586,6 @@ bool remove_lost(SampleTriangulator::State& st, const std::vector<std::int32_t>&
   SampleTriangulation& s = st.out;
   for (const std::int32_t v : lost) {
     if (!st.delaunay.remove(v)) return false;
-    st.has_vertex[s.vertex_column[static_cast<std::size_t>(v)]] = 0;
   }
   std::vector<std::int32_t> renumbered(s.vertex_count(), 0);
   for (const std::int32_t v : lost) renumbered[static_cast<std::size_t>(v)] = -1;
@@ -614,7 +614,7 @@ bool remove_lost(SampleTriangulator::State& st, const std::vector<std::int32_t>&
 // refreshed, and those whose pixel holds no sample any more removed).
 bool refresh_vertices(SampleTriangulator::State& st, const std::vector<float>& image, int width, int height) {
   SampleTriangulation& s = st.out;
-  if (st.has_vertex.empty() || s.width != width || s.height != height) return false;
+  if (s.width != width || s.height != height) return false;  // a fresh state too: width 0
   st.depth_changed.clear();
   std::vector<std::int32_t> lost;
   for (std::size_t v = 0; v < s.vertex_count(); ++v) {
@@ -655,8 +655,10 @@ std::vector<std::int32_t> dirty_vertices(SampleTriangulator::State& st, std::siz
   return dirty;
 }
 
-// Brings `st` to the image's samples (checked by the caller): the new ones are appended in column order and
-// inserted in Hilbert order; with `keep`, has_vertex is kept for the next call.
+// Brings `st` to the image's samples (checked by the caller): the lost ones removed, the new ones appended
+// in column order and inserted in Hilbert order. With `keep` (SampleTriangulator), the insertions after this
+// update record the vertices whose neighbours change, for the next update's residuals (a start-over's own
+// insertions need none: it measures every residual).
 void update_state(SampleTriangulator::State& st, const std::vector<float>& image, int width, int height,
                   const SensorModel& model, const TriangulationParams& params, bool keep) {
   st.started_over_last = !refresh_vertices(st, image, width, height);
@@ -664,11 +666,15 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
     st.out = SampleTriangulation{};
     st.out.width = width;
     st.out.height = height;
-    st.delaunay = Delaunay(width < kSmallSide && height < kSmallSide, keep);
-    st.has_vertex.assign(keep ? image.size() : 0, 0);
+    st.delaunay = Delaunay(width < kSmallSide && height < kSmallSide);
   }
   SampleTriangulation& s = st.out;
-  std::uint8_t* known = st.has_vertex.empty() ? nullptr : st.has_vertex.data();  // kept: has_vertex
+  std::vector<std::uint8_t> has_vertex;  // per column, where there are vertices already
+  if (!st.started_over_last) {
+    has_vertex.assign(image.size(), 0);
+    for (const ColumnIndex c : s.vertex_column) has_vertex[c] = 1;
+  }
+  const std::uint8_t* known = has_vertex.empty() ? nullptr : has_vertex.data();
   // Samples without a vertex, counted, then appended in column order (two instantiations: with and
   // without has_vertex, so that the counting loop vectorises). NaN fails `z > 0`.
   const auto append_new = [&](auto is_new) {
@@ -697,8 +703,6 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
   const std::size_t first_new = s.vertex_count();
   const std::size_t added = known ? append_new([&](std::size_t c) { return (image[c] > 0.0f) & (known[c] == 0); })
                                   : append_new([&](std::size_t c) { return image[c] > 0.0f; });
-  if (known)
-    for (std::size_t v = first_new; v < s.vertex_count(); ++v) known[s.vertex_column[v]] = 1;
   const std::vector<std::int32_t> order = insertion_order(s, first_new);
   for (std::size_t k = 0; k < order.size(); ++k) {
     poll_stop(k);
@@ -712,12 +716,13 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
   const std::array<double, 3> depth_noise{noise.sigma_depth_m, noise.sigma_depth_per_m2, noise.sigma_depth_floor_m};
   const bool same_noise = depth_noise == st.depth_noise;
   st.depth_noise = depth_noise;
-  const std::vector<std::int32_t> dirty = st.started_over_last ? st.delaunay.take_touched() : dirty_vertices(st, first_new);
+  const std::vector<std::int32_t> dirty = st.started_over_last ? std::vector<std::int32_t>{} : dirty_vertices(st, first_new);
   if (st.started_over_last || !same_noise || 2 * dirty.size() > s.vertex_count())
     measure_non_planarity(s, model);
   else
     remeasure_non_planarity(s, st.delaunay, dirty, model);
   flag_interpolable(s, model, params);
+  st.delaunay.track_touched(keep);
 }
 
 }  // namespace
