@@ -37,23 +37,14 @@ BinAxis BinAxis::from_centres(std::vector<double> centres) {
   return a;
 }
 
-int BinAxis::bin(double value) const {
-  if (!(value >= min_ && value < max_)) return -1;
-  if (!uniform_) return static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), value) - edges_.begin()) - 1;
-  const int i = static_cast<int>((value - min_) * inv_width_);
-  return std::min(i, bins_ - 1);  // guards rounding right below max
+int BinAxis::bin_from_edges(double value) const {
+  return static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), value) - edges_.begin()) - 1;
 }
 
-void BinAxis::overlapping(double lo, double hi, int& first, int& last) const {
-  if (uniform_) {
-    first = static_cast<int>(std::floor((lo - min_) * inv_width_));
-    last = static_cast<int>(std::floor((hi - min_) * inv_width_));
-  } else {  // as above: the bins holding lo and hi (half-open), clipped
-    first = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), lo) - edges_.begin()) - 1;
-    last = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), hi) - edges_.begin()) - 1;
-  }
-  first = std::max(first, 0);
-  last = std::min(last, bins_ - 1);
+// As the uniform case: the bins holding lo and hi (half-open), clipped by overlapping().
+void BinAxis::overlapping_from_edges(double lo, double hi, int& first, int& last) const {
+  first = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), lo) - edges_.begin()) - 1;
+  last = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), hi) - edges_.begin()) - 1;
 }
 
 namespace {

@@ -44,11 +44,11 @@ using detail::MeasurementChunks;
 //   below eps/8 at every depth, so the offset is the step term's alone, (log(4/eps) - 4 - B)/2 (-6.4
 //   sigmas at B = 24): such a neighbour only carves free space, and its update stops 6.4 sigmas in front
 //   of its return instead of at it.
+const double kStepLimit = std::log(4.0 / kSkipEpsilon), kPeakLimit = std::log(8.0 / (3.0 * kSkipEpsilon));
 double skip_offset_sigmas(double angular_term) {
-  static const double step_limit = std::log(4.0 / kSkipEpsilon), peak_limit = std::log(8.0 / (3.0 * kSkipEpsilon));
-  const double step_offset = (step_limit - 4.0 - angular_term) / 2.0;
-  if (angular_term >= peak_limit) return step_offset;
-  return std::max(step_offset, std::sqrt(peak_limit - angular_term));
+  const double step_offset = (kStepLimit - 4.0 - angular_term) / 2.0;
+  if (angular_term >= kPeakLimit) return step_offset;
+  return std::max(step_offset, std::sqrt(kPeakLimit - angular_term));
 }
 
 // Bound b) of integrate.hpp: at t <= this offset (in sigmas) t <= -3 - B/2 (u <= -2, where logit P_s <=
@@ -87,30 +87,51 @@ void logit_profile_from_terms(const float* e, const float* g, int n, float a, fl
 // Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
 // with clamping after each update, without a log per voxel and measurement (one exp and one log per voxel
 // the call reaches, ColumnScratch).
+// The loops below over a scratch row or a measurement's terms run over whole aligned blocks of
+// kLaneBlock bins: [first, end) widened to block bounds, the bins outside [first, end) written back
+// unchanged. Rows and terms are padded to whole blocks and aligned (LaneRows), so every loop is the
+// vector body alone: no scalar remainder, no peeling, which on the 8-14 bins a (measurement, column)
+// pair updates cost more than the vector work itself.
+constexpr int kLaneBlock = 8;
+constexpr int block_floor(int i) { return i / kLaneBlock * kLaneBlock; }
+constexpr int block_ceil(int i) { return (i + kLaneBlock - 1) / kLaneBlock * kLaneBlock; }
+
 OCC_IMPROVE_VECTOR_KERNEL
-void multiply_odds_clamped(float* o, const float* e, const float* g, int n, float a, float omin, float omax) {
-  for (int i = 0; i < n; ++i) {
+void multiply_odds_clamped(float* o, const float* e, const float* g, int first, int end, float a, float omin,
+                           float omax) {
+  const int from = block_floor(first), to = block_ceil(end);
+  o = static_cast<float*>(__builtin_assume_aligned(o, 32));
+  e = static_cast<const float*>(__builtin_assume_aligned(e, 32));
+  g = static_cast<const float*>(__builtin_assume_aligned(g, 32));
+  for (int i = from; i < to; ++i) {
     const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
     const float v = o[i] * (odds.n / odds.m);
-    o[i] = v < omin ? omin : (v > omax ? omax : v);
+    const float clamped = v < omin ? omin : (v > omax ? omax : v);
+    o[i] = i >= first && i < end ? clamped : o[i];
   }
 }
 
 // The clamps map to each other exactly both ways (whatever rounding the vector clone does), so that
 // uniform runs are recognised.
 OCC_IMPROVE_VECTOR_KERNEL
-void log_odds_to_odds(float* w, int n, float omin, float omax, float lmin, float lmax) {
-  for (int i = 0; i < n; ++i) {
+void log_odds_to_odds(float* w, int first, int end, float omin, float omax, float lmin, float lmax) {
+  const int from = block_floor(first), to = block_ceil(end);
+  w = static_cast<float*>(__builtin_assume_aligned(w, 32));
+  for (int i = from; i < to; ++i) {
     const float l = w[i], o = fast_exp(l);
-    w[i] = l <= lmin ? omin : (l >= lmax ? omax : o);
+    const float converted = l <= lmin ? omin : (l >= lmax ? omax : o);
+    w[i] = i >= first && i < end ? converted : l;
   }
 }
 
 OCC_IMPROVE_VECTOR_KERNEL
-void odds_to_log_odds(float* w, int n, float omin, float omax, float lmin, float lmax) {
-  for (int i = 0; i < n; ++i) {
+void odds_to_log_odds(float* w, int first, int end, float omin, float omax, float lmin, float lmax) {
+  const int from = block_floor(first), to = block_ceil(end);
+  w = static_cast<float*>(__builtin_assume_aligned(w, 32));
+  for (int i = from; i < to; ++i) {
     const float o = w[i], l = fast_log(o);
-    w[i] = o <= omin ? lmin : (o >= omax ? lmax : l);
+    const float converted = o <= omin ? lmin : (o >= omax ? lmax : l);
+    w[i] = i >= first && i < end ? converted : o;
   }
 }
 
@@ -119,13 +140,25 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
 
-// One measurement's bin terms, computed on demand over the bins its columns need. They are computed in
-// whole blocks of kTermsBlock bins (the vector width), so the vector loop ends in a scalar remainder only
-// at the far end of the depth axis.
+// A buffer of `count` floats (a multiple of kLaneBlock) in `storage`, its start aligned to 32 bytes.
+float* aligned_floats(std::vector<float>& storage, std::size_t count) {
+  constexpr std::size_t kAlign = 32;
+  storage.resize(count + kAlign / sizeof(float));
+  const auto misalignment = reinterpret_cast<std::uintptr_t>(storage.data()) % kAlign;
+  return storage.data() + (misalignment ? (kAlign - misalignment) / sizeof(float) : 0);
+}
+
+// One measurement's bin terms, computed on demand over the bins its columns need, in whole blocks of
+// kLaneBlock bins (the depth axis padded to whole blocks: the padding's terms are never read as bins).
 class MeasurementTerms {
 public:
-  explicit MeasurementTerms(const DepthAxis& depth)
-      : depth_(depth), e_(static_cast<std::size_t>(depth.bins())), g_(static_cast<std::size_t>(depth.bins())) {}
+  explicit MeasurementTerms(const DepthAxis& depth) : depth_(depth), padded_bins_(block_ceil(depth.bins())) {
+    const auto n = static_cast<std::size_t>(padded_bins_);
+    e_ = aligned_floats(e_storage_, n);
+    g_ = aligned_floats(g_storage_, n);
+    centres_.assign(depth.centres().begin(), depth.centres().end());
+    centres_.resize(n, depth.centres().back());
+  }
 
   void reset(double rho_bar, double sigma, double folded_angular_term = 0.0) {
     rho_bar_ = rho_bar;
@@ -136,8 +169,8 @@ public:
   }
   void ensure(int first, int last) {
     if (first >= last) return;
-    first = first / kTermsBlock * kTermsBlock;
-    last = std::min((last + kTermsBlock - 1) / kTermsBlock * kTermsBlock, depth_.bins());
+    first = block_floor(first);
+    last = block_ceil(last);
     if (lo_ == hi_) {
       compute(first, last);
       lo_ = first;
@@ -155,17 +188,18 @@ public:
   }
   /// Bins below it have t <= kNonPositiveT (where logit P_s <= 0 for every B).
   int run_keep() const { return run_keep_; }
-  const float* e() const { return e_.data(); }
-  const float* g() const { return g_.data(); }
+  const float* e() const { return e_; }
+  const float* g() const { return g_; }
 
 private:
-  static constexpr int kTermsBlock = 8;
   void compute(int first, int last) {
-    opdf_bin_terms(depth_.centres().data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_.data() + first,
-                   g_.data() + first);
+    opdf_bin_terms(centres_.data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_ + first, g_ + first);
   }
   const DepthAxis& depth_;
-  std::vector<float> e_, g_;
+  const int padded_bins_;
+  std::vector<float> e_storage_, g_storage_;
+  float *e_ = nullptr, *g_ = nullptr;
+  std::vector<double> centres_;  ///< the axis's, the padding repeating the last
   double rho_bar_ = 0, inv_sigma_ = 1;
   float folded_angular_term_ = 0;
   int run_keep_ = 0, lo_ = 0, hi_ = 0;
@@ -226,7 +260,7 @@ public:
 
   /// The column's new contents, back in log-odds in its scratch row (valid until the row is loaded again).
   ColumnContents contents(ColumnScratch& s, ColumnIndex column) const {
-    if (clamped_) odds_to_log_odds(s.v + s.run_end, s.odds_end - s.run_end, omin_, omax_, lmin_, lmax_);
+    if (clamped_) odds_to_log_odds(s.v, s.run_end, s.odds_end, omin_, omax_, lmin_, lmax_);
     s.loaded = false;
     return {column, s.run_end, s.run_end > 0 ? lmin_ : 0.0f, s.v + s.run_end, static_cast<std::uint32_t>(s.tail - s.run_end)};
   }
@@ -274,12 +308,12 @@ private:
     if (end > s.odds_end) {
       const int materialised_end = std::min(end, s.tail);
       if (materialised_end > s.odds_end)
-        log_odds_to_odds(o + s.odds_end, materialised_end - s.odds_end, omin_, omax_, lmin_, lmax_);
+        log_odds_to_odds(o, s.odds_end, materialised_end, omin_, omax_, lmin_, lmax_);
       extend_tail(s, end, 1.0f);
       s.odds_end = end;
     }
     terms.ensure(first, end);
-    multiply_odds_clamped(o + first, terms.e() + first, terms.g() + first, end - first, a, omin_, omax_);
+    multiply_odds_clamped(o, terms.e(), terms.g(), first, end, a, omin_, omax_);
     while (s.run_end < s.odds_end && o[s.run_end] <= omin_) ++s.run_end;
     if (s.run_end == s.odds_end) {
       while (s.run_end < s.tail && o[s.run_end] <= lmin_) ++s.run_end;
@@ -350,9 +384,10 @@ public:
       : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()),
         inv_sigma_azimuth_(1.0 / model.sigma_horizontal(g_.binning())),
         inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())), lmin_(grid.log_odds_min()) {
-    const auto depth_bins = static_cast<std::size_t>(g_.depth().bins());
-    scratch_rows.resize(kTile * kTile * depth_bins);
-    for (int i = 0; i < kTile * kTile; ++i) scratch_[i].v = scratch_rows.data() + static_cast<std::size_t>(i) * depth_bins;
+    // Rows of whole lane blocks, aligned: the kernel's loops run over whole blocks.
+    const auto row_floats = static_cast<std::size_t>(block_ceil(g_.depth().bins()));
+    float* rows = aligned_floats(scratch_rows, kTile * kTile * row_floats);
+    for (int i = 0; i < kTile * kTile; ++i) scratch_[i].v = rows + static_cast<std::size_t>(i) * row_floats;
   }
 
   void start(int a_first, int e_first) {

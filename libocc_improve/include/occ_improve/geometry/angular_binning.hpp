@@ -11,6 +11,7 @@
 // (angular_binning.cpp), or register_angular_binning() from outside the library. Its parameters are
 // GeometryParams fields (the map file stores them all with the binning's tag).
 #include <Eigen/Core>
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <ostream>
@@ -38,17 +39,40 @@ public:
   /// The bin width of a uniform axis (the mean width of a non-uniform one).
   double width() const { return width_; }
   double width(int i) const { return lower(i + 1) - lower(i); }
-  /// Bin containing `value`, or -1 when outside [min, max).
-  int bin(double value) const;
+  /// Bin containing `value`, or -1 when outside [min, max). Inline (with overlapping): the insertion
+  /// calls both for every point.
+  int bin(double value) const {
+    if (!(value >= min_ && value < max_)) return -1;
+    if (!uniform_) return bin_from_edges(value);
+    const int i = static_cast<int>((value - min_) * inv_width_);
+    return std::min(i, bins_ - 1);  // guards rounding right below max
+  }
   double centre(int i) const { return centres_[static_cast<std::size_t>(i)]; }
   /// Lower edge of bin i; lower(bins()) is the axis' upper end.
   double lower(int i) const { return edges_[static_cast<std::size_t>(i)]; }
   /// centre(i + di) - centre(i); di times the width on a uniform axis (exactly, whatever i).
   double centre_offset(int i, int di) const { return uniform_ ? di * width_ : centre(i + di) - centre(i); }
   /// Bins whose extent overlaps [lo, hi], clipped to the axis; empty (first > last) when none.
-  void overlapping(double lo, double hi, int& first, int& last) const;
+  void overlapping(double lo, double hi, int& first, int& last) const {
+    if (uniform_) {
+      first = floor_to_int((lo - min_) * inv_width_);
+      last = floor_to_int((hi - min_) * inv_width_);
+    } else {
+      overlapping_from_edges(lo, hi, first, last);
+    }
+    first = std::max(first, 0);
+    last = std::min(last, bins_ - 1);
+  }
 
 private:
+  // static_cast<int>(std::floor(x)) without the libm call floor is on baseline x86-64.
+  static int floor_to_int(double x) {
+    const int i = static_cast<int>(x);
+    return i - (x < i);
+  }
+  int bin_from_edges(double value) const;
+  void overlapping_from_edges(double lo, double hi, int& first, int& last) const;
+
   double min_ = 0, max_ = 1, width_ = 1, inv_width_ = 1;
   int bins_ = 0;
   bool uniform_ = true;

@@ -70,7 +70,7 @@ public:
   /// are finer than the bins, so the walk rarely takes a step: no mispredicted branch per call.
   int first_centre_above(double rho) const {
     const double k = (rho - min_) * buckets_per_m_;
-    int b = !(k >= 0) ? 0 : (k >= buckets_ ? bins_ : first_above_[static_cast<std::size_t>(k)]);
+    int b = !(k >= 0) ? 0 : (k >= buckets_ ? bins_ : first_above_[static_cast<std::size_t>(static_cast<int>(k))]);
     const double* centres = padded_centres_.data();
     b += centres[b] <= rho;  // the one centre a bucket mostly holds, without a branch (NaN: false at bins())
     while (b > 0 && centres[b - 1] > rho) --b;  // rounding at a bucket's start
