@@ -84,25 +84,43 @@ void logit_profile_from_terms(const float* e, const float* g, int n, float a, fl
   for (int i = 0; i < n; ++i) out[i] = logit_from_terms(e[i], g[i], a);
 }
 
-// Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
-// with clamping after each update, without a log per voxel and measurement (one exp and one log per voxel
-// the call reaches, ColumnScratch).
 // The loops below over a scratch row or a measurement's terms run over whole aligned blocks of
 // kLaneBlock bins: [first, end) widened to block bounds, the bins outside [first, end) written back
-// unchanged. Rows and terms are padded to whole blocks and aligned (LaneRows), so every loop is the
-// vector body alone: no scalar remainder, no peeling, which on the 8-14 bins a (measurement, column)
-// pair updates cost more than the vector work itself.
+// unchanged. Scratch rows and terms are padded to whole blocks and aligned (aligned_floats), so every loop
+// is the vector body alone: no scalar remainder, no peeling, which on the 8-14 bins a (measurement,
+// column) pair updates cost more than the vector work itself.
 constexpr int kLaneBlock = 8;
+constexpr std::size_t kLaneBlockBytes = kLaneBlock * sizeof(float);
 constexpr int block_floor(int i) { return i / kLaneBlock * kLaneBlock; }
 constexpr int block_ceil(int i) { return (i + kLaneBlock - 1) / kLaneBlock * kLaneBlock; }
 
+// The row, with the compiler told that it starts on a block boundary.
+template <typename T>
+T* block_aligned(T* row) {
+#if defined(__GNUC__)
+  return static_cast<T*>(__builtin_assume_aligned(row, kLaneBlockBytes));
+#else
+  return row;
+#endif
+}
+
+// A buffer of `count` floats (a multiple of kLaneBlock) in `storage`, starting on a block boundary.
+float* aligned_floats(std::vector<float>& storage, std::size_t count) {
+  storage.resize(count + kLaneBlock);
+  const auto misalignment = reinterpret_cast<std::uintptr_t>(storage.data()) % kLaneBlockBytes;
+  return storage.data() + (misalignment ? (kLaneBlockBytes - misalignment) / sizeof(float) : 0);
+}
+
+// Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
+// with clamping after each update, without a log per voxel and measurement (one exp and one log per voxel
+// the call reaches, ColumnScratch).
 OCC_IMPROVE_VECTOR_KERNEL
 void multiply_odds_clamped(float* o, const float* e, const float* g, int first, int end, float a, float omin,
                            float omax) {
   const int from = block_floor(first), to = block_ceil(end);
-  o = static_cast<float*>(__builtin_assume_aligned(o, 32));
-  e = static_cast<const float*>(__builtin_assume_aligned(e, 32));
-  g = static_cast<const float*>(__builtin_assume_aligned(g, 32));
+  o = block_aligned(o);
+  e = block_aligned(e);
+  g = block_aligned(g);
   for (int i = from; i < to; ++i) {
     const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
     const float v = o[i] * (odds.n / odds.m);
@@ -116,7 +134,7 @@ void multiply_odds_clamped(float* o, const float* e, const float* g, int first, 
 OCC_IMPROVE_VECTOR_KERNEL
 void log_odds_to_odds(float* w, int first, int end, float omin, float omax, float lmin, float lmax) {
   const int from = block_floor(first), to = block_ceil(end);
-  w = static_cast<float*>(__builtin_assume_aligned(w, 32));
+  w = block_aligned(w);
   for (int i = from; i < to; ++i) {
     const float l = w[i], o = fast_exp(l);
     const float converted = l <= lmin ? omin : (l >= lmax ? omax : o);
@@ -127,7 +145,7 @@ void log_odds_to_odds(float* w, int first, int end, float omin, float omax, floa
 OCC_IMPROVE_VECTOR_KERNEL
 void odds_to_log_odds(float* w, int first, int end, float omin, float omax, float lmin, float lmax) {
   const int from = block_floor(first), to = block_ceil(end);
-  w = static_cast<float*>(__builtin_assume_aligned(w, 32));
+  w = block_aligned(w);
   for (int i = from; i < to; ++i) {
     const float o = w[i], l = fast_log(o);
     const float converted = o <= omin ? lmin : (o >= omax ? lmax : l);
@@ -140,20 +158,12 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
 
-// A buffer of `count` floats (a multiple of kLaneBlock) in `storage`, its start aligned to 32 bytes.
-float* aligned_floats(std::vector<float>& storage, std::size_t count) {
-  constexpr std::size_t kAlign = 32;
-  storage.resize(count + kAlign / sizeof(float));
-  const auto misalignment = reinterpret_cast<std::uintptr_t>(storage.data()) % kAlign;
-  return storage.data() + (misalignment ? (kAlign - misalignment) / sizeof(float) : 0);
-}
-
 // One measurement's bin terms, computed on demand over the bins its columns need, in whole blocks of
 // kLaneBlock bins (the depth axis padded to whole blocks: the padding's terms are never read as bins).
 class MeasurementTerms {
 public:
-  explicit MeasurementTerms(const DepthAxis& depth) : depth_(depth), padded_bins_(block_ceil(depth.bins())) {
-    const auto n = static_cast<std::size_t>(padded_bins_);
+  explicit MeasurementTerms(const DepthAxis& depth) : depth_(depth) {
+    const auto n = static_cast<std::size_t>(block_ceil(depth.bins()));
     e_ = aligned_floats(e_storage_, n);
     g_ = aligned_floats(g_storage_, n);
     centres_.assign(depth.centres().begin(), depth.centres().end());
@@ -196,7 +206,6 @@ private:
     opdf_bin_terms(centres_.data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_ + first, g_ + first);
   }
   const DepthAxis& depth_;
-  const int padded_bins_;
   std::vector<float> e_storage_, g_storage_;
   float *e_ = nullptr, *g_ = nullptr;
   std::vector<double> centres_;  ///< the axis's, the padding repeating the last
@@ -384,7 +393,7 @@ public:
       : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()),
         inv_sigma_azimuth_(1.0 / model.sigma_horizontal(g_.binning())),
         inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())), lmin_(grid.log_odds_min()) {
-    // Rows of whole lane blocks, aligned: the kernel's loops run over whole blocks.
+    // Rows of whole lane blocks, each starting on a block boundary: the kernel's loops run over whole blocks.
     const auto row_floats = static_cast<std::size_t>(block_ceil(g_.depth().bins()));
     float* rows = aligned_floats(scratch_rows, kTile * kTile * row_floats);
     for (int i = 0; i < kTile * kTile; ++i) scratch_[i].v = rows + static_cast<std::size_t>(i) * row_floats;
