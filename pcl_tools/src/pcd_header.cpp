@@ -1,5 +1,6 @@
 #include "occ_improve/pcl/pcd_header.hpp"
 
+#include "header_text.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <pcl/io/lzf.h>
@@ -147,8 +148,11 @@ PcdHeader parse_header(std::istream& file, std::uint64_t file_size, const std::s
     const std::size_t next = newline == std::string::npos ? head.size() : newline + 1;
     const std::string text = head.substr(at, next - at);
     at = next;
-    for (unsigned char ch : text)
-      if (ch < 9 || (ch > 13 && ch < 32) || ch > 126) parser.fail("not a PCD file (binary data before the DATA line)");
+    switch (detail::classify_header_line(text)) {
+      case detail::HeaderText::binary: parser.fail("not a PCD file (binary data before the DATA line)");
+      case detail::HeaderText::vertical_space: parser.fail("a header line holds a vertical tab or form feed (PCL cannot read it)");
+      case detail::HeaderText::plain: break;
+    }
     std::vector<std::string> t = tokens(text);
     // PCL 1.13's readHeader skips only truly empty lines: one of white space alone (" ", "\t", a CR of
     // CRLF) before DATA makes its read dereference null (found by make fuzz). Refused, not crashed on.
@@ -252,7 +256,11 @@ void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Ve
   validate_pcd_file(path);
   pcl::PCDReader reader;
   int version = 0;
-  if (reader.read(path, blob, origin, orientation, version) < 0) throw FormatError("'" + path + "' is not a readable PCD file");
+  // The checks above refuse every input known to make PCL's reader throw; one they miss still ends as a
+  // typed error naming the file.
+  const int status =
+      detail::read_refusing_typed(path, "PCD", [&] { return reader.read(path, blob, origin, orientation, version); });
+  if (status < 0) throw FormatError("'" + path + "' is not a readable PCD file");
 }
 
 }  // namespace occ_improve
