@@ -41,12 +41,6 @@ int BinAxis::bin_from_edges(double value) const {
   return static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), value) - edges_.begin()) - 1;
 }
 
-// As the uniform case: the bins holding lo and hi (half-open), clipped by overlapping().
-void BinAxis::overlapping_from_edges(double lo, double hi, int& first, int& last) const {
-  first = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), lo) - edges_.begin()) - 1;
-  last = static_cast<int>(std::upper_bound(edges_.begin(), edges_.end(), hi) - edges_.begin()) - 1;
-}
-
 namespace {
 
 // The built-ins from the start; register_angular_binning() adds to it.

@@ -54,12 +54,9 @@ public:
   double centre_offset(int i, int di) const { return uniform_ ? di * width_ : centre(i + di) - centre(i); }
   /// Bins whose extent overlaps [lo, hi], clipped to the axis; empty (first > last) when none.
   void overlapping(double lo, double hi, int& first, int& last) const {
-    if (uniform_) {
-      first = floor_to_int((lo - min_) * inv_width_);
-      last = floor_to_int((hi - min_) * inv_width_);
-    } else {
-      overlapping_from_edges(lo, hi, first, last);
-    }
+    // The bins holding lo and hi (half-open), clipped.
+    first = uniform_ ? floor_to_int((lo - min_) * inv_width_) : bin_from_edges(lo);
+    last = uniform_ ? floor_to_int((hi - min_) * inv_width_) : bin_from_edges(hi);
     first = std::max(first, 0);
     last = std::min(last, bins_ - 1);
   }
@@ -70,8 +67,7 @@ private:
     const int i = static_cast<int>(x);
     return i - (x < i);
   }
-  int bin_from_edges(double value) const;
-  void overlapping_from_edges(double lo, double hi, int& first, int& last) const;
+  int bin_from_edges(double value) const;  // the bin holding value: -1 below min, bins() at or beyond max
 
   double min_ = 0, max_ = 1, width_ = 1, inv_width_ = 1;
   int bins_ = 0;
