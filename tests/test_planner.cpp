@@ -1,6 +1,7 @@
 // The planner: shapes, ties, the return-model discount, re-acquisition, the stop signal, bad requests.
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
+#include "occ_improve/planning/good_rays.hpp"
 #include "occ_improve/planning/planner.hpp"
 #include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
@@ -10,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <map>
 #include <set>
@@ -297,11 +299,11 @@ TEST(CoarseToFine, AtMostOneRayPerBlockPerShot) {
   }
 }
 
-// A wall at 2 m with a box at 1 m in front of its right part (columns 40-63), seen at every_fourth_ray.
-Mapper wall_and_box_seen_sparsely() {
+// A wall at 2 m, with a box at 1 m in front of its right part (columns 40-63), seen at every_fourth_ray.
+Mapper wall_seen_sparsely(bool with_box) {
   std::vector<float> depth(64 * 48, 2.0f);
   for (int v = 0; v < 48; ++v)
-    for (int u = 40; u < 64; ++u) depth[static_cast<std::size_t>(v * 64 + u)] = 1.0f;
+    for (int u = 40; u < 64 && with_box; ++u) depth[static_cast<std::size_t>(v * 64 + u)] = 1.0f;
   VirtualSensorParams clean;
   clean.sigma_depth_per_m2 = 0;
   clean.disparity_step_px = 0;
@@ -311,6 +313,8 @@ Mapper wall_and_box_seen_sparsely() {
   mapper.insert(PointSpan::from(sensor.points(grid, sensor.shoot(grid))));
   return mapper;
 }
+Mapper wall_and_box_seen_sparsely() { return wall_seen_sparsely(true); }
+Mapper flat_wall_seen_sparsely() { return wall_seen_sparsely(false); }
 
 // After a sparse pass over the wall and box, refinement by the residual goes to the box's edge.
 TEST(CoarseToFine, RefinementByTheResidualGoesToTheDepthEdge) {
@@ -350,10 +354,10 @@ TEST(CoarseToFine, RefinementByTrianglesGoesToTheDepthEdge) {
                InvalidParameter);
 }
 
-// Refinement by triangles counts the gain of the best rays left, as the rays shape does with as many
-// rays, not its centroids' own scores (low by construction: their neighbours' OPDFs reach them): so its
-// stop follows the map, not the triangles.
-TEST(CoarseToFine, TrianglesGainIsTheBestRaysLeft) {
+// Refinement by triangles stops on the gain of the best rays left, as the rays shape counts it with as
+// many rays, not on its centroids' own scores (low by construction: their neighbours' OPDFs reach them):
+// so its stop follows the map, not the triangles.
+TEST(CoarseToFine, TrianglesStopReadsTheBestRaysLeft) {
   const Mapper mapper = wall_and_box_seen_sparsely();
   ReturnRecord record = ReturnRecord::for_grid(64, 48);
   const std::vector<std::uint32_t> seen = every_fourth_ray();
@@ -363,12 +367,74 @@ TEST(CoarseToFine, TrianglesGainIsTheBestRaysLeft) {
   rays.budget_rays = static_cast<int>(triangles.ranked_rays);
   const Shot best = plan_next_shot(mapper, record, rays);
   EXPECT_EQ(triangles.ranked_rays, 40u);
-  EXPECT_NEAR(triangles.expected_gain, best.expected_gain, 1e-9 * std::abs(best.expected_gain));
+  EXPECT_NEAR(triangles.stop_gain, best.expected_gain, 1e-9 * std::abs(best.expected_gain));
+  EXPECT_EQ(best.stop_gain, best.expected_gain);
   EXPECT_EQ(triangles.stop, best.stop);
   double centroids = 0;  // what the centroids themselves score: less
   const std::vector<float> p = return_probability_map(record, PlanRequest{}.return_model);
   for (ColumnIndex c : triangles.columns) centroids += p[c] * mapper.improvement().value[c];
-  EXPECT_LT(centroids, triangles.expected_gain);
+  EXPECT_LT(centroids, triangles.stop_gain);
+}
+
+// The expected gain of a triangles shot is in rays made good (good_rays.hpp). First shot: nothing is
+// predicted anywhere and every coverage block gets rays, so the view's observable rays are expected to
+// come within 2 sigma with one return's probability (an empty record: p = 1, block return rate 1).
+TEST(CoarseToFine, TrianglesFirstShotExpectsTheViewPredicted) {
+  const Mapper mapper(kinect_v1(small_camera()));
+  const ReturnRecord none = ReturnRecord::for_grid(64, 48);
+  const Shot s = plan_next_shot(mapper, none, coarse_to_fine(256, RefineBy::triangles));
+  ASSERT_EQ(s.columns.size(), 256u);
+  const auto observable = static_cast<double>(std::count_if(mapper.improvement().value.begin(), mapper.improvement().value.end(),
+                                                            [](float v) { return !std::isnan(v); }));
+  EXPECT_GT(observable, 3000.0);
+  EXPECT_NEAR(s.expected_gain, within_two_sigma(1) * observable, 1e-6 * observable);
+}
+
+// Between samples of a flat wall every triangle is planar: no centroid is expected to gain anything (a
+// ray between samples that no triangle ranks would even lower the count a little: a plane through them
+// predicts better than one return). With the box, the triangles across its edge are off their plane by far more
+// than 2 sigma: each centroid is expected to make about its triangle's area good (4 x 4 / 2 = 8 px).
+TEST(CoarseToFine, TrianglesExpectRaysAtTheEdgeNotOnAFlatWall) {
+  ReturnRecord record = ReturnRecord::for_grid(64, 48);
+  const std::vector<std::uint32_t> seen = every_fourth_ray();
+  record.record_shot(seen, std::vector<std::uint8_t>(seen.size(), 1));
+  const Shot edge = plan_next_shot(wall_and_box_seen_sparsely(), record, coarse_to_fine(20, RefineBy::triangles));
+  const Shot flat = plan_next_shot(flat_wall_seen_sparsely(), record, coarse_to_fine(20, RefineBy::triangles));
+  ASSERT_EQ(edge.columns.size(), 20u);
+  ASSERT_EQ(flat.columns.size(), 20u);
+  EXPECT_LE(flat.expected_gain, 1e-6);
+  EXPECT_GE(flat.expected_gain, 20 * (within_two_sigma(1) - within_two_sigma(3)) - 1e-9);
+  EXPECT_GT(edge.expected_gain, 0.9 * 20 * 8);
+  EXPECT_LE(edge.expected_gain, 20 * 8 + 1e-9);
+}
+
+TEST(GoodRays, WithinTwoSigmaIsTheFusedGaussiansShare) {
+  EXPECT_EQ(within_two_sigma(0), 0.0);
+  for (std::uint32_t k = 1; k <= 4; ++k) {  // midpoint rule over N(0, 1 / k) on [-2, 2]
+    const double sd = 1.0 / std::sqrt(static_cast<double>(k));
+    double share = 0;
+    const int steps = 200000;
+    for (int i = 0; i < steps; ++i) {
+      const double x = -2.0 + 4.0 * (i + 0.5) / steps;
+      share += std::exp(-0.5 * x * x / (sd * sd)) / (sd * std::sqrt(2 * M_PI)) * 4.0 / steps;
+    }
+    EXPECT_NEAR(within_two_sigma(k), share, 1e-8) << k;
+  }
+  EXPECT_NEAR(within_two_sigma(1), 0.9545, 1e-4);
+}
+
+TEST(GoodRays, OffPlaneShareIsTheTailBeyondTwoSigma) {
+  EXPECT_EQ(off_plane_share(0), 0.0);
+  EXPECT_EQ(off_plane_share(-1), 0.0);
+  double previous = 0;
+  for (double n : {0.5, 1.0, 2.0, 4.0, 8.0, 100.0}) {  // interior ~ N(0, (n / 2)^2): P(|x| > 2)
+    const double sd = n / 2, tail = 1.0 - std::erf(2.0 / (sd * std::sqrt(2.0)));
+    EXPECT_NEAR(off_plane_share(n), tail, 1e-12) << n;
+    EXPECT_GT(off_plane_share(n), previous);
+    previous = off_plane_share(n);
+  }
+  EXPECT_NEAR(off_plane_share(4), 0.3173, 1e-4);  // n = 4: the interior's sd is 2, its 1-sd tail
+  EXPECT_GT(off_plane_share(100), 0.96);
 }
 
 // A noise-free wall at 2 m with a box at 1 m (u >= 40), optionally a silent 12 x 12 patch (no return).

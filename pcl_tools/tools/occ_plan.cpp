@@ -157,8 +157,9 @@ int run(const CommandLine& command_line) {
   const std::string predicted =
       write_predicted_depth(out, *source.mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
   char summary[512];
-  std::snprintf(summary, sizeof summary, "expected_gain %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n",
-                shot.expected_gain, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
+  std::snprintf(summary, sizeof summary,
+                "expected_gain %.6g\nstop_gain %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n", shot.expected_gain,
+                shot.stop_gain, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
   std::ofstream plan(out.file("plan.txt"));
   if (!(plan << summary) || !plan.flush()) throw IoError("cannot write '" + out.file("plan.txt") + "'");
   plan.close();

@@ -158,12 +158,17 @@ void bind_shot(py::module_& m) {
   s.def_property_readonly("columns", [](const Shot& x) { return flat_array(x.columns); },
                           "uint32 row-major ray indices (v, u = divmod(columns, width)): rays shape by rank, then "
                           "the re-acquisitions; other shapes ascending.")
-      .def_readonly("expected_gain", &Shot::expected_gain, "Sum of the scores of the rays taken by rank.")
+      .def_readonly("expected_gain", &Shot::expected_gain,
+                    "Sum of the scores of the rays taken by rank; coarse_to_fine refined by triangles: the rays "
+                    "they are expected to bring within 2 sigma (good_rays.hpp).")
+      .def_readonly("stop_gain", &Shot::stop_gain,
+                    "What the stop compares: expected_gain; refined by triangles, the summed score of the best "
+                    "ranked_rays rays left.")
       .def_readonly("ranked_rays", &Shot::ranked_rays, "Rays taken by rank (the rest are re-acquisitions).")
-      .def_readonly("stop", &Shot::stop, "expected_gain < stop_gain_per_ray_below * ranked_rays.")
+      .def_readonly("stop", &Shot::stop, "stop_gain < stop_gain_per_ray_below * ranked_rays.")
       .def_readonly("reason", &Shot::reason)
       .def("__len__", [](const Shot& x) { return x.columns.size(); });
-  def_fields_repr(s, {"expected_gain", "ranked_rays", "stop", "reason"});
+  def_fields_repr(s, {"expected_gain", "stop_gain", "ranked_rays", "stop", "reason"});
 }
 
 // A PlanMemory with the lock that plan_next_shot holds while the plan (GIL released) updates it.

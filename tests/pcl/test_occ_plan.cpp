@@ -15,6 +15,7 @@
 #include <random>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -46,6 +47,14 @@ protected:
     for (std::string line; std::getline(in, line);) ++n;
     return n;
   }
+  // plan.txt's "name value" lines; stop's yes / no as 1 / 0, the reason left out.
+  static std::map<std::string, double> plan_values(const fs::path& file) {
+    std::ifstream in(file);
+    std::map<std::string, double> values;
+    for (std::string name, value; in >> name && std::getline(in >> std::ws, value);)
+      if (name != "reason") values[name] = value == "yes" ? 1.0 : value == "no" ? 0.0 : std::stod(value);
+    return values;
+  }
   fs::path dir_;
 };
 
@@ -61,7 +70,14 @@ TEST_F(OccPlanTool, SampleShotIsWritten) {
   EXPECT_GT(lines(dir_ / "fine" / "shot_rays.csv"), 50u);
   EXPECT_LE(lines(dir_ / "fine" / "shot_rays.csv"), 501u);
   EXPECT_NE(r.output.find("stop no"), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("expected_gain"), std::string::npos) << r.output;
+  // plan.txt: the rays shape stops on its own gain; the default (triangles) expects rays made good and
+  // stops on the score of the best rays left (planner.hpp), below 0.1 a ray taken by rank.
+  const auto rays = plan_values(dir_ / "out" / "plan.txt"), triangles = plan_values(dir_ / "fine" / "plan.txt");
+  EXPECT_GT(rays.at("expected_gain"), 0.0);
+  EXPECT_EQ(rays.at("stop_gain"), rays.at("expected_gain"));
+  EXPECT_EQ(rays.at("ranked_rays"), 500.0);
+  EXPECT_NE(triangles.at("stop_gain"), triangles.at("expected_gain"));
+  EXPECT_EQ(triangles.at("stop") == 1.0, triangles.at("stop_gain") < 0.1 * triangles.at("ranked_rays"));
 }
 
 // -o never overwrites what the tool did not write: a folder with a user's file is refused (naming

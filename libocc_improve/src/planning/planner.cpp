@@ -3,6 +3,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/planning/good_rays.hpp"
 #include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/planning/sample_triangulation.hpp"
 
@@ -224,10 +225,15 @@ void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8
 // the samples leave sparse; a non-planar one (a vertex off its neighbours' plane, in sigmas) is where the
 // linear prediction is wrong; a flat, small one needs nothing. The centroid lies inside the triangle, so
 // it is an unsampled ray between samples; one ray per triangle keeps a shot's rays apart.
-std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
-                                             const std::vector<float>& score, const std::vector<float>& probability,
-                                             const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
-                                             double cap_sigmas, std::size_t left, SampleTriangulator* memory) {
+// The centroids' expected gains in rays made good (good_rays.hpp) come back with them, by column.
+struct TriangleRefinement {
+  std::vector<ColumnIndex> columns;  ///< the centroids, then the fill
+  std::vector<std::pair<ColumnIndex, double>> centroid_gain;
+};
+TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
+                                       const std::vector<float>& score, const std::vector<float>& probability,
+                                       const std::vector<std::uint8_t>& eligible, const ReturnRecord& returns,
+                                       double cap_sigmas, std::size_t left, SampleTriangulator* memory) {
   const std::vector<float> samples = measured_depth_image(surface, returns);
   // Neither a vertex (a sample) nor a ray asked before (measured, or silent): the centroid of a triangle
   // of a pixel or less rounds onto its own vertices.
@@ -244,22 +250,33 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
       unasked_count == 0 ? this_plan
       : memory           ? memory->update(samples, surface.width, surface.height, model)
                          : (this_plan = triangulate_samples(samples, surface.width, surface.height, model));
-  std::vector<std::pair<double, ColumnIndex>> ranked;  // (priority, centroid column)
+  struct Ranked {
+    double priority;
+    ColumnIndex column;  // the centroid's
+    double gain;         // in rays made good
+  };
+  std::vector<Ranked> ranked;
   for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
     const ColumnIndex c = triangulation.centroid_column(t);
     // Any observable ray (NaN: not observable), negative improvement too: a depth transition is where
     // the paper re-acquires. The return probability discounts silent regions; the improvement's size is
     // not used (in the ablation of the block refinement it ranked worse than geometry alone).
     if (!unasked[c] || std::isnan(score[c])) continue;
-    const double non_planarity = std::min(triangulation.non_planarity_sigmas(t), cap_sigmas);
-    const double priority = triangulation.area_px2(t) * non_planarity * probability[c];
-    if (priority > 0) ranked.push_back({priority, c});
+    const double non_planarity = triangulation.non_planarity_sigmas(t), area = triangulation.area_px2(t);
+    const double priority = area * std::min(non_planarity, cap_sigmas) * probability[c];
+    if (priority > 0) ranked.push_back({priority, c, probability[c] * area * off_plane_share(non_planarity)});
   }
   // In the order of a full sort, sorted a stretch at a time (twice the rays still missing: two small
   // triangles may share a centroid pixel): a dense map has ~2 triangles per sample, a shot takes a few
   // thousand.
-  const auto before = [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; };
-  std::vector<ColumnIndex> out;
+  // Ties by column, then by gain (two triangles of one centroid pixel and of one capped priority may
+  // differ in it), so that the order does not depend on the triangles' numbering.
+  const auto before = [](const Ranked& a, const Ranked& b) {
+    if (a.priority != b.priority) return a.priority > b.priority;
+    return a.column != b.column ? a.column < b.column : a.gain > b.gain;
+  };
+  TriangleRefinement refinement;
+  std::vector<ColumnIndex>& out = refinement.columns;
   for (std::size_t i = 0, sorted_end = 0; i < ranked.size() && out.size() < left; ++i) {
     if (i == sorted_end) {
       sorted_end = std::min(ranked.size(), i + 2 * (left - out.size()));
@@ -267,10 +284,11 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
       std::nth_element(first, last - 1, ranked.end(), before);  // linear; a heap's partial sort was not
       std::sort(first, last, before);
     }
-    const ColumnIndex c = ranked[i].second;
+    const ColumnIndex c = ranked[i].column;
     if (!unasked[c]) continue;  // two small triangles may share a centroid pixel
     unasked[c] = 0;
     out.push_back(c);
+    refinement.centroid_gain.push_back({c, ranked[i].gain});
   }
   // Once the triangles are a pixel or two (about half the rays measured) their centroids fall on their
   // own vertices: the rest of the shot goes to the unasked rays of highest score, spread as a jittered
@@ -281,7 +299,32 @@ std::vector<ColumnIndex> refine_by_triangles(const SurfaceMap& surface, const Se
   std::vector<std::uint8_t> not_in_shot = eligible;
   for (ColumnIndex c : out) not_in_shot[c] = 0;
   fill_by_score(score, not_in_shot, surface.width, left, out);
-  return out;
+  return refinement;
+}
+
+// The expected gain of a triangles shot in rays made good, per ray taken by the rules of good_rays.hpp.
+double good_ray_gain(const std::vector<ColumnIndex>& shot, const std::vector<std::pair<ColumnIndex, double>>& centroid_gain,
+                     const ImprovementPyramid& pyramid, int coverage_level, const std::vector<float>& probability,
+                     const std::vector<float>& block_return_rate, const ReturnRecord& returns) {
+  const int across = pyramid.blocks_x(coverage_level);
+  std::vector<std::uint32_t> shot_rays_in_block(pyramid.block_count(coverage_level), 0);
+  for (ColumnIndex c : shot) ++shot_rays_in_block[pyramid.block_of_column(coverage_level, c)];
+  std::vector<double> centroid(probability.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const auto& [c, g] : centroid_gain) centroid[c] = g;
+  double gain = 0;
+  for (ColumnIndex c : shot) {
+    const std::size_t b = pyramid.block_of_column(coverage_level, c);
+    const BlockSummary& block = pyramid.block(coverage_level, static_cast<int>(b % static_cast<std::size_t>(across)),
+                                              static_cast<int>(b / static_cast<std::size_t>(across)));
+    const bool measured = !returns.empty() && returns.returned()[c] > 0;
+    if (block.samples == 0)  // p as the coverage pass has it: a silent region's rays keep an optimistic prior
+      gain += probability[c] * block_return_rate[b] * within_two_sigma(1) * block.observable_rays / shot_rays_in_block[b];
+    else if (!std::isnan(centroid[c]))
+      gain += centroid[c];
+    else if (!measured)
+      gain += probability[c] * (within_two_sigma(1) - within_two_sigma(3));
+  }
+  return gain;
 }
 
 Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
@@ -295,8 +338,8 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
   Shot shot;
   // 1. Coverage: blocks without a sample, one jittered ray each, spread over the view by rank_key.
   const int coverage_level = ImprovementPyramid::level_of_block_size(request.coverage_block_columns);
+  const BlockBest blocks = best_ray_per_block(pyramid, coverage_level, score, mask, returns);
   {
-    const BlockBest blocks = best_ray_per_block(pyramid, coverage_level, score, mask, returns);
     const std::vector<ColumnIndex>& best = blocks.column;
     const int across = pyramid.blocks_x(coverage_level);
     std::vector<std::pair<std::uint64_t, std::size_t>> open;  // (rank_key over the block index, block)
@@ -313,25 +356,34 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
   const std::size_t coverage_rays = shot.columns.size();
   // 2. Refinement with the rays left.
   const std::size_t left = budget - coverage_rays;
+  TriangleRefinement triangles;
   if (left > 0) {
     std::vector<std::uint8_t> eligible = mask ? request.candidates : std::vector<std::uint8_t>(score.size(), 1);
     for (ColumnIndex c : shot.columns) eligible[c] = 0;
-    const std::vector<ColumnIndex> refined =
-        request.refine_by == RefineBy::triangles
-            ? refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas, left,
-                                  memory)
-            : refine_by_blocks(pyramid, model, score, probability, eligible, shot.columns, returns, request, left);
-    shot.columns.insert(shot.columns.end(), refined.begin(), refined.end());
+    if (request.refine_by == RefineBy::triangles) {
+      triangles = refine_by_triangles(*surface, model, score, probability, eligible, returns, request.residual_cap_sigmas,
+                                      left, memory);
+      shot.columns.insert(shot.columns.end(), triangles.columns.begin(), triangles.columns.end());
+    } else {
+      const std::vector<ColumnIndex> refined =
+          refine_by_blocks(pyramid, model, score, probability, eligible, shot.columns, returns, request, left);
+      shot.columns.insert(shot.columns.end(), refined.begin(), refined.end());
+    }
   }
   shot.ranked_rays = shot.columns.size();
-  // 3. Expected gain: the taken rays' scores; under triangles, the best rays left's, as the rays shape
-  // counts them, not the centroids': a centroid lies between samples whose OPDFs already inform it
-  // (improvement ~0.1, the stop level), while what it adds is to the linear prediction. Measured: with the
-  // centroids' scores the plan stopped at 0.05-0.1 frames; with this gain at 2.55-2.95 frames, 11-16 %
-  // after the knee (docs/SELECTIVE.md).
-  const std::vector<ColumnIndex> counted =
-      request.refine_by == RefineBy::triangles ? best_columns(score, mask, shot.ranked_rays) : shot.columns;
-  for (ColumnIndex c : counted) shot.expected_gain += score[c];
+  // 3. Expected gain: the taken rays' scores; under triangles, in rays made good (good_rays.hpp): a
+  // centroid lies between samples whose OPDFs already inform it (improvement ~0.1), while what it adds is
+  // to the linear prediction (measured: calibration r 0.18-0.26 with the improvement of the best rays left,
+  // docs/SELECTIVE.md). The stop reads the best rays left by score, as the rays shape counts them: with
+  // the centroids' scores the plan stopped at 0.05-0.1 frames.
+  if (request.refine_by == RefineBy::triangles) {
+    shot.expected_gain = good_ray_gain(shot.columns, triangles.centroid_gain, pyramid, coverage_level, probability,
+                                       blocks.return_rate, returns);
+    for (ColumnIndex c : best_columns(score, mask, shot.ranked_rays)) shot.stop_gain += score[c];
+  } else {
+    for (ColumnIndex c : shot.columns) shot.expected_gain += score[c];
+    shot.stop_gain = shot.expected_gain;
+  }
   return shot;
 }
 }  // namespace
@@ -373,10 +425,11 @@ std::vector<float> shot_scores(const ImprovementMap& improvement, const ReturnRe
 namespace {
 Shot decide_stop(Shot shot, const PlanRequest& request) {
   const double threshold = request.stop_gain_per_ray_below * static_cast<double>(shot.ranked_rays);
-  shot.stop = shot.ranked_rays == 0 || shot.expected_gain < threshold;
+  shot.stop = shot.ranked_rays == 0 || shot.stop_gain < threshold;
   std::ostringstream reason;
-  reason << "expected gain " << shot.expected_gain << " over " << shot.ranked_rays << " rays "
-         << (shot.stop ? "is below " : "reaches ") << threshold << " (" << request.stop_gain_per_ray_below << " per ray)";
+  reason << (shot.stop_gain == shot.expected_gain ? "expected gain " : "gain of the best rays left ") << shot.stop_gain
+         << " over " << shot.ranked_rays << " rays " << (shot.stop ? "is below " : "reaches ") << threshold << " ("
+         << request.stop_gain_per_ray_below << " per ray)";
   shot.reason = reason.str();
   return shot;
 }
@@ -392,6 +445,7 @@ Shot plan_next_shot(const ImprovementMap& improvement, const ReturnRecord& retur
               : request.shape == ShotShape::window ? window_shot(score, improvement.width, improvement.height, request)
                                                    : decimation_shot(score, improvement.width, improvement.height, request);
   if (request.shape != ShotShape::rays) shot.ranked_rays = shot.columns.size();
+  shot.stop_gain = shot.expected_gain;
   return decide_stop(std::move(shot), request);
 }
 

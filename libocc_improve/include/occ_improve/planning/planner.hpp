@@ -41,9 +41,11 @@
 //     each of the R triangles of largest area x non-planarity (its vertices' largest leave-one-out plane
 //     residual, in sigmas) x the centroid ray's return probability: large triangles are where the
 //     samples are sparse, non-planar ones where a linear prediction is wrong (the independent prototype
-//     of issue 20). Needs the surface: the Mapper overload of plan_next_shot. Its expected gain (and so
-//     its stop) is that of the best `budget` rays left by score, as the rays shape would take them: the
-//     centroids' own scores are low by construction (their neighbours' OPDFs reach them);
+//     of issue 20). Needs the surface: the Mapper overload of plan_next_shot. Its expected gain is in
+//     rays made good (good_rays.hpp: rays whose depth comes within 2 sigma): the paper's improvement of
+//     a centroid is low by construction (its neighbours' OPDFs reach it), while what it adds is to the
+//     linear prediction. Its stop reads the score of the best `budget` rays left, as the rays shape would
+//     take them;
 //     (default residual: in the ablation the paper's measure made (g) slower on every scene)
 //     with p = the return probability of the block's best ray x the block's return rate (R + 1) / (A + 1)
 //     over the record's asks of its columns (the per-ray prior only reaches 8 neighbours; measured without
@@ -105,9 +107,14 @@ struct PlanRequest {
 
 struct Shot {
   std::vector<ColumnIndex> columns;  ///< rays shape: by rank, then the negative ones; else ascending
-  double expected_gain = 0;          ///< sum of the scores of the rays taken by rank
-  std::size_t ranked_rays = 0;       ///< rays taken by rank (the rest are re-acquisitions)
-  bool stop = false;                 ///< expected_gain < stop_gain_per_ray_below * ranked_rays
+  /// Sum of the scores of the rays taken by rank; refined by triangles, the rays they are expected to
+  /// make good (good_rays.hpp; negative when they are expected to lower the quality).
+  double expected_gain = 0;
+  /// What the stop compares: expected_gain; refined by triangles, the summed score of the best
+  /// ranked_rays rays left (what the rays shape would expect).
+  double stop_gain = 0;
+  std::size_t ranked_rays = 0;  ///< rays taken by rank (the rest are re-acquisitions)
+  bool stop = false;            ///< stop_gain < stop_gain_per_ray_below * ranked_rays
   std::string reason;
 };
 
