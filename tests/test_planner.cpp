@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <set>
 #include <string>
@@ -354,26 +355,42 @@ TEST(CoarseToFine, RefinementByTrianglesGoesToTheDepthEdge) {
                InvalidParameter);
 }
 
-// Refinement by triangles stops on the gain of the best rays left, as the rays shape counts it with as
-// many rays, not on its centroids' own scores (low by construction: their neighbours' OPDFs reach them):
-// so its stop follows the map, not the triangles.
-TEST(CoarseToFine, TrianglesStopReadsTheBestRaysLeft) {
+// Refinement by triangles stops on the mean score of the view's best fifth of rays (stop_view_share), not
+// on the shot's rays: a map's state, not a shot's size, decides (planner.hpp); nor on its centroids' own
+// scores (low by construction: their neighbours' OPDFs reach them).
+TEST(CoarseToFine, TrianglesStopReadsTheViewsBestShare) {
   const Mapper mapper = wall_and_box_seen_sparsely();
   ReturnRecord record = ReturnRecord::for_grid(64, 48);
   const std::vector<std::uint32_t> seen = every_fourth_ray();
   record.record_shot(seen, std::vector<std::uint8_t>(seen.size(), 1));
-  const Shot triangles = plan_next_shot(mapper, record, coarse_to_fine(40, RefineBy::triangles));
-  PlanRequest rays;
-  rays.budget_rays = static_cast<int>(triangles.ranked_rays);
-  const Shot best = plan_next_shot(mapper, record, rays);
-  EXPECT_EQ(triangles.ranked_rays, 40u);
-  EXPECT_NEAR(triangles.stop_gain, best.expected_gain, 1e-9 * std::abs(best.expected_gain));
-  EXPECT_EQ(best.stop_gain, best.expected_gain);
-  EXPECT_EQ(triangles.stop, best.stop);
+  std::vector<float> scores;  // recomputed here: improvement x return probability, observable rays
+  for (float v : shot_scores(mapper.improvement(), record))
+    if (!std::isnan(v)) scores.push_back(v);
+  std::sort(scores.begin(), scores.end(), std::greater<>());
+  const auto mean_of_best = [&](double share) {
+    const auto k = static_cast<std::size_t>(std::ceil(share * static_cast<double>(scores.size())));
+    double sum = 0;
+    for (std::size_t i = 0; i < k; ++i) sum += scores[i];
+    return sum / static_cast<double>(k);
+  };
+  for (int budget : {10, 40, 300}) {  // whatever the shot's size
+    PlanRequest request = coarse_to_fine(budget, RefineBy::triangles);
+    const Shot s = plan_next_shot(mapper, record, request);
+    EXPECT_NEAR(s.stop_gain_per_ray, mean_of_best(0.2), 1e-6) << budget;
+    EXPECT_EQ(s.stop, s.stop_gain_per_ray < 0.1);
+    request.stop_view_share = 1.0;
+    EXPECT_NEAR(plan_next_shot(mapper, record, request).stop_gain_per_ray, mean_of_best(1.0), 1e-6) << budget;
+  }
+  const Shot s = plan_next_shot(mapper, record, coarse_to_fine(40, RefineBy::triangles));
   double centroids = 0;  // what the centroids themselves score: less
   const std::vector<float> p = return_probability_map(record, PlanRequest{}.return_model);
-  for (ColumnIndex c : triangles.columns) centroids += p[c] * mapper.improvement().value[c];
-  EXPECT_LT(centroids, triangles.stop_gain);
+  for (ColumnIndex c : s.columns) centroids += p[c] * mapper.improvement().value[c];
+  EXPECT_LT(centroids / 40, s.stop_gain_per_ray);
+  // The rays shape stops on its own rays' gain.
+  PlanRequest rays;
+  rays.budget_rays = 40;
+  const Shot best = plan_next_shot(mapper, record, rays);
+  EXPECT_NEAR(best.stop_gain_per_ray, best.expected_gain / 40, 1e-12);
 }
 
 // The expected gain of a triangles shot is in rays made good (good_rays.hpp). First shot: nothing is
@@ -534,6 +551,11 @@ TEST(CoarseToFine, BadRequestsThrowNamingTheValue) {
     FAIL();
   } catch (const InvalidParameter& e) {
     EXPECT_NE(std::string(e.what()).find("12"), std::string::npos) << e.what();
+  }
+  for (double share : {0.0, -0.1, 1.5, std::nan("")}) {
+    r = coarse_to_fine(10, RefineBy::triangles);
+    r.stop_view_share = share;
+    EXPECT_THROW(plan_next_shot(mapper, none, r), InvalidParameter) << share;
   }
   r = coarse_to_fine(10);
   r.residual_cap_sigmas = 0;

@@ -58,7 +58,7 @@ const ToolFlags kFlags{
     joined({output_folder_flag_names(),
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
              "-stop_on_signal", "-simulate", "-budget", "-shape", "-refine", "-window",
-             "-negative_share", "-stop_gain", "-max_shots", "-load", "-save", "-threads", "-k",
+             "-negative_share", "-stop_gain", "-stop_share", "-max_shots", "-load", "-save", "-threads", "-k",
              "-min_improvement", "-predicted_depth", "-radius", "-view", "-view_screenshot"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}}),
     {{"-o", "occ_improve_live_out"}},

@@ -46,7 +46,7 @@ const ToolFlags kFlags{
     "  OUTDIR/predicted_depth.png  with -predicted_depth nearest|linear: the map's dense depth from its\n"
     "                         samples, 16-bit grey in millimetres (0 = none within -radius)\n",
     joined({output_folder_flag_names(), {"-q", "-load", "-sample", "-budget", "-shape", "-refine", "-window",
-                                         "-negative_share", "-stop_gain", "-predicted_depth", "-radius"},
+                                         "-negative_share", "-stop_gain", "-stop_share", "-predicted_depth", "-radius"},
             sensor_flag_names(), camera_flag_names(), {"-no_poses", "-mask"}, batch_flag_names()}),
     {},
     {},
@@ -158,8 +158,8 @@ int run(const CommandLine& command_line) {
       write_predicted_depth(out, *source.mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
   char summary[512];
   std::snprintf(summary, sizeof summary,
-                "expected_gain %.6g\nstop_gain %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n", shot.expected_gain,
-                shot.stop_gain, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
+                "expected_gain %.6g\nstop_gain_per_ray %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n",
+                shot.expected_gain, shot.stop_gain_per_ray, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
   std::ofstream plan(out.file("plan.txt"));
   if (!(plan << summary) || !plan.flush()) throw IoError("cannot write '" + out.file("plan.txt") + "'");
   plan.close();

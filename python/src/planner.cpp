@@ -135,6 +135,7 @@ void bind_plan_request(py::module_& m) {
       .def_readwrite("window_height_columns", &PlanRequest::window_height_columns)
       .def_readwrite("negative_share", &PlanRequest::negative_share)
       .def_readwrite("stop_gain_per_ray_below", &PlanRequest::stop_gain_per_ray_below)
+      .def_readwrite("stop_view_share", &PlanRequest::stop_view_share)
       .def_readwrite("return_model", &PlanRequest::return_model)
       .def_readwrite("coverage_block_columns", &PlanRequest::coverage_block_columns)
       .def_readwrite("refine_by", &PlanRequest::refine_by)
@@ -150,7 +151,7 @@ void bind_plan_request(py::module_& m) {
       .def("validate", &PlanRequest::validate, py::arg("grid_width"), py::arg("grid_height"),
            "Raises InvalidParameter naming the bad value, InvalidInput for a mask of the wrong size.");
   def_fields_repr(q, {"budget_rays", "shape", "window_width_columns", "window_height_columns", "negative_share",
-                      "stop_gain_per_ray_below", "return_model"});
+                      "stop_gain_per_ray_below", "stop_view_share", "return_model"});
 }
 
 void bind_shot(py::module_& m) {
@@ -161,14 +162,14 @@ void bind_shot(py::module_& m) {
       .def_readonly("expected_gain", &Shot::expected_gain,
                     "Sum of the scores of the rays taken by rank; coarse_to_fine refined by triangles: the rays "
                     "they are expected to bring within 2 sigma (good_rays.hpp).")
-      .def_readonly("stop_gain", &Shot::stop_gain,
-                    "What the stop compares: expected_gain; refined by triangles, the summed score of the best "
-                    "ranked_rays rays left.")
+      .def_readonly("stop_gain_per_ray", &Shot::stop_gain_per_ray,
+                    "What the stop compares with stop_gain_per_ray_below: expected_gain / ranked_rays; refined by "
+                    "triangles, the mean score of the view's best stop_view_share of rays.")
       .def_readonly("ranked_rays", &Shot::ranked_rays, "Rays taken by rank (the rest are re-acquisitions).")
-      .def_readonly("stop", &Shot::stop, "stop_gain < stop_gain_per_ray_below * ranked_rays.")
+      .def_readonly("stop", &Shot::stop, "ranked_rays == 0 or stop_gain_per_ray < stop_gain_per_ray_below.")
       .def_readonly("reason", &Shot::reason)
       .def("__len__", [](const Shot& x) { return x.columns.size(); });
-  def_fields_repr(s, {"expected_gain", "stop_gain", "ranked_rays", "stop", "reason"});
+  def_fields_repr(s, {"expected_gain", "stop_gain_per_ray", "ranked_rays", "stop", "reason"});
 }
 
 // A PlanMemory with the lock that plan_next_shot holds while the plan (GIL released) updates it.

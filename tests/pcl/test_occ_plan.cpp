@@ -70,14 +70,20 @@ TEST_F(OccPlanTool, SampleShotIsWritten) {
   EXPECT_GT(lines(dir_ / "fine" / "shot_rays.csv"), 50u);
   EXPECT_LE(lines(dir_ / "fine" / "shot_rays.csv"), 501u);
   EXPECT_NE(r.output.find("stop no"), std::string::npos) << r.output;
-  // plan.txt: the rays shape stops on its own gain; the default (triangles) expects rays made good and
-  // stops on the score of the best rays left (planner.hpp), below 0.1 a ray taken by rank.
+  // plan.txt: the rays shape stops on its own gain per ray; the default (triangles) expects rays made
+  // good and stops on the mean score of the view's best fifth (planner.hpp), below -stop_gain 0.1.
   const auto rays = plan_values(dir_ / "out" / "plan.txt"), triangles = plan_values(dir_ / "fine" / "plan.txt");
   EXPECT_GT(rays.at("expected_gain"), 0.0);
-  EXPECT_EQ(rays.at("stop_gain"), rays.at("expected_gain"));
+  EXPECT_NEAR(rays.at("stop_gain_per_ray"), rays.at("expected_gain") / 500, 1e-6 * rays.at("stop_gain_per_ray"));
   EXPECT_EQ(rays.at("ranked_rays"), 500.0);
-  EXPECT_NE(triangles.at("stop_gain"), triangles.at("expected_gain"));
-  EXPECT_EQ(triangles.at("stop") == 1.0, triangles.at("stop_gain") < 0.1 * triangles.at("ranked_rays"));
+  EXPECT_GT(triangles.at("stop_gain_per_ray"), 0.0);
+  EXPECT_EQ(triangles.at("stop") == 1.0, triangles.at("stop_gain_per_ray") < 0.1);
+  // -stop_share 1: the whole view's mean, lower than its best fifth's; out of (0, 1]: one line, exit 1.
+  ASSERT_EQ(run("-sample -budget 500 -stop_share 1 -o " + (dir_ / "all").string()).exit_code, 0);
+  EXPECT_LT(plan_values(dir_ / "all" / "plan.txt").at("stop_gain_per_ray"), triangles.at("stop_gain_per_ray"));
+  const ToolRun bad = run("-sample -stop_share 0 -o " + (dir_ / "bad").string());
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("-stop_share"), std::string::npos) << bad.output;
 }
 
 // -o never overwrites what the tool did not write: a folder with a user's file is refused (naming

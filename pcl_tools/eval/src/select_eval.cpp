@@ -164,7 +164,8 @@ public:
       const Quality q = map_quality(mapper_, scene_, map_, options_.radius, rule_);
       csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
           << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
-          << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << '\n';
+          << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << ','
+          << shot.stop_gain_per_ray << '\n';
       curve_.push_back({static_cast<double>(rays_asked_), q.within});
       calibration_.push_back({expected_since, static_cast<double>(q.good) - static_cast<double>(good_before)});
       good_before = q.good;
@@ -282,7 +283,7 @@ double pearson(const std::vector<std::pair<double, double>>& xy) {
 std::vector<SelectSummaryRow> evaluate_select_scene(const SelectScene& scene, const SelectEvalOptions& options,
                                                     std::ostream& csv) {
   csv << "scene,strategy,budget_rays,shot,rays_asked,returns,quality,coverage,mean_abs_error_m,expected_gain,"
-         "realised_good_rays,plan_stop\n";
+         "realised_good_rays,plan_stop,stop_gain_per_ray\n";
   const auto n = static_cast<int>(scene.depth_m.size());
   Run reference(scene, SelectStrategy::full, n, options);
   reference.run(csv);

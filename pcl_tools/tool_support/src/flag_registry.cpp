@@ -223,6 +223,9 @@ std::vector<FlagSpec> plan_and_octomap_flags() {
       bounded(value_flag("-negative_share", K::number, "S", kPlan, "share of a shot re-acquiring negative rays", "0"), 0,
               1, false, true),
       bounded(value_flag("-stop_gain", K::number, "G", kPlan, "stop below G expected gain per ray", "0.1"), 0),
+      bounded(value_flag("-stop_share", K::number, "S", kPlan,
+                         "-refine triangles: the stop reads the mean score of the view's best share S of rays", "0.2"),
+              0, 1, true, false),
       choice("-predicted_depth", {"none", "nearest", "linear"}, kPlan,
              "also write predicted_depth.png: the map's dense depth from its samples (16-bit mm) by this rule "
              "(docs/SELECTIVE.md \"Predicted depth\"; radius: -radius)",

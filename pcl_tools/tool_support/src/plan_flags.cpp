@@ -35,6 +35,7 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
   }
   request.negative_share = *command_line.number("-negative_share");
   request.stop_gain_per_ray_below = *command_line.number("-stop_gain");
+  request.stop_view_share = *command_line.number("-stop_share");
   return request;
 }
 
