@@ -60,3 +60,8 @@ def test_targets_row_of_the_triangles_strategy(tmp_path):
     r = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / (
         sum((x - mx) ** 2 for x in xs) * sum((y - my) ** 2 for y in ys)) ** 0.5
     assert cells[10] == f"{r:.2f}"
+    xs, ys = xs[1:], ys[1:]  # the same without the first checkpoint
+    mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+    r_later = sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / (
+        sum((x - mx) ** 2 for x in xs) * sum((y - my) ** 2 for y in ys)) ** 0.5
+    assert cells[11] == f"{r_later:.2f}"
