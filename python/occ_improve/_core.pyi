@@ -378,6 +378,8 @@ class PlanRequest:
     window_height_columns: int
     negative_share: float
     stop_gain_per_ray_below: float
+    stop_view_share: float
+    """refine_by triangles: the stop reads the mean score of the view's best share of rays, in (0, 1]."""
     return_model: ReturnModelParams
     candidates: Optional[npt.NDArray[np.bool_]]
     """Set: an H x W bool mask (or None); read back flat (row-major) or None."""
@@ -387,7 +389,8 @@ class PlanRequest:
     residual_cap_sigmas: float
     def __init__(self, *, budget_rays: int = 4096, shape: ShotShape = ShotShape.rays,
                  window_width_columns: int = 64, window_height_columns: int = 64, negative_share: float = 0.0,
-                 stop_gain_per_ray_below: float = 0.1, candidates: Optional[_ArrayLike] = None,
+                 stop_gain_per_ray_below: float = 0.1, stop_view_share: float = 0.2,
+                 candidates: Optional[_ArrayLike] = None,
                  return_model: ReturnModelParams = ..., coverage_block_columns: int = 16,
                  refine_by: RefineBy = RefineBy.residual, local_model: LocalModel = LocalModel.constant,
                  residual_cap_sigmas: float = 8.0) -> None: ...
@@ -398,7 +401,11 @@ class Shot:
     def columns(self) -> npt.NDArray[np.uint32]:
         """Row-major ray indices: v, u = divmod(columns, width)."""
     @property
-    def expected_gain(self) -> float: ...
+    def expected_gain(self) -> float:
+        """Sum of the taken rays' scores; refine_by triangles: rays expected to come within 2 sigma."""
+    @property
+    def stop_gain_per_ray(self) -> float:
+        """What the stop compares with stop_gain_per_ray_below."""
     @property
     def ranked_rays(self) -> int: ...
     @property
