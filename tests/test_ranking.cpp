@@ -10,7 +10,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
+#include <random>
 
 namespace occ_improve {
 namespace {
@@ -61,6 +63,34 @@ TEST(Ranking, TopRaysAreTheLargestBestFirst) {
 // A tie over a 64 x 48 view, 5 % of it: one column per 4 x 4 cell (floor(sqrt(20)) = 4) and never two in
 // one cell, spread over both halves; then values that differ: each cell gives its best column first; NaN
 // and ineligible columns are never taken, and a request beyond what is left returns what is left.
+// mean_of_best_share against a full sort: many equal values, values that share a histogram bucket (the
+// top 16 bits) but differ, negatives, NaN and a mask, at shares down to a single value.
+TEST(Ranking, MeanOfBestShareIsTheMeanOfTheSortedTop) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> fine(0.1380f, 0.1390f), any(-0.5f, 0.35f);
+  std::vector<float> value(5000);
+  std::vector<std::uint8_t> mask(value.size());
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    value[i] = i % 5 == 0 ? 0.324f : i % 5 == 1 ? fine(rng) : i % 5 == 2 ? any(rng) : i % 97 == 0 ? NAN : 0.138f;
+    mask[i] = i % 7 != 0;
+  }
+  const std::uint8_t* none = nullptr;
+  for (const std::uint8_t* eligible : {none, static_cast<const std::uint8_t*>(mask.data())}) {
+    std::vector<double> sorted;
+    for (std::size_t i = 0; i < value.size(); ++i)
+      if ((!eligible || eligible[i]) && !std::isnan(value[i])) sorted.push_back(value[i]);
+    std::sort(sorted.begin(), sorted.end(), std::greater<>());
+    for (double share : {1e-4, 0.05, 0.2, 0.21, 0.5, 0.9, 1.0}) {
+      const auto k = static_cast<std::size_t>(std::ceil(share * static_cast<double>(sorted.size())));
+      double sum = 0;
+      for (std::size_t i = 0; i < k; ++i) sum += sorted[i];
+      EXPECT_NEAR(mean_of_best_share(value, eligible, share), sum / static_cast<double>(k), 1e-9) << share;
+    }
+  }
+  EXPECT_EQ(mean_of_best_share(std::vector<float>(10, NAN), nullptr, 0.2), 0.0);
+  EXPECT_EQ(mean_of_best_share({}, nullptr, 0.2), 0.0);
+}
+
 TEST(Ranking, SpreadBestColumnsIsAJitteredGridAtTheScaleOfK) {
   const int w = 64, h = 48;
   std::vector<float> value(static_cast<std::size_t>(w * h), 0.3f);

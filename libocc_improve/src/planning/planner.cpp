@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -229,7 +228,7 @@ void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8
 // The centroids' expected gains in rays made good (good_rays.hpp) come back with them, by column.
 struct TriangleRefinement {
   std::vector<ColumnIndex> columns;  ///< the centroids, then the fill
-  std::vector<std::pair<ColumnIndex, double>> centroid_gain;
+  std::vector<double> centroid_gain;  ///< of columns[0, centroid_gain.size()): the centroids
 };
 TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorModel& model,
                                        const std::vector<float>& score, const std::vector<float>& probability,
@@ -289,7 +288,7 @@ TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorMo
     if (!unasked[c]) continue;  // two small triangles may share a centroid pixel
     unasked[c] = 0;
     out.push_back(c);
-    refinement.centroid_gain.push_back({c, ranked[i].gain});
+    refinement.centroid_gain.push_back(ranked[i].gain);
   }
   // Once the triangles are a pixel or two (about half the rays measured) their centroids fall on their
   // own vertices: the rest of the shot goes to the unasked rays of highest score, spread as a jittered
@@ -303,25 +302,27 @@ TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorMo
   return refinement;
 }
 
-// The expected gain of a triangles shot in rays made good, per ray taken by the rules of good_rays.hpp.
-double good_ray_gain(const std::vector<ColumnIndex>& shot, const std::vector<std::pair<ColumnIndex, double>>& centroid_gain,
-                     const ImprovementPyramid& pyramid, int coverage_level, const std::vector<float>& probability,
-                     const std::vector<float>& block_return_rate, const ReturnRecord& returns) {
+// The expected gain of a triangles shot in rays made good, per ray taken by the rules of good_rays.hpp;
+// shot[first_centroid + i] is the centroid of gain centroid_gain[i].
+double good_ray_gain(const std::vector<ColumnIndex>& shot, std::size_t first_centroid,
+                     const std::vector<double>& centroid_gain, const ImprovementPyramid& pyramid, int coverage_level,
+                     const std::vector<float>& probability, const std::vector<float>& block_return_rate,
+                     const ReturnRecord& returns) {
   const int across = pyramid.blocks_x(coverage_level);
   std::vector<std::uint32_t> shot_rays_in_block(pyramid.block_count(coverage_level), 0);
   for (ColumnIndex c : shot) ++shot_rays_in_block[pyramid.block_of_column(coverage_level, c)];
-  std::vector<double> centroid(probability.size(), std::numeric_limits<double>::quiet_NaN());
-  for (const auto& [c, g] : centroid_gain) centroid[c] = g;
   double gain = 0;
-  for (ColumnIndex c : shot) {
+  for (std::size_t i = 0; i < shot.size(); ++i) {
+    const ColumnIndex c = shot[i];
+    const bool centroid = i >= first_centroid && i - first_centroid < centroid_gain.size();
     const std::size_t b = pyramid.block_of_column(coverage_level, c);
     const BlockSummary& block = pyramid.block(coverage_level, static_cast<int>(b % static_cast<std::size_t>(across)),
                                               static_cast<int>(b / static_cast<std::size_t>(across)));
     const bool measured = !returns.empty() && returns.returned()[c] > 0;
     if (block.samples == 0)  // p as the coverage pass has it: a silent region's rays keep an optimistic prior
       gain += probability[c] * block_return_rate[b] * within_two_sigma(1) * block.observable_rays / shot_rays_in_block[b];
-    else if (!std::isnan(centroid[c]))
-      gain += centroid[c];
+    else if (centroid)
+      gain += centroid_gain[i - first_centroid];
     else if (!measured)
       gain += probability[c] * (within_two_sigma(1) - within_two_sigma(3));
   }
@@ -329,21 +330,6 @@ double good_ray_gain(const std::vector<ColumnIndex>& shot, const std::vector<std
 }
 
 double per_ray(double gain, std::size_t rays) { return rays ? gain / static_cast<double>(rays) : 0.0; }
-
-// Mean of the largest ceil(share x n) of the n candidate (mask), observable (non-NaN) scores; 0 for none.
-double mean_of_best_share(const std::vector<float>& score, const std::uint8_t* mask, double share) {
-  std::vector<float> candidates;
-  candidates.reserve(score.size());
-  for (std::size_t c = 0; c < score.size(); ++c)
-    if ((!mask || mask[c]) && !std::isnan(score[c])) candidates.push_back(score[c]);
-  const auto k = static_cast<std::size_t>(std::ceil(share * static_cast<double>(candidates.size())));
-  if (k == 0) return 0.0;
-  std::nth_element(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(k - 1), candidates.end(),
-                   std::greater<>());
-  double sum = 0;
-  for (std::size_t i = 0; i < k; ++i) sum += candidates[i];
-  return sum / static_cast<double>(k);
-}
 
 Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyramid& pyramid, const SurfaceMap* surface,
                          const SensorModel& model, const ReturnRecord& returns, const PlanRequest& request,
@@ -397,8 +383,8 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
   // rays left, 1 % shots stopped 13-20 % after the knee (the fewer rays, the higher their mean), 20 % shots
   // within 8 % (docs/SELECTIVE.md "Gain in rays, and the stop").
   if (request.refine_by == RefineBy::triangles) {
-    shot.expected_gain = good_ray_gain(shot.columns, triangles.centroid_gain, pyramid, coverage_level, probability,
-                                       blocks.return_rate, returns);
+    shot.expected_gain = good_ray_gain(shot.columns, coverage_rays, triangles.centroid_gain, pyramid, coverage_level,
+                                       probability, blocks.return_rate, returns);
     shot.stop_gain_per_ray = mean_of_best_share(score, mask, request.stop_view_share);
   } else {
     for (ColumnIndex c : shot.columns) shot.expected_gain += score[c];

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <sstream>
 
@@ -38,27 +39,41 @@ std::uint64_t rank_key(float value, ColumnIndex column) {
   return (std::uint64_t{ordered_bits(value)} << 32) | ~spread_rank(column);
 }
 
-/// A histogram of the top 16 key bits finds a bound below which no winner lies, so only the few
-/// candidates above it are sorted (the planner ranks a 640 x 480 view per shot).
+namespace {
+/// A histogram of the top 16 bits of the values' ordered_bits (the top of rank_key) over the eligible,
+/// non-NaN values finds a bound below which none of the k largest lies, so only the few values above it
+/// are sorted (the planner ranks a 640 x 480 view per shot).
+struct TopBuckets {
+  std::size_t eligible = 0;  ///< eligible, non-NaN values
+  std::vector<std::uint32_t> histogram = std::vector<std::uint32_t>(1u << 16, 0);
+  static std::uint32_t bucket(float v) { return ordered_bits(v) >> 16; }
+  TopBuckets(const std::vector<float>& value, const std::uint8_t* eligible_mask) {
+    for (std::size_t c = 0; c < value.size(); ++c)
+      if ((!eligible_mask || eligible_mask[c]) && !std::isnan(value[c])) ++histogram[bucket(value[c])], ++eligible;
+  }
+  /// The largest bound whose buckets >= bound hold at least k values (all of them: 0), and how many they
+  /// hold.
+  std::pair<std::uint32_t, std::size_t> bound_for(std::size_t k) const {
+    std::size_t above = 0;
+    std::uint32_t bound = 1u << 16;
+    while (bound > 0 && above < k) above += histogram[--bound];
+    return {bound, above};
+  }
+};
+}  // namespace
+
 std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k) {
   const std::size_t n = value.size();
-  std::vector<std::uint32_t> histogram(1u << 16, 0);
   const auto takes = [&](std::size_t c) { return (!eligible || eligible[c]) && !std::isnan(value[c]); };
-  // The key's top 16 bits are the value's (rank_key): the column's hash is needed only for candidates.
-  const auto top_bits = [&](std::size_t c) { return ordered_bits(value[c]) >> 16; };
-  for (std::size_t c = 0; c < n; ++c)
-    if (takes(c)) ++histogram[top_bits(c)];
-  std::size_t above = 0;
-  std::uint64_t bound = 1u << 16;
-  while (bound > 0 && above < k) above += histogram[--bound];
+  const auto [bound, above] = TopBuckets(value, eligible).bound_for(k);
   struct Ranked {
     std::uint64_t key;
     ColumnIndex column;
   };
   std::vector<Ranked> candidates;
   candidates.reserve(above);
-  for (std::size_t c = 0; c < n; ++c)
-    if (top_bits(c) >= bound && takes(c)) {
+  for (std::size_t c = 0; c < n; ++c)  // the column's hash is needed only for candidates
+    if (TopBuckets::bucket(value[c]) >= bound && takes(c)) {
       const auto column = static_cast<ColumnIndex>(c);
       candidates.push_back({rank_key(value[c], column), column});
     }
@@ -69,6 +84,25 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
   std::vector<ColumnIndex> out(k);
   for (std::size_t i = 0; i < k; ++i) out[i] = candidates[i].column;
   return out;
+}
+
+double mean_of_best_share(const std::vector<float>& value, const std::uint8_t* eligible, double share) {
+  const TopBuckets buckets(value, eligible);
+  const auto k = static_cast<std::size_t>(std::ceil(share * static_cast<double>(buckets.eligible)));
+  if (k == 0) return 0.0;
+  const auto [bound, above] = buckets.bound_for(k);
+  double sum = 0;  // the values above the bound's bucket, all taken; the bucket's own, sorted
+  std::vector<float> edge;
+  for (std::size_t c = 0; c < value.size(); ++c) {
+    if ((eligible && !eligible[c]) || std::isnan(value[c])) continue;
+    const std::uint32_t b = TopBuckets::bucket(value[c]);
+    if (b > bound) sum += value[c];
+    else if (b == bound) edge.push_back(value[c]);
+  }
+  const std::size_t from_edge = k - (above - edge.size());
+  std::nth_element(edge.begin(), edge.begin() + static_cast<std::ptrdiff_t>(from_edge - 1), edge.end(), std::greater<>());
+  for (std::size_t i = 0; i < from_edge; ++i) sum += edge[i];
+  return sum / static_cast<double>(k);
 }
 
 SamplingCells::SamplingCells(std::size_t candidates, std::size_t k, int width) {

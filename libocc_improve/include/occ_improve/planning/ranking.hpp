@@ -35,6 +35,10 @@ std::uint64_t rank_key(float value, ColumnIndex column);
 /// The k columns of largest rank_key among the eligible ones (nullptr: all), best first; NaN values (not
 /// observable) are never taken. Returns min(k, eligible non-NaN columns) columns.
 std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std::uint8_t* eligible, std::size_t k);
+/// Mean of the largest ceil(share x n) of the n eligible (nullptr: all), non-NaN values; 0 when n = 0.
+/// share in (0, 1] (the caller validates it). Exact: the same histogram bound as best_columns, then the
+/// bound's bucket sorted.
+double mean_of_best_share(const std::vector<float>& value, const std::uint8_t* eligible, double share);
 
 /// The cells of a jittered grid at the scale of a sampling of k among `candidates` columns of a grid
 /// `width` columns wide: s x s columns with s = floor(sqrt(candidates / k)) (at least 1), so that the k
