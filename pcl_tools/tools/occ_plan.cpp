@@ -159,7 +159,8 @@ int run(const CommandLine& command_line) {
   char summary[512];
   std::snprintf(summary, sizeof summary,
                 "expected_gain %.6g\nstop_gain_per_ray %.6g\nrays %zu\nranked_rays %zu\nstop %s\nreason %s\n",
-                shot.expected_gain, shot.stop_gain_per_ray, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no", shot.reason.c_str());
+                shot.expected_gain, shot.stop_gain_per_ray, shot.columns.size(), shot.ranked_rays, shot.stop ? "yes" : "no",
+                shot.reason.c_str());
   std::ofstream plan(out.file("plan.txt"));
   if (!(plan << summary) || !plan.flush()) throw IoError("cannot write '" + out.file("plan.txt") + "'");
   plan.close();

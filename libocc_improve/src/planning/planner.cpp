@@ -225,7 +225,7 @@ void fill_by_score(const std::vector<float>& score, const std::vector<std::uint8
 // the samples leave sparse; a non-planar one (a vertex off its neighbours' plane, in sigmas) is where the
 // linear prediction is wrong; a flat, small one needs nothing. The centroid lies inside the triangle, so
 // it is an unsampled ray between samples; one ray per triangle keeps a shot's rays apart.
-// The centroids' expected gains in rays made good (good_rays.hpp) come back with them, by column.
+// The centroids' expected gains in rays made good (good_rays.hpp) come back with them, in their order.
 struct TriangleRefinement {
   std::vector<ColumnIndex> columns;  ///< the centroids, then the fill
   std::vector<double> centroid_gain;  ///< of columns[0, centroid_gain.size()): the centroids

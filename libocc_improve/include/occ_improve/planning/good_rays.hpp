@@ -16,7 +16,7 @@
 //    third, which asks these rays, lowers the quality by 0.011, 0.006-0.055 rays a ray);
 //  - a ray measured before: 0. Gaussian fusion would give its second return 0.041 rays
 //    (within_two_sigma(2) - within_two_sigma(1)), but measured on capture0001, 215 000 second returns
-//    on once-measured rays spread over the view changed the count by -0.0001 rays a ray: what a
+//    on once-measured rays spread over the view changed the count by -0.001 rays a ray: what a
 //    re-measured ray gains is not a function of its count of returns, so no term is claimed.
 // Every term is an approximation of the kind stated; the calibration is measured (docs/SELECTIVE.md).
 #include <cstdint>
