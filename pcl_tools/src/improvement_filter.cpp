@@ -193,7 +193,7 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
                           column, 0, repeat, 0, i});
   }
   // About one kept point per cell (the cells need the count of distinct rays, known only now).
-  const SamplingCells cells(rays, keep, geometry.width(), geometry.height());
+  const SamplingCells cells(rays, keep, geometry.width());
   for (Candidate& c : candidates) c.cell = cells.cell_of(geometry.azimuth_bin_of(c.column), geometry.elevation_bin_of(c.column));
   // Better first, by ray: the ray's improvement, its block's mean improvement, its spread rank, then the
   // point's own spread rank.

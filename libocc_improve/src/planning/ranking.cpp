@@ -105,11 +105,9 @@ double mean_of_best_share(const std::vector<float>& value, const std::uint8_t* e
   return sum / static_cast<double>(k);
 }
 
-SamplingCells::SamplingCells(std::size_t candidates, std::size_t k, int width_columns, int height_columns)
-    : width(std::max(1, width_columns)), height(std::max(1, height_columns)) {
-  const double side = k > 0 ? std::max(1.0, std::sqrt(static_cast<double>(candidates) / static_cast<double>(k))) : 1.0;
-  across = std::max(1, static_cast<int>(std::lround(width / side)));
-  down = std::max(1, static_cast<int>(std::lround(height / side)));
+SamplingCells::SamplingCells(std::size_t candidates, std::size_t k, int width) {
+  if (k > 0) side = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(candidates) / static_cast<double>(k))));
+  across = std::max(1, (width + side - 1) / side);
 }
 
 std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, const std::uint8_t* eligible, int width,
@@ -125,13 +123,13 @@ std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, co
   if (k == 0 || width <= 0) return out;
   out.reserve(k);
   const auto w = static_cast<std::size_t>(width);
-  const SamplingCells cells(available, k, width, static_cast<int>(value.size() / w));
+  const SamplingCells cells(available, k, width);
   constexpr ColumnIndex kNone = std::numeric_limits<ColumnIndex>::max();
   struct Best {
     std::uint64_t key;
     ColumnIndex column;
   };
-  std::vector<Best> best(cells.count());
+  std::vector<Best> best(cells.count(static_cast<int>(value.size() / w)));
   while (out.size() < k) {  // one round: the best open column of every cell
     std::fill(best.begin(), best.end(), Best{0, kNone});
     for (std::size_t c = 0; c < value.size(); ++c) {

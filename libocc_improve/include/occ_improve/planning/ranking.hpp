@@ -41,24 +41,20 @@ std::vector<ColumnIndex> best_columns(const std::vector<float>& value, const std
 double mean_of_best_share(const std::vector<float>& value, const std::uint8_t* eligible, double share);
 
 /// The cells of a jittered grid at the scale of a sampling of k among `candidates` columns of a grid
-/// `width` x `height` columns: about s x s columns each, s = sqrt(candidates / k) (at least 1), so that the
-/// k samples put about one in each cell; round(width / s) x round(height / s) cells of equal size that tile
-/// the grid exactly (no sliver of a cell at the right or bottom edge, whose sample would crowd its
-/// neighbour's). Shared by spread_best_columns and ImprovementFilter's top modes.
+/// `width` columns wide: s x s columns with s = floor(sqrt(candidates / k)) (at least 1), so that the k
+/// samples put about one in each cell. Shared by spread_best_columns and ImprovementFilter's top modes.
 struct SamplingCells {
-  SamplingCells(std::size_t candidates, std::size_t k, int width, int height);
-  int across = 1, down = 1;  ///< cells per row of cells, rows of cells
-  int width = 1, height = 1;
-  std::size_t count() const { return static_cast<std::size_t>(across) * static_cast<std::size_t>(down); }
-  /// The cell of column u, row v (u in [0, width), v in [0, height)).
+  SamplingCells(std::size_t candidates, std::size_t k, int width);
+  int side = 1;    ///< columns a side
+  int across = 1;  ///< cells per row of cells
+  std::size_t count(int height) const { return static_cast<std::size_t>(across) * static_cast<std::size_t>((height + side - 1) / side); }
   std::size_t cell_of(int column_u, int row_v) const {
-    const auto x = static_cast<std::int64_t>(column_u) * across / width, y = static_cast<std::int64_t>(row_v) * down / height;
-    return static_cast<std::size_t>(y) * static_cast<std::size_t>(across) + static_cast<std::size_t>(x);
+    return static_cast<std::size_t>(row_v / side) * static_cast<std::size_t>(across) + static_cast<std::size_t>(column_u / side);
   }
 };
 
 /// The k best eligible columns of a grid `width` columns wide, spread as a jittered grid at the scale of k:
-/// SamplingCells of ~s x s columns, s = sqrt(eligible non-NaN columns / k), one column per cell per round
+/// cells of s x s columns, s = floor(sqrt(eligible non-NaN columns / k)), one column per cell per round
 /// (the cell's largest rank_key), each round's cells by that key; so a tie (a view nothing has reached)
 /// is covered evenly rather than as a random sample clumps it. Returns min(k, eligible non-NaN) columns.
 std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, const std::uint8_t* eligible, int width,

@@ -11,10 +11,9 @@
 // Per-point improvement = the improvement of the ray (column) the point's direction falls in.
 // Top modes (top_count, top_fraction): a jittered grid at the scale of the sampling, refined by the
 // improvement (docs/SELECTIVE.md, "The same question in a PCL pipeline"):
-//  - cells: the grid's columns are cut into equal cells of ~s x s that tile it (SamplingCells, ranking.hpp),
-//    s = sqrt(rays / keep) with `rays` the distinct rays the points fall in, so a cell holds about one kept
-//    point (5 % of a frame: ~4.5 columns a side, 20 %: ~2.2) and the kept points cover the view evenly
-//    instead of clumping as a random sample does;
+//  - cells: the grid's columns are cut into cells of s x s, s = floor(sqrt(rays / keep)) with `rays` the
+//    distinct rays the points fall in, so a cell holds about one kept point (5 % of a frame: 4 x 4, 20 %:
+//    2 x 2) and the kept points cover the view evenly instead of clumping as a random sample does;
 //  - rounds: round r takes the r-th point of every cell; inside a cell, distinct rays before a second
 //    point of one ray, then the better point; in the last, partial round the cells whose point is better
 //    go first;
