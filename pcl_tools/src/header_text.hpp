@@ -8,33 +8,35 @@
 
 namespace occ_improve::detail {
 
-enum class HeaderText { plain, binary, vertical_space };
-
-/// binary: a byte outside printable ASCII and \t \n \r (the data began early, or not a text header);
-/// vertical_space: a vertical tab or form feed. Our header checks split lines at any white space, PCL
-/// 1.13's readers at spaces, tabs and CRs only: "DATA<VT>ascii" is one word to them, and PCL's PCD reader
-/// then threw std::out_of_range, its PLY reader failed an assertion (abort) on "<FF>obj_info" (both
-/// found by make fuzz). Such lines are refused, so that both read the words the checks read.
-inline HeaderText classify_header_line(const std::string& line) {
-  HeaderText worst = HeaderText::plain;
+/// Why a header line is refused, or nullptr: `binary` (the format's words for it) for a byte outside
+/// printable ASCII and \t \n \r (the data began early, or not a text header); a vertical tab or form
+/// feed otherwise. Our header checks split lines at any white space, PCL 1.13's readers at spaces, tabs
+/// and CRs only: "DATA<VT>ascii" is one word to them, and PCL's PCD reader then threw std::out_of_range,
+/// its PLY reader failed an assertion (abort) on "<FF>obj_info" (both found by make fuzz). Such lines are
+/// refused, so that both read the words the checks read.
+inline const char* refused_header_line(const std::string& line, const char* binary) {
+  bool vertical_space = false;
   for (const unsigned char ch : line) {
-    if (ch < 9 || (ch > 13 && ch < 32) || ch > 126) return HeaderText::binary;
-    if (ch == '\v' || ch == '\f') worst = HeaderText::vertical_space;
+    if (ch < 9 || (ch > 13 && ch < 32) || ch > 126) return binary;
+    vertical_space = vertical_space || ch == '\v' || ch == '\f';
   }
-  return worst;
+  return vertical_space ? "a header line holds a vertical tab or form feed (PCL cannot read it)" : nullptr;
 }
 
-/// PCL's read(), with an exception it throws on a file the header checks passed turned into a
-/// FormatError naming the file (out of memory stays itself); returns read()'s status.
+/// PCL's read() on a file the header checks passed: a failed status, or an exception it throws (out of
+/// memory stays itself), becomes a FormatError naming the file.
 template <typename Read>
-int read_refusing_typed(const std::string& path, const char* format, Read&& read) {
+void read_or_throw(const std::string& path, const char* format, Read&& read) {
+  const std::string unreadable = "'" + path + "' is not a readable " + format + " file";
+  int status = 0;
   try {
-    return read();
+    status = read();
   } catch (const std::bad_alloc&) {
     throw;
   } catch (const std::exception& e) {
-    throw FormatError("'" + path + "' is not a readable " + format + " file (PCL's reader: " + e.what() + ")");
+    throw FormatError(unreadable + " (PCL's reader: " + e.what() + ")");
   }
+  if (status < 0) throw FormatError(unreadable);
 }
 
 }  // namespace occ_improve::detail

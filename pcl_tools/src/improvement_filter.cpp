@@ -182,10 +182,7 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
     const PointT& p = (*input_)[static_cast<std::size_t>(i)];
     ColumnIndex column = 0;
     geometry.column_of(p.x, p.y, p.z, column);  // has a ray: point_improvement[i] is not NaN
-    const std::size_t b = pyramid.block_of_column(kTieLevel, column);
-    const int across = pyramid.blocks_x(kTieLevel);
-    const float block_mean = pyramid.block(kTieLevel, static_cast<int>(b % static_cast<std::size_t>(across)),
-                                           static_cast<int>(b / static_cast<std::size_t>(across))).mean_improvement();
+    const float block_mean = pyramid.block_at(kTieLevel, pyramid.block_of_column(kTieLevel, column)).mean_improvement();
     const std::uint32_t repeat = points_of_ray[column]++;
     if (repeat == 0) ++rays;
     const float value = point_improvement[static_cast<std::size_t>(i)];

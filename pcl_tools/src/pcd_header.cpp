@@ -148,11 +148,8 @@ PcdHeader parse_header(std::istream& file, std::uint64_t file_size, const std::s
     const std::size_t next = newline == std::string::npos ? head.size() : newline + 1;
     const std::string text = head.substr(at, next - at);
     at = next;
-    switch (detail::classify_header_line(text)) {
-      case detail::HeaderText::binary: parser.fail("not a PCD file (binary data before the DATA line)");
-      case detail::HeaderText::vertical_space: parser.fail("a header line holds a vertical tab or form feed (PCL cannot read it)");
-      case detail::HeaderText::plain: break;
-    }
+    if (const char* refused = detail::refused_header_line(text, "not a PCD file (binary data before the DATA line)"))
+      parser.fail(refused);
     std::vector<std::string> t = tokens(text);
     // PCL 1.13's readHeader skips only truly empty lines: one of white space alone (" ", "\t", a CR of
     // CRLF) before DATA makes its read dereference null (found by make fuzz). Refused, not crashed on.
@@ -258,9 +255,7 @@ void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Ve
   int version = 0;
   // The checks above refuse every input known to make PCL's reader throw; one they miss still ends as a
   // typed error naming the file.
-  const int status =
-      detail::read_refusing_typed(path, "PCD", [&] { return reader.read(path, blob, origin, orientation, version); });
-  if (status < 0) throw FormatError("'" + path + "' is not a readable PCD file");
+  detail::read_or_throw(path, "PCD", [&] { return reader.read(path, blob, origin, orientation, version); });
 }
 
 }  // namespace occ_improve

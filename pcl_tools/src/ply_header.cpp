@@ -185,11 +185,8 @@ PlyHeader parse_header(std::istream& file, std::uint64_t file_size, const std::s
     if (newline == std::string::npos) break;  // the header runs past the first 64 KiB or the file
     const std::string text = head.substr(at, newline - at);
     at = newline + 1;
-    switch (detail::classify_header_line(text)) {
-      case detail::HeaderText::binary: parser.fail("not a PLY file (binary data before end_header)");
-      case detail::HeaderText::vertical_space: parser.fail("a header line holds a vertical tab or form feed (PCL cannot read it)");
-      case detail::HeaderText::plain: break;
-    }
+    if (const char* refused = detail::refused_header_line(text, "not a PLY file (binary data before end_header)"))
+      parser.fail(refused);
     const std::vector<std::string> t = tokens(text);
     if (t.empty()) continue;
     if (t[0] == "end_header" && t.size() == 1) {
@@ -251,8 +248,7 @@ void read_ply_file(const std::string& path, pcl::PCLPointCloud2& blob) {
   validate_ply_file(path);
   pcl::PLYReader reader;
   const QuietPclWarnings quiet;
-  if (detail::read_refusing_typed(path, "PLY", [&] { return reader.read(path, blob); }) < 0)
-    throw FormatError("'" + path + "' is not a readable PLY file");
+  detail::read_or_throw(path, "PLY", [&] { return reader.read(path, blob); });
   require_consistent(blob, path);
 }
 

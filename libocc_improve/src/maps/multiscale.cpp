@@ -63,6 +63,12 @@ const BlockSummary& ImprovementPyramid::block(int level, int bx, int by) const {
   return levels_[level][static_cast<std::size_t>(by) * static_cast<std::size_t>(blocks_x(level)) + static_cast<std::size_t>(bx)];
 }
 
+const BlockSummary& ImprovementPyramid::block_at(int level, std::size_t index) const {
+  detail::require_parameter(level >= 0 && level < kLevels, "level", level, "in [0, 4)");
+  detail::require_parameter(index < block_count(level), "index", static_cast<double>(index), "below the level's block count");
+  return levels_[level][index];
+}
+
 std::size_t ImprovementPyramid::block_of_column(int level, ColumnIndex c) const {
   const int s = block_size(level);
   const auto u = static_cast<int>(c % static_cast<ColumnIndex>(width_)), v = static_cast<int>(c / static_cast<ColumnIndex>(width_));

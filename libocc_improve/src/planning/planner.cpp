@@ -147,9 +147,7 @@ double inherited_residual(const ImprovementPyramid& pyramid, int level, std::siz
 // without a record, without a depth sample: a full frame's map).
 double block_priority(const ImprovementPyramid& pyramid, int level, std::size_t block, double p, double unmeasured,
                       const SensorModel& model, const PlanRequest& request) {
-  const int across = pyramid.blocks_x(level);
-  const BlockSummary& b = pyramid.block(level, static_cast<int>(block % static_cast<std::size_t>(across)),
-                                        static_cast<int>(block / static_cast<std::size_t>(across)));
+  const BlockSummary& b = pyramid.block_at(level, block);
   // The magnitude of the block's mean improvement: missing data (0.324) and depth transitions (negative:
   // "regions of negative improvement can be re-acquired") high, settled blocks (~0.1 and less) low.
   const double improvement = std::abs(static_cast<double>(b.mean_improvement()));
@@ -184,8 +182,7 @@ std::vector<ColumnIndex> refine_by_blocks(const ImprovementPyramid& pyramid, con
   for (std::size_t b = 0; b < best.size(); ++b) {
     if (best[b] == kNoColumn || block_taken[b] || !(score[best[b]] > 0)) continue;
     const double p = static_cast<double>(probability[best[b]]) * blocks.return_rate[b];
-    const BlockSummary& summary = pyramid.block(level, static_cast<int>(b % static_cast<std::size_t>(pyramid.blocks_x(level))),
-                                                static_cast<int>(b / static_cast<std::size_t>(pyramid.blocks_x(level))));
+    const BlockSummary& summary = pyramid.block_at(level, b);
     const double rays = summary.observable_rays ? summary.observable_rays : 1.0;
     const double unmeasured = returns.empty() ? 1.0 - summary.samples / rays : 1.0 - blocks.measured[b] / rays;
     const double priority = block_priority(pyramid, level, b, p, unmeasured, model, request);
@@ -308,7 +305,6 @@ double good_ray_gain(const std::vector<ColumnIndex>& shot, std::size_t first_cen
                      const std::vector<double>& centroid_gain, const ImprovementPyramid& pyramid, int coverage_level,
                      const std::vector<float>& probability, const std::vector<float>& block_return_rate,
                      const ReturnRecord& returns) {
-  const int across = pyramid.blocks_x(coverage_level);
   std::vector<std::uint32_t> shot_rays_in_block(pyramid.block_count(coverage_level), 0);
   for (ColumnIndex c : shot) ++shot_rays_in_block[pyramid.block_of_column(coverage_level, c)];
   double gain = 0;
@@ -316,8 +312,7 @@ double good_ray_gain(const std::vector<ColumnIndex>& shot, std::size_t first_cen
     const ColumnIndex c = shot[i];
     const bool centroid = i >= first_centroid && i - first_centroid < centroid_gain.size();
     const std::size_t b = pyramid.block_of_column(coverage_level, c);
-    const BlockSummary& block = pyramid.block(coverage_level, static_cast<int>(b % static_cast<std::size_t>(across)),
-                                              static_cast<int>(b / static_cast<std::size_t>(across)));
+    const BlockSummary& block = pyramid.block_at(coverage_level, b);
     const bool measured = !returns.empty() && returns.returned()[c] > 0;
     if (block.samples == 0)  // p as the coverage pass has it: a silent region's rays keep an optimistic prior
       gain += probability[c] * block_return_rate[b] * within_two_sigma(1) * block.observable_rays / shot_rays_in_block[b];
@@ -345,14 +340,11 @@ Shot coarse_to_fine_shot(const ImprovementMap& improvement, const ImprovementPyr
   const BlockBest blocks = best_ray_per_block(pyramid, coverage_level, score, mask, returns);
   {
     const std::vector<ColumnIndex>& best = blocks.column;
-    const int across = pyramid.blocks_x(coverage_level);
     std::vector<std::pair<std::uint64_t, std::size_t>> open;  // (rank_key over the block index, block)
     for (std::size_t b = 0; b < best.size(); ++b) {
       const ColumnIndex c = best[b];
       if (c == kNoColumn || !(score[c] > 0) || probability[c] * blocks.return_rate[b] < kCoverageMinReturn) continue;
-      const BlockSummary& block = pyramid.block(coverage_level, static_cast<int>(b % static_cast<std::size_t>(across)),
-                                                static_cast<int>(b / static_cast<std::size_t>(across)));
-      if (block.samples == 0) open.push_back({rank_key(score[c], static_cast<ColumnIndex>(b)), b});
+      if (pyramid.block_at(coverage_level, b).samples == 0) open.push_back({rank_key(score[c], static_cast<ColumnIndex>(b)), b});
     }
     std::sort(open.begin(), open.end(), [](const auto& x, const auto& y) { return x.first > y.first; });
     for (std::size_t i = 0; i < open.size() && shot.columns.size() < budget; ++i) shot.columns.push_back(best[open[i].second]);

@@ -77,6 +77,9 @@ public:
   const BlockSummary& block(int level, int bx, int by) const;
   /// The block of `level` holding fine column c.
   std::size_t block_of_column(int level, ColumnIndex c) const;
+  /// Block number `index` of `level` (row-major, as block_of_column numbers them; InvalidParameter naming
+  /// the value when out of range).
+  const BlockSummary& block_at(int level, std::size_t index) const;
 
   /// RMS deviation, in sigma_depth_at(mean depth) of `model`, of the depth samples of block (bx, by) and its
   /// 8 neighbours from their best constant or plane (least squares). NaN when they hold fewer samples
