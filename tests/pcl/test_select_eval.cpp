@@ -30,6 +30,8 @@ SelectScene wall_and_box() {
 struct CsvRow {
   std::size_t shot, rays_asked, returns;
   double quality, coverage;
+  int plan_stop;
+  double stop_gain_per_ray;
 };
 
 // The rows of `strategy` in the evaluation's CSV (columns as the header names them).
@@ -38,13 +40,15 @@ std::vector<CsvRow> rows_of(const std::string& csv, const std::string& strategy)
   std::string line;
   std::getline(in, line);
   EXPECT_EQ(line.rfind("scene,strategy,budget_rays,shot,rays_asked,returns,quality,coverage,", 0), 0u) << line;
+  EXPECT_NE(line.find(",plan_stop,stop_gain_per_ray"), std::string::npos) << line;
   std::vector<CsvRow> rows;
   while (std::getline(in, line)) {
     std::vector<std::string> f;
     std::istringstream cells(line);
     for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
-    if (f.size() < 8 || f[1] != strategy) continue;
-    rows.push_back({std::stoul(f[3]), std::stoul(f[4]), std::stoul(f[5]), std::stod(f[6]), std::stod(f[7])});
+    if (f.size() < 13 || f[1] != strategy) continue;
+    rows.push_back({std::stoul(f[3]), std::stoul(f[4]), std::stoul(f[5]), std::stod(f[6]), std::stod(f[7]), std::stoi(f[11]),
+                    std::stod(f[12])});
   }
   return rows;
 }
@@ -68,8 +72,12 @@ TEST(SelectEval, TrianglesRunReadsBackAsACurveOfShares) {
     EXPECT_GT(r.quality, 0.0);
     EXPECT_LE(r.quality, 1.0);
     EXPECT_LE(r.coverage, 1.0);
+    // What the plan's stop compared (the view's best fifth, planner.hpp): it said stop below 0.1.
+    EXPECT_GT(r.stop_gain_per_ray, 0.0);
+    EXPECT_EQ(r.plan_stop == 1, r.stop_gain_per_ray < 0.1) << "shot " << r.shot;
     asked_before = r.rays_asked;
   }
+  for (const CsvRow& r : rows_of(csv.str(), "b_uniform_linear")) EXPECT_EQ(r.stop_gain_per_ray, 0.0);  // no plan
   EXPECT_GE(static_cast<double>(rows.back().rays_asked), 1.5 * rays - budget);  // the run went the whole way
   EXPECT_GT(rows.back().quality, 0.9);  // a clean wall and box, every ray measured
   bool found = false;
