@@ -106,6 +106,24 @@ TEST(Geometry, InvalidParametersNameTheField) {
   p = GeometryParams{};
   p.elevation_min_rad = std::nan("");
   EXPECT_THROW(GridGeometry{p}, InvalidParameter);
+  // An axis beyond 2^20 bins is refused before its centres and edges are allocated (make fuzz: a map
+  // file's 268 M elevation bins passed the column bound and ran out of memory).
+  p = GeometryParams{};
+  p.azimuth_bins = (1 << 28) + 1;
+  p.elevation_bins = 8;
+  try {
+    GridGeometry g(p);
+    FAIL() << "expected InvalidParameter";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("azimuth_bins"), std::string::npos) << e.what();
+  }
+  p = GeometryParams{};
+  p.elevation_bins = (1 << 20) + 1;
+  EXPECT_THROW(GridGeometry{p}, InvalidParameter);
+  p = GeometryParams{};
+  p.azimuth_bins = 1 << 20;  // the limit itself is a grid
+  p.elevation_bins = 4;
+  EXPECT_EQ(GridGeometry(p).width(), 1 << 20);
 }
 
 TEST(Geometry, ColumnIndexingIsRowMajorLikeAnImage) {

@@ -34,8 +34,11 @@ std::string camera_text(const PinholeIntrinsics& k) {
 
 void GeometryParams::validate() const {
   if (camera) camera->validate();
-  require_parameter(azimuth_bins > 0, "azimuth_bins", azimuth_bins, "> 0");
-  require_parameter(elevation_bins > 0, "elevation_bins", elevation_bins, "> 0");
+  // An angular axis keeps its bins' centres and edges (16 bytes a bin), built by the binning validated
+  // below: bounded here, before it allocates (make fuzz: a map file claiming 268 M elevation bins
+  // passed the column bound and ran the loader out of memory). 2^20 bins is 6 microradians over 2 pi.
+  require_parameter(azimuth_bins > 0 && azimuth_bins <= (1 << 20), "azimuth_bins", azimuth_bins, "in [1, 2^20]");
+  require_parameter(elevation_bins > 0 && elevation_bins <= (1 << 20), "elevation_bins", elevation_bins, "in [1, 2^20]");
   require_parameter(depth_bins > 0, "depth_bins", depth_bins, "> 0");
   // Column indices are 32-bit and the store's bins are int.
   require_parameter(static_cast<double>(azimuth_bins) * elevation_bins < 4.0e9, "azimuth_bins * elevation_bins",
