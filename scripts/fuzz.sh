@@ -2,7 +2,8 @@
 # Builds and runs the fuzz targets (tests/fuzz/) for FUZZ_SECONDS each. With clang++ and libFuzzer: a clang
 # ASan+libFuzzer build in FUZZ_BUILD_DIR; otherwise the built-in mutation driver from the normal build in
 # BUILD_DIR. Seeds are generated (fuzz_seeds) and joined by the regression corpus; findings (crash-*,
-# timeout-*, oom-*) land in <build>/fuzz/findings/<target>/. Prints runs and findings per target and
+# timeout-*, oom-*) land in <build>/fuzz/findings/<target>/, emptied when the target starts (copy a finding
+# into tests/fuzz/corpus/<target> to keep it). Prints runs and findings per target and
 # exits 1 when anything was found.
 set -uo pipefail
 : "${BUILD_DIR:=build}" "${FUZZ_BUILD_DIR:=build-fuzz}" "${FUZZ_SECONDS:=60}" "${JOBS:=2}"
@@ -35,6 +36,7 @@ rm -rf "$work/seeds"
 found=0
 echo "fuzz: engine $engine, ${FUZZ_SECONDS} s per target"
 for t in "${targets[@]}"; do
+  rm -rf "$work/findings/$t"  # this run's findings only: a kept one belongs in tests/fuzz/corpus/<target>
   mkdir -p "$work/corpus/$t" "$work/findings/$t"
   log="$work/$t.log"
   # The first folder collects what libFuzzer finds interesting; seeds and the regression corpus only seed.
