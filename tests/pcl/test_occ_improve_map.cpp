@@ -29,11 +29,12 @@ namespace {
 using occ_improve::test::ToolRun;
 
 // The log lives outside the test's folder (whose entries the tests count), one per process: ctest runs
-// the tests of this file in parallel.
+// the tests of this file in parallel. Removed once read (81 of them had piled up in /tmp).
 ToolRun run_tool(const std::string& arguments) {
-  return occ_improve::test::run_tool_command(
-      OCC_IMPROVE_MAP_EXECUTABLE, arguments,
-      fs::temp_directory_path() / ("occ_improve_map_test_" + std::to_string(::getpid()) + ".log"));
+  const fs::path log = fs::temp_directory_path() / ("occ_improve_map_test_" + std::to_string(::getpid()) + ".log");
+  ToolRun run = occ_improve::test::run_tool_command(OCC_IMPROVE_MAP_EXECUTABLE, arguments, log);
+  fs::remove(log);
+  return run;
 }
 
 class OccImproveMapTool : public ::testing::Test {

@@ -9,6 +9,7 @@
 #include "sensor/opdf_bounds.hpp"
 #include "sensor/opdf_kernel.hpp"
 #include "support/parallel.hpp"
+#include "support/vector_clones.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,14 +28,9 @@ using detail::fast_log;
 using detail::Measurement;
 using detail::MeasurementChunks;
 
-// The per-voxel loops below are compiled twice, for x86-64-v3 (AVX2 + FMA: Haswell and later) and for
-// baseline x86-64, and the loader picks the clone the CPU supports: vector code without -march=native.
-// They vectorise only with -fno-trapping-math (set on this file in CMake); check with -fopt-info-vec.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define OCC_IMPROVE_VECTOR_KERNEL __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define OCC_IMPROVE_VECTOR_KERNEL
-#endif
+// The per-voxel loops below are compiled for x86-64-v3 (AVX2 + FMA: Haswell and later) beside baseline
+// x86-64 (support/vector_clones.hpp).
+#define OCC_IMPROVE_VECTOR_KERNEL OCC_IMPROVE_CLONES("arch=x86-64-v3")
 
 // Beyond this depth offset (in sigmas, as a function of B) |logit P_s| < kSkipEpsilon / 2:
 //   the step term deviates from 1/2 by < eps/8 once u > log(4/eps), the peak term is < eps/8 once

@@ -6,6 +6,7 @@
 #include "sensor/opdf_bounds.hpp"
 #include "sensor/opdf_kernel.hpp"
 #include "support/parallel.hpp"
+#include "support/vector_clones.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,12 +15,6 @@
 #include <limits>
 #include <string>
 #include <type_traits>
-
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
-#define OCC_IMPROVE_ROW_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define OCC_IMPROVE_ROW_CLONES
-#endif
 
 namespace occ_improve {
 namespace {
@@ -137,7 +132,7 @@ struct WindowKernel {
   // The rays [x_first, x_end) of row e at once (out[x] for those x): offset by offset, j along the row
   // (contiguous, vectorisable). On x86-64 GCC also builds an AVX2 clone picked at load time (no FMA:
   // results stay bit-identical to ray()).
-  OCC_IMPROVE_ROW_CLONES void row(const GridGeometry& g, const SensorModel& model, const SurfaceMap& s, int e,
+  OCC_IMPROVE_CLONES("avx2") void row(const GridGeometry& g, const SensorModel& model, const SurfaceMap& s, int e,
                                   int x_first, int x_end, float* out, std::vector<float>& inv_sigma) const {
     const int w = g.width();
     const std::size_t row_start = static_cast<std::size_t>(e) * static_cast<std::size_t>(w);
