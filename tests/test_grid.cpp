@@ -55,6 +55,28 @@ TEST(Grid, UntouchedColumnsCostNoTileAndReadAsUnknown) {
   EXPECT_EQ(g.allocated_tile_count(), 0u);
 }
 
+// prefetch_tile is a hint: on a tile never written, a written one and columns outside the grid it neither
+// allocates, changes a value nor marks a column changed.
+TEST(Grid, PrefetchingATileChangesNothing) {
+  ColumnGrid g(paper_geometry());
+  const ColumnIndex outside = static_cast<ColumnIndex>(g.geometry().column_count());
+  g.prefetch_tile(1234);
+  EXPECT_EQ(g.allocated_tile_count(), 0u);
+  const std::vector<float> window{-1.0f, 2.0f, 0.5f};
+  g.assign({1234, 4, -6.9f, window.data(), 3});
+  g.take_changed_columns();
+  for (const ColumnIndex c : {ColumnIndex{1234}, ColumnIndex{1235}, ColumnIndex{0}, outside, outside + 100000})
+    g.prefetch_tile(c);
+  EXPECT_EQ(g.allocated_tile_count(), 1u);
+  EXPECT_TRUE(g.take_changed_columns().empty());
+  const ColumnData& c = *g.find(1234);
+  EXPECT_EQ(c.uniform_end, 4);
+  EXPECT_EQ(c.value(3), -6.9f);
+  EXPECT_EQ(c.value(4), -1.0f);
+  EXPECT_EQ(c.value(6), 0.5f);
+  EXPECT_EQ(c.value(7), 0.0f);
+}
+
 TEST(Grid, WrittenLeadingVoxelsEqualToTheRunJoinIt) {
   ColumnGrid g(paper_geometry());
   const std::vector<float> window{-6.9f, -6.9f, -1.0f, 2.0f};

@@ -83,6 +83,18 @@ const ColumnData* ColumnGrid::find(ColumnIndex column) const {
   return tile ? &tile->columns[slot] : nullptr;
 }
 
+void ColumnGrid::prefetch_tile(ColumnIndex column) const {
+  if (column >= changed_.size()) return;  // a hint: nothing to fetch outside the grid
+  std::size_t slot;
+  const Tile* tile = tiles_[tile_of(column, slot)].get();
+  if (!tile) return;
+  constexpr std::size_t kLine = 64;
+  const char* records = reinterpret_cast<const char*>(tile->columns);
+  for (std::size_t b = 0; b < sizeof tile->columns; b += kLine) __builtin_prefetch(records + b);
+  const char* windows = reinterpret_cast<const char*>(tile->storage.data());
+  for (std::size_t b = 0; b < tile->storage.size() * sizeof(float); b += kLine) __builtin_prefetch(windows + b);
+}
+
 ColumnGrid::Tile& ColumnGrid::allocated_tile(std::size_t tile_index) {
   auto& tile = tiles_[tile_index];
   if (!tile) tile = std::make_unique<Tile>();

@@ -543,11 +543,28 @@ std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, cons
   const int tile_columns = (g.width() + kTile - 1) / kTile;
   const BandTiles tiles(measurements, rows, first_tile_row, end_tile_row, tile_columns);
   TileUpdate update(grid, model, scratch_rows);
+  const auto tile_origin = [&](std::size_t t) {
+    return std::make_pair(static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile,
+                          (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile);
+  };
+  const auto measurements_in = [&](std::size_t t) { return tiles.begin[t + 1] - tiles.begin[t]; };
+  std::size_t next = 0;  // the next tile with measurements after t
   for (std::size_t t = 0; t < tiles.count(); ++t) {
-    if (tiles.begin[t] == tiles.begin[t + 1]) continue;
+    if (measurements_in(t) == 0) continue;
     throw_if_stop_requested();  // per tile: up to 64 columns' measurements
-    update.start(static_cast<int>(t % static_cast<std::size_t>(tile_columns)) * kTile,
-                 (first_tile_row + static_cast<int>(t / static_cast<std::size_t>(tile_columns))) * kTile);
+    // A tile with fewer measurements than columns (a small shot into a map) does too little work to hide
+    // its loads from a store of tens of MB, which then wait on memory column by column: ask for the next
+    // such tile while this one is updated (bench_select_round: insertion -16 to -24 %). A dense tile (a
+    // whole frame) reads its columns in order, which the hardware prefetcher follows (asking for it
+    // too measured 2 % slower on the 7-Scenes pipeline).
+    for (next = std::max(next, t + 1); next < tiles.count() && measurements_in(next) == 0; ++next) {
+    }
+    if (next < tiles.count() && measurements_in(next) < ColumnGrid::kTileColumns) {
+      const auto [a, e] = tile_origin(next);
+      grid.prefetch_tile(g.column(a, e));
+    }
+    const auto [a, e] = tile_origin(t);
+    update.start(a, e);
     if (grid.clamped())
       for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.bound(measurements.slots[tiles.items[k]]);
     for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.apply(measurements.slots[tiles.items[k]]);

@@ -135,6 +135,12 @@ public:
   /// Rebuilds every tile's storage with its windows back to back and no spare room.
   void shrink_to_fit();
 
+  /// Asks the memory system for the tile of `column`: its column records and its windows' storage. A hint:
+  /// it changes nothing, and does nothing for a tile never written or a column outside the grid. The
+  /// insertion calls it for the next tile it will update when that tile has few measurements (a small
+  /// shot): loading its windows from a store of tens of MB otherwise waits on memory column by column.
+  void prefetch_tile(ColumnIndex column) const;
+
   float log_odds(ColumnIndex column, int depth_bin) const;
   double probability(ColumnIndex column, int depth_bin) const;
 
