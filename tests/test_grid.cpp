@@ -222,5 +222,16 @@ TEST(Grid, ChangedColumnsAreRecordedOnceAndReset) {
   EXPECT_TRUE(g.take_changed_columns().empty());
 }
 
+// Columns at both ends and on either side of the scan's 8-column words, each listed once, in order.
+TEST(Grid, ChangedColumnsAtTheEndsAndWordEdgesAreAllTaken) {
+  ColumnGrid g(paper_geometry());
+  const auto last = static_cast<ColumnIndex>(g.geometry().column_count() - 1);
+  const std::vector<ColumnIndex> marked{0, 7, 8, 15, 16, 1000, last - 8, last - 1, last};
+  for (auto it = marked.rbegin(); it != marked.rend(); ++it) g.mark_changed(*it);
+  g.mark_changed(8);  // twice: listed once
+  EXPECT_EQ(g.take_changed_columns(), marked);
+  EXPECT_TRUE(g.take_changed_columns().empty());
+}
+
 }  // namespace
 }  // namespace occ_improve

@@ -112,11 +112,23 @@ double ColumnGrid::probability(ColumnIndex column, int depth_bin) const {
 
 std::vector<ColumnIndex> ColumnGrid::take_changed_columns() {
   std::vector<ColumnIndex> out;
-  for (std::size_t i = 0; i < changed_.size(); ++i)
-    if (changed_[i]) {
-      out.push_back(static_cast<ColumnIndex>(i));
-      changed_[i] = 0;
-    }
+  const auto take = [&](std::size_t first, std::size_t end) {
+    for (std::size_t i = first; i < end; ++i)
+      if (changed_[i]) {
+        out.push_back(static_cast<ColumnIndex>(i));
+        changed_[i] = 0;
+      }
+  };
+  // Eight flags at a time: a small shot changes a few percent of the columns, and a byte-by-byte scan of
+  // all of them was ~2 % of a closed-loop round (bench_select_round).
+  constexpr std::size_t kWord = sizeof(std::uint64_t);
+  std::size_t i = 0;
+  for (; i + kWord <= changed_.size(); i += kWord) {
+    std::uint64_t flags;
+    std::memcpy(&flags, changed_.data() + i, kWord);
+    if (flags) take(i, i + kWord);
+  }
+  take(i, changed_.size());
   return out;
 }
 
