@@ -157,6 +157,29 @@ TEST(Png, WritePngWritesTheEncodedBytesAtomicallyAndReportsErrors) {
   EXPECT_THROW(write_png("/nonexistent-dir/x.png", im), IoError);
 }
 
+// An 8-bit grey region-of-interest mask compresses ~600-fold (a square on black: ~500 bytes for 640 x 480);
+// the size check took every PNG pixel for 2 bytes and refused it as "more than the file can hold".
+TEST(Png, CompactEightBitMaskIsRead) {
+  Image im;
+  im.width = 640;
+  im.height = 480;
+  im.pixels.assign(640 * 480, 0);
+  for (int y = 100; y < 200; ++y)
+    for (int x = 300; x < 400; ++x) im.pixels[static_cast<std::size_t>(y) * 640 + static_cast<std::size_t>(x)] = 255;
+  const fs::path path = fs::temp_directory_path() / ("occ_png_mask_" + std::to_string(::getpid()) + ".png");
+  write_png(path.string(), im);
+  ASSERT_LT(fs::file_size(path) * 1032 / 2, 640u * 480u) << "the file must be small enough to have been refused";
+  const PixelMask mask = read_mask_png(path.string());
+  fs::remove(path);
+  ASSERT_EQ(mask.width, 640);
+  ASSERT_EQ(mask.height, 480);
+  std::size_t valid = 0;
+  for (const auto v : mask.valid) valid += v != 0;
+  EXPECT_EQ(valid, 100u * 100u);
+  EXPECT_TRUE(mask.valid[150 * 640 + 350]);
+  EXPECT_FALSE(mask.valid[150 * 640 + 250]);
+}
+
 // The target: a 640 x 480 improvement image at most a third of the stored encoding's size.
 TEST(Png, ImprovementImageOfTheSampleSceneIsAtMostAThirdOfTheStoredSize) {
   const sample::SampleFrame frame = sample::generate_scene();

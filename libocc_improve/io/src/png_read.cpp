@@ -60,9 +60,10 @@ DepthImage16 detail::read_grey_png(const std::string& path, const std::string& w
       << " must be " << (accept_8bit ? "8-bit or 16-bit" : "16-bit") << " single-channel (grey)";
     throw FormatError(m.str());
   }
-  // Deflate expands at most ~1032-fold: a file cannot hold more 2-byte pixels than that.
+  // Deflate expands at most ~1032-fold: a file cannot hold more pixels of bit_depth bits than that. (At 2
+  // bytes a pixel whatever the depth, a compact 8-bit or 1-bit mask, a square on black, was refused.)
   detail::require_image_size(what, path, png_get_image_width(png, info), png_get_image_height(png, info),
-                             ec ? kMaxDepthImagePixels : file_size * 1032 / 2);
+                             ec ? kMaxDepthImagePixels : file_size * 1032 * 8 / static_cast<std::uint64_t>(bit_depth));
   if (bit_depth < 8) png_set_expand_gray_1_2_4_to_8(png);
   if (bit_depth == 16) png_set_swap(png);  // PNG is big-endian; we read host-order uint16
   image.width = static_cast<int>(png_get_image_width(png, info));
