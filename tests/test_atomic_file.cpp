@@ -110,6 +110,32 @@ TEST_F(OutputFolderTest, UserFileInOwnOutputMakesItForeign) {
   EXPECT_EQ(contents(file("out/result.txt")), "two");
 }
 
+// Under -overwrite a foreign folder takes the outputs by name: an input of the run named like an output
+// (the input depth image beside its folder's other files), or a file in an input folder, is refused by
+// name before anything is staged, and stays as it was.
+TEST_F(OutputFolderTest, OverwriteNeverReplacesAnInput) {
+  fs::create_directory(file("data"));
+  put("data/result.txt", "the input");
+  put("data/other.txt", "mine");
+  {
+    OutputFolder out(file("data"), "tool_a", true, {file("data/result.txt")});
+    try {
+      out.file("result.txt");
+      FAIL() << "an output named like an input must be refused";
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find("would replace the input '" + file("data/result.txt") + "'"), std::string::npos)
+          << e.what();
+    }
+    std::ofstream(out.file("new.txt")) << "new";  // another name is fine
+    out.commit();
+  }
+  EXPECT_EQ(contents(file("data/result.txt")), "the input");
+  EXPECT_EQ(contents(file("data/new.txt")), "new");
+  OutputFolder into_input_folder(file("data"), "tool_a", true, {file("data")});
+  EXPECT_THROW(into_input_folder.file("other.txt"), IoError);
+  EXPECT_EQ(contents(file("data/other.txt")), "mine");
+}
+
 TEST_F(OutputFolderTest, OverwriteReplacesOnlySameNames) {
   fs::create_directory(file("data"));
   put("data/frame.depth.png", "frame");

@@ -783,6 +783,34 @@ TEST_F(Tools, SaveNeverReplacesAnInputOrAFileItDidNotWrite) {
   EXPECT_EQ(file_contents(folder_ / "mine.bt"), "not a tree");
 }
 
+// -o DIR -overwrite wrote the outputs into DIR by name, replacing the run's own inputs there: a cloud named
+// like an output (surface.pcd), a -mask (improvement.png). Refused, naming the input, which is kept.
+TEST_F(Tools, OverwriteNeverReplacesAnInputInTheOutputFolder) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  fs::create_directory(folder_ / "ds");
+  fs::copy_file(wall, folder_ / "ds" / "surface.pcd");
+  Image all_valid;  // an 8-bit grey mask of the cloud's 64 x 48 pixels
+  all_valid.width = 64;
+  all_valid.height = 48;
+  all_valid.pixels.assign(64 * 48, 255);
+  write_png(file("ds/improvement.png"), all_valid);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -mask ds/improvement.png -o first -q").exit_code, 0)
+      << "the mask itself is valid";
+  std::ofstream(folder_ / "ds" / "notes.txt") << "mine";  // ds is not the tool's own: -overwrite is needed
+  const std::string cloud = file_contents(folder_ / "ds" / "surface.pcd");
+  const std::string mask = file_contents(folder_ / "ds" / "improvement.png");
+  for (const std::string& args : {std::string("ds/surface.pcd -o ds -overwrite -q"),
+                                  wall + " -mask ds/improvement.png -o ds -overwrite -q"}) {
+    const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, args);
+    EXPECT_EQ(r.exit_code, 1) << args;
+    EXPECT_NE(r.err.find("would replace the input 'ds/"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_EQ(file_contents(folder_ / "ds" / "surface.pcd"), cloud);
+  EXPECT_EQ(file_contents(folder_ / "ds" / "improvement.png"), mask);
+  EXPECT_EQ(file_contents(folder_ / "ds" / "notes.txt"), "mine");
+}
+
 // A failed -save was reported after -o had been replaced: now every target is checked first and nothing is
 // committed when any write fails.
 TEST_F(Tools, AFailedSaveCommitsNothing) {

@@ -238,7 +238,8 @@ void OutputFile::commit() {
 
 OutputFolder::OutputFolder(const std::string& target, const std::string& tool, bool overwrite,
                            const std::vector<std::string>& inputs)
-    : target_(resolved_target(target, "output folder")), shown_(target), tool_(tool), overwrite_(overwrite) {
+    : target_(resolved_target(target, "output folder")), shown_(target), tool_(tool), overwrite_(overwrite),
+      inputs_(inputs) {
   const fs::path parent = target_.parent_path();
   require_writable_folder(parent, "output folder", shown_);
   std::error_code ec;
@@ -266,6 +267,23 @@ void OutputFolder::require_no_input_inside(const std::vector<std::string>& input
     if (path_is_within(input, target_.string()))
       throw IoError("output folder '" + shown_ + "' holds the input '" + input +
                     "', which replacing the folder would delete: choose another -o");
+  }
+}
+
+// A folder that is not the tool's own takes the staged files under -overwrite by name, replacing files of
+// the same names: never one the run reads (an input named like an output, or a file in an input folder).
+void OutputFolder::require_not_an_input(const std::string& name) const {
+  const fs::path published = target_ / name;
+  const fs::path compared = comparable_path(published.string());
+  std::error_code ec;
+  if (!fs::exists(published, ec)) return;
+  for (const std::string& input : inputs_) {
+    const fs::path source = comparable_path(input);
+    const bool inside_input_folder = fs::is_directory(source, ec) && path_is_within(published.string(), input);
+    if (compared == source || fs::equivalent(published, source, ec) || inside_input_folder)
+      throw IoError("output file '" + name + "' in output folder '" + shown_ + "' would replace " +
+                    (inside_input_folder ? "a file in the input folder '" : "the input '") + input +
+                    "': choose another -o");
   }
 }
 
@@ -298,6 +316,7 @@ OutputFolder::~OutputFolder() {
 std::string OutputFolder::file(const std::string& name) {
   if (name.empty() || name.find('/') != std::string::npos || name == kOutputMarkerName)
     throw InvalidParameter("output file name '" + name + "' must be a plain file name");
+  require_not_an_input(name);
   std::error_code ec;
   fs::create_directory(staging_, ec);  // again after a commit, for the next one
   if (std::find(files_.begin(), files_.end(), name) == files_.end()) files_.push_back(name);

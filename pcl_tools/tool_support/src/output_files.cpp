@@ -11,10 +11,10 @@ namespace fs = std::filesystem;
 
 std::vector<std::string> run_inputs(const CommandLine& c) {
   std::vector<std::string> inputs = c.positionals();
-  for (const char* flag : {"-load", "-intrinsics_file", "-oni", "-pcd_dir", "-depth_dir", "-simulate"})
+  for (const char* flag : {"-load", "-intrinsics_file", "-mask", "-oni", "-pcd_dir", "-depth_dir", "-input_dir", "-simulate"})
     if (c.declares(flag))
       for (const std::string& value : c.values(flag))
-        if (!value.empty()) inputs.push_back(value);
+        if (!value.empty() && value != "finite") inputs.push_back(value);  // -mask finite: a rule, not a file
   return inputs;
 }
 

@@ -99,6 +99,8 @@ public:
   ~OutputFolder();
 
   /// The staged path of output file `name` (a plain file name); commit() moves it into the target.
+  /// Throws IoError naming the input when the target already holds a file of that name that is one of
+  /// `inputs` or lies in an input folder (a folder written into under `overwrite` replaces files by name).
   std::string file(const std::string& name);
   /// Moves the staged files into the target (see the class comment). Throws IoError on failure, leaving
   /// the target as it was.
@@ -112,12 +114,14 @@ private:
   bool target_is_own() const;
   void recover_interrupted_commit();
   void require_no_input_inside(const std::vector<std::string>& inputs) const;
+  void require_not_an_input(const std::string& name) const;
   void replace_whole();
   void move_files_in();
 
   std::filesystem::path target_, staging_;
   std::string shown_, tool_;
   bool overwrite_;
+  std::vector<std::string> inputs_;
   std::vector<std::string> files_;
 };
 
