@@ -69,6 +69,25 @@ TEST(ReturnModel, MismatchedAndInconsistentRecordsAreNamed) {
   EXPECT_THROW(ReturnRecord::from_counts(4, 4, std::vector<std::uint32_t>(15, 0), returned), InvalidInput);
 }
 
+// Large counts cost nothing (replaying each ask took a minute for 2^32 asks, a map file's claim) and are
+// bounded so that the sums over 8 neighbours fit: 2^28 asks in every column, each sum 8 x 2^28 = 2^31.
+TEST(ReturnModel, FromCountsTakesLargeCountsAtOnceAndRefusesMoreThanTwoToThe28) {
+  const std::uint32_t most = ReturnRecord::kMaxAsks;
+  const ReturnRecord r = ReturnRecord::from_counts(3, 3, std::vector<std::uint32_t>(9, most), std::vector<std::uint32_t>(9, 1));
+  EXPECT_EQ(r.asked_nearby()[4], 8u * most);
+  EXPECT_EQ(r.asked_nearby()[0], 3u * most);
+  EXPECT_EQ(r.returned_nearby()[4], 8u);
+  EXPECT_EQ(r.total_asked(), 9ull * most);
+  std::vector<std::uint32_t> asked(9, 1), returned(9, 0);
+  asked[5] = most + 1;
+  try {
+    ReturnRecord::from_counts(3, 3, asked, returned);
+    FAIL() << "no throw";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("column 5 has 0 returns of 268435457 asks"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ReturnModel, FromCountsEqualsTheShotsThatMadeThem) {
   ReturnRecord shots = ReturnRecord::for_grid(6, 5);
   shots.record_shot({0, 7, 7, 29, 14}, {1, 0, 1, 0, 0});

@@ -11,8 +11,11 @@
 
 #include <pybind11/stl.h>
 
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <mutex>
+#include <sstream>
 
 namespace occ_improve::python {
 namespace {
@@ -42,6 +45,26 @@ std::vector<T> to_vector(const py::handle& values) {
   const auto a = Array<T>::ensure(values);
   if (!a) throw py::error_already_set();
   return std::vector<T>(a.data(), a.data() + a.size());
+}
+
+/// An array-like of whole numbers in [0, max of T] (counts, column indices) as a vector of T; InvalidInput
+/// naming `what`, the element and its value otherwise (a cast would turn -1 into 4294967295 and 1.5 into 1).
+template <class T>
+std::vector<T> to_whole_numbers(const py::handle& values, const std::string& what) {
+  const auto a = Array<double>::ensure(values);
+  if (!a) throw py::error_already_set();
+  std::vector<T> out(static_cast<std::size_t>(a.size()));
+  const double most = static_cast<double>(std::numeric_limits<T>::max());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const double v = a.data()[i];
+    if (!(v >= 0 && v <= most && v == std::floor(v))) {
+      std::ostringstream m;
+      m << what << ": element " << i << " is " << v << " (must be a whole number in [0, " << most << "])";
+      throw InvalidInput(m.str());
+    }
+    out[i] = static_cast<T>(v);
+  }
+  return out;
 }
 
 /// An improvement map: a Mapper's own, or an H x W array (copied once into the library's type).
@@ -74,11 +97,11 @@ void bind_return_model(py::module_& m) {
       .def_static("for_grid", &ReturnRecord::for_grid, py::arg("width"), py::arg("height"),
                   "An empty record for width x height columns.")
       .def_static("from_counts", [](int width, int height, const py::object& asked, const py::object& returned) {
-        return ReturnRecord::from_counts(width, height, to_vector<std::uint32_t>(asked),
-                                         to_vector<std::uint32_t>(returned));
+        return ReturnRecord::from_counts(width, height, to_whole_numbers<std::uint32_t>(asked, "asked"),
+                                         to_whole_numbers<std::uint32_t>(returned, "returned"));
       }, py::arg("width"), py::arg("height"), py::arg("asked"), py::arg("returned"),
-                  "A record from saved counts (H x W or flat, row-major). Raises InvalidInput for other sizes or "
-                  "more returns than asks.")
+                  "A record from saved counts (H x W or flat, row-major). Raises InvalidInput for other sizes, "
+                  "counts that are not whole numbers >= 0, more returns than asks or more than 2^28 asks of a ray.")
       .def_property_readonly("width", &ReturnRecord::width)
       .def_property_readonly("height", &ReturnRecord::height)
       .def_property_readonly("size", &ReturnRecord::size)
@@ -97,11 +120,11 @@ void bind_return_model(py::module_& m) {
   r.def("check_matches", &ReturnRecord::check_matches, py::arg("grid_width"), py::arg("grid_height"),
         "Raises InvalidInput naming both sizes unless the record is of this grid.");
   r.def("record_shot", [](ReturnRecord& record, const py::object& columns, const py::object& got_return) {
-    record.record_shot(to_vector<ColumnIndex>(columns), to_vector<std::uint8_t>(got_return));
+    record.record_shot(to_whole_numbers<ColumnIndex>(columns, "columns"), to_vector<std::uint8_t>(got_return));
   }, py::arg("columns"), py::arg("got_return"),
         "Adds one shot: got_return[i] (bool) says whether ray columns[i] (row-major index v * width + u) returned. "
-        "Checked before anything is counted: InvalidInput for different lengths, InvalidParameter for a column "
-        "outside the grid.");
+        "Checked before anything is counted: InvalidInput for different lengths or a column that is not a whole "
+        "number >= 0, InvalidParameter for a column outside the grid.");
   def_fields_repr(r, {"width", "height", "total_asked", "total_returned"});
 
   m.def("record_return_rate", &record_return_rate, py::arg("record"),

@@ -106,6 +106,22 @@ def test_return_record_refuses_bad_shots_and_counts_nothing():
         oi.ReturnModelParams(prior_strength_shots=0).validate()
 
 
+def test_counts_and_columns_must_be_whole_numbers_in_range():
+    # A cast made -1 into 4294967295 asks (then a minute-long loop deaf to Ctrl-C) and 1.5 into 1.
+    for bad, value in (([-1, 0, 0, 0], "-1"), ([1.5, 0, 0, 0], "1.5"), ([np.nan, 0, 0, 0], "nan")):
+        with pytest.raises(oi.InvalidInput, match=r"asked: element 0 is " + value):
+            oi.ReturnRecord.from_counts(2, 2, np.array(bad), np.zeros(4))
+    with pytest.raises(oi.InvalidInput, match="2\\^28"):
+        oi.ReturnRecord.from_counts(2, 2, np.full(4, 2**32 - 1), np.zeros(4))
+    record = oi.ReturnRecord.for_grid(4, 3)
+    with pytest.raises(oi.InvalidInput, match="columns: element 1 is -1"):
+        record.record_shot([0, -1], [True, True])
+    assert record.total_asked == 0
+    exact = oi.ReturnRecord.from_counts(2, 2, np.array([3.0, 2, 1, 0]), np.array([1, 1, 0, 0], dtype=np.uint8))
+    assert exact.asked.tolist() == [[3, 2], [1, 0]]
+    assert exact.asked_nearby.tolist() == [[3, 4], [5, 6]]
+
+
 def test_window_and_decimation_shapes(pixel_mapper):
     w, h = pixel_mapper.width, pixel_mapper.height
     record = empty_record(pixel_mapper)

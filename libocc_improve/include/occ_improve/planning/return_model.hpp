@@ -32,8 +32,11 @@ public:
   ReturnRecord() = default;
   /// An empty record for a grid of width x height columns (InvalidParameter when not positive).
   static ReturnRecord for_grid(int width, int height);
-  /// A record from saved counts (map_io). Throws InvalidInput naming the value when the arrays do not hold
-  /// width x height counts or a column has more returns than asks.
+  /// At most this many asks of one ray in a record from counts: the sums over 8 neighbours stay below 2^31.
+  static constexpr std::uint32_t kMaxAsks = std::uint32_t{1} << 28;
+  /// A record from saved counts (map_io), in one pass over the columns. Throws InvalidInput naming the
+  /// value when the arrays do not hold width x height counts, a column has more returns than asks, or
+  /// more than kMaxAsks asks.
   static ReturnRecord from_counts(int width, int height, std::vector<std::uint32_t> asked,
                                   std::vector<std::uint32_t> returned);
 
