@@ -504,11 +504,14 @@ class Mapper:
     def predict_depth(self, params: DepthPredictionParams = ...
                       ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
     def render_improvement(self) -> npt.NDArray[np.uint8]: ...
-    def save(self, path: _Path) -> None: ...
+    def save(self, path: _Path, overwrite: bool = False) -> None:
+        """Replaces an existing file only when it is a map occ_improve wrote, or with overwrite=True."""
     def export_octomap(self, path: _Path, resolution_m: float,
                        world_from_sensor: Optional[_ArrayLike] = None,
-                       options: OctomapExportOptions = ...) -> OctomapExportReport:
-        """Only where HAS_OCTOMAP (the module was built with the OctoMap adapter)."""
+                       options: OctomapExportOptions = ...,
+                       overwrite: bool = False) -> OctomapExportReport:
+        """Only where HAS_OCTOMAP (the module was built with the OctoMap adapter). Replaces an existing file
+        only when occ_improve wrote it, or with overwrite=True."""
 
 def load_map(path: _Path) -> Mapper: ...
 

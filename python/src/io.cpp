@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 
 #include <cstring>
+#include <filesystem>
 #include <string>
 
 #ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
@@ -68,12 +69,25 @@ std::string lzf_decompress(const std::string& in, std::size_t expected_bytes) {
   return out;
 }
 
+/// As the tools' -save and occ_to_octomap -o: an existing file is replaced only when occ_improve wrote it
+/// (`is_own`, by its magic) or with overwrite=True. (A folder is left to the writer's own error.)
+void require_replaceable(const std::string& path, bool overwrite, bool (*is_own)(const std::string&), const char* kind) {
+  std::error_code ec;
+  if (overwrite || !std::filesystem::exists(path, ec) || std::filesystem::is_directory(path, ec) || is_own(path)) return;
+  throw IoError("'" + path + "' exists and is not " + kind +
+                " written by occ_improve: choose another path, or pass overwrite=True to replace it");
+}
+
 void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
   m.attr("MAP_FORMAT_VERSION") = kMapFormatVersion;
-  c.def("save", [](PyMapper& self, const py::object& path) {
+  c.def("save", [](PyMapper& self, const py::object& path, bool overwrite) {
     const std::string p = path_string(path);
+    require_replaceable(p, overwrite, &is_map_file, "a map");
     with_mapper(self, [&](Mapper& mp) { save_map(p, mp.grid(), mp.model().params()); });
-  }, py::arg("path"), "Writes the grid and its sensor model (atomically: temp file + rename). Raises IoError.");
+  }, py::arg("path"), py::arg("overwrite") = false,
+        "Writes the grid and its sensor model (atomically: temp file + rename). An existing file is replaced "
+        "when it is a map occ_improve wrote, or with overwrite=True; else IoError, and the file is kept. "
+        "Raises IoError.");
   m.def("load_map", [](const py::object& path) {
     const std::string p = path_string(path);
     py::gil_scoped_release release;
@@ -116,9 +130,11 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
       .def_readonly("seconds", &OctomapExportReport::seconds);
   def_fields_repr(r, {"leaves_examined", "occupied_written", "free_written", "left_unknown", "seconds"});
   c.def("export_octomap", [](PyMapper& self, const py::object& path, double resolution_m,
-                             const std::optional<PoseArray>& world_from_sensor, const OctomapExportOptions& options) {
+                             const std::optional<PoseArray>& world_from_sensor, const OctomapExportOptions& options,
+                             bool overwrite) {
     const std::string p = path_string(path);
     require_octomap_output_path(p);  // before any work, as the tools do
+    require_replaceable(p, overwrite, &is_octomap_file, "an OctoMap file");
     const Eigen::Isometry3d pose = pose_from(world_from_sensor);
     return with_mapper(self, [&](Mapper& mp) {
       OctomapExportReport report;
@@ -127,9 +143,10 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
       return report;
     });
   }, py::arg("path"), py::arg("resolution_m"), py::arg("world_from_sensor") = py::none(),
-        py::arg("options") = OctomapExportOptions{},
+        py::arg("options") = OctomapExportOptions{}, py::arg("overwrite") = false,
         "Writes the grid as an OctoMap .bt (maximum likelihood) or .ot (log-odds) file at resolution_m, "
-        "seen from world_from_sensor (4 x 4 rigid transform, default identity).");
+        "seen from world_from_sensor (4 x 4 rigid transform, default identity). An existing file is replaced "
+        "when occ_improve wrote it, or with overwrite=True; else IoError before any work.");
 }
 #endif
 

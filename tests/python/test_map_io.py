@@ -77,3 +77,19 @@ def test_saving_into_a_missing_folder_is_an_io_error_and_leaves_nothing(tmp_path
         paper_mapper.save(tmp_path / "no" / "such" / "folder" / "m.occmap")
     assert not (tmp_path / "no").exists()
     assert np.isfinite(paper_mapper.improvement()).all()
+
+
+def test_save_replaces_its_own_map_but_not_a_users_file(tmp_path, paper_mapper):
+    # save() replaced any file (a user's notes became a map); the tools' -save never did.
+    notes = tmp_path / "notes.occmap"
+    notes.write_text("my notes")
+    with pytest.raises(oi.IoError, match="overwrite=True"):
+        paper_mapper.save(notes)
+    assert notes.read_text() == "my notes"
+    own = tmp_path / "m.occmap"
+    paper_mapper.save(own)
+    paper_mapper.save(own)  # its own map is replaced
+    assert own.read_bytes().startswith(b"OCCIMAP")
+    paper_mapper.save(notes, overwrite=True)
+    assert notes.read_bytes().startswith(b"OCCIMAP")
+    assert oi.load_map(notes).width == paper_mapper.width

@@ -49,3 +49,17 @@ def test_bad_extension_pose_and_resolution_raise_invalid_parameter(tmp_path):
 def test_pose_must_be_a_4_by_4_matrix(tmp_path):
     with pytest.raises(oi.InvalidParameter, match="4 x 4"):
         small_mapper().export_octomap(tmp_path / "map.bt", 0.05, world_from_sensor=np.eye(3))
+
+
+def test_export_replaces_its_own_tree_but_not_a_users_file(tmp_path):
+    mapper = small_mapper()
+    theirs = tmp_path / "theirs.bt"
+    theirs.write_bytes(b"not a tree")
+    with pytest.raises(oi.IoError, match="overwrite=True"):
+        mapper.export_octomap(theirs, 0.05)
+    assert theirs.read_bytes() == b"not a tree"
+    own = tmp_path / "own.bt"
+    mapper.export_octomap(own, 0.05)
+    assert mapper.export_octomap(own, 0.05).occupied_written > 0  # its own tree is replaced
+    mapper.export_octomap(theirs, 0.05, overwrite=True)
+    assert theirs.read_bytes().startswith(b"# Octomap OcTree binary file")
