@@ -88,6 +88,18 @@ TEST(ReturnModel, FromCountsTakesLargeCountsAtOnceAndRefusesMoreThanTwoToThe28) 
   }
 }
 
+// A record beyond 32-bit column indices is refused by name (Python saw MemoryError for 100000 x 100000).
+// (One below that which cannot be allocated is a ResourceLimit; not tested: with overcommit the zeroing
+// is what fails, as an out-of-memory kill.)
+TEST(ReturnModel, OversizedRecordsAreTypedErrors) {
+  try {
+    ReturnRecord::for_grid(100000, 100000);
+    FAIL() << "no throw";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("width x height"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ReturnModel, FromCountsEqualsTheShotsThatMadeThem) {
   ReturnRecord shots = ReturnRecord::for_grid(6, 5);
   shots.record_shot({0, 7, 7, 29, 14}, {1, 0, 1, 0, 0});

@@ -32,6 +32,8 @@ def read_depth_png(path: PathLike, scale: float = 0.001) -> np.ndarray:
             values = np.asarray(image)
     except OSError as e:
         raise IoError(f"cannot read depth image '{os.fspath(path)}': {e}") from e
+    except Image.DecompressionBombError as e:  # a header claiming gigapixels: Pillow refuses to decode it
+        raise InvalidInput(f"depth image '{os.fspath(path)}': {e}") from e
     # Pillow reports 16-bit grey PNGs as "I;16" or widens them to 32-bit "I".
     if values.ndim != 2 or mode not in ("I", "I;16", "I;16B") or values.max(initial=0) > 65535:
         raise InvalidInput(f"'{os.fspath(path)}' is not a 16-bit grey depth image (mode {mode}, shape {values.shape})")

@@ -182,7 +182,10 @@ def _compressed_records(path: str, header: _Header, raw: bytes) -> np.ndarray:
                     f"{len(raw) - start - 8}")
     if uncompressed > compressed * _MAX_COMPRESSION_RATIO:
         _fail(path, f"binary_compressed data declares {uncompressed} bytes from {compressed}: not LZF data")
-    plain = _lzf_decompress(raw[start + 8:start + 8 + compressed], uncompressed) if expected else b""
+    try:
+        plain = _lzf_decompress(raw[start + 8:start + 8 + compressed], uncompressed) if expected else b""
+    except FormatError as e:  # the decompressor knows the bytes, not the file
+        _fail(path, str(e))
     # Field after field (all points' x, then all y, ...): PCL's layout for better compression.
     records = np.empty(header.points, dtype=record)
     offset = 0

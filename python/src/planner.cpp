@@ -80,6 +80,12 @@ ImprovementMap improvement_from(const py::handle& source) {
   map.height = static_cast<int>(a.shape(0));
   map.width = static_cast<int>(a.shape(1));
   map.value.assign(a.data(), a.data() + a.size());
+  // NaN marks a ray that cannot be observed; an infinite improvement is no value (it made expected_gain inf).
+  for (std::size_t c = 0; c < map.value.size(); ++c)
+    if (std::isinf(map.value[c]))
+      throw InvalidInput("improvement: ray " + std::to_string(c) + " (row " + std::to_string(c / static_cast<std::size_t>(map.width)) +
+                         ", column " + std::to_string(c % static_cast<std::size_t>(map.width)) +
+                         ") is infinite (finite values, or NaN for a ray that cannot be observed)");
   return map;
 }
 

@@ -18,6 +18,22 @@ def test_depth_png_round_trip_and_wrong_images(tmp_path):
         oi.read_depth_png(tmp_path / "missing.png")
 
 
+def test_depth_png_claiming_gigapixels_is_invalid_input(tmp_path):
+    # Pillow's DecompressionBombError escaped as a non-occ_improve exception.
+    pytest.importorskip("PIL.Image", reason="reading depth PNGs needs Pillow (Debian: python3-pil)")
+    import struct
+    import zlib
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    ihdr = struct.pack(">IIBBBBB", 100000, 100000, 16, 0, 0, 0, 0)
+    (tmp_path / "huge.png").write_bytes(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) +
+                                        chunk(b"IDAT", zlib.compress(bytes(10))) + chunk(b"IEND", b""))
+    with pytest.raises(oi.InvalidInput, match="huge.png"):
+        oi.read_depth_png(tmp_path / "huge.png")
+
+
 def test_intrinsics_files_in_both_layouts(tmp_path):
     (tmp_path / "k3.txt").write_text("585 0 320\n0 586 240\n0 0 1\n")
     k = oi.read_intrinsics(tmp_path / "k3.txt")

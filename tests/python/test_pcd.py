@@ -167,6 +167,10 @@ def test_malformed_files_name_the_file_and_the_problem(tmp_path, sample):
     wrong_size = raw[:data_at + 4] + np.array([123], "<u4").tobytes() + raw[data_at + 8:]
     with pytest.raises(oi.FormatError, match="declares 123 bytes"):
         oi.read_pcd(variant("declared.pcd", wrong_size))
+    # An LZF stream that opens with a back reference (control byte >= 32): the decoder's error, with the file named.
+    corrupt = raw[:data_at + 8] + b"\xff\xff\xff" + raw[data_at + 11:]
+    with pytest.raises(oi.FormatError, match="corrupt_body.pcd.*LZF data corrupt"):
+        oi.read_pcd(variant("corrupt_body.pcd", corrupt))
     write_pcd(tmp_path / "bin.pcd", records, "binary")
     with pytest.raises(oi.FormatError, match="binary data holds"):
         oi.read_pcd(variant("short.pcd", (tmp_path / "bin.pcd").read_bytes()[:-1]))

@@ -307,3 +307,16 @@ def test_insert_takes_the_mask_as_a_keyword(sample):
     assert report.points_masked == b.insert_depth(depth, intrinsics).points_masked > 0
     assert np.array_equal(a.column_mask, mask.astype(bool))
     np.testing.assert_array_equal(a.improvement(), b.improvement())
+
+
+def test_plan_names_a_record_of_another_size_and_refuses_infinite_improvement():
+    # The budget check came first and blamed budget_rays = 4096; an all-inf map gave expected_gain = inf.
+    with pytest.raises(oi.InvalidInput, match="return record"):
+        oi.plan_next_shot(np.zeros((10, 10), np.float32), oi.ReturnRecord.for_grid(640, 480), oi.PlanRequest())
+    improvement = np.full((10, 10), 0.3, np.float32)
+    improvement[2, 3] = np.inf
+    with pytest.raises(oi.InvalidInput, match="row 2, column 3"):
+        oi.plan_next_shot(improvement, oi.ReturnRecord.for_grid(10, 10), oi.PlanRequest(budget_rays=5))
+    improvement[2, 3] = np.nan  # not observable: never planned
+    shot = oi.plan_next_shot(improvement, oi.ReturnRecord.for_grid(10, 10), oi.PlanRequest(budget_rays=5))
+    assert len(shot) == 5 and 23 not in list(shot.columns)

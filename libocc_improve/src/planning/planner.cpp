@@ -437,6 +437,7 @@ Shot decide_stop(Shot shot, const PlanRequest& request) {
 }  // namespace
 
 Shot plan_next_shot(const ImprovementMap& improvement, const ReturnRecord& returns, const PlanRequest& request) {
+  returns.check_matches(improvement.width, improvement.height);  // first: a wrong record explains a bad budget too
   request.validate(improvement.width, improvement.height);
   if (request.shape == ShotShape::coarse_to_fine)
     throw InvalidParameter("shape coarse_to_fine needs the multi-scale pyramid: call plan_next_shot with the mapper "

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <new>
 #include <sstream>
 #include <string>
 
@@ -12,11 +14,19 @@ namespace occ_improve {
 ReturnRecord ReturnRecord::for_grid(int width, int height) {
   detail::require_parameter(width > 0, "width", width, "> 0");
   detail::require_parameter(height > 0, "height", height, "> 0");
+  const std::uint64_t columns = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+  detail::require_parameter(columns <= std::numeric_limits<ColumnIndex>::max(), "width x height",
+                            static_cast<double>(columns), "at most 2^32 - 1 columns (a column index is 32-bit)");
   ReturnRecord r;
   r.width_ = width;
   r.height_ = height;
-  r.asked_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
-  r.returned_ = r.asked_nearby_ = r.returned_nearby_ = r.asked_;
+  try {
+    r.asked_.assign(columns, 0);
+    r.returned_ = r.asked_nearby_ = r.returned_nearby_ = r.asked_;
+  } catch (const std::bad_alloc&) {
+    throw ResourceLimit("return record of " + std::to_string(width) + " x " + std::to_string(height) + " columns: its " +
+                        std::to_string(16 * columns) + " bytes of counts could not be allocated");
+  }
   return r;
 }
 
