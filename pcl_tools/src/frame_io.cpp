@@ -1,6 +1,7 @@
 #include "occ_improve/pcl/frame_io.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/pcl/pcd_header.hpp"
@@ -170,6 +171,7 @@ std::string pose_file_for(const std::string& depth_path) {
 }
 
 PinholeIntrinsics read_intrinsics_file(const std::string& path) {
+  throw_if_folder(path, "intrinsics file");
   std::ifstream in(path);
   if (!in) throw IoError("cannot open intrinsics file '" + path + "'");
   std::vector<double> v;

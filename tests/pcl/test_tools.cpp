@@ -904,6 +904,26 @@ TEST_F(Tools, ValuesThatLookLikeFlagsAndCamerasThatDoNotFitAreNamed) {
   const ToolRun fps = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -fps 1e-12 -o live");
   EXPECT_EQ(fps.exit_code, 1);
   EXPECT_NE(fps.err.find("-fps 1e-12 is invalid"), std::string::npos) << fps.err;
+  // -sample renders through its own camera: -intrinsics was silently ignored.
+  for (const char* tool : {OCC_IMPROVE_MAP_EXECUTABLE, OCC_PLAN_EXECUTABLE}) {
+    const ToolRun sample = run(tool, "-sample -intrinsics 1e-30,1e-30,0,0 -o out_sample");
+    EXPECT_EQ(sample.exit_code, 1) << tool;
+    EXPECT_NE(sample.err.find("-intrinsics with -sample"), std::string::npos) << sample.err;
+    EXPECT_FALSE(fs::exists(folder_ / "out_sample")) << tool;
+  }
+}
+
+// A folder given for a mask or an intrinsics file was "not a PNG file" / "holds something that is not a
+// number": the reader opened it as a file.
+TEST_F(Tools, AFolderWhereAFileIsExpectedIsNamedAsAFolder) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  fs::create_directory(folder_ / "a_folder.png");
+  for (const std::string& flag : {std::string("-mask"), std::string("-intrinsics_file")}) {
+    const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " " + flag + " a_folder.png -o out");
+    EXPECT_EQ(r.exit_code, 1) << flag;
+    EXPECT_NE(r.err.find("'a_folder.png': it is a folder"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
 }
 
 }  // namespace

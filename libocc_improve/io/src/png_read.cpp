@@ -1,6 +1,7 @@
 #include "occ_improve/io/png.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "image_read.hpp"
 
 #include <png.h>
@@ -32,6 +33,7 @@ struct PngReader {
 }  // namespace
 
 DepthImage16 detail::read_grey_png(const std::string& path, const std::string& what, bool accept_8bit) {
+  throw_if_folder(path, what);
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) throw IoError("cannot open " + what + " '" + path + "'");
   unsigned char signature[8];

@@ -199,6 +199,11 @@ bool path_is_within(const std::string& inner, const std::string& outer) {
   return !relative.empty() && *relative.begin() != "..";
 }
 
+void throw_if_folder(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw IoError("cannot read " + what + " '" + path + "': it is a folder");
+}
+
 void write_text_file(const std::string& path, const std::string& what, const std::string& text) {
   write_file_atomically(path, what, [&](std::ostream& out) {
     return static_cast<bool>(out.write(text.data(), static_cast<std::streamsize>(text.size())));

@@ -93,8 +93,7 @@ private:
 };
 
 std::vector<char> read_file(const std::string& path, std::size_t memory_cap_bytes) {
-  std::error_code error;
-  if (std::filesystem::is_directory(path, error)) throw IoError("cannot read map '" + path + "': it is a folder");
+  throw_if_folder(path, "map");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open map '" + path + "' for reading");
   in.seekg(0, std::ios::end);

@@ -85,6 +85,8 @@ ToolFrame sample_tool_frame() {
 ToolFrameReader::ToolFrameReader(const ToolOptions& options, bool use_sample)
     : options_(options), use_sample_(use_sample) {
   if (use_sample && !options.inputs.empty()) throw InvalidParameter("give either input files or -sample, not both");
+  if (use_sample && options.intrinsics)  // the sample is rendered through its own camera: the flag would be ignored
+    throw InvalidParameter(options.intrinsics_flag + " with -sample: the built-in sample has its own camera");
   for (const std::string& input : options.inputs) {
     const InputScope scope(input);
     for (FrameSource& source : expand_input(input)) sources_.push_back(std::move(source));

@@ -28,6 +28,10 @@ std::filesystem::path comparable_path(const std::string& path);
 /// existing parts resolved (an output against the run's inputs, an input against an output folder).
 bool path_is_within(const std::string& inner, const std::string& outer);
 
+/// Throws IoError "cannot read <what> '<path>': it is a folder" when `path` names a folder: a reader would
+/// otherwise open it and report a format error about its (absent) contents.
+void throw_if_folder(const std::string& path, const std::string& what);
+
 /// write_file_atomically of a text held in memory (CSV tables, plan summaries).
 void write_text_file(const std::string& path, const std::string& what, const std::string& text);
 
