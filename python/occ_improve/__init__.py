@@ -18,6 +18,7 @@ from ._core import (  # noqa: F401  (re-exported)
     HAS_OCTOMAP,
     MAX_INTRINSICS_FIT_RESIDUAL_PX,
     AngularBinning,
+    Cancelled,
     DepthBinning,
     DepthPredictionParams,
     DepthPredictionRule,

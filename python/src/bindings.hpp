@@ -1,6 +1,7 @@
 #pragma once
 // Shared pieces of the Python module: one bind_* function per library header group, the Mapper holder
 // that serialises calls from several Python threads, and small helpers for struct bindings.
+#include "interrupt.hpp"
 #include "occ_improve/mapper.hpp"
 
 #include <pybind11/pybind11.h>
@@ -31,14 +32,17 @@ struct PyMapper {
   std::mutex mutex;
 };
 
-/// Runs f(mapper) with the GIL released and the Mapper's mutex held. The lock is declared after the GIL
-/// release, so it is given back before the GIL is retaken: a thread that holds the GIL and waits for
-/// the mutex can never block the thread that holds the mutex. f must not touch Python objects.
+/// Runs f(mapper) with the GIL released and the Mapper's mutex held, Ctrl-C stopping it
+/// (run_interruptible: KeyboardInterrupt; an interrupted insertion leaves part of its frame in the map).
+/// The lock is taken after the GIL release, so it is given back before the GIL is retaken: a thread that
+/// holds the GIL and waits for the mutex can never block the thread that holds the mutex. f must not
+/// touch Python objects.
 template <class F>
 auto with_mapper(PyMapper& m, F&& f) {
-  py::gil_scoped_release release;
-  std::lock_guard<std::mutex> lock(m.mutex);
-  return f(m.mapper);
+  return run_interruptible([&] {
+    std::lock_guard<std::mutex> lock(m.mutex);
+    return f(m.mapper);
+  });
 }
 
 /// A constructor from keyword arguments only, each naming a field: T(fx=500.0, width=320). An unknown

@@ -23,7 +23,7 @@ py::handle new_exception(py::module_& m, const char* name, py::tuple bases, cons
 void bind_errors(py::module_& m) {
   const py::object builtins = py::module_::import("builtins");
   // Static: the translator below runs long after this function returns.
-  static py::handle error, invalid_parameter, invalid_input, io_error, format_error, resource_limit;
+  static py::handle error, invalid_parameter, invalid_input, io_error, format_error, resource_limit, cancelled;
   error = new_exception(m, "Error", py::make_tuple(builtins.attr("RuntimeError")),
                         "Root of every exception raised by occ_improve.");
   invalid_parameter = new_exception(m, "InvalidParameter", py::make_tuple(error, builtins.attr("ValueError")),
@@ -36,6 +36,8 @@ void bind_errors(py::module_& m) {
                                "A file was read but is not in the expected format (corrupt, truncated, other version).");
   resource_limit = new_exception(m, "ResourceLimit", py::make_tuple(error),
                                  "A request would exceed a configured resource limit (e.g. the grid memory cap).");
+  cancelled = new_exception(m, "Cancelled", py::make_tuple(error),
+                            "A call stopped by a stop request (a Ctrl-C during a call is raised as KeyboardInterrupt).");
   // Most derived first: the C++ types form a hierarchy and the first matching catch wins.
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -50,6 +52,8 @@ void bind_errors(py::module_& m) {
       PyErr_SetString(format_error.ptr(), e.what());
     } catch (const ResourceLimit& e) {
       PyErr_SetString(resource_limit.ptr(), e.what());
+    } catch (const Cancelled& e) {
+      PyErr_SetString(cancelled.ptr(), e.what());
     } catch (const Error& e) {
       PyErr_SetString(error.ptr(), e.what());
     }

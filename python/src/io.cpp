@@ -90,9 +90,10 @@ void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
         "Raises IoError.");
   m.def("load_map", [](const py::object& path) {
     const std::string p = path_string(path);
-    py::gil_scoped_release release;
-    LoadedMap loaded = load_map(p);
-    return std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model)));
+    return run_interruptible([&] {
+      LoadedMap loaded = load_map(p);
+      return std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model)));
+    });
   }, py::arg("path"),
         "A Mapper continuing from a saved map (surface and improvement recomputed). Raises IoError when "
         "the file cannot be read, FormatError when it is not a valid map.");

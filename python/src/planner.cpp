@@ -236,8 +236,7 @@ void bind_planning(py::module_& m) {
       });
     if (memory) throw InvalidParameter("plan_next_shot: memory is kept for a Mapper's plans, not for an improvement array");
     const ImprovementMap map = improvement_from(improvement);
-    py::gil_scoped_release release;
-    return plan_next_shot(map, returns, request);
+    return run_interruptible([&] { return plan_next_shot(map, returns, request); });
   }, py::arg("improvement"), py::arg("returns"), py::arg("request") = PlanRequest{}, py::arg("memory") = nullptr,
         "The next shot over a Mapper (every shape) or an H x W float32 improvement array (every shape but "
         "coarse_to_fine, which reads the Mapper's multi-scale improvement). returns: "
@@ -246,11 +245,7 @@ void bind_planning(py::module_& m) {
         "of another grid.");
   m.def("shot_scores", [](const py::object& improvement, const ReturnRecord& returns, const ReturnModelParams& params) {
     const ImprovementMap map = improvement_from(improvement);
-    std::vector<float> scores;
-    {
-      py::gil_scoped_release release;
-      scores = shot_scores(map, returns, params);
-    }
+    const std::vector<float> scores = run_interruptible([&] { return shot_scores(map, returns, params); });
     return grid_array(scores, map.height, map.width);
   }, py::arg("improvement"), py::arg("returns"), py::arg("params") = ReturnModelParams{},
         "improvement x return probability, H x W float32: the ranking plan_next_shot uses.");
@@ -269,8 +264,7 @@ IntrinsicsFit fit_organized(const py::object& points, Fit&& fit) {
   const py::array a = py::reinterpret_borrow<py::array>(py::module_::import("numpy").attr("asarray")(points));
   if (a.ndim() != 3) throw InvalidInput("points must be an organized H x W x 3 cloud to fit intrinsics");
   const int height = static_cast<int>(a.shape(0)), width = static_cast<int>(a.shape(1));
-  py::gil_scoped_release release;
-  return fit(in.span.xyz, width, height, in.span.stride_floats);
+  return run_interruptible([&] { return fit(in.span.xyz, width, height, in.span.stride_floats); });
 }
 
 void bind_intrinsics_fit(py::module_& m) {

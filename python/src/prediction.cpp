@@ -33,11 +33,7 @@ py::tuple predict_from_image(const py::handle& sparse, const SensorModelParams& 
   const int h = static_cast<int>(image.shape(0)), w = static_cast<int>(image.shape(1));
   const std::vector<float> values(image.data(), image.data() + image.size());
   const SensorModel sensor(model);
-  PredictedDepth p;
-  {
-    py::gil_scoped_release release;
-    p = predict_dense_depth(values, w, h, sensor, params);
-  }
+  const PredictedDepth p = run_interruptible([&] { return predict_dense_depth(values, w, h, sensor, params); });
   return to_arrays(p);
 }
 

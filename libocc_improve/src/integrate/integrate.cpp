@@ -372,6 +372,7 @@ private:
     for (int r = first_tile_row; r < end_tile_row; ++r) {
       const std::size_t row_start = static_cast<std::size_t>(r - first_tile_row) * static_cast<std::size_t>(tile_columns);
       for (std::uint32_t k = rows.begin[static_cast<std::size_t>(r)]; k < rows.begin[static_cast<std::size_t>(r) + 1]; ++k) {
+        poll_stop(k);  // a dense band holds millions of measurements
         const std::uint32_t mi = rows.items[k];
         const Measurement& m = measurements.slots[mi];
         for (int t = m.azimuth_first / kTile; t <= m.azimuth_last / kTile; ++t) visit(row_start + static_cast<std::size_t>(t), mi);

@@ -84,7 +84,7 @@ TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows
   each_chunk([&](std::size_t c) {
     const auto [begin, end] = measurements.ranges[c];
     for (std::size_t i = begin; i < end; ++i)
-      for_each_row(measurements.slots[i], [&](std::size_t r, int pairs) {
+      for_each_row((poll_stop(i), measurements.slots[i]), [&](std::size_t r, int pairs) {
         ++slot[c][r];
         work[c][r] += pairs;
       });
@@ -106,7 +106,7 @@ TileRows bucket_by_tile_row(const MeasurementChunks& measurements, int tile_rows
   each_chunk([&](std::size_t c) {
     const auto [begin, end] = measurements.ranges[c];
     for (std::size_t i = begin; i < end; ++i)
-      for_each_row(measurements.slots[i], [&](std::size_t r, int) { out.items[slot[c][r]++] = static_cast<std::uint32_t>(i); });
+      for_each_row((poll_stop(i), measurements.slots[i]), [&](std::size_t r, int) { out.items[slot[c][r]++] = static_cast<std::uint32_t>(i); });
   });
   return out;
 }
