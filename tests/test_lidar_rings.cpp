@@ -96,6 +96,11 @@ TEST(LidarRings, BadRingTablesAreRefusedNamingTheField) {
   g = lidar_rings().geometry;
   g.azimuth_min_rad = -4.0;
   EXPECT_NE(geometry_error(g).find("azimuth_min_rad"), std::string::npos) << geometry_error(g);
+  // No ring table at all (a GeometryParams switched to lidar_rings): the rows were built before the
+  // check and the process crashed.
+  GeometryParams no_rings;
+  no_rings.angular_binning = AngularBinning::lidar_rings;
+  EXPECT_NE(geometry_error(no_rings).find("row_elevations_rad size"), std::string::npos) << geometry_error(no_rings);
   g = lidar_rings().geometry;
   g.angular_binning = "lidar_ringz";
   EXPECT_NE(geometry_error(g).find("'lidar_ringz' is not a registered binning"), std::string::npos)

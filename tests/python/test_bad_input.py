@@ -225,3 +225,11 @@ def test_bad_query_parameters_raise_invalid_parameter(mapper):
         mapper.direction(-1, 0)
     with pytest.raises(TypeError):
         mapper.top_rays("ten")
+
+
+def test_lidar_rings_without_a_ring_table_is_invalid_parameter_not_a_crash():
+    # The rows were built from the empty table before it was checked: the interpreter died (exit 139).
+    with pytest.raises(oi.InvalidParameter, match="row_elevations_rad size = 0"):
+        oi.GeometryParams(angular_binning="lidar_rings").validate()
+    with pytest.raises(oi.InvalidParameter, match="row_elevations_rad"):
+        oi.preset_from_pinhole(oi.kinect_v1_intrinsics(), oi.PinholePresetOptions(angular_binning="lidar_rings"))

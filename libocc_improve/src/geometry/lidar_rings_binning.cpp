@@ -43,9 +43,11 @@ const GeometryParams& validated(const GeometryParams& p) {
 
 }  // namespace
 
+// validated() in both arguments: their order of evaluation is unspecified, and GCC built the rows first,
+// from_centres reading an empty table (a crash from Python: GeometryParams(angular_binning="lidar_rings")).
 LidarRingsBinning::LidarRingsBinning(const GeometryParams& p)
     : SphericalBinning(BinAxis(validated(p).azimuth_min_rad, p.azimuth_max_rad, p.azimuth_bins),
-                     BinAxis::from_centres(p.row_elevations_rad)) {}
+                     BinAxis::from_centres(validated(p).row_elevations_rad)) {}
 
 double LidarRingsBinning::curvature_angle_rad() const {
   double widest_row = 0;

@@ -19,8 +19,9 @@ const PinholeIntrinsics& validated_camera(const GeometryParams& p) {
 }  // namespace
 
 PinholeBinning::PinholeBinning(const GeometryParams& p)
+    // Checked in both arguments: their order of evaluation is unspecified, and p.camera may be empty.
     : AngularBinning(BinAxis(-0.5, validated_camera(p).width - 0.5, p.camera->width),
-                     BinAxis(-0.5, p.camera->height - 0.5, p.camera->height)),
+                     BinAxis(-0.5, validated_camera(p).height - 0.5, p.camera->height)),
       camera_(*p.camera) {}
 
 bool PinholeBinning::position(double x, double y, double z, double& h, double& v, double& depth) const {

@@ -27,9 +27,10 @@ const GeometryParams& validated(const GeometryParams& p) {
 
 }  // namespace
 
+// validated() in both arguments: the order in which a call's arguments are evaluated is unspecified.
 SphericalBinning::SphericalBinning(const GeometryParams& p)
     : AngularBinning(BinAxis(validated(p).azimuth_min_rad, p.azimuth_max_rad, p.azimuth_bins),
-                     BinAxis(p.elevation_min_rad, p.elevation_max_rad, p.elevation_bins)) {}
+                     BinAxis(validated(p).elevation_min_rad, p.elevation_max_rad, p.elevation_bins)) {}
 
 bool SphericalBinning::position(double x, double y, double z, double& h, double& v, double& depth) const {
   const SphericalPoint s = to_spherical(x, y, z);
