@@ -320,3 +320,24 @@ def test_plan_names_a_record_of_another_size_and_refuses_infinite_improvement():
     improvement[2, 3] = np.nan  # not observable: never planned
     shot = oi.plan_next_shot(improvement, oi.ReturnRecord.for_grid(10, 10), oi.PlanRequest(budget_rays=5))
     assert len(shot) == 5 and 23 not in list(shot.columns)
+
+
+def test_candidates_and_return_flags_are_nonzero_flags_and_anything_else_is_named():
+    # A float or wide-integer mask was cast to 8 bits (0.5 and 256 became 0: a shot of nothing, stop=True);
+    # a string gave pybind11's internal RuntimeError.
+    improvement = np.full((10, 10), 0.3, np.float32)
+    returns = oi.ReturnRecord.for_grid(10, 10)
+    for marked in (0.5, 256, -1):
+        mask = np.zeros((10, 10))
+        mask[:2] = marked
+        shot = oi.plan_next_shot(improvement, returns, oi.PlanRequest(budget_rays=5, candidates=mask))
+        assert len(shot) == 5 and all(c < 20 for c in shot.columns), marked
+    with pytest.raises(oi.InvalidInput, match="candidates: element 3 is NaN"):
+        oi.PlanRequest(candidates=np.array([0, 1, 0, np.nan]))
+    for bad in ("abc", {}):
+        with pytest.raises(oi.InvalidInput, match="candidates: expected an array-like of numbers"):
+            oi.PlanRequest(candidates=bad)
+    with pytest.raises(oi.InvalidInput, match="NaN"):  # numpy makes None a NaN
+        oi.PlanRequest(candidates=[None])
+    returns.record_shot([0, 1], np.array([0.5, 0.0]))
+    assert returns.returned.ravel()[:2].tolist() == [1, 0]
