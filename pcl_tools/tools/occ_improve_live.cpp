@@ -120,6 +120,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   if (!mask_line.empty()) std::printf("%s\n", mask_line.c_str());
   ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
   PlanRequest request = plan_request_from_flags(command_line);
+  require_plan_fits(command_line, request, mapper.geometry().width(), mapper.geometry().height());
   request.candidates = mapper.column_mask();  // rays outside -mask are never asked for
   std::vector<SimulatedShot> shots;
   PlanMemory memory;  // the measured samples' triangulation, extended shot by shot

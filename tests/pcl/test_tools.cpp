@@ -647,6 +647,15 @@ TEST_F(Tools, SimulateRunsTheSelectiveLoopUntilThePlanSaysStop) {
   ASSERT_EQ(pcl::io::savePCDFileBinary(file("sample.pcd"),
                                        organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height)),
             0);
+  // A plan that cannot fit the grid names the flags, as occ_plan does (it named budget_rays, a struct field).
+  for (const std::string& args : {std::string("-budget 307201"), std::string("-shape window -window 64x64 -budget 4095")}) {
+    const ToolRun refused = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd " + args + " -o refused");
+    EXPECT_EQ(refused.exit_code, 1) << args;
+    EXPECT_EQ(refused.err.find("budget_rays"), std::string::npos) << refused.err;
+    EXPECT_NE(refused.err.find(args.find("window") != std::string::npos ? "-window 64x64 covers 4096 rays" : "-budget 307201"),
+              std::string::npos) << refused.err;
+    EXPECT_FALSE(std::filesystem::exists(folder_ / "refused"));
+  }
   const ToolRun r = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate sample.pcd -budget 30000 -shape rays -o sim");
   ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
   EXPECT_NE(r.out.find("the plan says stop"), std::string::npos) << r.out;

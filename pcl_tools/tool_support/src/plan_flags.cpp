@@ -39,4 +39,20 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
   return request;
 }
 
+void require_plan_fits(const CommandLine& command_line, const PlanRequest& request, int width, int height) {
+  const long long columns = static_cast<long long>(width) * height;
+  const std::string grid = std::to_string(width) + " x " + std::to_string(height);
+  if (request.budget_rays > columns)
+    throw InvalidParameter("-budget " + std::to_string(request.budget_rays) + " is more than the grid's " + grid +
+                           " = " + std::to_string(columns) + " rays");
+  if (request.shape != ShotShape::window) return;
+  const std::string window = "-window " + *command_line.text("-window");
+  if (request.window_width_columns > width || request.window_height_columns > height)
+    throw InvalidParameter(window + " does not fit in the grid of " + grid + " columns");
+  const long long area = static_cast<long long>(request.window_width_columns) * request.window_height_columns;
+  if (area > request.budget_rays)
+    throw InvalidParameter(window + " covers " + std::to_string(area) + " rays, more than -budget " +
+                           std::to_string(request.budget_rays) + ": raise -budget or shrink -window");
+}
+
 }  // namespace occ_improve

@@ -9,4 +9,9 @@ namespace occ_improve {
 /// reading for occ_plan and occ_improve_live -simulate). InvalidParameter naming a malformed -window.
 PlanRequest plan_request_from_flags(const CommandLine& command_line);
 
+/// The checks of PlanRequest::validate that depend on the grid, made first with the flags' names (the
+/// library's message names its struct fields): -budget beyond the grid's rays, a -window that does not
+/// fit in the grid or covers more than -budget rays. InvalidParameter.
+void require_plan_fits(const CommandLine& command_line, const PlanRequest& request, int width, int height);
+
 }  // namespace occ_improve
