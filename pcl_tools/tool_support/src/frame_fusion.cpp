@@ -92,8 +92,9 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     }
   } catch (const Cancelled&) {
     progress.finish();
-    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\n%s\n", fused.frames,
-                frames.count(), describe_points(fused.insertion).c_str());
+    // The frame being inserted when the stop came is not counted: its report never came back.
+    std::printf("inserted %zu of %zu frame(s) before the interruption; nothing written\nof those frames' %s\n",
+                fused.frames, frames.count(), describe_points(fused.insertion).c_str());
     throw;
   }
   progress.finish();
