@@ -4,6 +4,8 @@
 #include <csignal>
 #include <mutex>
 
+#include <pythread.h>
+
 namespace occ_improve::python {
 namespace {
 
@@ -46,10 +48,13 @@ SigintStopsLibrary::~SigintStopsLibrary() {
   if (!delivered.exchange(false)) PyErr_SetInterrupt();  // Python raises KeyboardInterrupt at its next check
 }
 
-bool SigintStopsLibrary::take_interrupt() {
-  if (!fired.load()) return false;
-  delivered.store(true);
-  return true;
+bool SigintStopsLibrary::interrupted() const { return fired.load(); }
+
+void SigintStopsLibrary::mark_delivered() { delivered.store(true); }
+
+bool in_main_thread() {
+  const py::object main = py::module_::import("threading").attr("main_thread")();
+  return main.attr("ident").cast<unsigned long>() == PyThread_get_thread_ident();
 }
 
 }  // namespace occ_improve::python

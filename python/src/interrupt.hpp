@@ -15,20 +15,26 @@ namespace py = pybind11;
 
 /// While alive (calls may nest, or run in several threads), SIGINT requests a library stop. On
 /// destruction the previous handler is back and the stop request withdrawn; a SIGINT that came while
-/// the call still completed is passed on to Python (PyErr_SetInterrupt), unless take_interrupt() said
-/// it was delivered as KeyboardInterrupt already.
+/// the call still completed, or that stopped a call outside the main thread, is passed on to Python
+/// (PyErr_SetInterrupt), unless mark_delivered() said it was raised as KeyboardInterrupt already.
 class SigintStopsLibrary {
 public:
   SigintStopsLibrary();
   ~SigintStopsLibrary();
   SigintStopsLibrary(const SigintStopsLibrary&) = delete;
   SigintStopsLibrary& operator=(const SigintStopsLibrary&) = delete;
-  /// Whether a SIGINT came during the call; if so, it is marked delivered.
-  bool take_interrupt();
+  /// Whether a SIGINT came during the call.
+  bool interrupted() const;
+  /// Says the SIGINT was raised as KeyboardInterrupt, so that it is not passed on again.
+  void mark_delivered();
 };
 
-/// f() with the GIL released and SIGINT stopping the library: KeyboardInterrupt when Ctrl-C stopped it.
-/// Take the GIL before calling (f must not touch Python objects).
+/// Whether the calling thread is Python's main thread (the GIL held).
+bool in_main_thread();
+
+/// f() with the GIL released and SIGINT stopping the library. When Ctrl-C stopped it: KeyboardInterrupt
+/// in Python's main thread, as Python raises it; in another thread oi.Cancelled, and the main thread gets
+/// its KeyboardInterrupt. Take the GIL before calling (f must not touch Python objects).
 template <class F>
 auto run_interruptible(F&& f) -> decltype(f()) {
   SigintStopsLibrary sigint;
@@ -36,8 +42,9 @@ auto run_interruptible(F&& f) -> decltype(f()) {
     py::gil_scoped_release release;
     return f();
   } catch (const Cancelled&) {
-    if (!sigint.take_interrupt()) throw;
+    if (!sigint.interrupted() || !in_main_thread()) throw;
   }
+  sigint.mark_delivered();
   PyErr_SetNone(PyExc_KeyboardInterrupt);
   throw py::error_already_set();
 }

@@ -68,3 +68,37 @@ def test_an_ignored_sigint_stays_ignored():
     lines = run_child("mapper.insert(points[:2_000_000], threads=1)",
                       setup="signal.signal(signal.SIGINT, signal.SIG_IGN)")
     assert lines[0].startswith("completed"), lines
+
+
+THREADED = r"""
+import os, signal, threading, time
+import numpy as np
+import occ_improve as oi
+mapper = oi.Mapper(oi.kinect_v1_paper())
+points = np.random.default_rng(0).uniform([-2, -2, 0.5], [2, 2, 7], (6_000_000, 3)).astype(np.float32)
+outcome = []
+def work():
+    try:
+        mapper.insert(points, threads=1)
+        outcome.append("completed")
+    except oi.Cancelled:
+        outcome.append("cancelled")
+worker = threading.Thread(target=work)
+worker.start()
+threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+try:
+    while worker.is_alive():
+        worker.join(0.05)
+    print("main not interrupted")
+except KeyboardInterrupt:
+    worker.join()
+    print("main interrupted")
+print("worker", outcome[0])
+"""
+
+
+def test_ctrl_c_cancels_a_call_in_another_thread_and_interrupts_the_main_thread():
+    # KeyboardInterrupt belongs to the main thread, as in Python; the worker's call ends with oi.Cancelled.
+    result = subprocess.run([sys.executable, "-c", THREADED], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[:2] == ["main interrupted", "worker cancelled"], result.stdout
