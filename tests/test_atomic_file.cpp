@@ -136,6 +136,20 @@ TEST_F(OutputFolderTest, OverwriteNeverReplacesAnInput) {
   EXPECT_EQ(contents(file("data/other.txt")), "mine");
 }
 
+// The tool's own folder inside an input folder (`tool seq/ -o seq/out`, run twice) is replaced as a whole:
+// the by-name check of a foreign folder does not apply (it refused the second run).
+TEST_F(OutputFolderTest, OwnFolderInsideAnInputFolderIsReplacedAgain) {
+  fs::create_directory(file("seq"));
+  put("seq/frame.depth.png", "frame");
+  for (const char* text : {"one", "two"}) {
+    OutputFolder out(file("seq/out"), "tool_a", false, {file("seq")});
+    std::ofstream(out.file("result.txt")) << text;
+    out.commit();
+  }
+  EXPECT_EQ(contents(file("seq/out/result.txt")), "two");
+  EXPECT_EQ(contents(file("seq/frame.depth.png")), "frame");
+}
+
 TEST_F(OutputFolderTest, OverwriteReplacesOnlySameNames) {
   fs::create_directory(file("data"));
   put("data/frame.depth.png", "frame");

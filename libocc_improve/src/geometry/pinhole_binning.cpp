@@ -20,8 +20,8 @@ const PinholeIntrinsics& validated_camera(const GeometryParams& p) {
 
 PinholeBinning::PinholeBinning(const GeometryParams& p)
     // Checked in both arguments: their order of evaluation is unspecified, and p.camera may be empty.
-    : AngularBinning(BinAxis(-0.5, validated_camera(p).width - 0.5, p.camera->width),
-                     BinAxis(-0.5, validated_camera(p).height - 0.5, p.camera->height)),
+    : AngularBinning(BinAxis(-0.5, validated_camera(p).width - 0.5, validated_camera(p).width),
+                     BinAxis(-0.5, validated_camera(p).height - 0.5, validated_camera(p).height)),
       camera_(*p.camera) {}
 
 bool PinholeBinning::position(double x, double y, double z, double& h, double& v, double& depth) const {

@@ -277,6 +277,7 @@ void OutputFolder::require_no_input_inside(const std::vector<std::string>& input
 
 // A folder that is not the tool's own takes the staged files under -overwrite by name, replacing files of
 // the same names: never one the run reads (an input named like an output, or a file in an input folder).
+// (The tool's own folder is replaced as a whole: require_no_input_inside guards it.)
 void OutputFolder::require_not_an_input(const std::string& name) const {
   const fs::path published = target_ / name;
   const fs::path compared = comparable_path(published.string());
@@ -321,7 +322,7 @@ OutputFolder::~OutputFolder() {
 std::string OutputFolder::file(const std::string& name) {
   if (name.empty() || name.find('/') != std::string::npos || name == kOutputMarkerName)
     throw InvalidParameter("output file name '" + name + "' must be a plain file name");
-  require_not_an_input(name);
+  if (!target_is_own()) require_not_an_input(name);  // early; move_files_in checks again before any rename
   std::error_code ec;
   fs::create_directory(staging_, ec);  // again after a commit, for the next one
   if (std::find(files_.begin(), files_.end(), name) == files_.end()) files_.push_back(name);
@@ -374,6 +375,7 @@ void OutputFolder::replace_whole() {
 }
 
 void OutputFolder::move_files_in() {
+  for (const std::string& name : files_) require_not_an_input(name);  // the folder may have turned foreign since
   for (const std::string& name : files_) {
     std::error_code ec;
     fs::rename(staging_ / name, target_ / name, ec);

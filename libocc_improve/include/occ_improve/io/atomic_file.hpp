@@ -103,8 +103,9 @@ public:
   ~OutputFolder();
 
   /// The staged path of output file `name` (a plain file name); commit() moves it into the target.
-  /// Throws IoError naming the input when the target already holds a file of that name that is one of
-  /// `inputs` or lies in an input folder (a folder written into under `overwrite` replaces files by name).
+  /// Throws IoError naming the input when the target is not the tool's own and already holds a file of
+  /// that name that is one of `inputs` or lies in an input folder (a folder written into under `overwrite`
+  /// replaces files by name; commit() checks again).
   std::string file(const std::string& name);
   /// Moves the staged files into the target (see the class comment). Throws IoError on failure, leaving
   /// the target as it was.
