@@ -9,33 +9,41 @@
 namespace occ_improve::python {
 namespace {
 
-std::mutex installing;                 // guards the fields below but the two atomics
-int active = 0;                        // SigintStopsLibrary objects alive
-bool installed = false;                // SIGINT is ours (Python's handler was there to take over)
-struct sigaction previous {};
-std::atomic<bool> fired{false};        // a SIGINT came while ours
-std::atomic<bool> delivered{false};    // ... and was raised as KeyboardInterrupt
+std::mutex installing;               // guards the fields below but `fired`
+int active = 0;                      // SigintStopsLibrary objects alive
+bool installed = false;              // SIGINT runs stop_library, then Python's handler
+struct sigaction previous {};        // Python's handler, chained and restored
+std::atomic<bool> fired{false};      // a SIGINT came while installed
 
-extern "C" void stop_library(int) {  // async-signal-safe: two lock-free atomic stores
-  fired.store(true);
+extern "C" void stop_library(int signal, siginfo_t* info, void* context) {
+  fired.store(true);  // async-signal-safe: lock-free atomic stores, then Python's own (async-signal-safe) handler
   request_stop(SIGINT);
+  if (previous.sa_flags & SA_SIGINFO)
+    previous.sa_sigaction(signal, info, context);
+  else if (previous.sa_handler != SIG_IGN && previous.sa_handler != SIG_DFL)
+    previous.sa_handler(signal);
+}
+
+// Whether SIGINT's Python-level handler is Python's default (KeyboardInterrupt), the GIL held.
+bool python_default_handler() {
+  const py::module_ signal_module = py::module_::import("signal");
+  return signal_module.attr("getsignal")(static_cast<int>(SIGINT)).is(signal_module.attr("default_int_handler"));
 }
 
 }  // namespace
 
 SigintStopsLibrary::SigintStopsLibrary() {
+  const bool join = python_default_handler();
   const std::lock_guard<std::mutex> lock(installing);
-  if (active++ > 0) return;
+  if (active++ > 0 || !join) return;
   struct sigaction current {};
   sigaction(SIGINT, nullptr, &current);
-  const bool handled = (current.sa_flags & SA_SIGINFO) || (current.sa_handler != SIG_IGN && current.sa_handler != SIG_DFL);
-  installed = handled;
-  if (!installed) return;
   previous = current;
   struct sigaction ours {};
-  ours.sa_handler = &stop_library;
+  ours.sa_sigaction = &stop_library;
+  ours.sa_flags = SA_SIGINFO;
   sigemptyset(&ours.sa_mask);
-  sigaction(SIGINT, &ours, nullptr);
+  installed = sigaction(SIGINT, &ours, nullptr) == 0;
 }
 
 SigintStopsLibrary::~SigintStopsLibrary() {
@@ -43,14 +51,10 @@ SigintStopsLibrary::~SigintStopsLibrary() {
   if (--active > 0) return;
   if (installed) sigaction(SIGINT, &previous, nullptr);
   installed = false;
-  if (!fired.exchange(false)) return;
-  clear_stop_request();
-  if (!delivered.exchange(false)) PyErr_SetInterrupt();  // Python raises KeyboardInterrupt at its next check
+  if (fired.exchange(false)) clear_stop_request();
 }
 
 bool SigintStopsLibrary::interrupted() const { return fired.load(); }
-
-void SigintStopsLibrary::mark_delivered() { delivered.store(true); }
 
 bool in_main_thread() {
   const py::object main = py::module_::import("threading").attr("main_thread")();

@@ -2,9 +2,11 @@
 // Ctrl-C during a long library call. Python's own SIGINT handler only sets a flag that the interpreter
 // checks between bytecodes, so a call running with the GIL released (an insertion, an export, a plan)
 // ran to its end before KeyboardInterrupt was raised: 5-15 s for a large insert, and an export still
-// wrote its file. While such a call runs, SIGINT instead asks the library to stop (request_stop,
-// cancel.hpp): its loops throw Cancelled within milliseconds, which the caller gets as KeyboardInterrupt,
-// as from any Python code. A program that ignores SIGINT, or leaves the system default, keeps its choice.
+// wrote its file. While such a call runs, SIGINT also asks the library to stop (request_stop, cancel.hpp):
+// its loops throw Cancelled within milliseconds. Python's handler still runs (chained), so its flag is set
+// and a waiting main thread wakes, and the KeyboardInterrupt comes from Python itself. Only Python's
+// default handler is joined this way: a program with its own SIGINT handler (or SIG_IGN, SIG_DFL) keeps it
+// as it was, and its calls run to their end.
 #include "occ_improve/cancel.hpp"
 
 #include <pybind11/pybind11.h>
@@ -13,10 +15,9 @@ namespace occ_improve::python {
 
 namespace py = pybind11;
 
-/// While alive (calls may nest, or run in several threads), SIGINT requests a library stop. On
-/// destruction the previous handler is back and the stop request withdrawn; a SIGINT that came while
-/// the call still completed, or that stopped a call outside the main thread, is passed on to Python
-/// (PyErr_SetInterrupt), unless mark_delivered() said it was raised as KeyboardInterrupt already.
+/// While alive (calls may nest, or run in several threads) and Python's default SIGINT handler is in
+/// place, SIGINT also requests a library stop. On destruction the previous handler is back and the stop
+/// request withdrawn. Construct and destroy with the GIL held.
 class SigintStopsLibrary {
 public:
   SigintStopsLibrary();
@@ -25,16 +26,15 @@ public:
   SigintStopsLibrary& operator=(const SigintStopsLibrary&) = delete;
   /// Whether a SIGINT came during the call.
   bool interrupted() const;
-  /// Says the SIGINT was raised as KeyboardInterrupt, so that it is not passed on again.
-  void mark_delivered();
 };
 
 /// Whether the calling thread is Python's main thread (the GIL held).
 bool in_main_thread();
 
-/// f() with the GIL released and SIGINT stopping the library. When Ctrl-C stopped it: KeyboardInterrupt
-/// in Python's main thread, as Python raises it; in another thread oi.Cancelled, and the main thread gets
-/// its KeyboardInterrupt. Take the GIL before calling (f must not touch Python objects).
+/// f() with the GIL released and SIGINT stopping the library. When Ctrl-C stopped it: in Python's main
+/// thread the KeyboardInterrupt of Python's handler; in another thread oi.Cancelled (the main thread gets
+/// its KeyboardInterrupt from Python, as for any signal). Take the GIL before calling (f must not touch
+/// Python objects).
 template <class F>
 auto run_interruptible(F&& f) -> decltype(f()) {
   SigintStopsLibrary sigint;
@@ -43,10 +43,9 @@ auto run_interruptible(F&& f) -> decltype(f()) {
     return f();
   } catch (const Cancelled&) {
     if (!sigint.interrupted() || !in_main_thread()) throw;
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Python's handler: KeyboardInterrupt
+    throw;
   }
-  sigint.mark_delivered();
-  PyErr_SetNone(PyExc_KeyboardInterrupt);
-  throw py::error_already_set();
 }
 
 }  // namespace occ_improve::python
