@@ -22,7 +22,43 @@ Mapper::Mapper(ColumnGrid grid, const SensorModel& model) : grid_(std::move(grid
   improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
 }
 
+// A call that throws part-way (a stop during the insertion: some bands stored, the incremental improvement
+// not run, the changed columns lost; or a mask set before its improvement was computed) leaves the maps
+// behind the grid. They are recomputed from it when next needed, as a loaded map's are.
+template <class F>
+auto Mapper::updating(F&& f) -> decltype(f()) {
+  refresh_if_stale();
+  try {
+    return f();
+  } catch (...) {
+    stale_ = true;
+    throw;
+  }
+}
+
+void Mapper::refresh_if_stale() const {
+  if (!stale_) return;
+  SurfaceMap surface = compute_surface(grid_);
+  ImprovementMap improvement = compute_improvement(grid_.geometry(), model_, surface);
+  mask_improvement(column_mask_, improvement);
+  surface_ = std::move(surface);
+  improvement_ = std::move(improvement);
+  pyramid_.reset();
+  stale_ = false;
+}
+
+const SurfaceMap& Mapper::surface() const {
+  refresh_if_stale();
+  return surface_;
+}
+
+const ImprovementMap& Mapper::improvement() const {
+  refresh_if_stale();
+  return improvement_;
+}
+
 const ImprovementPyramid& Mapper::pyramid() const {
+  refresh_if_stale();
   if (!pyramid_) pyramid_.emplace(improvement_, surface_);
   return *pyramid_;
 }
@@ -34,22 +70,30 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options, c
 
 void Mapper::set_mask(const PixelMask& mask) {
   std::vector<std::uint8_t> columns = mask_columns(grid_.geometry(), mask);
-  const bool widened = !column_mask_.empty() && columns != column_mask_;
-  column_mask_ = std::move(columns);
-  // Columns the old mask hid may now be inside: their values come back only from a full computation.
-  if (widened) improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
-  mask_improvement(column_mask_, improvement_);
-  pyramid_.reset();  // every block may have changed: rebuilt when next asked
+  updating([&] {
+    const bool widened = !column_mask_.empty() && columns != column_mask_;
+    column_mask_ = std::move(columns);
+    // Columns the old mask hid may now be inside: their values come back only from a full computation.
+    if (widened) improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+    mask_improvement(column_mask_, improvement_);
+    pyramid_.reset();  // every block may have changed: rebuilt when next asked
+  });
 }
 
 void Mapper::clear_mask() {
   if (column_mask_.empty()) return;
-  column_mask_.clear();
-  improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
-  pyramid_.reset();
+  updating([&] {
+    column_mask_.clear();
+    improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+    pyramid_.reset();
+  });
 }
 
 MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options) {
+  return updating([&] { return insert_now(points, options); });
+}
+
+MapperReport Mapper::insert_now(PointSpan points, const InsertionOptions& options) {
   MapperReport report;
   std::vector<float> kept;  // the points inside the mask, when there is one
   if (!column_mask_.empty()) {

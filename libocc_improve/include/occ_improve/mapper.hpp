@@ -48,8 +48,11 @@ public:
   const GridGeometry& geometry() const { return grid_.geometry(); }
   const SensorModel& model() const { return model_; }
   const ColumnGrid& grid() const { return grid_; }
-  const SurfaceMap& surface() const { return surface_; }
-  const ImprovementMap& improvement() const { return improvement_; }
+  /// The surface and improvement of the grid. After a call that threw part-way (Cancelled: a stop during an
+  /// insertion; the grid keeps what was inserted before it), both are recomputed from the grid here or by
+  /// the next insertion, so they never lag behind it.
+  const SurfaceMap& surface() const;
+  const ImprovementMap& improvement() const;
   /// The improvement on blocks of 2-16 columns and the depth samples' moments, kept with the map.
   /// The multi-scale improvement (multiscale.hpp). Built on the first call, then kept up to date by every
   /// insertion, so that a Mapper no coarse-to-fine planner or filter asks never pays for it (~16 ms of a
@@ -57,12 +60,20 @@ public:
   const ImprovementPyramid& pyramid() const;
 
 private:
+  /// Runs a call that updates the grid and its maps; if it throws, the maps are marked stale.
+  template <class F>
+  auto updating(F&& f) -> decltype(f());
+  /// Recomputes the surface, improvement and pyramid from the grid when a call threw part-way.
+  void refresh_if_stale() const;
+  MapperReport insert_now(PointSpan points, const InsertionOptions& options);
+
   ColumnGrid grid_;
   SensorModel model_;
-  SurfaceMap surface_;
-  ImprovementMap improvement_;
+  mutable SurfaceMap surface_;            // mutable: refreshed on access after an interrupted call
+  mutable ImprovementMap improvement_;
   std::vector<std::uint8_t> column_mask_;  ///< empty: no mask
   mutable std::optional<ImprovementPyramid> pyramid_;  ///< empty until pyramid() is first asked
+  mutable bool stale_ = false;  ///< a call threw part-way: surface_ and improvement_ may lag the grid
 };
 
 }  // namespace occ_improve
