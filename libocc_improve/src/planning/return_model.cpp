@@ -32,8 +32,9 @@ ReturnRecord ReturnRecord::for_grid(int width, int height) {
 
 ReturnRecord ReturnRecord::from_counts(int width, int height, std::vector<std::uint32_t> asked,
                                        std::vector<std::uint32_t> returned) {
-  ReturnRecord r = for_grid(width, height);
+  // The arrays' sizes first: a claimed 65535 x 65535 grid with small arrays allocated 68 GB before the check.
   require_shape("return record", ColumnShape::of_arrays(width, height, {asked.size(), returned.size()}));
+  ReturnRecord r = for_grid(width, height);
   for (std::size_t c = 0; c < r.size(); ++c)
     if (returned[c] > asked[c] || asked[c] > kMaxAsks) {
       std::ostringstream m;
