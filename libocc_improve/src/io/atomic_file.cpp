@@ -199,6 +199,17 @@ bool path_is_within(const std::string& inner, const std::string& outer) {
   return !relative.empty() && *relative.begin() != "..";
 }
 
+const std::string* replaced_input(const std::string& path, const std::vector<std::string>& inputs) {
+  const fs::path target = comparable_path(path);
+  for (const std::string& input : inputs) {
+    std::error_code ec;
+    const fs::path source = comparable_path(input);
+    if (target == source || fs::equivalent(target, source, ec) || (fs::is_directory(source, ec) && path_is_within(path, input)))
+      return &input;
+  }
+  return nullptr;
+}
+
 void throw_if_folder(const std::string& path, const std::string& what) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw IoError("cannot read " + what + " '" + path + "': it is a folder");
@@ -280,17 +291,12 @@ void OutputFolder::require_no_input_inside(const std::vector<std::string>& input
 // (The tool's own folder is replaced as a whole: require_no_input_inside guards it.)
 void OutputFolder::require_not_an_input(const std::string& name) const {
   const fs::path published = target_ / name;
-  const fs::path compared = comparable_path(published.string());
   std::error_code ec;
   if (!fs::exists(published, ec)) return;
-  for (const std::string& input : inputs_) {
-    const fs::path source = comparable_path(input);
-    const bool inside_input_folder = fs::is_directory(source, ec) && path_is_within(published.string(), input);
-    if (compared == source || fs::equivalent(published, source, ec) || inside_input_folder)
-      throw IoError("output file '" + name + "' in output folder '" + shown_ + "' would replace " +
-                    (inside_input_folder ? "a file in the input folder '" : "the input '") + input +
-                    "': choose another -o");
-  }
+  if (const std::string* input = replaced_input(published.string(), inputs_))
+    throw IoError("output file '" + name + "' in output folder '" + shown_ + "' would replace " +
+                  (fs::is_directory(*input, ec) ? "a file in the input folder '" : "the input '") + *input +
+                  "': choose another -o");
 }
 
 // A run killed between replace_whole's two renames left the previous output as ".<name>.tmp-<pid>.old" and

@@ -19,15 +19,13 @@ std::vector<std::string> run_inputs(const CommandLine& c) {
 }
 
 void require_not_an_input(const CommandLine& command_line, const std::string& path, const std::string& flag) {
-  const fs::path target = comparable_path(path);
-  for (const std::string& input : run_inputs(command_line)) {
-    std::error_code ec;
-    const fs::path source = comparable_path(input);
-    const bool folder = fs::is_directory(source, ec);
-    if (target == source || fs::equivalent(target, source, ec) || (folder && path_is_within(path, input)))
-      throw InvalidParameter(flag + " '" + path + "' would overwrite " + (folder ? "a file in the input folder '" : "the input '") +
-                             input + "': choose an output outside the inputs");
-  }
+  const std::vector<std::string> inputs = run_inputs(command_line);
+  const std::string* input = replaced_input(path, inputs);
+  if (!input) return;
+  std::error_code ec;
+  throw InvalidParameter(flag + " '" + path + "' would overwrite " +
+                         (fs::is_directory(*input, ec) ? "a file in the input folder '" : "the input '") + *input +
+                         "': choose an output outside the inputs");
 }
 
 void require_distinct_outputs(const std::string& path_a, const std::string& flag_a, const std::string& path_b,

@@ -28,6 +28,10 @@ std::filesystem::path comparable_path(const std::string& path);
 /// existing parts resolved (an output against the run's inputs, an input against an output folder).
 bool path_is_within(const std::string& inner, const std::string& outer);
 
+/// The first of `inputs` that writing `path` would replace: the same file (by name or by identity), or an
+/// input folder `path` lies in; nullptr when none (the -save check and OutputFolder's both ask this).
+const std::string* replaced_input(const std::string& path, const std::vector<std::string>& inputs);
+
 /// Throws IoError "cannot read <what> '<path>': it is a folder" when `path` names a folder: a reader would
 /// otherwise open it and report a format error about its (absent) contents.
 void throw_if_folder(const std::string& path, const std::string& what);
