@@ -11,6 +11,19 @@
 
 namespace occ_improve {
 
+namespace {
+
+/// visit(n) for the up to 8 neighbours n of column (x, y) in a width x height grid.
+template <class Visit>
+void for_each_neighbour(int x, int y, int width, int height, Visit&& visit) {
+  for (int yy = std::max(0, y - 1); yy <= std::min(height - 1, y + 1); ++yy)
+    for (int xx = std::max(0, x - 1); xx <= std::min(width - 1, x + 1); ++xx)
+      if (xx != x || yy != y)
+        visit(static_cast<std::size_t>(yy) * static_cast<std::size_t>(width) + static_cast<std::size_t>(xx));
+}
+
+}  // namespace
+
 ReturnRecord ReturnRecord::for_grid(int width, int height) {
   detail::require_parameter(width > 0, "width", width, "> 0");
   detail::require_parameter(height > 0, "height", height, "> 0");
@@ -52,13 +65,10 @@ ReturnRecord ReturnRecord::from_counts(int width, int height, std::vector<std::u
       const std::size_t c = static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x);
       r.total_asked_ += r.asked_[c];
       r.total_returned_ += r.returned_[c];
-      for (int yy = std::max(0, y - 1); yy <= std::min(height - 1, y + 1); ++yy)
-        for (int xx = std::max(0, x - 1); xx <= std::min(width - 1, x + 1); ++xx) {
-          if (xx == x && yy == y) continue;
-          const std::size_t n = static_cast<std::size_t>(yy) * static_cast<std::size_t>(width) + static_cast<std::size_t>(xx);
-          r.asked_nearby_[c] += r.asked_[n];
-          r.returned_nearby_[c] += r.returned_[n];
-        }
+      for_each_neighbour(x, y, width, height, [&](std::size_t n) {
+        r.asked_nearby_[c] += r.asked_[n];
+        r.returned_nearby_[c] += r.returned_[n];
+      });
     }
   return r;
 }
@@ -72,13 +82,10 @@ void ReturnRecord::count(ColumnIndex column, bool got_return) {
   returned_[column] += got_return ? 1 : 0;
   const int x = static_cast<int>(column % static_cast<ColumnIndex>(width_));
   const int y = static_cast<int>(column / static_cast<ColumnIndex>(width_));
-  for (int yy = std::max(0, y - 1); yy <= std::min(height_ - 1, y + 1); ++yy)
-    for (int xx = std::max(0, x - 1); xx <= std::min(width_ - 1, x + 1); ++xx) {
-      if (xx == x && yy == y) continue;
-      const std::size_t n = static_cast<std::size_t>(yy) * static_cast<std::size_t>(width_) + static_cast<std::size_t>(xx);
-      ++asked_nearby_[n];
-      returned_nearby_[n] += got_return ? 1 : 0;
-    }
+  for_each_neighbour(x, y, width_, height_, [&](std::size_t n) {
+    ++asked_nearby_[n];
+    returned_nearby_[n] += got_return ? 1 : 0;
+  });
   ++total_asked_;
   total_returned_ += got_return ? 1 : 0;
 }
