@@ -24,10 +24,13 @@ extern "C" void stop_library(int signal, siginfo_t* info, void* context) {
     previous.sa_handler(signal);
 }
 
-// Whether SIGINT's Python-level handler is Python's default (KeyboardInterrupt), the GIL held.
+// Whether SIGINT's Python-level handler is Python's default (KeyboardInterrupt), the GIL held. Asked on
+// every GIL-free call (every Mapper method): the functions are looked up once, and kept until the process
+// ends (released handles: a static py::object would be freed after the interpreter).
 bool python_default_handler() {
-  const py::module_ signal_module = py::module_::import("signal");
-  return signal_module.attr("getsignal")(static_cast<int>(SIGINT)).is(signal_module.attr("default_int_handler"));
+  static const py::handle getsignal = py::object(py::module_::import("signal").attr("getsignal")).release();
+  static const py::handle default_handler = py::object(py::module_::import("signal").attr("default_int_handler")).release();
+  return getsignal(static_cast<int>(SIGINT)).is(default_handler);
 }
 
 }  // namespace
