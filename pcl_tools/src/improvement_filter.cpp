@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/planning/depth_prediction.hpp"
 #include "occ_improve/planning/ranking.hpp"
 
 #include <pcl/filters/impl/filter_indices.hpp>
@@ -165,7 +166,9 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
   if (keep == 0) return {};
   const ImprovementPyramid& pyramid = mapper_->pyramid();
   const GridGeometry& geometry = mapper_->geometry();
+  const SurfaceMap& surface = mapper_->surface();
   struct Candidate {
+    bool sampled;  ///< its ray holds a depth sample (is_depth_sample)
     float improvement, block_mean;
     std::uint64_t ray_key, point_key;
     ColumnIndex column;
@@ -186,15 +189,16 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
     const std::uint32_t repeat = points_of_ray[column]++;
     if (repeat == 0) ++rays;
     const float value = point_improvement[static_cast<std::size_t>(i)];
-    candidates.push_back({value, block_mean, rank_key(value, column), rank_key(0.0f, static_cast<ColumnIndex>(i)),
-                          column, 0, repeat, 0, i});
+    candidates.push_back({is_depth_sample(surface, column), value, block_mean, rank_key(value, column),
+                          rank_key(0.0f, static_cast<ColumnIndex>(i)), column, 0, repeat, 0, i});
   }
   // About one kept point per cell (the cells need the count of distinct rays, known only now).
   const SamplingCells cells(rays, keep, geometry.width());
   for (Candidate& c : candidates) c.cell = cells.cell_of(geometry.azimuth_bin_of(c.column), geometry.elevation_bin_of(c.column));
-  // Better first, by ray: the ray's improvement, its block's mean improvement, its spread rank, then the
-  // point's own spread rank.
+  // Better first, by ray (header, "better"): a ray with a sample, then the ray's improvement, its block's
+  // mean improvement, its spread rank, then the point's own spread rank.
   const auto better = [](const Candidate& a, const Candidate& b) {
+    if (a.sampled != b.sampled) return a.sampled;
     if (a.improvement != b.improvement) return a.improvement > b.improvement;
     if (a.block_mean != b.block_mean) return a.block_mean > b.block_mean;
     if (a.ray_key != b.ray_key) return a.ray_key > b.ray_key;
