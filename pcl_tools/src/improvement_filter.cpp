@@ -2,8 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
-#include "occ_improve/planning/depth_prediction.hpp"
-#include "occ_improve/planning/ranking.hpp"
+#include "occ_improve/planning/point_selection.hpp"
 
 #include <pcl/filters/impl/filter_indices.hpp>
 
@@ -149,7 +148,7 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
           selection_ == ImprovementSelection::top_count
               ? std::min(top_count_, with_ray.size())
               : static_cast<std::size_t>(std::llround(top_fraction_ * static_cast<double>(with_ray.size())));
-      selected = stratified_top(with_ray, point_improvement, keep);
+      selected = stratified_top(with_ray, keep);
       std::sort(selected.begin(), selected.end());  // back to ascending index order like every PCL filter
       return selected;
     }
@@ -157,70 +156,22 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
   return selected;
 }
 
-// The top modes' order (header: "Top modes"): a jittered grid at the scale of the sampling, with the
-// improvement choosing inside each cell and among the cells of the last, partial round.
+// The top modes' order (header: "Top modes"): keep_points_by_map (point_selection.hpp) over the points
+// that have a ray.
 template <typename PointT>
-pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray,
-                                                       const std::vector<float>& point_improvement,
-                                                       std::size_t keep) const {
-  if (keep == 0) return {};
-  const ImprovementPyramid& pyramid = mapper_->pyramid();
+pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray, std::size_t keep) const {
   const GridGeometry& geometry = mapper_->geometry();
-  const SurfaceMap& surface = mapper_->surface();
-  struct Candidate {
-    bool sampled;  ///< its ray holds a depth sample (is_depth_sample)
-    float improvement, block_mean;
-    std::uint64_t ray_key, point_key;
-    ColumnIndex column;
-    std::size_t cell;      ///< its SamplingCells cell
-    std::uint32_t repeat;  ///< how many points of the same ray come before it
-    std::uint32_t round;   ///< its rank within its cell: the round that takes it
-    pcl::index_t index;
-  };
-  std::vector<Candidate> candidates;
-  candidates.reserve(with_ray.size());
-  std::vector<std::uint32_t> points_of_ray(geometry.column_count(), 0);
-  std::size_t rays = 0;
+  std::vector<PointOnRay> points;
+  points.reserve(with_ray.size());
   for (const auto i : with_ray) {
     const PointT& p = (*input_)[static_cast<std::size_t>(i)];
     ColumnIndex column = 0;
-    geometry.column_of(p.x, p.y, p.z, column);  // has a ray: point_improvement[i] is not NaN
-    const float block_mean = pyramid.block_at(kTieLevel, pyramid.block_of_column(kTieLevel, column)).mean_improvement();
-    const std::uint32_t repeat = points_of_ray[column]++;
-    if (repeat == 0) ++rays;
-    const float value = point_improvement[static_cast<std::size_t>(i)];
-    candidates.push_back({is_depth_sample(surface, column), value, block_mean, rank_key(value, column),
-                          rank_key(0.0f, static_cast<ColumnIndex>(i)), column, 0, repeat, 0, i});
+    geometry.column_of(p.x, p.y, p.z, column);  // has a ray: its improvement is not NaN
+    points.push_back({static_cast<std::uint64_t>(i), column});
   }
-  // About one kept point per cell (the cells need the count of distinct rays, known only now).
-  const SamplingCells cells(rays, keep, geometry.width());
-  for (Candidate& c : candidates) c.cell = cells.cell_of(geometry.azimuth_bin_of(c.column), geometry.elevation_bin_of(c.column));
-  // Better first, by ray (header, "better"): a ray with a sample, then the ray's improvement, its block's
-  // mean improvement, its spread rank, then the point's own spread rank.
-  const auto better = [](const Candidate& a, const Candidate& b) {
-    if (a.sampled != b.sampled) return a.sampled;
-    if (a.improvement != b.improvement) return a.improvement > b.improvement;
-    if (a.block_mean != b.block_mean) return a.block_mean > b.block_mean;
-    if (a.ray_key != b.ray_key) return a.ray_key > b.ray_key;
-    return a.point_key > b.point_key;
-  };
-  // Within a cell: distinct rays before a second point of one ray, then better first.
-  std::sort(candidates.begin(), candidates.end(), [&](const Candidate& a, const Candidate& b) {
-    if (a.cell != b.cell) return a.cell < b.cell;
-    if (a.repeat != b.repeat) return a.repeat < b.repeat;
-    return better(a, b);
-  });
-  for (std::size_t k = 0; k < candidates.size(); ++k)
-    candidates[k].round = k > 0 && candidates[k - 1].cell == candidates[k].cell ? candidates[k - 1].round + 1 : 0;
-  // Round by round; within a round, the cells whose candidate is better first.
-  const auto last = candidates.begin() + static_cast<std::ptrdiff_t>(std::min(keep, candidates.size()));
-  std::partial_sort(candidates.begin(), last, candidates.end(), [&](const Candidate& a, const Candidate& b) {
-    if (a.round != b.round) return a.round < b.round;
-    return better(a, b);
-  });
+  const MapView map{geometry, mapper_->surface(), mapper_->improvement(), mapper_->pyramid()};
   pcl::Indices selected;
-  selected.reserve(keep);
-  for (auto c = candidates.begin(); c != last; ++c) selected.push_back(c->index);
+  for (const std::uint64_t i : keep_points_by_map(points, keep, map)) selected.push_back(static_cast<pcl::index_t>(i));
   return selected;
 }
 

@@ -4,31 +4,17 @@
 // its Mapper (its own, or one shared through setMapper; setUpdateMap(false) only reads the map), then
 // selects points by one of:
 //  - range:         improvement in [min, max];
-//  - top_count:     the K points of highest improvement;
-//  - top_fraction:  the best `fraction` of the points that have a ray ("selective sensing": keep the
-//                   share of a frame worth keeping, cut the data where it adds least);
+//  - top_count:     K points, in the top modes' order below;
+//  - top_fraction:  that share of the points that have a ray, in the same order ("selective sensing":
+//                   keep the share of a frame worth keeping, cut the data where it adds least);
 //  - contour:       improvement < threshold (negative improvement marks depth discontinuities).
 // Per-point improvement = the improvement of the ray (column) the point's direction falls in.
-// Top modes (top_count, top_fraction): a jittered grid at the scale of the sampling, refined by the
-// improvement (docs/SELECTIVE.md, "The same question in a PCL pipeline"):
-//  - cells: the grid's columns are cut into cells of s x s, s = floor(sqrt(rays / keep)) with `rays` the
-//    distinct rays the points fall in, so a cell holds about one kept point (5 % of a frame: 4 x 4, 20 %:
-//    2 x 2) and the kept points cover the view evenly instead of clumping as a random sample does;
-//  - rounds: round r takes the r-th point of every cell; inside a cell, distinct rays before a second
-//    point of one ray, then the better point; in the last, partial round the cells whose point is better
-//    go first;
-//  - better: first a ray that holds a depth sample in the map (is_depth_sample, depth_prediction.hpp) over
-//    one that does not. At the scale of the sampling a ray without a sample in a cell that has one is
-//    predicted from it (predict_depth), so one more measurement of the cell's sample, which averages the
-//    sensor's noise, is worth more than a first sample beside it; a cell without samples takes its
-//    unmeasured rays, so newly seen parts of the view are covered first (make filter-eval: the rule
-//    raised the quality after 10 and 50 frames by 0.06-0.13, docs/SELECTIVE.md). Then the ray's
-//    improvement (the least settled sample first), the mean improvement of its block of 4 x 4 columns
-//    (the map's multi-scale improvement, multiscale.hpp: of two unseen rays, the one in the less known
-//    block first), the ray's spread rank (rank_key: a tie is spread over the view, never broken by point
-//    index, which on an organized frame would keep the top rows), then the point's own spread rank.
-//    With setUpdateMap(true) the frame was inserted before the choice, so nearly every candidate holds
-//    a sample and the improvement decides.
+// Top modes (top_count, top_fraction): keep_points_by_map (occ_improve/planning/point_selection.hpp) over
+// the points that have a ray: a jittered grid at the scale of the sampling, in each cell a ray that holds
+// a depth sample before one that does not, then the improvement; ties spread over the view, never by
+// point index. With setUpdateMap(true) the frame was inserted before the choice, so nearly every
+// candidate holds a sample and the improvement decides; to thin a stream by the map, choose with
+// setUpdateMap(false) and insert what is kept (docs/PIPELINE.md).
 //
 // Points without a ray (NaN/Inf, rho = 0, direction outside the grid's field of view) are never kept,
 // neither in the normal nor in the negative (setNegative) output, like NaN points in pcl::PassThrough;
@@ -104,9 +90,7 @@ private:
   bool evaluate(std::vector<float>& point_improvement);
   /// Indices (into input_) selected in normal mode, ascending.
   pcl::Indices select(const std::vector<float>& point_improvement) const;
-  pcl::Indices stratified_top(const pcl::Indices& with_ray, const std::vector<float>& point_improvement,
-                              std::size_t keep) const;
-  static constexpr int kTieLevel = 1;      ///< pyramid level of the tie-breaking block (4 x 4 columns)
+  pcl::Indices stratified_top(const pcl::Indices& with_ray, std::size_t keep) const;
   bool parametersValid() const;
 
   std::shared_ptr<Mapper> mapper_;
