@@ -286,6 +286,10 @@ TEST(LinearDepthPrediction, BadInputThrowsNamingTheValue) {
   expect_throw_naming<InvalidInput>([&] { predict_dense_depth(image, 4, 3, m, p); }, "pixel (2, 1)");
   image[6] = std::numeric_limits<float>::infinity();
   expect_throw_naming<InvalidInput>([&] { predict_dense_depth(image, 4, 3, m, p); }, "pixel (2, 1)");
+  image[6] = -std::numeric_limits<float>::infinity();
+  expect_throw_naming<InvalidInput>([&] { predict_dense_depth(image, 4, 3, m, p); }, "pixel (2, 1)");
+  image[6] = -0.0f;  // zero: no sample
+  EXPECT_NO_THROW(predict_dense_depth(image, 4, 3, m, p));
   image[6] = std::numeric_limits<float>::quiet_NaN();  // NaN: no sample, as 0
   const PredictedDepth none = predict_dense_depth(image, 4, 3, m, p);
   for (const std::int32_t d : none.distance) EXPECT_EQ(d, -1);

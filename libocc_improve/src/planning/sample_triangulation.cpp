@@ -525,9 +525,13 @@ void check_sparse_depth_image(const std::vector<float>& depth, int width, int he
   detail::require_parameter(height > 0 && height <= kMaxSide, "height", height, "in [1, 2^20]");
   const std::size_t n = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
   require_shape("sparse depth image", ColumnShape::of_arrays(width, height, {depth.size()}));
-  const auto bad = [](float z) { return z < 0.0f || std::abs(z) == std::numeric_limits<float>::infinity(); };
-  bool any_bad = false;
-  for (std::size_t c = 0; c < n; ++c) any_bad |= bad(depth[c]);  // no early exit, no branch per pixel
+  // Negative or infinite (NaN is no sample): z < 0 or z > the largest float, as integer flags OR-ed without
+  // an early exit, which the compiler vectorises (a bool || chain kept it scalar: 3 % of predict_depth).
+  const auto bad = [](float z) {
+    return static_cast<unsigned>(z < 0.0f) | static_cast<unsigned>(z > std::numeric_limits<float>::max());
+  };
+  unsigned any_bad = 0;
+  for (std::size_t c = 0; c < n; ++c) any_bad |= bad(depth[c]);
   if (!any_bad) return;
   for (std::size_t c = 0; c < n; ++c)
     if (bad(depth[c]))
