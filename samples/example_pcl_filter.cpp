@@ -51,7 +51,7 @@ int main(int argc, char** argv) {
                                                                    : occ_improve::kinect_v1_paper());
     mapper->insert(occ_improve::span_of(*first));
 
-    // Insert the second frame and keep its most improving 20 %.
+    // Insert the second frame and keep 20 % of it, chosen by the map (ImprovementFilter's top modes).
     occ_improve::ImprovementFilter<pcl::PointXYZ> filter(true);
     filter.setMapper(mapper);
     filter.setInputCloud(second);

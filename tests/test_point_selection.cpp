@@ -10,6 +10,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <utility>
@@ -26,11 +28,14 @@ struct Frame {
 };
 Frame scene_on(const GridGeometry& g) {
   Frame f{sample::generate_scene().points(), {}};
-  for (std::size_t i = 0; i < f.points.size(); ++i) {
-    ColumnIndex c = 0;
-    if (g.column_of(f.points[i].x(), f.points[i].y(), f.points[i].z(), c)) f.on_ray.push_back({i, c});
-  }
+  f.on_ray = points_on_rays(PointSpan::from(f.points), g);
   return f;
+}
+
+std::size_t distinct_rays(const std::vector<PointOnRay>& points) {
+  std::set<ColumnIndex> rays;
+  for (const PointOnRay& p : points) rays.insert(p.column);
+  return rays.size();
 }
 
 TEST(PointSelection, KeepsAsManyDistinctPointsAsAskedOnePerCellDeterministically) {
@@ -38,11 +43,11 @@ TEST(PointSelection, KeepsAsManyDistinctPointsAsAskedOnePerCellDeterministically
   const Frame f = scene_on(mapper.geometry());
   ASSERT_GT(f.on_ray.size(), 100000u);
   const std::size_t keep = f.on_ray.size() / 20;
-  const std::vector<std::uint64_t> kept = keep_points_by_map(f.on_ray, keep, view_of(mapper));
+  const std::vector<std::uint64_t> kept = keep_points_by_map(f.on_ray, KeepAmount::count(keep), view_of(mapper));
   ASSERT_EQ(kept.size(), keep);
   EXPECT_EQ(std::set<std::uint64_t>(kept.begin(), kept.end()).size(), keep);
   // Every ray ties on an empty map: the jittered grid puts at most one point in a cell.
-  const SamplingCells cells(f.on_ray.size(), keep, mapper.geometry().width());
+  const SamplingCells cells(distinct_rays(f.on_ray), keep, mapper.geometry().width());
   std::map<std::uint64_t, ColumnIndex> column_of;
   for (const PointOnRay& p : f.on_ray) column_of[p.point] = p.column;
   std::map<std::size_t, int> per_cell;
@@ -50,10 +55,15 @@ TEST(PointSelection, KeepsAsManyDistinctPointsAsAskedOnePerCellDeterministically
     const ColumnIndex c = column_of.at(id);
     EXPECT_EQ(++per_cell[cells.cell_of(mapper.geometry().azimuth_bin_of(c), mapper.geometry().elevation_bin_of(c))], 1);
   }
-  EXPECT_EQ(keep_points_by_map(f.on_ray, keep, view_of(mapper)), kept);
-  EXPECT_EQ(keep_points_by_map(f.on_ray, f.on_ray.size() + 5, view_of(mapper)).size(), f.on_ray.size());
-  EXPECT_TRUE(keep_points_by_map(f.on_ray, 0, view_of(mapper)).empty());
-  EXPECT_TRUE(keep_points_by_map({}, 10, view_of(mapper)).empty());
+  EXPECT_EQ(keep_points_by_map(f.on_ray, KeepAmount::count(keep), view_of(mapper)), kept);
+  EXPECT_EQ(keep_points_by_map(f.on_ray, KeepAmount::count(f.on_ray.size() + 5), view_of(mapper)).size(), f.on_ray.size());
+  EXPECT_TRUE(keep_points_by_map(f.on_ray, KeepAmount::count(0), view_of(mapper)).empty());
+  EXPECT_TRUE(keep_points_by_map({}, KeepAmount::count(10), view_of(mapper)).empty());
+  // A fraction counts the points on an observable ray, rounded to the nearest.
+  EXPECT_EQ(keep_points_by_map(f.on_ray, KeepAmount::fraction(0.05), view_of(mapper)).size(),
+            static_cast<std::size_t>(std::llround(0.05 * static_cast<double>(f.on_ray.size()))));
+  // points_on_rays: every valid point of the scene in the field of view, ids in order.
+  for (std::size_t k = 1; k < f.on_ray.size(); ++k) EXPECT_LT(f.on_ray[k - 1].point, f.on_ray[k].point);
 }
 
 // Once the kept points are in the map, the same choice keeps every one whose ray became a sample again,
@@ -63,7 +73,7 @@ TEST(PointSelection, ACellsSampleIsKeptAgainBeforeTheRaysBesideIt) {
   Mapper mapper(kinect_v1());
   const Frame f = scene_on(mapper.geometry());
   const std::size_t keep = f.on_ray.size() / 20;
-  const std::vector<std::uint64_t> first = keep_points_by_map(f.on_ray, keep, view_of(mapper));
+  const std::vector<std::uint64_t> first = keep_points_by_map(f.on_ray, KeepAmount::count(keep), view_of(mapper));
   std::vector<Eigen::Vector3f> kept_points;
   for (const std::uint64_t id : first) kept_points.push_back(f.points[id]);
   mapper.insert(PointSpan::from(kept_points));
@@ -74,29 +84,52 @@ TEST(PointSelection, ACellsSampleIsKeptAgainBeforeTheRaysBesideIt) {
     if (is_depth_sample(mapper.surface(), column_of.at(id))) sampled.insert(id);
   EXPECT_GT(sampled.size(), first.size() * 8 / 10);
 
-  const std::vector<std::uint64_t> second = keep_points_by_map(f.on_ray, keep, view_of(mapper));
+  const std::vector<std::uint64_t> second = keep_points_by_map(f.on_ray, KeepAmount::count(keep), view_of(mapper));
   ASSERT_EQ(second.size(), keep);
   const std::set<std::uint64_t> again(second.begin(), second.end());
   for (const std::uint64_t id : sampled) EXPECT_EQ(again.count(id), 1u) << id;
   // Samples first, best first: the sampled ones lead the order.
   for (std::size_t k = 0; k < sampled.size(); ++k) EXPECT_EQ(sampled.count(second[k]), 1u) << k;
-  const float sample_level = mapper.improvement().value[column_of.at(*sampled.begin())];
-  EXPECT_LT(sample_level, 0.2f);
+  // ... though their improvement is now below that of the unmeasured rays around them.
+  double sampled_mean = 0, unmeasured_mean = 0;
+  std::size_t unmeasured = 0;
+  for (const std::uint64_t id : sampled) sampled_mean += mapper.improvement().value[column_of.at(id)];
+  sampled_mean /= static_cast<double>(sampled.size());
+  for (const PointOnRay& p : f.on_ray)
+    if (mapper.surface().unknown[p.column]) {
+      unmeasured_mean += mapper.improvement().value[p.column];
+      ++unmeasured;
+    }
+  ASSERT_GT(unmeasured, 0u);
+  unmeasured_mean /= static_cast<double>(unmeasured);
+  EXPECT_LT(sampled_mean + 0.1, unmeasured_mean);
 }
 
-TEST(PointSelection, RefusesAPointOutsideTheGridAndMapsOfAnotherSize) {
+template <class Expected, class Call>
+void expect_refused(Call&& call, const std::string& named) {
+  try {
+    call();
+    FAIL() << "accepted; expected a refusal naming " << named;
+  } catch (const Expected& e) {
+    EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+  }
+}
+
+TEST(PointSelection, RefusesAPointOutsideTheGridABadFractionAndMapsOfAnotherSize) {
   Mapper mapper(kinect_v1());
   const std::size_t columns = mapper.geometry().column_count();
-  try {
-    keep_points_by_map({{0, 0}, {7, static_cast<ColumnIndex>(columns)}}, 1, view_of(mapper));
-    FAIL() << "a column outside the grid was accepted";
-  } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("point 7"), std::string::npos) << e.what();
-  }
-  SurfaceMap small = mapper.surface();
-  small.depth_m.pop_back();
-  const MapView bad{mapper.geometry(), small, mapper.improvement(), mapper.pyramid()};
-  EXPECT_THROW(keep_points_by_map({{0, 0}}, 1, bad), InvalidInput);
+  expect_refused<InvalidInput>([&] { keep_points_by_map({{0, 0}, {7, static_cast<ColumnIndex>(columns)}}, KeepAmount::count(1), view_of(mapper)); },
+                 "point 7");
+  for (const double share : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()})
+    expect_refused<InvalidParameter>([&] { keep_points_by_map({{0, 0}}, KeepAmount::fraction(share), view_of(mapper)); }, "fraction");
+  SurfaceMap small_surface = mapper.surface();
+  small_surface.depth_m.pop_back();
+  expect_refused<InvalidInput>([&] { keep_points_by_map({{0, 0}}, KeepAmount::count(1), {mapper.geometry(), small_surface, mapper.improvement(), mapper.pyramid()}); },
+                 "surface map");
+  ImprovementMap small_improvement = mapper.improvement();
+  small_improvement.value.pop_back();
+  expect_refused<InvalidInput>([&] { keep_points_by_map({{0, 0}}, KeepAmount::count(1), {mapper.geometry(), mapper.surface(), small_improvement, mapper.pyramid()}); },
+                 "improvement map");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "occ_improve/pcl/improvement_filter.hpp"
 
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/planning/point_selection.hpp"
@@ -92,6 +93,8 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) 
         for (const auto i : *indices_) points.emplace_back(cloud[i].x, cloud[i].y, cloud[i].z);
         last_report_ = mapper_->insert(PointSpan::from(points), insertion_options_);
       }
+    } catch (const Cancelled&) {
+      throw;  // the user's stop (header), not a cloud the map refuses
     } catch (const std::exception& e) {
       PCL_ERROR("[occ_improve::%s::applyFilter] cannot insert the cloud: %s\n", getClassName().c_str(), e.what());
       return false;
@@ -144,11 +147,10 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
       return selected;
     case ImprovementSelection::top_count:
     case ImprovementSelection::top_fraction: {
-      const std::size_t keep =
-          selection_ == ImprovementSelection::top_count
-              ? std::min(top_count_, with_ray.size())
-              : static_cast<std::size_t>(std::llround(top_fraction_ * static_cast<double>(with_ray.size())));
-      selected = stratified_top(with_ray, keep);
+      // with_ray holds the observable points: the base keep_points_by_map counts a fraction of.
+      selected = stratified_top(with_ray, selection_ == ImprovementSelection::top_count
+                                              ? KeepAmount::count(top_count_)
+                                              : KeepAmount::fraction(top_fraction_));
       std::sort(selected.begin(), selected.end());  // back to ascending index order like every PCL filter
       return selected;
     }
@@ -159,7 +161,7 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
 // The top modes' order (header: "Top modes"): keep_points_by_map (point_selection.hpp) over the points
 // that have a ray.
 template <typename PointT>
-pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray, std::size_t keep) const {
+pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray, KeepAmount amount) const {
   const GridGeometry& geometry = mapper_->geometry();
   std::vector<PointOnRay> points;
   points.reserve(with_ray.size());
@@ -171,7 +173,7 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
   }
   const MapView map{geometry, mapper_->surface(), mapper_->improvement(), mapper_->pyramid()};
   pcl::Indices selected;
-  for (const std::uint64_t i : keep_points_by_map(points, keep, map)) selected.push_back(static_cast<pcl::index_t>(i));
+  for (const std::uint64_t i : keep_points_by_map(points, amount, map)) selected.push_back(static_cast<pcl::index_t>(i));
   return selected;
 }
 

@@ -2,7 +2,6 @@
 #include "arrays.hpp"
 #include "bindings.hpp"
 
-#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/grid/mask.hpp"
@@ -224,31 +223,20 @@ void bind_mapper_insertion(py::class_<PyMapper>& c) {
         "than the preset's. mask: as in insert. Releases the GIL.");
 }
 
-/// Mapper.keep_points: the rows (ascending) of the points to keep by the map (point_selection.hpp).
+/// Mapper.keep_points: the point numbers (ascending) to keep by the map (point_selection.hpp).
 py::array_t<std::int64_t> keep_points_array(PyMapper& self, const py::object& points, std::optional<std::int64_t> count,
                                             std::optional<double> fraction) {
   if (count.has_value() == fraction.has_value())
     throw InvalidParameter("keep_points: give exactly one of count and fraction");
   if (count) occ_improve::detail::require_parameter(*count >= 0, "count", static_cast<double>(*count), ">= 0");
-  if (fraction)
-    occ_improve::detail::require_parameter(*fraction >= 0.0 && *fraction <= 1.0, "fraction", *fraction, "in [0, 1]");
+  const KeepAmount amount =
+      count ? KeepAmount::count(static_cast<std::size_t>(*count)) : KeepAmount::fraction(*fraction);
   const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
-  const std::vector<std::uint64_t> kept = with_mapper(self, [&](Mapper& m) {
-    const GridGeometry& g = m.geometry();
-    const ImprovementMap& improvement = m.improvement();
-    std::vector<PointOnRay> observable;  // the fraction's base, as ImprovementFilter's: points on an observable ray
-    for (std::size_t i = 0; i < in.span.count; ++i) {
-      poll_stop(i);
-      const float* p = in.span.xyz + i * in.span.stride_floats;
-      ColumnIndex c = 0;
-      if (g.column_of(p[0], p[1], p[2], c) && !std::isnan(improvement.value[c])) observable.push_back({i, c});
-    }
-    const std::size_t keep = count ? static_cast<std::size_t>(*count)
-                                   : static_cast<std::size_t>(std::llround(*fraction * static_cast<double>(observable.size())));
-    std::vector<std::uint64_t> ids = keep_points_by_map(observable, keep, {g, m.surface(), improvement, m.pyramid()});
-    std::sort(ids.begin(), ids.end());
-    return ids;
+  std::vector<std::uint64_t> kept = with_mapper(self, [&](Mapper& m) {
+    const MapView map{m.geometry(), m.surface(), m.improvement(), m.pyramid()};
+    return keep_points_by_map(points_on_rays(in.span, m.geometry()), amount, map);
   });
+  std::sort(kept.begin(), kept.end());
   py::array_t<std::int64_t> out(static_cast<py::ssize_t>(kept.size()));
   std::copy(kept.begin(), kept.end(), out.mutable_data());
   return out;
@@ -258,12 +246,12 @@ void bind_mapper_selection(py::class_<PyMapper>& c) {
   c.def("keep_points", &keep_points_array, py::arg("points"), py::arg("count") = py::none(),
         py::arg("fraction") = py::none(),
         "Which points of a frame to keep by the map (selective sensing; the order of ImprovementFilter's top "
-        "modes, docs/SELECTIVE.md): their row numbers in `points` (N x 3, or H x W x 3 counted row by row), "
-        "ascending, as an int64 array. Give exactly one of count (at most that many) and fraction (of the points "
+        "modes, docs/SELECTIVE.md): their numbers in `points` (the row of an N x 3 array; of an H x W x 3 image, "
+        "v * W + u, the row of points.reshape(-1, 3)), ascending, as an int64 array. Give exactly one of count (at most that many) and fraction (of the points "
         "on an observable ray, in [0, 1]). A jittered grid at the scale of the sampling; in each cell a ray that "
         "already holds a depth sample first (the rays beside it are predicted from it), then the highest "
         "improvement. Points without a ray (NaN, outside the field of view) or on a masked ray are never kept. "
-        "Choose before inserting the frame, then insert points[kept]. Releases the GIL.");
+        "Choose before inserting the frame, then insert points.reshape(-1, 3)[kept]. Releases the GIL.");
 }
 
 void bind_mapper_properties(py::class_<PyMapper>& c) {

@@ -43,6 +43,15 @@ def test_a_cells_sample_is_kept_again_before_the_rays_beside_it(sample, sample_p
     assert len(np.intersect1d(first, second)) > 0.8 * len(first)
 
 
+def test_an_image_of_points_is_counted_row_by_row(sample, sample_points):
+    depth, intrinsics = sample
+    image = oi.depth_to_points(depth, intrinsics)  # H x W x 3
+    mapper = _fresh(intrinsics)
+    kept = mapper.keep_points(image, fraction=0.05)
+    np.testing.assert_array_equal(kept, mapper.keep_points(sample_points, fraction=0.05))
+    np.testing.assert_array_equal(image.reshape(-1, 3)[kept], sample_points[kept])
+
+
 def test_bad_arguments_are_refused_by_name(sample, sample_points):
     _, intrinsics = sample
     mapper = _fresh(intrinsics)
@@ -50,11 +59,11 @@ def test_bad_arguments_are_refused_by_name(sample, sample_points):
         mapper.keep_points(sample_points)
     with pytest.raises(oi.InvalidParameter, match="exactly one of count and fraction"):
         mapper.keep_points(sample_points, count=3, fraction=0.1)
-    with pytest.raises(oi.InvalidParameter, match="fraction"):
+    with pytest.raises(oi.InvalidParameter, match="fraction = 1.5"):
         mapper.keep_points(sample_points, fraction=1.5)
-    with pytest.raises(oi.InvalidParameter, match="fraction"):
+    with pytest.raises(oi.InvalidParameter, match="fraction = nan"):
         mapper.keep_points(sample_points, fraction=float("nan"))
-    with pytest.raises(oi.InvalidParameter, match="count"):
+    with pytest.raises(oi.InvalidParameter, match="count = -1"):
         mapper.keep_points(sample_points, count=-1)
     with pytest.raises(oi.InvalidInput):
         mapper.keep_points(np.zeros((5, 2), np.float32), count=1)

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace occ_improve {
@@ -48,6 +49,13 @@ void check_maps(const std::vector<PointOnRay>& points, const MapView& map) {
                          std::to_string(p.column) + ", outside the grid's " + std::to_string(g.column_count()));
 }
 
+// A spread key from a 64-bit id (rank_key hashes 32 bits: the halves folded, so ids 2^32 apart differ).
+std::uint64_t point_key(std::uint64_t id) {
+  return rank_key(0.0f, static_cast<ColumnIndex>(id ^ (id >> 32) ^ (id >> 40)));
+}
+
+// The observable points' candidates (NaN improvement: not observable, never kept) and how many distinct
+// rays they fall in.
 std::vector<Candidate> candidates_of(const std::vector<PointOnRay>& points, const MapView& map, std::size_t& rays) {
   std::vector<Candidate> candidates;
   candidates.reserve(points.size());
@@ -58,24 +66,41 @@ std::vector<Candidate> candidates_of(const std::vector<PointOnRay>& points, cons
     const PointOnRay& p = points[k];
     const float value = map.improvement.value[p.column];
     if (std::isnan(value)) continue;  // not observable (improvement.hpp): never kept
-    const float block_mean = map.pyramid.block_at(kTieLevel, map.pyramid.block_of_column(kTieLevel, p.column)).mean_improvement();
+    const float mean = map.pyramid.block_at(kTieLevel, map.pyramid.block_of_column(kTieLevel, p.column)).mean_improvement();
+    // A pyramid out of step with the map could give NaN, which the comparator must never see.
+    const float block_mean = std::isnan(mean) ? -std::numeric_limits<float>::infinity() : mean;
     const std::uint32_t repeat = points_of_ray[p.column]++;
     if (repeat == 0) ++rays;
     candidates.push_back({is_depth_sample(map.surface, p.column), value, block_mean, rank_key(value, p.column),
-                          rank_key(0.0f, static_cast<ColumnIndex>(p.point)), p.column, 0, repeat, 0, p.point});
+                          point_key(p.point), p.column, 0, repeat, 0, p.point});
   }
   return candidates;
 }
 
 }  // namespace
 
-std::vector<std::uint64_t> keep_points_by_map(const std::vector<PointOnRay>& points, std::size_t keep,
+std::vector<PointOnRay> points_on_rays(PointSpan points, const GridGeometry& geometry) {
+  std::vector<PointOnRay> out;
+  out.reserve(points.count);
+  for (std::size_t i = 0; i < points.count; ++i) {
+    poll_stop(i);
+    const float* p = points.xyz + i * points.stride_floats;
+    ColumnIndex column = 0;
+    if (geometry.column_of(p[0], p[1], p[2], column)) out.push_back({i, column});
+  }
+  return out;
+}
+
+std::vector<std::uint64_t> keep_points_by_map(const std::vector<PointOnRay>& points, KeepAmount amount,
                                               const MapView& map) {
+  if (amount.is_fraction)
+    detail::require_parameter(amount.share >= 0.0 && amount.share <= 1.0, "fraction", amount.share, "in [0, 1]");
   check_maps(points, map);
-  if (keep == 0) return {};
   std::size_t rays = 0;
   std::vector<Candidate> candidates = candidates_of(points, map, rays);
-  keep = std::min(keep, candidates.size());
+  const std::size_t keep =
+      amount.is_fraction ? static_cast<std::size_t>(std::llround(amount.share * static_cast<double>(candidates.size())))
+                         : std::min(amount.points, candidates.size());
   if (keep == 0) return {};
   // About one kept point per cell (the cells need the count of distinct rays, known only now).
   const GridGeometry& g = map.geometry;

@@ -21,6 +21,7 @@
 //    (rank_key: a tie is spread over the view, never broken by the points' order, which on an organized
 //    frame would keep the top rows), then the point's own spread rank.
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/maps/multiscale.hpp"
 #include "occ_improve/maps/surface.hpp"
@@ -32,10 +33,15 @@
 namespace occ_improve {
 
 /// A point that has a ray: the caller's id for it (its index in the cloud) and the column it falls in.
+/// Each entry is one point; ids need not be distinct (the choice returns each kept entry's id).
 struct PointOnRay {
   std::uint64_t point = 0;
   ColumnIndex column = 0;
 };
+
+/// The points of `points` that have a ray in `geometry` (valid, in the field of view), their id = their
+/// index in the span. Polls Ctrl-C.
+std::vector<PointOnRay> points_on_rays(PointSpan points, const GridGeometry& geometry);
 
 /// The maps the choice reads (a Mapper's: geometry(), surface(), improvement(), pyramid()).
 struct MapView {
@@ -45,11 +51,22 @@ struct MapView {
   const ImprovementPyramid& pyramid;
 };
 
-/// The ids of the min(keep, observable points) points to keep, best first (order above). Points on a ray
-/// that is not observable (NaN improvement: masked, or no pixel sees it; improvement.hpp) are never kept.
-/// Every point must have a ray: InvalidInput naming the first column outside the grid; InvalidInput when
-/// the maps' sizes differ from the grid's. Deterministic: the same points and map give the same ids.
-std::vector<std::uint64_t> keep_points_by_map(const std::vector<PointOnRay>& points, std::size_t keep,
+/// How many to keep: `count` points, or `fraction` (in [0, 1]) of the points on an observable ray,
+/// rounded to the nearest whole point (the base the PCL filter's setTopFraction counts).
+struct KeepAmount {
+  static KeepAmount count(std::size_t points) { return {false, points, 0.0}; }
+  static KeepAmount fraction(double share) { return {true, 0, share}; }
+  bool is_fraction = false;
+  std::size_t points = 0;
+  double share = 0.0;
+};
+
+/// The ids of the points to keep, best first (order above): `amount` of them, at most the points on an
+/// observable ray. Points on a ray that is not observable (NaN improvement: masked, or no pixel sees it;
+/// improvement.hpp) are never kept. InvalidParameter for a fraction outside [0, 1]; InvalidInput naming
+/// the first point whose column lies outside the grid, or a map whose size is not the grid's.
+/// Deterministic: the same points and map give the same ids. Polls Ctrl-C (Cancelled).
+std::vector<std::uint64_t> keep_points_by_map(const std::vector<PointOnRay>& points, KeepAmount amount,
                                               const MapView& map);
 
 }  // namespace occ_improve

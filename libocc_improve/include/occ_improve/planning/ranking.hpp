@@ -42,7 +42,7 @@ double mean_of_best_share(const std::vector<float>& value, const std::uint8_t* e
 
 /// The cells of a jittered grid at the scale of a sampling of k among `candidates` columns of a grid
 /// `width` columns wide: s x s columns with s = floor(sqrt(candidates / k)) (at least 1), so that the k
-/// samples put about one in each cell. Shared by spread_best_columns and ImprovementFilter's top modes.
+/// samples put about one in each cell. Shared by spread_best_columns and keep_points_by_map (point_selection.hpp).
 struct SamplingCells {
   SamplingCells(std::size_t candidates, std::size_t k, int width);
   int side = 1;    ///< columns a side

@@ -21,7 +21,8 @@
 // they are always among the removed indices and are counted (getPointsWithoutRay()).
 // setNegative, setKeepOrganized, setUserFilterValue and getRemovedIndices behave as in every
 // pcl::FilterIndices. Errors (no map, bad parameters, a map the cloud cannot be inserted into) follow
-// PCL's convention: PCL_ERROR and an empty selection.
+// PCL's convention: PCL_ERROR and an empty selection. A stop request (Ctrl-C, cancel.hpp) is not an
+// error: filter() throws occ_improve::Cancelled, as every long call of the library does.
 //
 // getImprovementCloud(): per input point (aligned with the input cloud, same width/height) its x y z,
 // and the surface depth, surface probability and improvement of its ray (NaN where it has no ray).
@@ -32,6 +33,7 @@
 // Explicitly instantiated for PointXYZ, PointXYZI, PointXYZRGB, PointXYZRGBA and PointXYZL.
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/point_types.hpp"
+#include "occ_improve/planning/point_selection.hpp"
 
 #include <pcl/filters/filter_indices.h>
 
@@ -90,7 +92,7 @@ private:
   bool evaluate(std::vector<float>& point_improvement);
   /// Indices (into input_) selected in normal mode, ascending.
   pcl::Indices select(const std::vector<float>& point_improvement) const;
-  pcl::Indices stratified_top(const pcl::Indices& with_ray, std::size_t keep) const;
+  pcl::Indices stratified_top(const pcl::Indices& with_ray, KeepAmount amount) const;
   bool parametersValid() const;
 
   std::shared_ptr<Mapper> mapper_;
@@ -105,9 +107,10 @@ private:
   std::size_t points_without_ray_ = 0;
 };
 
-/// Selective sensing in one call: inserts `frame` into `mapper` and returns the indices of the best
-/// `fraction` of its points by improvement (ascending). Throws InvalidParameter for a fraction outside
-/// [0, 1], InvalidInput for a cloud the mapper refuses.
+/// Inserts `frame` into `mapper`, then returns the indices (ascending) of the `fraction` of its points the
+/// top modes keep (the frame itself is in the map by then: a thinned copy of what was inserted, for what
+/// comes after the map; to thin what the map receives, choose before inserting, docs/PIPELINE.md).
+/// Throws InvalidParameter for a fraction outside [0, 1], InvalidInput for a cloud the mapper refuses.
 template <typename PointT>
 pcl::Indices keep_most_improving(const pcl::PointCloud<PointT>& frame, const std::shared_ptr<Mapper>& mapper,
                                  double fraction);
