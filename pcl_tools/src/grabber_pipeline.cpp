@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
+#include "occ_improve/planning/point_selection.hpp"
 #include "occ_improve/timing.hpp"
 
 #include <algorithm>
@@ -19,6 +20,7 @@ void PipelineOptions::validate() const {
   stop.validate();
   progress.validate();
   detail::require_parameter(insertion.threads >= 0, "insertion.threads", insertion.threads, ">= 0");
+  detail::require_parameter(keep_fraction > 0.0 && keep_fraction <= 1.0, "keep_fraction", keep_fraction, "in (0, 1]");
   detail::require_parameter((expected_width == 0) == (expected_height == 0), "expected_width",
                             expected_width, "0 exactly when expected_height is 0");
 }
@@ -168,8 +170,17 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
 
   FrameResult result;
   result.frame_index = index;
+  double keep_ms = 0;
+  std::size_t inserted_points = frame.points.count;
   try {
-    result.report = mapper_->insert(frame.points, options_.insertion);
+    PointSpan points = frame.points;
+    if (options_.keep_fraction < 1.0) {
+      const double t_keep = now_seconds();
+      points = kept_share(points);
+      inserted_points = points.count;
+      keep_ms = ms_since(t_keep);
+    }
+    result.report = mapper_->insert(points, options_.insertion);
   } catch (const Cancelled&) {  // the user's stop, not a bad frame: counted apart, no warning
     std::lock_guard<std::mutex> lock(mutex_);
     ++stats_.interrupted;
@@ -200,11 +211,27 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
 
   std::lock_guard<std::mutex> lock(mutex_);
   ++stats_.processed;
+  stats_.points_received += frame.points.count;
+  stats_.points_not_kept += frame.points.count - inserted_points;
   stats_.convert_ms += convert_ms;
+  stats_.keep_ms += keep_ms;
   stats_.insert_ms += result.report.insertion.seconds * 1e3;
   stats_.improvement_ms += result.report.improvement_seconds * 1e3;
   stats_.regions_ms += regions_ms;
   stats_.callback_ms += callback_ms;
+}
+
+PointSpan PipelineEngine::kept_share(PointSpan points) {
+  Mapper& m = *mapper_;
+  const MapView map{m.geometry(), m.surface(), m.improvement(), m.pyramid()};
+  const std::vector<std::uint64_t> kept =
+      keep_points_by_map(points_on_rays(points, m.geometry()), KeepAmount::fraction(options_.keep_fraction), map);
+  kept_points_.clear();
+  for (const std::uint64_t i : kept) {
+    const float* p = points.xyz + i * points.stride_floats;
+    kept_points_.emplace_back(p[0], p[1], p[2]);
+  }
+  return PointSpan::from(kept_points_);
 }
 
 }  // namespace detail

@@ -56,7 +56,7 @@ const ToolFlags kFlags{
     "depth from its samples, 16-bit mm, 0 = none within -radius). -view shows the improvement map and the\n"
     "top regions as frames arrive. Ctrl-C stops cleanly and still writes the maps.\n",
     joined({output_folder_flag_names(),
-            {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-max_frames", "-save_every",
+            {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-keep", "-max_frames", "-save_every",
              "-stop_on_signal", "-simulate", "-budget", "-shape", "-refine", "-window",
              "-negative_share", "-stop_gain", "-stop_share", "-max_shots", "-load", "-save", "-threads", "-k",
              "-min_improvement", "-predicted_depth", "-radius", "-view", "-view_screenshot"},
@@ -329,9 +329,14 @@ void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, 
       static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
       static_cast<unsigned long long>(s.interrupted),
       static_cast<unsigned long long>(s.grabber_errors), s.wall_seconds, s.processed_per_second());
-  pcl::console::print_info("Per frame [ms]: convert %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
-                           s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms),
+  pcl::console::print_info("Per frame [ms]: convert %.1f, keep %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
+                           s.mean_ms(s.convert_ms), s.mean_ms(s.keep_ms), s.mean_ms(s.insert_ms),
                            s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
+  if (s.points_not_kept > 0)
+    pcl::console::print_info("Points: %llu received, %llu inserted, %llu not kept (-keep: chosen by the map)\n",
+                             static_cast<unsigned long long>(s.points_received),
+                             static_cast<unsigned long long>(s.points_received - s.points_not_kept),
+                             static_cast<unsigned long long>(s.points_not_kept));
   if (!last) return;
   if (fired && std::string(stop_reason) != kStopSignalReason)
     pcl::console::print_info("Stop signal first fired at frame %llu: %s\n",
@@ -374,6 +379,8 @@ int run(const CommandLine& command_line) {
   MapSaveTarget save(command_line, &out);
   if (!simulate && *command_line.text("-predicted_depth") != "none")
     throw InvalidParameter("-predicted_depth is written by -simulate runs only");
+  if (simulate && command_line.has("-keep"))
+    throw InvalidParameter("-keep thins a stream's frames; -simulate plans its own shots (-budget)");
   const std::unique_ptr<OutputFile> screenshot = open_screenshot(command_line, out, save);
   const std::unique_ptr<LiveView> view = open_view(command_line);
   if (simulate) return run_simulation(command_line, options, region_options, out, save);
@@ -387,6 +394,7 @@ int run(const CommandLine& command_line) {
   pipeline_options.top_regions = static_cast<std::size_t>(options.top_k);
   pipeline_options.regions = region_options;  // the regions shown by -view are regions.csv's
   pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
+  pipeline_options.keep_fraction = *command_line.number("-keep");
   const std::shared_ptr<Mapper> mapper = make_mapper(load_path, options, source.preset);
   // A stream has no first frame yet: -mask finite is refused here, a PNG mask applies to every frame.
   const std::string mask_line = apply_tool_mask(command_line, *mapper, nullptr);

@@ -3,6 +3,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
+#include "occ_improve/planning/point_selection.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "support/test_data.hpp"
 
@@ -102,6 +103,47 @@ TEST(GrabberPipeline, ProcessesEveryFrameInOrderWithBackpressure) {
   for (std::size_t i = 0; i < indices.size(); ++i) EXPECT_EQ(indices[i], i);
   EXPECT_GT(pipeline.mapper().surface().known_count(), 0u);
   EXPECT_GT(s.insert_ms, 0.0);
+}
+
+// keep_fraction: each frame's kept points are keep_points_by_map's choice against the map before the
+// frame, only they are inserted, and the rest is counted.
+TEST(GrabberPipeline, KeepFractionInsertsTheMapsChoiceAndCountsTheRest) {
+  PipelineOptions options;
+  options.backpressure = true;
+  options.keep_fraction = 0.1;
+  GrabberPipeline<pcl::PointXYZ> pipeline(tiny_preset(), {}, options);
+  // The same choices, made beside the pipeline on a map of our own fed the same way.
+  Mapper expected_map(tiny_preset());
+  std::vector<std::size_t> inserted;
+  pipeline.setResultCallback([&](const FrameResult& r) { inserted.push_back(r.report.insertion.points_received); });
+  pipeline.start();
+  std::size_t expected_total = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Cloud::Ptr frame = tiny_frame(2.0 + 0.05 * i);
+    const MapView map{expected_map.geometry(), expected_map.surface(), expected_map.improvement(), expected_map.pyramid()};
+    const PointSpan span = span_of(*frame);
+    std::vector<Eigen::Vector3f> kept;
+    for (const std::uint64_t k : keep_points_by_map(points_on_rays(span, expected_map.geometry()), KeepAmount::fraction(0.1), map))
+      kept.push_back((*frame)[k].getVector3fMap());
+    expected_map.insert(PointSpan::from(kept));
+    expected_total += kept.size();
+    pipeline.pushFrame(frame);
+  }
+  pipeline.stop();
+  const PipelineStatistics s = pipeline.statistics();
+  EXPECT_EQ(s.processed, 3u);
+  expect_consistent(s);
+  EXPECT_EQ(s.points_received, 3u * 64u * 48u);
+  ASSERT_EQ(inserted.size(), 3u);
+  for (const std::size_t n : inserted) EXPECT_EQ(n, static_cast<std::size_t>(std::llround(0.1 * 64 * 48)));
+  EXPECT_EQ(s.points_not_kept, s.points_received - expected_total);
+  EXPECT_EQ(pipeline.mapper().surface().depth_m, expected_map.surface().depth_m);
+  EXPECT_GE(s.keep_ms, 0.0);
+  PipelineOptions bad;
+  for (const double f : {0.0, 1.5}) {
+    bad.keep_fraction = f;
+    EXPECT_THROW(bad.validate(), InvalidParameter) << f;
+  }
 }
 
 TEST(GrabberPipeline, NewestFrameWinsWhenTheWorkerFallsBehind) {

@@ -337,6 +337,32 @@ TEST_F(Tools, PosesAreAppliedWhereverFramesAreFused) {
       << occupied_centre(file("world.bt")).transpose() << " against " << expected.transpose();
 }
 
+// -keep F: each frame's share chosen by the map goes in, the rest is counted in the summary.
+TEST_F(Tools, LiveKeepInsertsAShareOfEachFrameAndCountsTheRest) {
+  OCC_REQUIRE_DATA(frames_dir, "sequences/7scenes_redkitchen/frames");
+  const std::string posed = seven_scenes_folder(folder_ / "posed", frames_dir, {"000150", "000165", "000180"});
+  const ToolRun kept = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + posed + " -keep 0.1 -o keep");
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  unsigned long long received = 0, inserted = 0, not_kept = 0;
+  const std::size_t at = kept.out.find("Points: ");
+  ASSERT_NE(at, std::string::npos) << kept.out;
+  ASSERT_EQ(std::sscanf(kept.out.c_str() + at, "Points: %llu received, %llu inserted, %llu not kept", &received,
+                        &inserted, &not_kept), 3) << kept.out;
+  EXPECT_EQ(received, 3ull * 640 * 480);
+  EXPECT_EQ(inserted + not_kept, received);
+  EXPECT_GT(inserted, received / 20);  // a tenth of the points with a ray
+  EXPECT_LT(inserted, received / 8);
+  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + posed + " -o all").exit_code, 0);
+  EXPECT_NE(file_contents(folder_ / "keep/surface.pcd"), file_contents(folder_ / "all/surface.pcd"));
+  for (const char* bad : {"-keep 0", "-keep 1.5", "-keep 0.1 -simulate " }) {
+    const std::string args = std::string(bad) == "-keep 0.1 -simulate " ? std::string(bad) + posed + "/frame-000150.depth.png -o s"
+                                                                         : "-depth_dir " + posed + " " + bad + " -o b";
+    const ToolRun refused = run(OCC_IMPROVE_LIVE_EXECUTABLE, args);
+    EXPECT_NE(refused.exit_code, 0) << bad;
+    EXPECT_NE(refused.err.find("-keep"), std::string::npos) << refused.err;
+  }
+}
+
 // A PCD's VIEWPOINT was ignored: its points are in the cloud's frame with the sensor at the viewpoint.
 TEST_F(Tools, APcdViewpointIsTheSensorPose) {
   const sample::SampleFrame scene = sample::generate_scene();

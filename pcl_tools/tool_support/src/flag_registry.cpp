@@ -187,6 +187,10 @@ std::vector<FlagSpec> stream_flags() {
               0, 1000),
       switch_flag("-drop", kStream,
                   "file sources: the newest frame wins, like a live sensor (default: every frame is processed)"),
+      bounded(value_flag("-keep", K::number, "F", kStream,
+                         "insert only this share of each frame, chosen by the map before the frame goes in\n"
+                         "(selective sensing, docs/SELECTIVE.md); the rest is counted in the summary", "1"),
+              0, 1, true),
       bounded(value_flag("-max_frames", K::integer, "N", kStream,
                          "only the first N frames (live: stop after N processed); 0: all", "0"),
               0),

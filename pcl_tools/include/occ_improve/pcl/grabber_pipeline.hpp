@@ -41,6 +41,11 @@ struct PipelineOptions {
   std::size_t top_regions = 5;    ///< regions kept in each FrameResult (best first)
   StopCriteria stop;              ///< when to signal "enough"
   ProgressCriteria progress;      ///< ... or when frames stop paying (StopMonitor)
+  /// In (0, 1]: insert only this share of each frame's points on an observable ray, chosen against the
+  /// map before the frame goes in (keep_points_by_map, point_selection.hpp: selective sensing, which over
+  /// a posed sequence builds a better map than pcl::RandomSample of as many; docs/SELECTIVE.md). 1: every
+  /// point. The rest is counted (PipelineStatistics::points_not_kept).
+  double keep_fraction = 1.0;
   bool backpressure = false;      ///< true: the grabber waits for the worker instead of dropping frames
   bool require_organized = false; ///< reject unorganized frames
   /// Expected organized size (0 = any); set from the preset's camera by the preset constructor.
@@ -77,9 +82,12 @@ struct PipelineStatistics {
   std::uint64_t rejected = 0;   ///< bad frames (see the header comment)
   std::uint64_t interrupted = 0;  ///< frames whose insertion a stop request (Ctrl-C) cut short: partly inserted
   std::uint64_t grabber_errors = 0;  ///< start/stop failures and errors reported by the source
+  /// Points of processed frames: all of them (valid or not), and those keep_fraction left out (points
+  /// without a ray included: with keep_fraction < 1 only the kept points reach the mapper's report).
+  std::uint64_t points_received = 0, points_not_kept = 0;
   std::uint64_t in_flight = 0;  ///< waiting or being processed (0 once stopped)
   /// Summed milliseconds over processed frames, per stage (insert_ms includes the surface update).
-  double convert_ms = 0, insert_ms = 0, improvement_ms = 0, regions_ms = 0, callback_ms = 0;
+  double convert_ms = 0, keep_ms = 0, insert_ms = 0, improvement_ms = 0, regions_ms = 0, callback_ms = 0;
   double wall_seconds = 0;      ///< from start() to stop() (or to now while running)
   double processed_per_second() const { return wall_seconds > 0 ? processed / wall_seconds : 0.0; }
   double mean_ms(double total_ms) const { return processed > 0 ? total_ms / processed : 0.0; }
@@ -120,6 +128,8 @@ public:
 private:
   void run();
   void process(ErasedFrame& frame, std::uint64_t index);
+  /// The frame's points keep_fraction keeps, chosen by the map (in kept_points_).
+  PointSpan kept_share(PointSpan points);
   void reject(std::uint64_t index, const std::string& message);
   void emit(const PipelineEvent& event) noexcept;
 
@@ -133,6 +143,7 @@ private:
   bool busy_ = false, stopping_ = false, running_ = false;
   std::thread worker_;
   PipelineStatistics stats_;
+  std::vector<Eigen::Vector3f> kept_points_;  ///< worker thread only: the frame's kept points
   std::uint32_t stream_width_ = 0, stream_height_ = 0;  ///< fixed by the first accepted frame
   double started_at_ = 0, stopped_at_ = 0;
 };
