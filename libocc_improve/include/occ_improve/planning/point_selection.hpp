@@ -61,7 +61,7 @@ struct KeepAmount {
   double share = 0.0;
 };
 
-/// The ids of the points to keep, best first (order above): `amount` of them, at most the points on an
+/// The ids of the points to keep (order above), ascending: `amount` of them, at most the points on an
 /// observable ray. Points on a ray that is not observable (NaN improvement: masked, or no pixel sees it;
 /// improvement.hpp) are never kept. InvalidParameter for a fraction outside [0, 1]; InvalidInput naming
 /// the first point whose column lies outside the grid, or a map whose size is not the grid's.
