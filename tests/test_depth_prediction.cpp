@@ -8,6 +8,8 @@
 #include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 
+#include "support/expect_throw.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -253,15 +255,7 @@ TEST(LinearDepthPrediction, SurfaceOverloadsAgreeWithTheSparseImage) {
   EXPECT_EQ(predict_depth(s, kinect_noise(), p).depth_m, predict_depth(s).depth_m);
 }
 
-template <class E>
-void expect_throw_naming(const std::function<void()>& f, const std::string& name) {
-  try {
-    f();
-    ADD_FAILURE() << "no exception, expected one naming " << name;
-  } catch (const E& e) {
-    EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
-  }
-}
+using test::expect_throw_naming;
 
 TEST(LinearDepthPrediction, BadInputThrowsNamingTheValue) {
   const SensorModel m = kinect_noise();

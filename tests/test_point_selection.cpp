@@ -7,6 +7,8 @@
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/sensor/presets.hpp"
 
+#include "support/expect_throw.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -104,30 +106,20 @@ TEST(PointSelection, ACellsSampleIsKeptAgainBeforeTheRaysBesideIt) {
   EXPECT_LT(sampled_mean + 0.1, unmeasured_mean);
 }
 
-template <class Expected, class Call>
-void expect_refused(Call&& call, const std::string& named) {
-  try {
-    call();
-    FAIL() << "accepted; expected a refusal naming " << named;
-  } catch (const Expected& e) {
-    EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
-  }
-}
-
 TEST(PointSelection, RefusesAPointOutsideTheGridABadFractionAndMapsOfAnotherSize) {
   Mapper mapper(kinect_v1());
   const std::size_t columns = mapper.geometry().column_count();
-  expect_refused<InvalidInput>([&] { keep_points_by_map({{0, 0}, {7, static_cast<ColumnIndex>(columns)}}, KeepAmount::count(1), view_of(mapper)); },
+  test::expect_throw_naming<InvalidInput>([&] { keep_points_by_map({{0, 0}, {7, static_cast<ColumnIndex>(columns)}}, KeepAmount::count(1), view_of(mapper)); },
                  "point 7");
   for (const double share : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()})
-    expect_refused<InvalidParameter>([&] { keep_points_by_map({{0, 0}}, KeepAmount::fraction(share), view_of(mapper)); }, "fraction");
+    test::expect_throw_naming<InvalidParameter>([&] { keep_points_by_map({{0, 0}}, KeepAmount::fraction(share), view_of(mapper)); }, "fraction");
   SurfaceMap small_surface = mapper.surface();
   small_surface.depth_m.pop_back();
-  expect_refused<InvalidInput>([&] { keep_points_by_map({{0, 0}}, KeepAmount::count(1), {mapper.geometry(), small_surface, mapper.improvement(), mapper.pyramid()}); },
+  test::expect_throw_naming<InvalidInput>([&] { keep_points_by_map({{0, 0}}, KeepAmount::count(1), {mapper.geometry(), small_surface, mapper.improvement(), mapper.pyramid()}); },
                  "surface map");
   ImprovementMap small_improvement = mapper.improvement();
   small_improvement.value.pop_back();
-  expect_refused<InvalidInput>([&] { keep_points_by_map({{0, 0}}, KeepAmount::count(1), {mapper.geometry(), mapper.surface(), small_improvement, mapper.pyramid()}); },
+  test::expect_throw_naming<InvalidInput>([&] { keep_points_by_map({{0, 0}}, KeepAmount::count(1), {mapper.geometry(), mapper.surface(), small_improvement, mapper.pyramid()}); },
                  "improvement map");
 }
 

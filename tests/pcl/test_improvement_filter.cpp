@@ -324,18 +324,29 @@ void check_selective_sensing(const pcl::PointCloud<pcl::PointXYZRGBA>::Ptr& clou
   EXPECT_EQ(finite, kept.size());
 }
 
+// Selective sensing as make filter-eval runs it on the sample: the top fraction chosen against a
+// kinect_v1 map as it is (empty at first), the frame not inserted by the filter.
+struct SelectiveSensing {
+  Cloud::Ptr cloud = sample_cloud();
+  std::shared_ptr<Mapper> mapper = std::make_shared<Mapper>(kinect_v1());
+  ImprovementFilter<pcl::PointXYZ> filter;
+  explicit SelectiveSensing(double fraction) {
+    filter.setMapper(mapper);
+    filter.setUpdateMap(false);
+    filter.setInputCloud(cloud);
+    filter.setTopFraction(fraction);
+  }
+};
+
 // On a map that has seen nothing every ray ties at the no-data level: the kept points must be spread
 // over the view (not the top rows, as a tie broken by point index did), as a jittered grid at the
 // sampling's scale: 5 % of the rays is one point per 4 x 4 cell (floor(sqrt(20)) = 4), never two in one
 // cell while cells are left, and fewer 8 x 8 blocks left empty than pcl::RandomSample leaves.
 TEST(ImprovementFilter, TiesAreSpreadAsAJitteredGridAtTheSamplingScale) {
-  const Cloud::Ptr cloud = sample_cloud();
-  auto mapper = std::make_shared<Mapper>(kinect_v1());
-  ImprovementFilter<pcl::PointXYZ> filter;
-  filter.setMapper(mapper);
-  filter.setUpdateMap(false);
-  filter.setInputCloud(cloud);
-  filter.setTopFraction(0.05);
+  SelectiveSensing run(0.05);
+  const Cloud::Ptr& cloud = run.cloud;
+  const std::shared_ptr<Mapper>& mapper = run.mapper;
+  ImprovementFilter<pcl::PointXYZ>& filter = run.filter;
   pcl::Indices kept;
   filter.filter(kept);
   const pcl::Indices valid = with_ray(filter.getImprovementCloud());
@@ -391,15 +402,11 @@ TEST(ImprovementFilter, TiesAreSpreadAsAJitteredGridAtTheSamplingScale) {
 // OPDF across a depth step is none), although each of them now has a lower improvement than its
 // unmeasured neighbours (0.138 against 0.324).
 TEST(ImprovementFilter, ACellsSampleIsMeasuredAgainBeforeTheRaysBesideIt) {
-  const Cloud::Ptr cloud = sample_cloud();
-  auto mapper = std::make_shared<Mapper>(kinect_v1());
-  ImprovementFilter<pcl::PointXYZ> filter;
-  filter.setMapper(mapper);
-  filter.setUpdateMap(false);
-  filter.setInputCloud(cloud);
-  filter.setTopFraction(0.05);
+  SelectiveSensing run(0.05);
+  const Cloud::Ptr& cloud = run.cloud;
+  const std::shared_ptr<Mapper>& mapper = run.mapper;
   pcl::Indices first;
-  filter.filter(first);
+  run.filter.filter(first);
   ASSERT_FALSE(first.empty());
   Cloud kept_points;
   pcl::copyPointCloud(*cloud, first, kept_points);
@@ -414,10 +421,10 @@ TEST(ImprovementFilter, ACellsSampleIsMeasuredAgainBeforeTheRaysBesideIt) {
   EXPECT_GT(sampled.size(), first.size() * 8 / 10);
 
   pcl::Indices second;
-  filter.filter(second);
+  run.filter.filter(second);
   EXPECT_EQ(second.size(), first.size());
   EXPECT_TRUE(std::includes(second.begin(), second.end(), sampled.begin(), sampled.end()));
-  const auto& improvement = filter.getImprovementCloud();
+  const auto& improvement = run.filter.getImprovementCloud();
   const pcl::Indices others = minus(with_ray(improvement), second);
   EXPECT_LT(mean_improvement(improvement, second) + 0.1, mean_improvement(improvement, others));
 }
