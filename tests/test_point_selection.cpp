@@ -6,6 +6,8 @@
 #include "occ_improve/planning/ranking.hpp"
 #include "occ_improve/sample_scene.hpp"
 #include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/grid/mask.hpp"
+#include "support/small_camera.hpp"
 
 #include "support/expect_throw.hpp"
 
@@ -15,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <random>
 #include <set>
 #include <utility>
 
@@ -104,6 +107,83 @@ TEST(PointSelection, ACellsSampleIsKeptAgainBeforeTheRaysBesideIt) {
   ASSERT_GT(unmeasured, 0u);
   unmeasured_mean /= static_cast<double>(unmeasured);
   EXPECT_LT(sampled_mean + 0.1, unmeasured_mean);
+}
+
+// The straightforward order of the header, on the public pieces: every observable point's sample flag,
+// improvement, block mean and ray key; one sort of all by (cell, repeat, better), ranks within cells, the
+// first `keep` by (round, better). (Two points of one ray never share a cell's rank, and different rays
+// never tie on the ray key, so no tie reaches the point's own key.)
+std::vector<std::uint64_t> reference_choice(const std::vector<PointOnRay>& points, std::size_t keep, const Mapper& m) {
+  struct Ref {
+    std::size_t cell;
+    std::uint32_t repeat, round;
+    bool sampled;
+    float improvement, block_mean;
+    std::uint64_t ray_key, id;
+  };
+  const GridGeometry& g = m.geometry();
+  std::vector<Ref> refs;
+  std::map<ColumnIndex, std::uint32_t> seen;
+  for (const PointOnRay& p : points) {
+    const float value = m.improvement().value[p.column];
+    if (std::isnan(value)) continue;
+    const float mean = m.pyramid().block_at(1, m.pyramid().block_of_column(1, p.column)).mean_improvement();
+    refs.push_back({p.column, seen[p.column]++, 0, is_depth_sample(m.surface(), p.column), value,
+                    std::isnan(mean) ? -std::numeric_limits<float>::infinity() : mean, rank_key(value, p.column), p.point});
+  }
+  keep = std::min(keep, refs.size());
+  if (keep == 0) return {};
+  const SamplingCells cells(seen.size(), keep, g.width());
+  for (Ref& r : refs) r.cell = cells.cell_of(g.azimuth_bin_of(static_cast<ColumnIndex>(r.cell)), g.elevation_bin_of(static_cast<ColumnIndex>(r.cell)));
+  const auto better = [](const Ref& a, const Ref& b) {
+    if (a.sampled != b.sampled) return a.sampled;
+    if (a.improvement != b.improvement) return a.improvement > b.improvement;
+    if (a.block_mean != b.block_mean) return a.block_mean > b.block_mean;
+    return a.ray_key > b.ray_key;
+  };
+  std::sort(refs.begin(), refs.end(), [&](const Ref& a, const Ref& b) {
+    if (a.cell != b.cell) return a.cell < b.cell;
+    if (a.repeat != b.repeat) return a.repeat < b.repeat;
+    return better(a, b);
+  });
+  for (std::size_t k = 0; k < refs.size(); ++k) refs[k].round = k > 0 && refs[k - 1].cell == refs[k].cell ? refs[k - 1].round + 1 : 0;
+  std::sort(refs.begin(), refs.end(), [&](const Ref& a, const Ref& b) {
+    if (a.round != b.round) return a.round < b.round;
+    return better(a, b);
+  });
+  std::vector<std::uint64_t> ids;
+  for (std::size_t k = 0; k < keep; ++k) ids.push_back(refs[k].id);
+  std::sort(ids.begin(), ids.end());
+  return ids;
+}
+
+// The fast path (cells bucketed, sorted cell by cell, nth_element) chooses the reference's set: random
+// points on a small camera (64 x 48: cells of 3 and 5 do not divide it), several points on some rays, a
+// map with samples, free and unseen rays, a masked corner; keeps from none to all, full and partial rounds.
+TEST(PointSelection, ChoosesWhatTheStraightforwardOrderChooses) {
+  PinholePresetOptions options;
+  options.depth_bins = 256;
+  Mapper mapper(preset_from_pinhole(test::small_camera(), options, "small"));
+  std::mt19937 random(7);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<Eigen::Vector3f> frame;
+  for (int i = 0; i < 1500; ++i) {
+    const float z = 1.0f + 2.0f * unit(random);
+    frame.emplace_back((unit(random) - 0.5f) * z, (unit(random) - 0.5f) * 0.75f * z, z);
+  }
+  PixelMask mask{64, 48, std::vector<std::uint8_t>(64 * 48, 1)};
+  for (int v = 0; v < 8; ++v)
+    for (int u = 0; u < 8; ++u) mask.valid[static_cast<std::size_t>(v) * 64 + static_cast<std::size_t>(u)] = 0;
+  mapper.set_mask(mask);
+  mapper.insert(PointSpan::from(frame));
+  std::uniform_int_distribution<ColumnIndex> column(0, 64 * 48 - 1);
+  std::vector<PointOnRay> points;
+  for (std::uint64_t id = 0; id < 4000; ++id) points.push_back({id * 3 + 11, id % 5 == 0 && id > 0 ? points[id - 1].column : column(random)});
+  for (const std::size_t keep : {std::size_t{0}, std::size_t{1}, std::size_t{37}, std::size_t{400}, std::size_t{1500},
+                                 std::size_t{3000}, std::size_t{3999}, std::size_t{5000}}) {
+    SCOPED_TRACE(keep);
+    EXPECT_EQ(keep_points_by_map(points, KeepAmount::count(keep), view_of(mapper)), reference_choice(points, keep, mapper));
+  }
 }
 
 TEST(PointSelection, RefusesAPointOutsideTheGridABadFractionAndMapsOfAnotherSize) {

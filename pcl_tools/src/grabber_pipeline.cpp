@@ -172,13 +172,16 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
   result.frame_index = index;
   double keep_ms = 0;
   std::size_t inserted_points = frame.points.count;
+  const char* stage = "the mapper refused it: ";
   try {
     PointSpan points = frame.points;
     if (options_.keep_fraction < 1.0) {
+      stage = "choosing the kept points failed: ";
       const double t_keep = now_seconds();
       points = kept_share(points);
       inserted_points = points.count;
       keep_ms = ms_since(t_keep);
+      stage = "the mapper refused it: ";
     }
     result.report = mapper_->insert(points, options_.insertion);
   } catch (const Cancelled&) {  // the user's stop, not a bad frame: counted apart, no warning
@@ -186,7 +189,7 @@ void PipelineEngine::process(ErasedFrame& frame, std::uint64_t index) {
     ++stats_.interrupted;
     return;
   } catch (const std::exception& e) {
-    return reject(index, std::string("the mapper refused it: ") + e.what());
+    return reject(index, std::string(stage) + e.what());
   }
   const double t_regions = now_seconds();
   std::vector<Region> regions = find_regions(mapper_->geometry(), mapper_->improvement(), mapper_->surface(),

@@ -151,7 +151,6 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
       selected = stratified_top(with_ray, selection_ == ImprovementSelection::top_count
                                               ? KeepAmount::count(top_count_)
                                               : KeepAmount::fraction(top_fraction_));
-      std::sort(selected.begin(), selected.end());  // back to ascending index order like every PCL filter
       return selected;
     }
   }
@@ -172,7 +171,7 @@ pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_
     points.push_back({static_cast<std::uint64_t>(i), column});
   }
   const MapView map{geometry, mapper_->surface(), mapper_->improvement(), mapper_->pyramid()};
-  pcl::Indices selected;
+  pcl::Indices selected;  // ascending, like every PCL filter's: keep_points_by_map returns the ids so
   for (const std::uint64_t i : keep_points_by_map(points, amount, map)) selected.push_back(static_cast<pcl::index_t>(i));
   return selected;
 }

@@ -315,8 +315,8 @@ const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const 
 
 // `fired`: the first frame whose stop signal fired (the one that ends a -stop_on_signal run); the frames
 // processed after it may have made progress again, so the last frame's signal can read "continue".
-void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, const std::optional<FrameResult>& fired,
-                          const std::optional<FrameResult>& last) {
+void print_stream_summary(const PipelineStatistics& s, bool keeping, const char* stop_reason,
+                          const std::optional<FrameResult>& fired, const std::optional<FrameResult>& last) {
   if (fired && std::string(stop_reason) == kStopSignalReason)
     pcl::console::print_info("Stopped: %s (frame %llu: %s)\n", stop_reason,
                              static_cast<unsigned long long>(fired->frame_index + 1), fired->stop.reason.c_str());
@@ -329,14 +329,20 @@ void print_stream_summary(const PipelineStatistics& s, const char* stop_reason, 
       static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
       static_cast<unsigned long long>(s.interrupted),
       static_cast<unsigned long long>(s.grabber_errors), s.wall_seconds, s.processed_per_second());
-  pcl::console::print_info("Per frame [ms]: convert %.1f, keep %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
-                           s.mean_ms(s.convert_ms), s.mean_ms(s.keep_ms), s.mean_ms(s.insert_ms),
-                           s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
-  if (s.points_not_kept > 0)
-    pcl::console::print_info("Points: %llu received, %llu inserted, %llu not kept (-keep: chosen by the map)\n",
+  if (keeping) {
+    pcl::console::print_info("Per frame [ms]: convert %.1f, keep %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
+                             s.mean_ms(s.convert_ms), s.mean_ms(s.keep_ms), s.mean_ms(s.insert_ms),
+                             s.mean_ms(s.improvement_ms), s.mean_ms(s.regions_ms));
+    pcl::console::print_info("Points: %llu received, %llu inserted, %llu left out by -keep (invalid and outside the "
+                             "view included)\n",
                              static_cast<unsigned long long>(s.points_received),
                              static_cast<unsigned long long>(s.points_received - s.points_not_kept),
                              static_cast<unsigned long long>(s.points_not_kept));
+  } else {
+    pcl::console::print_info("Per frame [ms]: convert %.1f, insert+surface %.1f, improvement %.1f, regions %.1f\n",
+                             s.mean_ms(s.convert_ms), s.mean_ms(s.insert_ms), s.mean_ms(s.improvement_ms),
+                             s.mean_ms(s.regions_ms));
+  }
   if (!last) return;
   if (fired && std::string(stop_reason) != kStopSignalReason)
     pcl::console::print_info("Stop signal first fired at frame %llu: %s\n",
@@ -446,7 +452,7 @@ int run(const CommandLine& command_line) {
   const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
   if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
   if (view) finish_view(*view, screenshot.get(), pipeline.mapper(), last, pipeline.statistics().processed);
-  print_stream_summary(pipeline.statistics(), stop_reason, fired, last);
+  print_stream_summary(pipeline.statistics(), pipeline_options.keep_fraction < 1.0, stop_reason, fired, last);
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());
   // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.

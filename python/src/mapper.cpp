@@ -232,11 +232,10 @@ py::array_t<std::int64_t> keep_points_array(PyMapper& self, const py::object& po
   const KeepAmount amount =
       count ? KeepAmount::count(static_cast<std::size_t>(*count)) : KeepAmount::fraction(*fraction);
   const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
-  std::vector<std::uint64_t> kept = with_mapper(self, [&](Mapper& m) {
+  const std::vector<std::uint64_t> kept = with_mapper(self, [&](Mapper& m) {  // ascending
     const MapView map{m.geometry(), m.surface(), m.improvement(), m.pyramid()};
     return keep_points_by_map(points_on_rays(in.span, m.geometry()), amount, map);
   });
-  std::sort(kept.begin(), kept.end());
   py::array_t<std::int64_t> out(static_cast<py::ssize_t>(kept.size()));
   std::copy(kept.begin(), kept.end(), out.mutable_data());
   return out;

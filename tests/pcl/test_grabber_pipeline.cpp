@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <future>
 #include <thread>
 
@@ -138,12 +139,14 @@ TEST(GrabberPipeline, KeepFractionInsertsTheMapsChoiceAndCountsTheRest) {
   for (const std::size_t n : inserted) EXPECT_EQ(n, static_cast<std::size_t>(std::llround(0.1 * 64 * 48)));
   EXPECT_EQ(s.points_not_kept, s.points_received - expected_total);
   EXPECT_EQ(pipeline.mapper().surface().depth_m, expected_map.surface().depth_m);
-  EXPECT_GE(s.keep_ms, 0.0);
+  EXPECT_GT(s.keep_ms, 0.0);
   PipelineOptions bad;
-  for (const double f : {0.0, 1.5}) {
+  for (const double f : {0.0, 1.5, -0.5, std::numeric_limits<double>::quiet_NaN()}) {
     bad.keep_fraction = f;
     EXPECT_THROW(bad.validate(), InvalidParameter) << f;
   }
+  bad.keep_fraction = 1.0;
+  EXPECT_NO_THROW(bad.validate());
 }
 
 TEST(GrabberPipeline, NewestFrameWinsWhenTheWorkerFallsBehind) {

@@ -346,13 +346,15 @@ TEST_F(Tools, LiveKeepInsertsAShareOfEachFrameAndCountsTheRest) {
   unsigned long long received = 0, inserted = 0, not_kept = 0;
   const std::size_t at = kept.out.find("Points: ");
   ASSERT_NE(at, std::string::npos) << kept.out;
-  ASSERT_EQ(std::sscanf(kept.out.c_str() + at, "Points: %llu received, %llu inserted, %llu not kept", &received,
+  ASSERT_EQ(std::sscanf(kept.out.c_str() + at, "Points: %llu received, %llu inserted, %llu left out by -keep", &received,
                         &inserted, &not_kept), 3) << kept.out;
   EXPECT_EQ(received, 3ull * 640 * 480);
   EXPECT_EQ(inserted + not_kept, received);
   EXPECT_GT(inserted, received / 20);  // a tenth of the points with a ray
   EXPECT_LT(inserted, received / 8);
-  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + posed + " -o all").exit_code, 0);
+  const ToolRun all = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + posed + " -keep 1 -o all");  // every point
+  ASSERT_EQ(all.exit_code, 0) << all.err;
+  EXPECT_EQ(all.out.find("Points: "), std::string::npos) << all.out;
   EXPECT_NE(file_contents(folder_ / "keep/surface.pcd"), file_contents(folder_ / "all/surface.pcd"));
   for (const char* bad : {"-keep 0", "-keep 1.5", "-keep 0.1 -simulate " }) {
     const std::string args = std::string(bad) == "-keep 0.1 -simulate " ? std::string(bad) + posed + "/frame-000150.depth.png -o s"

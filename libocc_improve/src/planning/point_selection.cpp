@@ -103,7 +103,9 @@ std::vector<Candidate> candidates_of(const std::vector<PointOnRay>& points, cons
 // Sets every candidate's cell of `cells`.
 void assign_cells(std::vector<Candidate>& candidates, const SamplingCells& cells, const GridGeometry& g) {
   const std::vector<std::uint32_t> cell_x = quotients(g.width(), cells.side), cell_y = quotients(g.height(), cells.side);
-  for (Candidate& c : candidates) {
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    poll_stop(k);
+    Candidate& c = candidates[k];
     const std::uint32_t v = c.column / static_cast<ColumnIndex>(g.width()), u = c.column - v * static_cast<ColumnIndex>(g.width());
     c.cell = static_cast<std::size_t>(cell_y[v]) * static_cast<std::size_t>(cells.across) + cell_x[u];
   }
@@ -144,8 +146,10 @@ std::vector<std::uint32_t> first_rounds(const std::vector<Candidate>& candidates
   std::uint32_t rounds = 0;
   for (std::size_t taken = 0; taken < keep; ++rounds) taken += per_round[rounds];
   std::vector<std::uint32_t> out;
-  for (std::size_t k = 0; k < candidates.size(); ++k)
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    poll_stop(k);
     if (candidates[k].round < rounds) out.push_back(static_cast<std::uint32_t>(k));
+  }
   return out;
 }
 
@@ -182,7 +186,9 @@ std::vector<std::uint64_t> keep_points_by_map(const std::vector<PointOnRay>& poi
   rank_within_cells(candidates, cells.count(map.geometry.height()));
   std::vector<std::uint32_t> ranked = first_rounds(candidates, keep);
   // Round by round; within a round, the cells whose candidate is better first (a selection: the kept set
-  // needs no order among itself).
+  // needs no order among itself). The order is strict (two points of one ray never share a cell's round,
+  // and rank_key's spread rank is a bijection of the column), so the kept set is one and the same
+  // whatever the algorithm: PointSelection.ChoosesWhatTheStraightforwardOrderChooses checks it.
   const auto last = ranked.begin() + static_cast<std::ptrdiff_t>(keep);
   std::nth_element(ranked.begin(), last - 1, ranked.end(), [&](std::uint32_t a, std::uint32_t b) {
     const Candidate &x = candidates[a], &y = candidates[b];

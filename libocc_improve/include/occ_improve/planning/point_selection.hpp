@@ -64,7 +64,8 @@ struct KeepAmount {
 /// The ids of the points to keep (order above), ascending: `amount` of them, at most the points on an
 /// observable ray. Points on a ray that is not observable (NaN improvement: masked, or no pixel sees it;
 /// improvement.hpp) are never kept. InvalidParameter for a fraction outside [0, 1]; InvalidInput naming
-/// the first point whose column lies outside the grid, or a map whose size is not the grid's.
+/// the first point whose column lies outside the grid, a map whose size is not the grid's, or more than
+/// 2^32 - 1 points at once.
 /// Deterministic: the same points and map give the same ids. Polls Ctrl-C (Cancelled).
 std::vector<std::uint64_t> keep_points_by_map(const std::vector<PointOnRay>& points, KeepAmount amount,
                                               const MapView& map);

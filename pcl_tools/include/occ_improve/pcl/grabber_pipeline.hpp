@@ -80,10 +80,11 @@ struct PipelineStatistics {
   std::uint64_t processed = 0;  ///< frames inserted
   std::uint64_t dropped = 0;    ///< replaced by a newer frame before the worker took them
   std::uint64_t rejected = 0;   ///< bad frames (see the header comment)
-  std::uint64_t interrupted = 0;  ///< frames whose insertion a stop request (Ctrl-C) cut short: partly inserted
+  std::uint64_t interrupted = 0;  ///< frames a stop request (Ctrl-C) cut short: partly inserted, or not at all (during keep_fraction's choice)
   std::uint64_t grabber_errors = 0;  ///< start/stop failures and errors reported by the source
-  /// Points of processed frames: all of them (valid or not), and those keep_fraction left out (points
-  /// without a ray included: with keep_fraction < 1 only the kept points reach the mapper's report).
+  /// Points of processed frames: all of them (valid or not), and those not inserted because of
+  /// keep_fraction (points without a ray included: with keep_fraction < 1 only the kept points reach the
+  /// mapper, whose report then counts no invalid point).
   std::uint64_t points_received = 0, points_not_kept = 0;
   std::uint64_t in_flight = 0;  ///< waiting or being processed (0 once stopped)
   /// Summed milliseconds over processed frames, per stage (insert_ms includes the surface update).
