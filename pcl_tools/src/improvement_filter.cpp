@@ -80,7 +80,7 @@ bool ImprovementFilter<PointT>::parametersValid() const {
 }
 
 template <typename PointT>
-bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) {
+bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement, std::vector<ColumnIndex>& point_column) {
   const auto& cloud = *input_;
   last_report_ = {};
   if (update_map_) {
@@ -111,6 +111,7 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) 
   improvement_cloud_.is_dense = false;
   improvement_cloud_.header = cloud.header;
   point_improvement.assign(cloud.size(), nan);
+  point_column.assign(cloud.size(), 0);
   for (std::size_t i = 0; i < cloud.size(); ++i) {
     const PointT& p = cloud[i];
     PointImprovement& out = improvement_cloud_[i];
@@ -120,6 +121,7 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) 
     out.surface_depth = out.probability = out.improvement = nan;
     ColumnIndex column = 0;
     if (!geometry.column_of(p.x, p.y, p.z, column)) continue;
+    point_column[i] = column;
     out.surface_depth = surface.depth_m[column];
     out.probability = surface.probability[column];
     out.improvement = improvement.value[column];
@@ -129,7 +131,8 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement) 
 }
 
 template <typename PointT>
-pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_improvement) const {
+pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_improvement,
+                                               const std::vector<ColumnIndex>& point_column) const {
   pcl::Indices with_ray;
   with_ray.reserve(indices_->size());
   for (const auto i : *indices_)
@@ -148,7 +151,7 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
     case ImprovementSelection::top_count:
     case ImprovementSelection::top_fraction: {
       // with_ray holds the observable points: the base keep_points_by_map counts a fraction of.
-      selected = stratified_top(with_ray, selection_ == ImprovementSelection::top_count
+      selected = stratified_top(with_ray, point_column, selection_ == ImprovementSelection::top_count
                                               ? KeepAmount::count(top_count_)
                                               : KeepAmount::fraction(top_fraction_));
       return selected;
@@ -160,17 +163,13 @@ pcl::Indices ImprovementFilter<PointT>::select(const std::vector<float>& point_i
 // The top modes' order (header: "Top modes"): keep_points_by_map (point_selection.hpp) over the points
 // that have a ray.
 template <typename PointT>
-pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray, KeepAmount amount) const {
-  const GridGeometry& geometry = mapper_->geometry();
+pcl::Indices ImprovementFilter<PointT>::stratified_top(const pcl::Indices& with_ray,
+                                                       const std::vector<ColumnIndex>& point_column,
+                                                       KeepAmount amount) const {
   std::vector<PointOnRay> points;
   points.reserve(with_ray.size());
-  for (const auto i : with_ray) {
-    const PointT& p = (*input_)[static_cast<std::size_t>(i)];
-    ColumnIndex column = 0;
-    geometry.column_of(p.x, p.y, p.z, column);  // has a ray: its improvement is not NaN
-    points.push_back({static_cast<std::uint64_t>(i), column});
-  }
-  const MapView map{geometry, mapper_->surface(), mapper_->improvement(), mapper_->pyramid()};
+  for (const auto i : with_ray) points.push_back({static_cast<std::uint64_t>(i), point_column[static_cast<std::size_t>(i)]});
+  const MapView map{mapper_->geometry(), mapper_->surface(), mapper_->improvement(), mapper_->pyramid()};
   pcl::Indices selected;  // ascending, like every PCL filter's: keep_points_by_map returns the ids so
   for (const std::uint64_t i : keep_points_by_map(points, amount, map)) selected.push_back(static_cast<pcl::index_t>(i));
   return selected;
@@ -190,7 +189,8 @@ void ImprovementFilter<PointT>::applyFilter(pcl::Indices& indices) {
     return parametersValid();
   }();
   std::vector<float> point_improvement;
-  if (!ok || !evaluate(point_improvement)) {
+  std::vector<ColumnIndex> point_column;
+  if (!ok || !evaluate(point_improvement, point_column)) {
     // Nothing selected: every considered point counts as removed (keep-organized output is all NaN).
     if (extract_removed_indices_) *removed_indices_ = *indices_;
     return;
@@ -198,7 +198,7 @@ void ImprovementFilter<PointT>::applyFilter(pcl::Indices& indices) {
 
   for (const auto i : *indices_)
     if (std::isnan(point_improvement[i])) ++points_without_ray_;
-  const pcl::Indices selected = select(point_improvement);
+  const pcl::Indices selected = select(point_improvement, point_column);
 
   // Walk the considered indices once, in their order: a point goes to the output when it is selected
   // (normal) or has a ray and is not selected (negative); everything else is removed.

@@ -17,24 +17,25 @@ namespace {
 constexpr int kTieLevel = 1;  ///< pyramid level of the tie-breaking block (4 x 4 columns)
 
 struct Candidate {
-  bool sampled;  ///< its ray holds a depth sample (is_depth_sample)
+  std::uint64_t ray_key, point;
   float improvement, block_mean;
-  std::uint64_t ray_key, point_key;
   ColumnIndex column;
-  std::size_t cell;      ///< its SamplingCells cell
+  std::uint32_t u, v;    ///< the column's position in the grid
+  std::uint32_t cell;    ///< its SamplingCells cell (cells <= columns < 2^32)
   std::uint32_t repeat;  ///< how many points of the same ray come before it
   std::uint32_t round;   ///< its rank within its cell: the round that takes it
-  std::uint64_t point;
+  bool sampled;          ///< its ray holds a depth sample (is_depth_sample)
 };
 
 // Better first, by ray (header, "better"): a ray with a sample, then the ray's improvement, its block's
-// mean improvement, its spread rank, then the point's own spread rank.
+// mean improvement, its spread rank. No two rays tie on the spread rank (a bijection of the column), and
+// two points of one ray differ in `repeat` and so in `round`, which every order compares first: the
+// point's own key is never needed.
 bool better(const Candidate& a, const Candidate& b) {
   if (a.sampled != b.sampled) return a.sampled;
   if (a.improvement != b.improvement) return a.improvement > b.improvement;
   if (a.block_mean != b.block_mean) return a.block_mean > b.block_mean;
-  if (a.ray_key != b.ray_key) return a.ray_key > b.ray_key;
-  return a.point_key > b.point_key;
+  return a.ray_key > b.ray_key;
 }
 
 void check_maps(const std::vector<PointOnRay>& points, const MapView& map) {
@@ -47,11 +48,6 @@ void check_maps(const std::vector<PointOnRay>& points, const MapView& map) {
     if (p.column >= g.column_count())
       throw InvalidInput("keep_points_by_map: point " + std::to_string(p.point) + " falls in column " +
                          std::to_string(p.column) + ", outside the grid's " + std::to_string(g.column_count()));
-}
-
-// A spread key from a 64-bit id (rank_key hashes 32 bits: the halves folded, so ids 2^32 apart differ).
-std::uint64_t point_key(std::uint64_t id) {
-  return rank_key(0.0f, static_cast<ColumnIndex>(id ^ (id >> 32) ^ (id >> 40)));
 }
 
 // Integer division by a fixed divisor for every index below `count`, as a table (a division per point
@@ -94,8 +90,8 @@ std::vector<Candidate> candidates_of(const std::vector<PointOnRay>& points, cons
     const float block_mean = means[block_y[v] * blocks_across + block_x[u]];
     const std::uint32_t repeat = points_of_ray[p.column]++;
     if (repeat == 0) ++rays;
-    candidates.push_back({is_depth_sample(map.surface, p.column), value, block_mean, rank_key(value, p.column),
-                          point_key(p.point), p.column, 0, repeat, 0, p.point});
+    candidates.push_back({rank_key(value, p.column), p.point, value, block_mean, p.column, u, v, 0, repeat, 0,
+                          is_depth_sample(map.surface, p.column)});
   }
   return candidates;
 }
@@ -103,11 +99,11 @@ std::vector<Candidate> candidates_of(const std::vector<PointOnRay>& points, cons
 // Sets every candidate's cell of `cells`.
 void assign_cells(std::vector<Candidate>& candidates, const SamplingCells& cells, const GridGeometry& g) {
   const std::vector<std::uint32_t> cell_x = quotients(g.width(), cells.side), cell_y = quotients(g.height(), cells.side);
+  const auto across = static_cast<std::uint32_t>(cells.across);
   for (std::size_t k = 0; k < candidates.size(); ++k) {
     poll_stop(k);
     Candidate& c = candidates[k];
-    const std::uint32_t v = c.column / static_cast<ColumnIndex>(g.width()), u = c.column - v * static_cast<ColumnIndex>(g.width());
-    c.cell = static_cast<std::size_t>(cell_y[v]) * static_cast<std::size_t>(cells.across) + cell_x[u];
+    c.cell = cell_y[c.v] * across + cell_x[c.u];
   }
 }
 

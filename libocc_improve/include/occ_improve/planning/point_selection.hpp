@@ -17,9 +17,9 @@
 //    is worth more than a first sample beside it; a cell without samples takes its unmeasured rays, so
 //    newly seen parts of the view are covered first. Then the ray's improvement (the least settled
 //    sample first), the mean improvement of its block of 4 x 4 columns (the multi-scale improvement,
-//    multiscale.hpp: of two unseen rays, the one in the less known block first), the ray's spread rank
-//    (rank_key: a tie is spread over the view, never broken by the points' order, which on an organized
-//    frame would keep the top rows), then the point's own spread rank.
+//    multiscale.hpp: of two unseen rays, the one in the less known block first), then the ray's spread
+//    rank (rank_key: a tie is spread over the view, never broken by the points' order, which on an
+//    organized frame would keep the top rows).
 #include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/maps/improvement.hpp"

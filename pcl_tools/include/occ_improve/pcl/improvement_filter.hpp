@@ -88,11 +88,13 @@ protected:
   void applyFilter(pcl::Indices& indices) override;
 
 private:
-  /// Fills per-point improvement (NaN without a ray) and the improvement cloud; false on error.
-  bool evaluate(std::vector<float>& point_improvement);
+  /// Fills per-point improvement (NaN without a ray), the point's column (meaningful where the improvement
+  /// is not NaN) and the improvement cloud; false on error.
+  bool evaluate(std::vector<float>& point_improvement, std::vector<ColumnIndex>& point_column);
   /// Indices (into input_) selected in normal mode, ascending.
-  pcl::Indices select(const std::vector<float>& point_improvement) const;
-  pcl::Indices stratified_top(const pcl::Indices& with_ray, KeepAmount amount) const;
+  pcl::Indices select(const std::vector<float>& point_improvement, const std::vector<ColumnIndex>& point_column) const;
+  pcl::Indices stratified_top(const pcl::Indices& with_ray, const std::vector<ColumnIndex>& point_column,
+                              KeepAmount amount) const;
   bool parametersValid() const;
 
   std::shared_ptr<Mapper> mapper_;
