@@ -1,5 +1,5 @@
-// Insertion, step 2 (eq. 2): one measurement's truncated OPDF added to a column (the column kernel and
-// its vector loops, with eq. 1's skip bounds), and a band of tile rows updated tile by tile. Step 1
+// Insertion, step 2 (eq. 2): measurements' truncated OPDFs added to a column (the column kernel and its
+// vector loops, with eq. 1's skip bounds), and a band of tile rows updated tile by tile. Step 1
 // (points -> measurements, band scheduling): measurements.cpp; the public entry points: insert.cpp;
 // depth images: depth_image.cpp.
 #include "integrate/column_updates.hpp"
@@ -107,21 +107,37 @@ float* aligned_floats(std::vector<float>& storage, std::size_t count) {
   return storage.data() + (misalignment ? (kLaneBlockBytes - misalignment) / sizeof(float) : 0);
 }
 
+// Where one (measurement, column) pair of a call updates the column, decided before any pair of the column
+// is applied (clamped mode): bins [first, end) are evaluated, none when first >= end.
+struct PairPlan {
+  std::uint32_t measurement;  ///< the pair's measurement in the tile's list
+  float a;                    ///< e^-B, or 1 where B > kMaxFactoredB is folded into the pair's own terms
+  double angular_term;        ///< B
+  int first, end;
+  std::size_t own_terms;      ///< B > kMaxFactoredB: where the pair's terms start in the tile's pool
+  const float *e, *g;         ///< the terms from bin block_floor(first) on, once computed
+};
+
 // Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
 // with clamping after each update, without a log per voxel and measurement (one exp and one log per voxel
-// the call reaches, ColumnScratch).
+// the call reaches, ColumnScratch). One call applies a column's pairs in input order (one call per column:
+// the per-pair work is the vector loop alone).
 OCC_IMPROVE_VECTOR_KERNEL
-void multiply_odds_clamped(float* o, const float* e, const float* g, int first, int end, float a, float omin,
-                           float omax) {
-  const int from = block_floor(first), to = block_ceil(end);
-  o = block_aligned(o);
-  e = block_aligned(e);
-  g = block_aligned(g);
-  for (int i = from; i < to; ++i) {
-    const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
-    const float v = o[i] * (odds.n / odds.m);
-    const float clamped = v < omin ? omin : (v > omax ? omax : v);
-    o[i] = i >= first && i < end ? clamped : o[i];
+void multiply_odds_clamped(float* o, const PairPlan* pairs, std::size_t count, float omin, float omax) {
+  for (std::size_t k = 0; k < count; ++k) {
+    const PairPlan& p = pairs[k];
+    if (p.first >= p.end) continue;
+    const int from = block_floor(p.first), first = p.first - from, end = p.end - from, to = block_ceil(p.end) - from;
+    float* row = block_aligned(o + from);
+    const float* e = block_aligned(p.e);
+    const float* g = block_aligned(p.g);
+    const float a = p.a;
+    for (int i = 0; i < to; ++i) {
+      const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
+      const float v = row[i] * (odds.n / odds.m);
+      const float clamped = v < omin ? omin : (v > omax ? omax : v);
+      row[i] = i >= first && i < end ? clamped : row[i];
+    }
   }
 }
 
@@ -154,23 +170,29 @@ void add_logit(float* w, const float* e, const float* g, int n, float a) {
   for (int i = 0; i < n; ++i) w[i] += logit_from_terms(e[i], g[i], a);
 }
 
-// One measurement's bin terms, computed on demand over the bins its columns need, in whole blocks of
-// kLaneBlock bins (the depth axis padded to whole blocks: the padding's terms are never read as bins).
+// The depth axis's bin centres, padded to whole blocks by repeating the last (the padding's terms are
+// computed but never read as bins).
+std::vector<double> padded_centres(const DepthAxis& depth) {
+  std::vector<double> centres(depth.centres().begin(), depth.centres().end());
+  centres.resize(static_cast<std::size_t>(block_ceil(depth.bins())), depth.centres().back());
+  return centres;
+}
+
+// Exact mode: one measurement's bin terms, computed on demand over the bins its columns need, in whole
+// blocks of kLaneBlock bins (the depth axis padded to whole blocks: the padding's terms are never read as bins).
 class MeasurementTerms {
 public:
   explicit MeasurementTerms(const DepthAxis& depth) : depth_(depth) {
     const auto n = static_cast<std::size_t>(block_ceil(depth.bins()));
     e_ = aligned_floats(e_storage_, n);
     g_ = aligned_floats(g_storage_, n);
-    centres_.assign(depth.centres().begin(), depth.centres().end());
-    centres_.resize(n, depth.centres().back());
+    centres_ = padded_centres(depth);
   }
 
   void reset(double rho_bar, double sigma, double folded_angular_term = 0.0) {
     rho_bar_ = rho_bar;
     inv_sigma_ = 1.0 / sigma;
     folded_angular_term_ = static_cast<float>(folded_angular_term);
-    run_keep_ = depth_.first_centre_above(rho_bar + sigma * kNonPositiveT);
     lo_ = hi_ = 0;
   }
   void ensure(int first, int last) {
@@ -192,8 +214,6 @@ public:
       hi_ = last;
     }
   }
-  /// Bins below it have t <= kNonPositiveT (where logit P_s <= 0 for every B).
-  int run_keep() const { return run_keep_; }
   const float* e() const { return e_; }
   const float* g() const { return g_; }
 
@@ -207,14 +227,59 @@ private:
   std::vector<double> centres_;  ///< the axis's, the padding repeating the last
   double rho_bar_ = 0, inv_sigma_ = 1;
   float folded_angular_term_ = 0;
-  int run_keep_ = 0, lo_ = 0, hi_ = 0;
+  int lo_ = 0, hi_ = 0;
+};
+
+// The bin terms of a tile's measurements (clamped mode), each over the whole blocks of bins its pairs
+// evaluate, in one pool: requested while the tile's columns are planned, then computed together.
+class TileTerms {
+public:
+  explicit TileTerms(const DepthAxis& depth) : centres_(padded_centres(depth)) {}
+
+  void clear() {
+    requests_.clear();
+    size_ = 0;
+  }
+  /// Asks for bins [first, end) (first on a block boundary; end widened to one) of the terms at rho_bar,
+  /// sigma (with B folded in where folded_angular_term != 0); returns where they start in the pool.
+  std::size_t reserve(int first, int end, double rho_bar, double sigma, double folded_angular_term) {
+    const std::size_t offset = size_;
+    const int count = block_ceil(end) - first;
+    requests_.push_back({offset, first, count, rho_bar, sigma, static_cast<float>(folded_angular_term)});
+    size_ += static_cast<std::size_t>(count);
+    return offset;
+  }
+  void compute() {
+    e_ = aligned_floats(e_storage_, size_);
+    g_ = aligned_floats(g_storage_, size_);
+    for (const Request& r : requests_)
+      opdf_bin_terms(centres_.data() + r.first, r.count, r.rho_bar, 1.0 / r.sigma, r.folded_angular_term, e_ + r.offset,
+                     g_ + r.offset);
+  }
+  /// The terms from `offset`: the request's first bin is element 0 (block-aligned).
+  const float* e(std::size_t offset) const { return e_ + offset; }
+  const float* g(std::size_t offset) const { return g_ + offset; }
+
+private:
+  struct Request {
+    std::size_t offset;
+    int first, count;
+    double rho_bar, sigma;
+    float folded_angular_term;
+  };
+  std::vector<double> centres_;
+  std::vector<Request> requests_;
+  std::size_t size_ = 0;
+  std::vector<float> e_storage_, g_storage_;
+  float *e_ = nullptr, *g_ = nullptr;
 };
 
 // One column's voxels while a call updates it: the whole depth axis in a scratch row. Only [run_end, tail)
 // is materialised: bins below run_end hold the leading L_min run (clamped mode), bins from tail on are
 // untouched (L = 0). Clamped mode holds [run_end, odds_end) in odds e^L (one exp and one log per voxel
 // and call instead of a log per voxel and measurement): the bins the call's measurements have reached so
-// far. The bins behind stay in log-odds and are stored back bit for bit: a conversion there and back
+// far (clamped mode plans the call's pairs first and converts those bins once, ColumnKernel::plan). The
+// bins behind stay in log-odds and are stored back bit for bit: a conversion there and back
 // would move them by up to 5e-7 + 2e-7 |L| per call, and a small shot's columns are mostly such bins. Exact mode
 // holds log-odds throughout. A column is loaded once per call, receives all its measurements of the call
 // in input order, and is stored back once, so its window is neither reallocated nor shifted per
@@ -226,7 +291,15 @@ struct ColumnScratch {
   bool loaded = false;
 };
 
-// Adds one measurement's truncated OPDF to one column.
+// A column's plan for a call (clamped mode): what its scratch row holds before the pairs are applied.
+struct ColumnPlan {
+  int lo, hi;              ///< the bins some pair evaluates: [lo, hi), none when lo >= hi
+  int odds_from;           ///< the run ends here at the first evaluation: [lo, odds_from) hold L_min
+  int materialised_end;    ///< [odds_from, materialised_end) hold stored log-odds, bins from it L = 0
+  int run_end, tail;       ///< the column's run and tail when no pair evaluates
+};
+
+// Adds measurements' truncated OPDFs to one column.
 class ColumnKernel {
 public:
   explicit ColumnKernel(const ColumnGrid& grid) : depth_(grid.geometry().depth()) {
@@ -270,64 +343,16 @@ public:
     return {column, s.run_end, s.run_end > 0 ? lmin_ : 0.0f, s.v + s.run_end, static_cast<std::uint32_t>(s.tail - s.run_end)};
   }
 
-  /// `terms` are the measurement's, with a = e^-B the column's factor (or B folded in and a = 1).
-  void apply(ColumnScratch& s, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
-             float a) const {
-    const int end = depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
-    if (clamped_)
-      apply_clamped(s, end, rho_bar, angular_term, sigma, a, terms);
-    else
-      apply_exact(s, end, rho_bar, angular_term, sigma, a, terms);
+  /// Bins from the first centre above it are beyond the support's end for angular term B (eq. 1's skip).
+  int support_end(double rho_bar, double angular_term, double sigma) const {
+    return depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
   }
 
-private:
-  static void extend_tail(ColumnScratch& s, int end, float fill) {
-    if (end <= s.tail) return;
-    std::fill(s.v + s.tail, s.v + end, fill);
-    s.tail = end;
-  }
-
-  void apply_clamped(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
-                     MeasurementTerms& terms) const {
-    float* o = s.v;
-    // 1. The leading L_min run only changes where t > kNonPositiveT: materialise it from there.
-    const int run_keep = terms.run_keep();
-    if (angular_term >= kNegligibleB && s.run_end >= run_keep) return;
-    if (s.run_end > run_keep && run_keep < end) {
-      std::fill(o + run_keep, o + s.run_end, omin_);
-      s.run_end = run_keep;
-    }
-    // 2. Nothing materialised means untouched voxels (L = 0) from the run's end: there the bound on
-    //    logit P_s for t <= -3 - B/2 is a depth threshold below which they end at L_min without
-    //    evaluation. (Materialised voxels are simply evaluated: a vector update is cheaper than testing
-    //    them one by one.)
-    int first = s.run_end;
-    if (s.run_end == s.tail) {
-      const int fresh = std::min(depth_.first_centre_above(rho_bar + sigma * to_lmin_offset_sigmas(angular_term, lmin_)), end);
-      if (fresh > first) first = s.run_end = s.tail = s.odds_end = fresh;
-    }
-    // 3. The remaining bins up to the support's end, in odds (materialised ones converted on first reach,
-    //    new ones L = 0, odds 1), evaluated; leading voxels at the lower clamp join the run (in odds, then
-    //    in log-odds behind).
-    if (first >= end) return;
-    if (end > s.odds_end) {
-      const int materialised_end = std::min(end, s.tail);
-      if (materialised_end > s.odds_end)
-        log_odds_to_odds(o, s.odds_end, materialised_end, omin_, omax_, lmin_, lmax_);
-      extend_tail(s, end, 1.0f);
-      s.odds_end = end;
-    }
-    terms.ensure(first, end);
-    multiply_odds_clamped(o, terms.e(), terms.g(), first, end, a, omin_, omax_);
-    while (s.run_end < s.odds_end && o[s.run_end] <= omin_) ++s.run_end;
-    if (s.run_end == s.odds_end) {
-      while (s.run_end < s.tail && o[s.run_end] <= lmin_) ++s.run_end;
-      s.odds_end = s.run_end;
-    }
-  }
-
-  void apply_exact(ColumnScratch& s, int end, double rho_bar, double angular_term, double sigma, float a,
-                   MeasurementTerms& terms) const {
+  /// Exact mode: adds one measurement to the column. `terms` are the measurement's, with a = e^-B the
+  /// column's factor (or B folded in and a = 1).
+  void apply_exact(ColumnScratch& s, double rho_bar, double angular_term, double sigma, MeasurementTerms& terms,
+                   float a) const {
+    const int end = support_end(rho_bar, angular_term, sigma);
     const double t_linear = (kLinearU - 4.0 - angular_term) / 2.0;
     const int linear_end = std::min(depth_.first_centre_above(rho_bar + sigma * t_linear), end);
     extend_tail(s, end, 0.0f);
@@ -337,6 +362,93 @@ private:
     for (int b = 0; b < linear_end; ++b) w[b] += static_cast<float>(offset + slope * (centres[b] - rho_bar));
     terms.ensure(linear_end, end);
     add_logit(w + linear_end, terms.e() + linear_end, terms.g() + linear_end, end - linear_end, a);
+  }
+
+  /// Clamped mode, after load and extend_run: which bins each of the column's pairs (in input order)
+  /// evaluates. Applying every pair to every bin in front of its support's end would give the same
+  /// column; a pair skips exactly the bins where its update cannot change the clamped result:
+  ///  a) bins of the leading L_min run where its t <= kNonPositiveT (logit P_s <= 0 there);
+  ///  b) bins below bound b) of a column with nothing materialised (they end at L_min: they join the run);
+  ///  b') all of a pair with B >= kNegligibleB whose support lies in the run (its end is in front of
+  ///     t = kNonPositiveT, so a) covers it).
+  /// The run is followed as the pairs materialise it (a pair that reaches into it with t > kNonPositiveT
+  /// takes it back from there), not as updates clamp voxels into it: a pair may then evaluate run voxels
+  /// it could have skipped by a), which leaves them at L_min. `run_keep(p)`: the first bin with t >
+  /// kNonPositiveT for p's measurement; `measurement_of(p)`: its rho and sigma.
+  template <typename RunKeep, typename MeasurementOf>
+  ColumnPlan plan(const ColumnScratch& s, PairPlan* pairs, std::size_t count, RunKeep&& run_keep,
+                  MeasurementOf&& measurement_of) const {
+    ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0};
+    int run_end = s.run_end, tail = s.tail, odds_end = s.odds_end;
+    for (std::size_t i = 0; i < count; ++i) {
+      PairPlan& p = pairs[i];
+      p.first = p.end;
+      const int keep = run_keep(p);
+      if (p.angular_term >= kNegligibleB && run_end >= keep) continue;  // b')
+      if (run_end > keep && keep < p.end) run_end = keep;                 // a): the run taken back from keep
+      if (run_end == tail) {                                              // b)
+        const Measurement& m = measurement_of(p);
+        const int fresh = std::min(depth_.first_centre_above(m.rho + m.sigma * to_lmin_offset_sigmas(p.angular_term, lmin_)), p.end);
+        if (fresh > run_end) run_end = tail = odds_end = fresh;
+      }
+      if (run_end >= p.end) continue;
+      p.first = run_end;
+      if (c.lo > c.hi) {
+        c.odds_from = odds_end;
+        c.materialised_end = tail;
+      }
+      c.lo = std::min(c.lo, run_end);
+      c.hi = std::max(c.hi, p.end);
+      tail = odds_end = std::max(odds_end, p.end);  // reached: in odds, materialised
+    }
+    c.run_end = run_end;
+    c.tail = tail;
+    return c;
+  }
+
+  /// Clamped mode: the scratch row as the plan's first evaluation finds it, in odds over [lo, hi).
+  void to_odds(ColumnScratch& s, const ColumnPlan& c) const {
+    float* o = s.v;
+    if (c.lo < c.odds_from) std::fill(o + c.lo, o + c.odds_from, omin_);
+    const int converted_end = std::min(c.hi, c.materialised_end);
+    if (c.odds_from < converted_end) log_odds_to_odds(o, c.odds_from, converted_end, omin_, omax_, lmin_, lmax_);
+    const int untouched = std::max(c.odds_from, c.materialised_end);
+    if (untouched < c.hi) std::fill(o + untouched, o + c.hi, 1.0f);
+  }
+
+  /// Clamped mode: the column's pairs (their terms resolved), in input order.
+  void multiply(ColumnScratch& s, const PairPlan* pairs, std::size_t count) const {
+    multiply_odds_clamped(s.v, pairs, count, omin_, omax_);
+  }
+
+  /// Clamped mode, after the plan's pairs: the leading voxels at the lower clamp join the run (in odds,
+  /// then in log-odds behind), and the row's state is ready for contents().
+  void close(ColumnScratch& s, const ColumnPlan& c) const {
+    if (c.lo >= c.hi) {
+      s.run_end = s.odds_end = c.run_end;
+      s.tail = c.tail;
+      return;
+    }
+    const float* o = s.v;
+    // The row holds odds up to the last bin evaluated or the run's end at the first evaluation (a pair
+    // that took the run back and ended in front of it leaves the rest of that stretch at L_min, in odds).
+    const int odds_end = std::max(c.hi, c.odds_from);
+    int run_end = c.lo;
+    while (run_end < odds_end && o[run_end] <= omin_) ++run_end;
+    s.tail = std::max(c.materialised_end, c.hi);
+    s.odds_end = odds_end;
+    if (run_end == odds_end) {
+      while (run_end < s.tail && o[run_end] <= lmin_) ++run_end;
+      s.odds_end = run_end;
+    }
+    s.run_end = run_end;
+  }
+
+private:
+  static void extend_tail(ColumnScratch& s, int end, float fill) {
+    if (end <= s.tail) return;
+    std::fill(s.v + s.tail, s.v + end, fill);
+    s.tail = end;
   }
 
   const DepthAxis& depth_;
@@ -381,13 +493,15 @@ private:
   }
 };
 
-// One tile's columns while its measurements are applied: a column is loaded on its first measurement and
-// stored after the tile's last. Within the tile, a measurement's depth terms are computed once for all its
-// columns, and B = B_azimuth + B_elevation, e^-B = e^-B_azimuth e^-B_elevation, once per row and column.
+// One tile's columns while its measurements are applied: each column is loaded once, receives its
+// measurements in input order and is stored after the tile's last. Within the tile, a measurement's depth
+// terms are computed once for all its columns, and B = B_azimuth + B_elevation, e^-B = e^-B_azimuth
+// e^-B_elevation, once per row and column. Clamped mode (the default) goes a column at a time
+// (apply_clamped), exact mode a measurement at a time (apply_exact).
 class TileUpdate {
 public:
   TileUpdate(ColumnGrid& grid, const SensorModel& model, std::vector<float>& scratch_rows)
-      : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()),
+      : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()), tile_terms_(g_.depth()),
         inv_sigma_azimuth_(1.0 / model.sigma_horizontal(g_.binning())),
         inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())), lmin_(grid.log_odds_min()) {
     // Rows of whole lane blocks, each starting on a block boundary: the kernel's loops run over whole blocks.
@@ -427,30 +541,47 @@ public:
     to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(azimuth_b + elevation_b, lmin_));
   }
 
-  void apply(const Measurement& m) {
-    const TileColumns r = columns_of(m);
-    const double sigma = m.sigma;
-    terms_.reset(m.rho, sigma);
-    for (int a = r.a0; a <= r.a1; ++a) {
-      azimuth_b_[a - a_first_] = azimuth_term(a, m);
-      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-azimuth_b_[a - a_first_]));
-    }
-    for (int e = r.e0; e <= r.e1; ++e) {
-      const double elevation_b = elevation_term(e, m);
-      const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
-      for (int a = r.a0; a <= r.a1; ++a) {
-        const int i = (e - e_first_) * kTile + (a - a_first_);
-        ColumnScratch& s = scratch_[i];
-        if (!s.loaded) load(g_.column(a, e), i);
-        const double b = azimuth_b_[a - a_first_] + elevation_b;
-        if (b <= kMaxFactoredB) {
-          kernel_.apply(s, m.rho, b, sigma, terms_, azimuth_factor_[a - a_first_] * elevation_factor);
-        } else {
-          column_terms_.reset(m.rho, sigma, b);
-          kernel_.apply(s, m.rho, b, sigma, column_terms_, 1.0f);
-        }
-        ++column_updates_;
+  /// Exact mode: adds one of the tile's measurements to its columns (loading each on its first).
+  void apply_exact(const Measurement& m) {
+    terms_.reset(m.rho, m.sigma);
+    for_each_column_of(m, [&](int a, int e, double b, float factor) {
+      const int i = slot(a, e);
+      ColumnScratch& s = scratch_[i];
+      if (!s.loaded) load(g_.column(a, e), i);
+      if (b <= kMaxFactoredB) {
+        kernel_.apply_exact(s, m.rho, b, m.sigma, terms_, factor);
+      } else {
+        column_terms_.reset(m.rho, m.sigma, b);
+        kernel_.apply_exact(s, m.rho, b, m.sigma, column_terms_, 1.0f);
       }
+      ++column_updates_;
+    });
+  }
+
+  /// Clamped mode: all the tile's measurements (slots[items[k]], k < count, in input order), a column at
+  /// a time. The pairs are listed per column, every loaded column plans its pairs (ColumnKernel::plan),
+  /// each measurement's depth terms are computed once over the bins its pairs evaluate, and then each
+  /// column's row receives its pairs in input order, converted to odds once and scanned for its run once:
+  /// the bookkeeping is per column, not per pair.
+  void apply_clamped(const std::uint32_t* items, std::size_t count, const Measurement* slots) {
+    list_pairs(items, count, slots);
+    plan_columns();
+    compute_terms();
+    for (int i = 0; i < kTile * kTile; ++i) {
+      if (pairs_[i].empty()) continue;
+      ColumnScratch& s = scratch_[i];
+      kernel_.to_odds(s, plans_[i]);
+      for (PairPlan& p : pairs_[i]) {
+        if (p.first >= p.end) continue;
+        const TileMeasurement& tm = measurements_[p.measurement];
+        const std::size_t terms = p.angular_term <= kMaxFactoredB
+                                      ? tm.terms + static_cast<std::size_t>(block_floor(p.first) - tm.lo)
+                                      : p.own_terms;
+        p.e = tile_terms_.e(terms);
+        p.g = tile_terms_.g(terms);
+      }
+      kernel_.multiply(s, pairs_[i].data(), pairs_[i].size());
+      kernel_.close(s, plans_[i]);
     }
   }
 
@@ -492,6 +623,89 @@ private:
     const double d = (g_.elevation().centre(e) - m.elevation) * inv_sigma_elevation_;
     return d * d;
   }
+  int slot(int a, int e) const { return (e - e_first_) * kTile + (a - a_first_); }
+
+  // visit(a, e, B, e^-B) for each of m's columns in the tile, row by row: B = B_azimuth + B_elevation and
+  // e^-B = e^-B_azimuth e^-B_elevation, each factor computed once per column and once per row.
+  template <typename Visit>
+  void for_each_column_of(const Measurement& m, Visit&& visit) {
+    const TileColumns r = columns_of(m);
+    for (int a = r.a0; a <= r.a1; ++a) {
+      azimuth_b_[a - a_first_] = azimuth_term(a, m);
+      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-azimuth_b_[a - a_first_]));
+    }
+    for (int e = r.e0; e <= r.e1; ++e) {
+      const double elevation_b = elevation_term(e, m);
+      const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
+      for (int a = r.a0; a <= r.a1; ++a)
+        visit(a, e, azimuth_b_[a - a_first_] + elevation_b, azimuth_factor_[a - a_first_] * elevation_factor);
+    }
+  }
+
+  // A measurement of the tile (clamped mode) and the bins [lo, hi) its factored pairs evaluate, widened to
+  // whole blocks once planned; its terms start at `terms` in the pool.
+  struct TileMeasurement {
+    const Measurement* m;
+    int run_keep;  ///< the first bin with t > kNonPositiveT
+    int lo, hi;
+    std::size_t terms;
+  };
+
+  // Each column's pairs, in input order, with where each ends.
+  void list_pairs(const std::uint32_t* items, std::size_t count, const Measurement* slots) {
+    for (auto& pairs : pairs_) pairs.clear();
+    measurements_.resize(count);
+    for (std::size_t k = 0; k < count; ++k) {
+      const Measurement& m = slots[items[k]];
+      measurements_[k] = {&m, g_.depth().first_centre_above(m.rho + m.sigma * kNonPositiveT),
+                          std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0};
+      for_each_column_of(m, [&](int a, int e, double b, float factor) {
+        const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
+        pairs_[slot(a, e)].push_back(
+            {static_cast<std::uint32_t>(k), a_factor, b, 0, kernel_.support_end(m.rho, b, m.sigma), 0, nullptr, nullptr});
+        ++column_updates_;
+      });
+    }
+  }
+
+  // Loads every column with pairs and plans them; each measurement learns the bins its pairs evaluate.
+  void plan_columns() {
+    folded_.clear();
+    const auto run_keep = [&](const PairPlan& p) { return measurements_[p.measurement].run_keep; };
+    const auto measurement_of = [&](const PairPlan& p) -> const Measurement& { return *measurements_[p.measurement].m; };
+    for (int i = 0; i < kTile * kTile; ++i) {
+      std::vector<PairPlan>& pairs = pairs_[i];
+      if (pairs.empty()) continue;
+      load(g_.column(a_first_ + i % kTile, e_first_ + i / kTile), i);
+      plans_[i] = kernel_.plan(scratch_[i], pairs.data(), pairs.size(), run_keep, measurement_of);
+      for (PairPlan& p : pairs) {
+        if (p.first >= p.end) continue;
+        if (p.angular_term > kMaxFactoredB) {
+          folded_.push_back(&p);
+          continue;
+        }
+        TileMeasurement& tm = measurements_[p.measurement];
+        tm.lo = std::min(tm.lo, p.first);
+        tm.hi = std::max(tm.hi, p.end);
+      }
+    }
+  }
+
+  // The depth terms every planned pair reads: a measurement's over its pairs' bins, and those of a pair
+  // with B > kMaxFactoredB (B folded in) over its own.
+  void compute_terms() {
+    tile_terms_.clear();
+    for (TileMeasurement& tm : measurements_) {
+      if (tm.lo >= tm.hi) continue;
+      tm.lo = block_floor(tm.lo);
+      tm.terms = tile_terms_.reserve(tm.lo, tm.hi, tm.m->rho, tm.m->sigma, 0.0);
+    }
+    for (PairPlan* p : folded_) {
+      const Measurement& m = *measurements_[p->measurement].m;
+      p->own_terms = tile_terms_.reserve(block_floor(p->first), p->end, m.rho, m.sigma, p->angular_term);
+    }
+    tile_terms_.compute();
+  }
 
   // Free space a whole call carves in one column, whatever the order of its measurements (clamped mode).
   // Below front_m every measurement of the call has t <= kNonPositiveT, so logit P_s <= 0 for all of them;
@@ -520,7 +734,12 @@ private:
   ColumnGrid& grid_;
   const GridGeometry& g_;
   const ColumnKernel kernel_;
-  MeasurementTerms terms_, column_terms_;
+  MeasurementTerms terms_, column_terms_;  // exact mode
+  TileTerms tile_terms_;                    // clamped mode
+  std::vector<TileMeasurement> measurements_;
+  std::vector<PairPlan> pairs_[kTile * kTile];
+  std::vector<PairPlan*> folded_;  // the planned pairs with B > kMaxFactoredB that evaluate
+  ColumnPlan plans_[kTile * kTile];
   const double inv_sigma_azimuth_, inv_sigma_elevation_;
   const float lmin_;
   ColumnScratch scratch_[kTile * kTile];
@@ -566,9 +785,12 @@ std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, cons
     }
     const auto [a, e] = tile_origin(t);
     update.start(a, e);
-    if (grid.clamped())
+    if (grid.clamped()) {
       for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.bound(measurements.slots[tiles.items[k]]);
-    for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.apply(measurements.slots[tiles.items[k]]);
+      update.apply_clamped(tiles.items.data() + tiles.begin[t], measurements_in(t), measurements.slots.data());
+    } else {
+      for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.apply_exact(measurements.slots[tiles.items[k]]);
+    }
     update.finish(surface, surface_changed);
   }
   return update.column_updates();
