@@ -107,15 +107,24 @@ float* aligned_floats(std::vector<float>& storage, std::size_t count) {
   return storage.data() + (misalignment ? (kLaneBlockBytes - misalignment) / sizeof(float) : 0);
 }
 
+// A measurement of a tile (clamped mode) and the bins [lo, hi) its factored pairs evaluate, widened to
+// whole blocks once planned; its terms start at `terms` in the tile's pool.
+struct TileMeasurement {
+  const Measurement* m;
+  int run_keep;  ///< the first bin with t > kNonPositiveT
+  int lo, hi;
+  std::size_t terms;
+};
+
 // Where one (measurement, column) pair of a call updates the column, decided before any pair of the column
-// is applied (clamped mode): bins [first, end) are evaluated, none when first >= end.
+// is applied (clamped mode): bins [first, end) are evaluated, none when first >= end (end is looked up
+// only for a pair that b') does not skip).
 struct PairPlan {
   std::uint32_t measurement;  ///< the pair's measurement in the tile's list
   float a;                    ///< e^-B, or 1 where B > kMaxFactoredB is folded into the pair's own terms
   double angular_term;        ///< B
   int first, end;
-  std::size_t own_terms;      ///< B > kMaxFactoredB: where the pair's terms start in the tile's pool
-  const float *e, *g;         ///< the terms from bin block_floor(first) on, once computed
+  std::size_t terms;          ///< where the terms of bin block_floor(first) are in the tile's pool, once known
 };
 
 // Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
@@ -123,14 +132,15 @@ struct PairPlan {
 // the call reaches, ColumnScratch). One call applies a column's pairs in input order (one call per column:
 // the per-pair work is the vector loop alone).
 OCC_IMPROVE_VECTOR_KERNEL
-void multiply_odds_clamped(float* o, const PairPlan* pairs, std::size_t count, float omin, float omax) {
+void multiply_odds_clamped(float* o, const PairPlan* pairs, std::size_t count, const float* e_pool, const float* g_pool,
+                           float omin, float omax) {
   for (std::size_t k = 0; k < count; ++k) {
     const PairPlan& p = pairs[k];
     if (p.first >= p.end) continue;
     const int from = block_floor(p.first), first = p.first - from, end = p.end - from, to = block_ceil(p.end) - from;
     float* row = block_aligned(o + from);
-    const float* e = block_aligned(p.e);
-    const float* g = block_aligned(p.g);
+    const float* e = block_aligned(e_pool + p.terms);
+    const float* g = block_aligned(g_pool + p.terms);
     const float a = p.a;
     for (int i = 0; i < to; ++i) {
       const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
@@ -256,9 +266,9 @@ public:
       opdf_bin_terms(centres_.data() + r.first, r.count, r.rho_bar, 1.0 / r.sigma, r.folded_angular_term, e_ + r.offset,
                      g_ + r.offset);
   }
-  /// The terms from `offset`: the request's first bin is element 0 (block-aligned).
-  const float* e(std::size_t offset) const { return e_ + offset; }
-  const float* g(std::size_t offset) const { return g_ + offset; }
+  /// The pool: a request's terms start at the offset reserve returned, its first bin there (block-aligned).
+  const float* e() const { return e_; }
+  const float* g() const { return g_; }
 
 private:
   struct Request {
@@ -297,6 +307,7 @@ struct ColumnPlan {
   int odds_from;           ///< the run ends here at the first evaluation: [lo, odds_from) hold L_min
   int materialised_end;    ///< [odds_from, materialised_end) hold stored log-odds, bins from it L = 0
   int run_end, tail;       ///< the column's run and tail when no pair evaluates
+  bool folded;             ///< a pair with B > kMaxFactoredB evaluates
 };
 
 // Adds measurements' truncated OPDFs to one column.
@@ -373,26 +384,32 @@ public:
   ///     t = kNonPositiveT, so a) covers it).
   /// The run is followed as the pairs materialise it (a pair that reaches into it with t > kNonPositiveT
   /// takes it back from there), not as updates clamp voxels into it: a pair may then evaluate run voxels
-  /// it could have skipped by a), which leaves them at L_min. `run_keep(p)`: the first bin with t >
-  /// kNonPositiveT for p's measurement; `measurement_of(p)`: its rho and sigma.
-  template <typename RunKeep, typename MeasurementOf>
-  ColumnPlan plan(const ColumnScratch& s, PairPlan* pairs, std::size_t count, RunKeep&& run_keep,
-                  MeasurementOf&& measurement_of) const {
-    ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0};
+  /// it could have skipped by a), which leaves them at L_min. Each evaluating factored pair widens its
+  /// measurement's [lo, hi) (the bins whose terms the tile computes).
+  ColumnPlan plan(const ColumnScratch& s, PairPlan* pairs, std::size_t count, TileMeasurement* measurements) const {
+    ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0, false};
     int run_end = s.run_end, tail = s.tail, odds_end = s.odds_end;
     for (std::size_t i = 0; i < count; ++i) {
       PairPlan& p = pairs[i];
-      p.first = p.end;
-      const int keep = run_keep(p);
+      TileMeasurement& tm = measurements[p.measurement];
+      p.first = p.end = 0;  // skipped, unless evaluated below
+      const int keep = tm.run_keep;
       if (p.angular_term >= kNegligibleB && run_end >= keep) continue;  // b')
-      if (run_end > keep && keep < p.end) run_end = keep;                 // a): the run taken back from keep
-      if (run_end == tail) {                                              // b)
-        const Measurement& m = measurement_of(p);
+      const Measurement& m = *tm.m;
+      p.first = p.end = support_end(m.rho, p.angular_term, m.sigma);
+      if (run_end > keep && keep < p.end) run_end = keep;  // a): the run taken back from keep
+      if (run_end == tail) {                               // b)
         const int fresh = std::min(depth_.first_centre_above(m.rho + m.sigma * to_lmin_offset_sigmas(p.angular_term, lmin_)), p.end);
         if (fresh > run_end) run_end = tail = odds_end = fresh;
       }
       if (run_end >= p.end) continue;
       p.first = run_end;
+      if (p.angular_term <= kMaxFactoredB) {
+        tm.lo = std::min(tm.lo, p.first);
+        tm.hi = std::max(tm.hi, p.end);
+      } else {
+        c.folded = true;
+      }
       if (c.lo > c.hi) {
         c.odds_from = odds_end;
         c.materialised_end = tail;
@@ -417,8 +434,8 @@ public:
   }
 
   /// Clamped mode: the column's pairs (their terms resolved), in input order.
-  void multiply(ColumnScratch& s, const PairPlan* pairs, std::size_t count) const {
-    multiply_odds_clamped(s.v, pairs, count, omin_, omax_);
+  void multiply(ColumnScratch& s, const PairPlan* pairs, std::size_t count, const float* e_pool, const float* g_pool) const {
+    multiply_odds_clamped(s.v, pairs, count, e_pool, g_pool, omin_, omax_);
   }
 
   /// Clamped mode, after the plan's pairs: the leading voxels at the lower clamp join the run (in odds,
@@ -572,15 +589,11 @@ public:
       ColumnScratch& s = scratch_[i];
       kernel_.to_odds(s, plans_[i]);
       for (PairPlan& p : pairs_[i]) {
-        if (p.first >= p.end) continue;
+        if (p.first >= p.end || p.angular_term > kMaxFactoredB) continue;  // folded: compute_terms placed them
         const TileMeasurement& tm = measurements_[p.measurement];
-        const std::size_t terms = p.angular_term <= kMaxFactoredB
-                                      ? tm.terms + static_cast<std::size_t>(block_floor(p.first) - tm.lo)
-                                      : p.own_terms;
-        p.e = tile_terms_.e(terms);
-        p.g = tile_terms_.g(terms);
+        p.terms = tm.terms + static_cast<std::size_t>(block_floor(p.first) - tm.lo);
       }
-      kernel_.multiply(s, pairs_[i].data(), pairs_[i].size());
+      kernel_.multiply(s, pairs_[i].data(), pairs_[i].size(), tile_terms_.e(), tile_terms_.g());
       kernel_.close(s, plans_[i]);
     }
   }
@@ -642,16 +655,7 @@ private:
     }
   }
 
-  // A measurement of the tile (clamped mode) and the bins [lo, hi) its factored pairs evaluate, widened to
-  // whole blocks once planned; its terms start at `terms` in the pool.
-  struct TileMeasurement {
-    const Measurement* m;
-    int run_keep;  ///< the first bin with t > kNonPositiveT
-    int lo, hi;
-    std::size_t terms;
-  };
-
-  // Each column's pairs, in input order, with where each ends.
+  // Each column's pairs, in input order.
   void list_pairs(const std::uint32_t* items, std::size_t count, const Measurement* slots) {
     for (auto& pairs : pairs_) pairs.clear();
     measurements_.resize(count);
@@ -661,8 +665,7 @@ private:
                           std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0};
       for_each_column_of(m, [&](int a, int e, double b, float factor) {
         const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
-        pairs_[slot(a, e)].push_back(
-            {static_cast<std::uint32_t>(k), a_factor, b, 0, kernel_.support_end(m.rho, b, m.sigma), 0, nullptr, nullptr});
+        pairs_[slot(a, e)].push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0, 0});
         ++column_updates_;
       });
     }
@@ -671,23 +674,14 @@ private:
   // Loads every column with pairs and plans them; each measurement learns the bins its pairs evaluate.
   void plan_columns() {
     folded_.clear();
-    const auto run_keep = [&](const PairPlan& p) { return measurements_[p.measurement].run_keep; };
-    const auto measurement_of = [&](const PairPlan& p) -> const Measurement& { return *measurements_[p.measurement].m; };
     for (int i = 0; i < kTile * kTile; ++i) {
       std::vector<PairPlan>& pairs = pairs_[i];
       if (pairs.empty()) continue;
       load(g_.column(a_first_ + i % kTile, e_first_ + i / kTile), i);
-      plans_[i] = kernel_.plan(scratch_[i], pairs.data(), pairs.size(), run_keep, measurement_of);
-      for (PairPlan& p : pairs) {
-        if (p.first >= p.end) continue;
-        if (p.angular_term > kMaxFactoredB) {
-          folded_.push_back(&p);
-          continue;
-        }
-        TileMeasurement& tm = measurements_[p.measurement];
-        tm.lo = std::min(tm.lo, p.first);
-        tm.hi = std::max(tm.hi, p.end);
-      }
+      plans_[i] = kernel_.plan(scratch_[i], pairs.data(), pairs.size(), measurements_.data());
+      if (plans_[i].folded)
+        for (PairPlan& p : pairs)
+          if (p.first < p.end && p.angular_term > kMaxFactoredB) folded_.push_back(&p);
     }
   }
 
@@ -702,7 +696,7 @@ private:
     }
     for (PairPlan* p : folded_) {
       const Measurement& m = *measurements_[p->measurement].m;
-      p->own_terms = tile_terms_.reserve(block_floor(p->first), p->end, m.rho, m.sigma, p->angular_term);
+      p->terms = tile_terms_.reserve(block_floor(p->first), p->end, m.rho, m.sigma, p->angular_term);
     }
     tile_terms_.compute();
   }
