@@ -214,6 +214,42 @@ TEST(Integrate, FreeSpaceOfACallOverALeadingRunTheKernelDidNotMake) {
   }
 }
 
+// A tile receiving more measurements in one call than the kernel lists at once (1024: a frame's tile holds
+// ~100; merged or very dense clouds hold more): 64 pixels with 17 returns each, at depths in front of,
+// at and behind one another in random order, in one call. The tile is taken in parts whose columns stay
+// loaded, so every voxel still matches the reference's one sequence of clamped updates.
+TEST(Integrate, ATileWithMoreMeasurementsThanOnePartMatchesReference) {
+  const PinholeIntrinsics k;
+  for (const SensorPreset& p : {kinect_v1(k), kinect_v1_paper()}) {
+    const GridGeometry g = centre_crop(p);
+    const SensorModel model(p.model);
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> pick(0, 3);
+    const double depths_m[] = {1.0, 1.0 + 2.0 * model.sigma_depth_at(1.0), 1.4, 2.2};
+    std::vector<Eigen::Vector3f> points;
+    for (int repeat = 0; repeat < 17; ++repeat)  // 1088 measurements in the tile
+      for (int v = 240; v < 248; ++v)  // one 8 x 8 tile of the crop (columns 8-15, rows 8-15)
+        for (int u = 320; u < 328; ++u) {
+          const double z = depths_m[pick(rng)];
+          points.emplace_back(static_cast<float>((u - k.cx) / k.fx * z), static_cast<float>((v - k.cy) / k.fy * z), static_cast<float>(z));
+        }
+    GridOptions clamped;
+    clamped.probability_min = 0.001;
+    ColumnGrid fast(g, clamped);
+    reference::DenseGrid ref(g, model, clamped);
+    insert_points(fast, model, PointSpan::from(points));
+    ref.insert(points);
+    EXPECT_LE(reference::max_log_odds_difference(fast, ref), 2.45e-5) << p.name;
+    // Not a trivial column: occupied voxels at some of the depths, free space carved in front of them.
+    ColumnIndex c = 0;
+    ASSERT_TRUE(g.column_of(points[100].x(), points[100].y(), points[100].z(), c));
+    double highest = -1e9;
+    for (int b = 0; b < g.depth().bins(); ++b) highest = std::max(highest, ref.log_odds(c, b));
+    EXPECT_GT(highest, 1.0) << p.name;
+    EXPECT_NEAR(ref.log_odds(c, g.depth().bin(0.9)), fast.log_odds_min(), 1e-5) << p.name;
+  }
+}
+
 TEST(Integrate, RangeDependentSigmaMatchesReference) {
   // Spherical bins and the pixel-native binning, with the sample camera's own intrinsics.
   for (SensorPreset p : {kinect_v1_spherical(sample::generate_scene().intrinsics), kinect_v1(sample::generate_scene().intrinsics)}) {

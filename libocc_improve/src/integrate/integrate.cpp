@@ -304,9 +304,10 @@ struct ColumnScratch {
 // A column's plan for a call (clamped mode): what its scratch row holds before the pairs are applied.
 struct ColumnPlan {
   int lo, hi;              ///< the bins some pair evaluates: [lo, hi), none when lo >= hi
-  int odds_from;           ///< the run ends here at the first evaluation: [lo, odds_from) hold L_min
+  int run_fill_end;        ///< the run's end before the first evaluation: [lo, run_fill_end) hold L_min
+  int odds_from;           ///< [run_fill_end, odds_from): odds already (a part before in the call)
   int materialised_end;    ///< [odds_from, materialised_end) hold stored log-odds, bins from it L = 0
-  int run_end, tail;       ///< the column's run and tail when no pair evaluates
+  int run_end, tail, odds_end;  ///< the column's state when no pair evaluates
   bool folded;             ///< a pair with B > kMaxFactoredB evaluates
 };
 
@@ -387,7 +388,7 @@ public:
   /// it could have skipped by a), which leaves them at L_min. Each evaluating factored pair widens its
   /// measurement's [lo, hi) (the bins whose terms the tile computes).
   ColumnPlan plan(const ColumnScratch& s, PairPlan* pairs, std::size_t count, TileMeasurement* measurements) const {
-    ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0, false};
+    ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0, 0, 0, false};
     int run_end = s.run_end, tail = s.tail, odds_end = s.odds_end;
     for (std::size_t i = 0; i < count; ++i) {
       PairPlan& p = pairs[i];
@@ -397,10 +398,12 @@ public:
       if (p.angular_term >= kNegligibleB && run_end >= keep) continue;  // b')
       const Measurement& m = *tm.m;
       p.first = p.end = support_end(m.rho, p.angular_term, m.sigma);
-      if (run_end > keep && keep < p.end) run_end = keep;  // a): the run taken back from keep
-      if (run_end == tail) {                               // b)
+      int run_before = run_end;
+      if (run_end > keep && keep < p.end) {  // a): the run taken back from keep
+        run_end = keep;
+      } else if (run_end == tail) {  // b) (nothing materialised)
         const int fresh = std::min(depth_.first_centre_above(m.rho + m.sigma * to_lmin_offset_sigmas(p.angular_term, lmin_)), p.end);
-        if (fresh > run_end) run_end = tail = odds_end = fresh;
+        if (fresh > run_end) run_before = run_end = tail = odds_end = fresh;
       }
       if (run_end >= p.end) continue;
       p.first = run_end;
@@ -411,6 +414,7 @@ public:
         c.folded = true;
       }
       if (c.lo > c.hi) {
+        c.run_fill_end = run_before;
         c.odds_from = odds_end;
         c.materialised_end = tail;
       }
@@ -420,13 +424,14 @@ public:
     }
     c.run_end = run_end;
     c.tail = tail;
+    c.odds_end = odds_end;
     return c;
   }
 
   /// Clamped mode: the scratch row as the plan's first evaluation finds it, in odds over [lo, hi).
   void to_odds(ColumnScratch& s, const ColumnPlan& c) const {
     float* o = s.v;
-    if (c.lo < c.odds_from) std::fill(o + c.lo, o + c.odds_from, omin_);
+    if (c.lo < c.run_fill_end) std::fill(o + c.lo, o + c.run_fill_end, omin_);
     const int converted_end = std::min(c.hi, c.materialised_end);
     if (c.odds_from < converted_end) log_odds_to_odds(o, c.odds_from, converted_end, omin_, omax_, lmin_, lmax_);
     const int untouched = std::max(c.odds_from, c.materialised_end);
@@ -442,7 +447,8 @@ public:
   /// then in log-odds behind), and the row's state is ready for contents().
   void close(ColumnScratch& s, const ColumnPlan& c) const {
     if (c.lo >= c.hi) {
-      s.run_end = s.odds_end = c.run_end;
+      s.run_end = c.run_end;
+      s.odds_end = c.odds_end;
       s.tail = c.tail;
       return;
     }
@@ -532,8 +538,11 @@ public:
     e_first_ = e_first;
     a_last_ = std::min(a_first + kTile, g_.width()) - 1;
     e_last_ = std::min(e_first + kTile, g_.height()) - 1;
-    std::fill(std::begin(free_space_), std::end(free_space_), FreeSpaceBound{});
+    reset_bounds();
   }
+
+  /// Clamped mode: forgets the FreeSpaceBounds before a part of the tile's measurements is bounded.
+  void reset_bounds() { std::fill(std::begin(free_space_), std::end(free_space_), FreeSpaceBound{}); }
 
   /// Clamped mode: folds one of the tile's measurements into the FreeSpaceBound of its columns. Called for
   /// every measurement of the tile before the first apply.
@@ -677,7 +686,7 @@ private:
     for (int i = 0; i < kTile * kTile; ++i) {
       std::vector<PairPlan>& pairs = pairs_[i];
       if (pairs.empty()) continue;
-      load(g_.column(a_first_ + i % kTile, e_first_ + i / kTile), i);
+      if (!scratch_[i].loaded) load(g_.column(a_first_ + i % kTile, e_first_ + i / kTile), i);
       plans_[i] = kernel_.plan(scratch_[i], pairs.data(), pairs.size(), measurements_.data());
       if (plans_[i].folded)
         for (PairPlan& p : pairs)
@@ -745,6 +754,9 @@ private:
   std::size_t column_updates_ = 0;
 };
 
+// Clamped mode: a tile's measurements are listed and planned in parts of at most this many.
+constexpr std::size_t kMeasurementsPerPart = 1024;
+
 }  // namespace
 
 std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, const MeasurementChunks& measurements,
@@ -780,8 +792,16 @@ std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, cons
     const auto [a, e] = tile_origin(t);
     update.start(a, e);
     if (grid.clamped()) {
-      for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.bound(measurements.slots[tiles.items[k]]);
-      update.apply_clamped(tiles.items.data() + tiles.begin[t], measurements_in(t), measurements.slots.data());
+      // In parts of at most kMeasurementsPerPart (a frame's tile holds ~100): the pairs and terms a part
+      // lists stay bounded however dense the input, and a part's columns stay loaded for the next, so
+      // the result is the one of a single part.
+      for (std::size_t k = tiles.begin[t]; k < tiles.begin[t + 1]; k += kMeasurementsPerPart) {
+        if (k > tiles.begin[t]) throw_if_stop_requested();
+        const std::size_t end = std::min<std::size_t>(k + kMeasurementsPerPart, tiles.begin[t + 1]);
+        update.reset_bounds();
+        for (std::size_t j = k; j < end; ++j) update.bound(measurements.slots[tiles.items[j]]);
+        update.apply_clamped(tiles.items.data() + k, end - k, measurements.slots.data());
+      }
     } else {
       for (std::uint32_t k = tiles.begin[t]; k < tiles.begin[t + 1]; ++k) update.apply_exact(measurements.slots[tiles.items[k]]);
     }
