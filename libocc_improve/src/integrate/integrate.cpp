@@ -87,8 +87,9 @@ void logit_profile_from_terms(const float* e, const float* g, int n, float a, fl
 // column) pair updates cost more than the vector work itself.
 constexpr int kLaneBlock = 8;
 constexpr std::size_t kLaneBlockBytes = kLaneBlock * sizeof(float);
-constexpr int block_floor(int i) { return i / kLaneBlock * kLaneBlock; }
-constexpr int block_ceil(int i) { return (i + kLaneBlock - 1) / kLaneBlock * kLaneBlock; }
+static_assert((kLaneBlock & (kLaneBlock - 1)) == 0, "block bounds by masks");
+constexpr int block_floor(int bin) { return bin & ~(kLaneBlock - 1); }  // bins are >= 0
+constexpr int block_ceil(int bin) { return block_floor(bin + kLaneBlock - 1); }
 
 // The row, with the compiler told that it starts on a block boundary.
 template <typename T>
@@ -192,11 +193,11 @@ std::vector<double> padded_centres(const DepthAxis& depth) {
 // blocks of kLaneBlock bins (the depth axis padded to whole blocks: the padding's terms are never read as bins).
 class MeasurementTerms {
 public:
-  explicit MeasurementTerms(const DepthAxis& depth) : depth_(depth) {
+  /// `centres`: padded_centres of the axis, kept by the caller.
+  MeasurementTerms(const DepthAxis& depth, const std::vector<double>& centres) : depth_(depth), centres_(centres) {
     const auto n = static_cast<std::size_t>(block_ceil(depth.bins()));
     e_ = aligned_floats(e_storage_, n);
     g_ = aligned_floats(g_storage_, n);
-    centres_ = padded_centres(depth);
   }
 
   void reset(double rho_bar, double sigma, double folded_angular_term = 0.0) {
@@ -234,7 +235,7 @@ private:
   const DepthAxis& depth_;
   std::vector<float> e_storage_, g_storage_;
   float *e_ = nullptr, *g_ = nullptr;
-  std::vector<double> centres_;  ///< the axis's, the padding repeating the last
+  const std::vector<double>& centres_;
   double rho_bar_ = 0, inv_sigma_ = 1;
   float folded_angular_term_ = 0;
   int lo_ = 0, hi_ = 0;
@@ -244,7 +245,8 @@ private:
 // evaluate, in one pool: requested while the tile's columns are planned, then computed together.
 class TileTerms {
 public:
-  explicit TileTerms(const DepthAxis& depth) : centres_(padded_centres(depth)) {}
+  /// `centres`: padded_centres of the depth axis, kept by the caller.
+  explicit TileTerms(const std::vector<double>& centres) : centres_(centres) {}
 
   void clear() {
     requests_.clear();
@@ -277,7 +279,7 @@ private:
     double rho_bar, sigma;
     float folded_angular_term;
   };
-  std::vector<double> centres_;
+  const std::vector<double>& centres_;
   std::vector<Request> requests_;
   std::size_t size_ = 0;
   std::vector<float> e_storage_, g_storage_;
@@ -524,7 +526,8 @@ private:
 class TileUpdate {
 public:
   TileUpdate(ColumnGrid& grid, const SensorModel& model, std::vector<float>& scratch_rows)
-      : grid_(grid), g_(grid.geometry()), kernel_(grid), terms_(g_.depth()), column_terms_(g_.depth()), tile_terms_(g_.depth()),
+      : grid_(grid), g_(grid.geometry()), kernel_(grid), centres_(padded_centres(g_.depth())),
+        terms_(g_.depth(), centres_), column_terms_(g_.depth(), centres_), tile_terms_(centres_),
         inv_sigma_azimuth_(1.0 / model.sigma_horizontal(g_.binning())),
         inv_sigma_elevation_(1.0 / model.sigma_vertical(g_.binning())), lmin_(grid.log_odds_min()) {
     // Rows of whole lane blocks, each starting on a block boundary: the kernel's loops run over whole blocks.
@@ -593,8 +596,7 @@ public:
     list_pairs(items, count, slots);
     plan_columns();
     compute_terms();
-    for (int i = 0; i < kTile * kTile; ++i) {
-      if (pairs_[i].empty()) continue;
+    for (const int i : listed_) {
       ColumnScratch& s = scratch_[i];
       kernel_.to_odds(s, plans_[i]);
       for (PairPlan& p : pairs_[i]) {
@@ -664,9 +666,11 @@ private:
     }
   }
 
-  // Each column's pairs, in input order.
+  // Each column's pairs, in input order; listed_ names the columns that have some (a small shot's tile has
+  // a few of its 64).
   void list_pairs(const std::uint32_t* items, std::size_t count, const Measurement* slots) {
-    for (auto& pairs : pairs_) pairs.clear();
+    for (const int i : listed_) pairs_[i].clear();
+    listed_.clear();
     measurements_.resize(count);
     for (std::size_t k = 0; k < count; ++k) {
       const Measurement& m = slots[items[k]];
@@ -674,7 +678,9 @@ private:
                           std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0};
       for_each_column_of(m, [&](int a, int e, double b, float factor) {
         const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
-        pairs_[slot(a, e)].push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0, 0});
+        std::vector<PairPlan>& pairs = pairs_[slot(a, e)];
+        if (pairs.empty()) listed_.push_back(slot(a, e));
+        pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0, 0});
         ++column_updates_;
       });
     }
@@ -683,9 +689,8 @@ private:
   // Loads every column with pairs and plans them; each measurement learns the bins its pairs evaluate.
   void plan_columns() {
     folded_.clear();
-    for (int i = 0; i < kTile * kTile; ++i) {
+    for (const int i : listed_) {
       std::vector<PairPlan>& pairs = pairs_[i];
-      if (pairs.empty()) continue;
       if (!scratch_[i].loaded) load(g_.column(a_first_ + i % kTile, e_first_ + i / kTile), i);
       plans_[i] = kernel_.plan(scratch_[i], pairs.data(), pairs.size(), measurements_.data());
       if (plans_[i].folded)
@@ -737,10 +742,12 @@ private:
   ColumnGrid& grid_;
   const GridGeometry& g_;
   const ColumnKernel kernel_;
+  const std::vector<double> centres_;      // padded_centres of the depth axis, for the terms
   MeasurementTerms terms_, column_terms_;  // exact mode
   TileTerms tile_terms_;                    // clamped mode
   std::vector<TileMeasurement> measurements_;
   std::vector<PairPlan> pairs_[kTile * kTile];
+  std::vector<int> listed_;  // the columns with pairs in the part being applied
   std::vector<PairPlan*> folded_;  // the planned pairs with B > kMaxFactoredB that evaluate
   ColumnPlan plans_[kTile * kTile];
   const double inv_sigma_azimuth_, inv_sigma_elevation_;
@@ -796,9 +803,11 @@ std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, cons
       // lists stay bounded however dense the input, and a part's columns stay loaded for the next, so
       // the result is the one of a single part.
       for (std::size_t k = tiles.begin[t]; k < tiles.begin[t + 1]; k += kMeasurementsPerPart) {
-        if (k > tiles.begin[t]) throw_if_stop_requested();
+        if (k > tiles.begin[t]) {  // start() reset the bounds for the first part
+          throw_if_stop_requested();
+          update.reset_bounds();
+        }
         const std::size_t end = std::min<std::size_t>(k + kMeasurementsPerPart, tiles.begin[t + 1]);
-        update.reset_bounds();
         for (std::size_t j = k; j < end; ++j) update.bound(measurements.slots[tiles.items[j]]);
         update.apply_clamped(tiles.items.data() + k, end - k, measurements.slots.data());
       }
