@@ -108,8 +108,8 @@ float* aligned_floats(std::vector<float>& storage, std::size_t count) {
   return storage.data() + (misalignment ? (kLaneBlockBytes - misalignment) / sizeof(float) : 0);
 }
 
-// A measurement of a tile (clamped mode) and the bins [lo, hi) its factored pairs evaluate, widened to
-// whole blocks once planned; its terms start at `terms` in the tile's pool.
+// A measurement of a tile (clamped mode) and the bins [lo, hi) its factored pairs evaluate (lo widened to
+// a block boundary once planned); its terms start at `terms` in the tile's pool.
 struct TileMeasurement {
   const Measurement* m;
   int run_keep;  ///< the first bin with t > kNonPositiveT
@@ -194,7 +194,7 @@ std::vector<double> padded_centres(const DepthAxis& depth) {
 class MeasurementTerms {
 public:
   /// `centres`: padded_centres of the axis, kept by the caller.
-  MeasurementTerms(const DepthAxis& depth, const std::vector<double>& centres) : depth_(depth), centres_(centres) {
+  MeasurementTerms(const DepthAxis& depth, const std::vector<double>& centres) : centres_(centres) {
     const auto n = static_cast<std::size_t>(block_ceil(depth.bins()));
     e_ = aligned_floats(e_storage_, n);
     g_ = aligned_floats(g_storage_, n);
@@ -232,7 +232,6 @@ private:
   void compute(int first, int last) {
     opdf_bin_terms(centres_.data() + first, last - first, rho_bar_, inv_sigma_, folded_angular_term_, e_ + first, g_ + first);
   }
-  const DepthAxis& depth_;
   std::vector<float> e_storage_, g_storage_;
   float *e_ = nullptr, *g_ = nullptr;
   const std::vector<double>& centres_;
@@ -290,7 +289,7 @@ private:
 // is materialised: bins below run_end hold the leading L_min run (clamped mode), bins from tail on are
 // untouched (L = 0). Clamped mode holds [run_end, odds_end) in odds e^L (one exp and one log per voxel
 // and call instead of a log per voxel and measurement): the bins the call's measurements have reached so
-// far (clamped mode plans the call's pairs first and converts those bins once, ColumnKernel::plan). The
+// far (clamped mode plans the call's pairs first and converts those bins once, ColumnKernel::to_odds). The
 // bins behind stay in log-odds and are stored back bit for bit: a conversion there and back
 // would move them by up to 5e-7 + 2e-7 |L| per call, and a small shot's columns are mostly such bins. Exact mode
 // holds log-odds throughout. A column is loaded once per call, receives all its measurements of the call
@@ -386,8 +385,10 @@ public:
   ///  b') all of a pair with B >= kNegligibleB whose support lies in the run (its end is in front of
   ///     t = kNonPositiveT, so a) covers it).
   /// The run is followed as the pairs materialise it (a pair that reaches into it with t > kNonPositiveT
-  /// takes it back from there), not as updates clamp voxels into it: a pair may then evaluate run voxels
-  /// it could have skipped by a), which leaves them at L_min. Each evaluating factored pair widens its
+  /// takes it back from there), not as updates clamp voxels into it: a pair may then evaluate voxels the
+  /// pair-by-pair kernel skipped by a), b) or b') after its per-pair run scans, which leaves them where
+  /// they are (at L_min) for the same reasons. (A clamped grid holding values below L_min, which this
+  /// kernel never writes, may keep some of them where that kernel stored L_min.) Each evaluating factored pair widens its
   /// measurement's [lo, hi) (the bins whose terms the tile computes).
   ColumnPlan plan(const ColumnScratch& s, PairPlan* pairs, std::size_t count, TileMeasurement* measurements) const {
     ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0, 0, 0, false};
@@ -422,7 +423,8 @@ public:
       }
       c.lo = std::min(c.lo, run_end);
       c.hi = std::max(c.hi, p.end);
-      tail = odds_end = std::max(odds_end, p.end);  // reached: in odds, materialised
+      tail = std::max(tail, p.end);  // reached: materialised, in odds
+      odds_end = std::max(odds_end, p.end);
     }
     c.run_end = run_end;
     c.tail = tail;
@@ -430,14 +432,15 @@ public:
     return c;
   }
 
-  /// Clamped mode: the scratch row as the plan's first evaluation finds it, in odds over [lo, hi).
+  /// Clamped mode: the scratch row as the plan's first evaluation finds it, in odds: the run taken back
+  /// ([lo, run_fill_end), L_min), the odds a part before left, the stored log-odds converted up to hi, and
+  /// untouched bins (L = 0) beyond them.
   void to_odds(ColumnScratch& s, const ColumnPlan& c) const {
     float* o = s.v;
     if (c.lo < c.run_fill_end) std::fill(o + c.lo, o + c.run_fill_end, omin_);
     const int converted_end = std::min(c.hi, c.materialised_end);
     if (c.odds_from < converted_end) log_odds_to_odds(o, c.odds_from, converted_end, omin_, omax_, lmin_, lmax_);
-    const int untouched = std::max(c.odds_from, c.materialised_end);
-    if (untouched < c.hi) std::fill(o + untouched, o + c.hi, 1.0f);
+    if (c.materialised_end < c.hi) std::fill(o + c.materialised_end, o + c.hi, 1.0f);
   }
 
   /// Clamped mode: the column's pairs (their terms resolved), in input order.
@@ -525,6 +528,8 @@ private:
 // (apply_clamped), exact mode a measurement at a time (apply_exact).
 class TileUpdate {
 public:
+  TileUpdate(const TileUpdate&) = delete;  // its term buffers refer to its centres_
+  TileUpdate& operator=(const TileUpdate&) = delete;
   TileUpdate(ColumnGrid& grid, const SensorModel& model, std::vector<float>& scratch_rows)
       : grid_(grid), g_(grid.geometry()), kernel_(grid), centres_(padded_centres(g_.depth())),
         terms_(g_.depth(), centres_), column_terms_(g_.depth(), centres_), tile_terms_(centres_),
@@ -548,7 +553,7 @@ public:
   void reset_bounds() { std::fill(std::begin(free_space_), std::end(free_space_), FreeSpaceBound{}); }
 
   /// Clamped mode: folds one of the tile's measurements into the FreeSpaceBound of its columns. Called for
-  /// every measurement of the tile before the first apply.
+  /// every measurement of a part before the part is applied (a column loaded in that part takes them).
   /// front_m takes every measurement of the column; to_lmin_m only the one at the measurement's smallest B
   /// in the tile (its own column where the tile holds it): a bound from some of the measurements is still
   /// a bound, and that one reaches furthest.
@@ -587,7 +592,7 @@ public:
     });
   }
 
-  /// Clamped mode: all the tile's measurements (slots[items[k]], k < count, in input order), a column at
+  /// Clamped mode: a part of the tile's measurements (slots[items[k]], k < count, in input order), a column at
   /// a time. The pairs are listed per column, every loaded column plans its pairs (ColumnKernel::plan),
   /// each measurement's depth terms are computed once over the bins its pairs evaluate, and then each
   /// column's row receives its pairs in input order, converted to odds once and scanned for its run once:
@@ -715,12 +720,15 @@ private:
     tile_terms_.compute();
   }
 
-  // Free space a whole call carves in one column, whatever the order of its measurements (clamped mode).
-  // Below front_m every measurement of the call has t <= kNonPositiveT, so logit P_s <= 0 for all of them;
+  // Free space a part of a call carves in one column, whatever the order of its measurements (clamped
+  // mode; the part is the whole call unless the tile receives more than kMeasurementsPerPart, and a column
+  // takes the bound of the part it is loaded in, the first with pairs for it; the parts after continue
+  // from what that one left). Below front_m every measurement of the part has t <= kNonPositiveT, so
+  // logit P_s <= 0 for all of them;
   // below to_lmin_m at least one of them alone takes a voxel holding L <= 0 below L_min (bound b: by 0.128
   // at least, far beyond float rounding in the odds). Under clamping after each update a voxel that only
   // receives non-positive terms ends at max(L_min, L + sum), so every voxel below both that holds L <= 0
-  // ends the call at L_min: the column's leading run takes it at load (ColumnKernel::extend_run) and no
+  // ends the part at L_min: the column's leading run takes it at load (ColumnKernel::extend_run) and no
   // measurement evaluates it. A neighbour whose update lies wholly in front of the column's own return
   // then costs O(1), and its free-space carving never materialises bins the return would clamp anyway.
   struct FreeSpaceBound {

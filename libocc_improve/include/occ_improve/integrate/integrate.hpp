@@ -17,10 +17,11 @@
 //       log(1/2) + u <= L_min - 0.2 ends at L_min;
 //    b') for B >= 15 (a pixel-native return's diagonal neighbours, B = 24) |logit P_s| < 4.5e-7 wherever
 //       t > -1.5, so a column whose leading L_min run reaches t = -1.5 is not updated at all (a) + CONVENTIONS 4);
-//    b'') per column and call, below the depth where every measurement of the call has t <= -1.5 (so
-//       logit P_s <= 0 for all of them) and one of them alone satisfies b), a voxel holding L <= 0 ends
-//       the call at L_min whatever the order (clamped sums of non-positive terms): the leading run takes
-//       such voxels before any measurement is applied, so a neighbour's update that lies wholly in front
+//    b'') per column and call (per part of at most 1024 measurements where a tile receives more), below
+//       the depth where every measurement of the call has t <= -1.5 (so logit P_s <= 0 for all of them)
+//       and one of them alone satisfies b), a voxel holding L <= 0 ends the call at L_min whatever the
+//       order (clamped sums of non-positive terms): the leading run takes such voxels before any
+//       measurement is applied, so a neighbour's update that lies wholly in front
 //       of the column's own return costs O(1) (tests: Integrate.FreeSpaceOfACall*);
 //    c) while a column is being updated, the bins the call's measurements reach hold odds e^L (one exp
 //       and one log per voxel and call instead of a log per voxel and measurement); the clamps map to
