@@ -388,8 +388,8 @@ public:
   /// takes it back from there), not as updates clamp voxels into it: a pair may then evaluate voxels the
   /// pair-by-pair kernel skipped by a), b) or b') after its per-pair run scans, which leaves them where
   /// they are (at L_min) for the same reasons. (A clamped grid holding values below L_min, which this
-  /// kernel never writes, may keep some of them where that kernel stored L_min.) Each evaluating factored pair widens its
-  /// measurement's [lo, hi) (the bins whose terms the tile computes).
+  /// kernel never writes, may keep some of them where that kernel stored L_min.) Each evaluating factored
+  /// pair widens its measurement's [lo, hi) (the bins whose terms the tile computes).
   ColumnPlan plan(const ColumnScratch& s, PairPlan* pairs, std::size_t count, TileMeasurement* measurements) const {
     ColumnPlan c{std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0, 0, 0, 0, 0, 0, false};
     int run_end = s.run_end, tail = s.tail, odds_end = s.odds_end;
