@@ -552,29 +552,6 @@ public:
   /// Clamped mode: forgets the FreeSpaceBounds before a part of the tile's measurements is bounded.
   void reset_bounds() { std::fill(std::begin(free_space_), std::end(free_space_), FreeSpaceBound{}); }
 
-  /// Clamped mode: folds one of the tile's measurements into the FreeSpaceBound of its columns. Called for
-  /// every measurement of a part before the part is applied (a column loaded in that part takes them).
-  /// front_m takes every measurement of the column; to_lmin_m only the one at the measurement's smallest B
-  /// in the tile (its own column where the tile holds it): a bound from some of the measurements is still
-  /// a bound, and that one reaches furthest.
-  void bound(const Measurement& m) {
-    const TileColumns r = columns_of(m);
-    const double front_m = m.rho + m.sigma * kNonPositiveT;
-    for (int e = r.e0; e <= r.e1; ++e)
-      for (int a = r.a0; a <= r.a1; ++a) {
-        double& f = free_space_[(e - e_first_) * kTile + (a - a_first_)].front_m;
-        f = std::min(f, front_m);
-      }
-    int a_near = r.a0, e_near = r.e0;
-    double azimuth_b = azimuth_term(a_near, m), elevation_b = elevation_term(e_near, m);
-    for (int a = r.a0 + 1; a <= r.a1; ++a)
-      if (const double b = azimuth_term(a, m); b < azimuth_b) std::tie(a_near, azimuth_b) = std::make_pair(a, b);
-    for (int e = r.e0 + 1; e <= r.e1; ++e)
-      if (const double b = elevation_term(e, m); b < elevation_b) std::tie(e_near, elevation_b) = std::make_pair(e, b);
-    double& to_lmin_m = free_space_[(e_near - e_first_) * kTile + (a_near - a_first_)].to_lmin_m;
-    to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(azimuth_b + elevation_b, lmin_));
-  }
-
   /// Exact mode: adds one of the tile's measurements to its columns (loading each on its first).
   void apply_exact(const Measurement& m) {
     terms_.reset(m.rho, m.sigma);
@@ -664,14 +641,37 @@ private:
       azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-azimuth_b_[a - a_first_]));
     }
     for (int e = r.e0; e <= r.e1; ++e) {
-      const double elevation_b = elevation_term(e, m);
+      const double elevation_b = elevation_b_[e - e_first_] = elevation_term(e, m);
       const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
       for (int a = r.a0; a <= r.a1; ++a)
         visit(a, e, azimuth_b_[a - a_first_] + elevation_b, azimuth_factor_[a - a_first_] * elevation_factor);
     }
   }
 
-  // Each column's pairs, in input order; listed_ names the columns that have some (a small shot's tile has
+  // Clamped mode: folds measurement m into the FreeSpaceBound of its columns, from the angular terms
+  // for_each_column_of has just computed (every measurement of a part, before the part's columns are
+  // loaded: a column loaded in that part takes them). front_m takes every measurement of the column;
+  // to_lmin_m only the one at the measurement's smallest B in the tile (its own column where the tile
+  // holds it): a bound from some of the measurements is still a bound, and that one reaches furthest.
+  void bound(const Measurement& m) {
+    const TileColumns r = columns_of(m);
+    const double front_m = m.rho + m.sigma * kNonPositiveT;
+    for (int e = r.e0; e <= r.e1; ++e)
+      for (int a = r.a0; a <= r.a1; ++a) {
+        double& f = free_space_[slot(a, e)].front_m;
+        f = std::min(f, front_m);
+      }
+    // Tile-relative: the first column and row of smallest term.
+    const auto nearest = [](const double* terms, int first, int last) {
+      return static_cast<int>(std::min_element(terms + first, terms + last + 1) - terms);
+    };
+    const int a_near = nearest(azimuth_b_, r.a0 - a_first_, r.a1 - a_first_);
+    const int e_near = nearest(elevation_b_, r.e0 - e_first_, r.e1 - e_first_);
+    double& to_lmin_m = free_space_[e_near * kTile + a_near].to_lmin_m;
+    to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(azimuth_b_[a_near] + elevation_b_[e_near], lmin_));
+  }
+
+  // Each column's pairs, in input order, and the columns' FreeSpaceBounds; listed_ names the columns that have some (a small shot's tile has
   // a few of its 64).
   void list_pairs(const std::uint32_t* items, std::size_t count, const Measurement* slots) {
     for (const int i : listed_) pairs_[i].clear();
@@ -688,6 +688,7 @@ private:
         pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0, 0});
         ++column_updates_;
       });
+      bound(m);
     }
   }
 
@@ -764,7 +765,7 @@ private:
   ColumnContents contents_[kTile * kTile];  // the loaded columns' contents, stored together
   FreeSpaceBound free_space_[kTile * kTile];
   float azimuth_factor_[kTile];
-  double azimuth_b_[kTile];
+  double azimuth_b_[kTile], elevation_b_[kTile];
   int a_first_ = 0, e_first_ = 0, a_last_ = -1, e_last_ = -1;
   std::size_t column_updates_ = 0;
 };
@@ -816,7 +817,6 @@ std::size_t detail::update_band(ColumnGrid& grid, const SensorModel& model, cons
           update.reset_bounds();
         }
         const std::size_t end = std::min<std::size_t>(k + kMeasurementsPerPart, tiles.begin[t + 1]);
-        for (std::size_t j = k; j < end; ++j) update.bound(measurements.slots[tiles.items[j]]);
         update.apply_clamped(tiles.items.data() + k, end - k, measurements.slots.data());
       }
     } else {
