@@ -48,18 +48,24 @@ bool ranks_before(const Point& p, const Point& q) { return p.y != q.y ? p.y < q.
 /// insertion order, so the triangulation of a set of samples is one and the same (SampleTriangulator
 /// inserting shot after shot gives triangulate_samples' triangles) instead of depending on which of
 /// the co-circular samples came first (on a pixel grid, most ties are such squares and rectangles).
-template <class T>
-bool in_circle(const Point& a, const Point& b, const Point& c, const Point& d) {
-  const T adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
-  const T ad = adx * adx + ady * ady, bd = bdx * bdx + bdy * bdy, cd = cdx * cdx + cdy * cdy;
-  const T det = adx * (bdy * cd - bd * cdy) - ady * (bdx * cd - bd * cdx) + ad * (bdx * cdy - bdy * cdx);
-  if (det != 0) return det > 0;
+/// in_circle's tie (D = 0), out of line: the determinant alone, inlined where the triangulation tests
+/// circles, decides all but a few of them.
+[[gnu::noinline]] bool in_circle_tie(const Point& a, const Point& b, const Point& c, const Point& d) {
   std::array<std::pair<const Point*, std::int64_t>, 4> cofactor{
       {{&a, orient(b, c, d)}, {&b, -orient(a, c, d)}, {&c, orient(a, b, d)}, {&d, -orient(a, b, c)}}};
   std::sort(cofactor.begin(), cofactor.end(), [](const auto& p, const auto& q) { return ranks_before(*q.first, *p.first); });
   for (const auto& [point, value] : cofactor)
     if (value != 0) return value > 0;
   return false;  // unreachable: orient(a, b, c) > 0
+}
+
+template <class T>
+bool in_circle(const Point& a, const Point& b, const Point& c, const Point& d) {
+  const T adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
+  const T ad = adx * adx + ady * ady, bd = bdx * bdx + bdy * bdy, cd = cdx * cdx + cdy * cdy;
+  const T det = adx * (bdy * cd - bd * cdy) - ady * (bdx * cd - bd * cdx) + ad * (bdx * cdy - bdy * cdx);
+  if (det != 0) return det > 0;
+  return in_circle_tie(a, b, c, d);
 }
 
 /// Position of (x, y) along a Hilbert curve over a side x side square (side a power of two).
