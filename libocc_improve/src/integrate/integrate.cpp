@@ -101,9 +101,11 @@ T* block_aligned(T* row) {
 #endif
 }
 
-// A buffer of `count` floats (a multiple of kLaneBlock) in `storage`, starting on a block boundary.
+// A buffer of `count` floats (a multiple of kLaneBlock) in `storage`, starting on a block boundary. The
+// storage only grows: a tile's term pool is sized per tile, and resizing it down and up again would zero
+// the difference every time.
 float* aligned_floats(std::vector<float>& storage, std::size_t count) {
-  storage.resize(count + kLaneBlock);
+  if (storage.size() < count + kLaneBlock) storage.resize(count + kLaneBlock);
   const auto misalignment = reinterpret_cast<std::uintptr_t>(storage.data()) % kLaneBlockBytes;
   return storage.data() + (misalignment ? (kLaneBlockBytes - misalignment) / sizeof(float) : 0);
 }
@@ -315,7 +317,7 @@ struct ColumnPlan {
 // Adds measurements' truncated OPDFs to one column.
 class ColumnKernel {
 public:
-  explicit ColumnKernel(const ColumnGrid& grid) : depth_(grid.geometry().depth()) {
+  explicit ColumnKernel(const ColumnGrid& grid) : depth_(grid.geometry().depth()), bins_(depth_.bins()) {
     clamped_ = grid.clamped();
     lmin_ = grid.log_odds_min();
     lmax_ = grid.log_odds_max();
@@ -357,8 +359,11 @@ public:
   }
 
   /// Bins from the first centre above it are beyond the support's end for angular term B (eq. 1's skip).
+  static double support_last(double rho_bar, double angular_term, double sigma) {
+    return rho_bar + sigma * skip_offset_sigmas(angular_term);
+  }
   int support_end(double rho_bar, double angular_term, double sigma) const {
-    return depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
+    return depth_.first_centre_above(support_last(rho_bar, angular_term, sigma));
   }
 
   /// Exact mode: adds one measurement to the column. `terms` are the measurement's, with a = e^-B the
@@ -398,15 +403,23 @@ public:
       TileMeasurement& tm = measurements[p.measurement];
       p.first = p.end = 0;  // skipped, unless evaluated below
       const int keep = tm.run_keep;
-      if (p.angular_term >= kNegligibleB && run_end >= keep) continue;  // b')
       const Measurement& m = *tm.m;
+      if (p.angular_term >= kNegligibleB) {
+        if (run_end >= keep) continue;  // b')
+        if (run_end == bins_ || support_last(m.rho, p.angular_term, m.sigma) < depth_.centre(run_end)) continue;
+      }
       p.first = p.end = support_end(m.rho, p.angular_term, m.sigma);
       int run_before = run_end;
       if (run_end > keep && keep < p.end) {  // a): the run taken back from keep
         run_end = keep;
       } else if (run_end == tail) {  // b) (nothing materialised)
-        const int fresh = std::min(depth_.first_centre_above(m.rho + m.sigma * to_lmin_offset_sigmas(p.angular_term, lmin_)), p.end);
-        if (fresh > run_end) run_before = run_end = tail = odds_end = fresh;
+        // It moves the run only when the bin at the run's end lies below the bound (its first centre above
+        // the bound is beyond the run's end): that comparison first, the lookup only then.
+        const double to_lmin_last = m.rho + m.sigma * to_lmin_offset_sigmas(p.angular_term, lmin_);
+        if (run_end < bins_ && depth_.centre(run_end) <= to_lmin_last) {
+          const int fresh = std::min(depth_.first_centre_above(to_lmin_last), p.end);
+          if (fresh > run_end) run_before = run_end = tail = odds_end = fresh;
+        }
       }
       if (run_end >= p.end) continue;
       p.first = run_end;
@@ -480,6 +493,7 @@ private:
   }
 
   const DepthAxis& depth_;
+  const int bins_;
   bool clamped_;
   float lmin_, lmax_, omin_, omax_;
 };
@@ -650,17 +664,12 @@ private:
 
   // Clamped mode: folds measurement m into the FreeSpaceBound of its columns, from the angular terms
   // for_each_column_of has just computed (every measurement of a part, before the part's columns are
-  // loaded: a column loaded in that part takes them). front_m takes every measurement of the column;
-  // to_lmin_m only the one at the measurement's smallest B in the tile (its own column where the tile
-  // holds it): a bound from some of the measurements is still a bound, and that one reaches furthest.
-  void bound(const Measurement& m) {
+  // loaded: a column loaded in that part takes them). front_m takes every measurement of the column (as
+  // list_pairs lists them); to_lmin_m only the one at the measurement's smallest B in the tile (its own
+  // column where the tile holds it): a bound from some of the measurements is still a bound, and that
+  // one reaches furthest.
+  void bound_to_lmin(const Measurement& m) {
     const TileColumns r = columns_of(m);
-    const double front_m = m.rho + m.sigma * kNonPositiveT;
-    for (int e = r.e0; e <= r.e1; ++e)
-      for (int a = r.a0; a <= r.a1; ++a) {
-        double& f = free_space_[slot(a, e)].front_m;
-        f = std::min(f, front_m);
-      }
     // Tile-relative: the first column and row of smallest term.
     const auto nearest = [](const double* terms, int first, int last) {
       return static_cast<int>(std::min_element(terms + first, terms + last + 1) - terms);
@@ -681,14 +690,18 @@ private:
       const Measurement& m = slots[items[k]];
       measurements_[k] = {&m, g_.depth().first_centre_above(m.rho + m.sigma * kNonPositiveT),
                           std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0};
+      const double front_m = m.rho + m.sigma * kNonPositiveT;
       for_each_column_of(m, [&](int a, int e, double b, float factor) {
         const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
-        std::vector<PairPlan>& pairs = pairs_[slot(a, e)];
-        if (pairs.empty()) listed_.push_back(slot(a, e));
+        const int i = slot(a, e);
+        std::vector<PairPlan>& pairs = pairs_[i];
+        if (pairs.empty()) listed_.push_back(i);
         pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0, 0});
+        double& f = free_space_[i].front_m;
+        f = std::min(f, front_m);
         ++column_updates_;
       });
-      bound(m);
+      bound_to_lmin(m);
     }
   }
 
