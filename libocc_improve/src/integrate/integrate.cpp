@@ -388,7 +388,7 @@ public:
   ///  a) bins of the leading L_min run where its t <= kNonPositiveT (logit P_s <= 0 there);
   ///  b) bins below bound b) of a column with nothing materialised (they end at L_min: they join the run);
   ///  b') all of a pair with B >= kNegligibleB whose support lies in the run (its end is in front of
-  ///     t = kNonPositiveT, so a) covers it).
+  ///     t = kNonPositiveT, so a) covers it), or ends at or in front of the run's end (nothing to do).
   /// The run is followed as the pairs materialise it (a pair that reaches into it with t > kNonPositiveT
   /// takes it back from there), not as updates clamp voxels into it: a pair may then evaluate voxels the
   /// pair-by-pair kernel skipped by a), b) or b') after its per-pair run scans, which leaves them where
@@ -406,6 +406,10 @@ public:
       const Measurement& m = *tm.m;
       if (p.angular_term >= kNegligibleB) {
         if (run_end >= keep) continue;  // b')
+        // Such a support ends in front of keep (skip_offset_sigmas <= -1.9 < kNonPositiveT), so a) cannot
+        // take the run back and b) cannot extend it past the support's end: the pair does nothing when that
+        // end is at or in front of the run's, i.e. when its last depth lies below the run's first centre
+        // (support_end's own comparison, without the lookup).
         if (run_end == bins_ || support_last(m.rho, p.angular_term, m.sigma) < depth_.centre(run_end)) continue;
       }
       p.first = p.end = support_end(m.rho, p.angular_term, m.sigma);
