@@ -407,6 +407,60 @@ TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {
   EXPECT_NEAR(v.probability, 0.001, 1e-6);
 }
 
+// The insertion refreshes a column's surface from the contents it has just written (refresh_column_surface's
+// ColumnContents overload); the store may have joined leading values equal to the run's value to the run,
+// so the stored column is another representation of the same values, with the same surface.
+TEST(Integrate, SurfaceOfWrittenContentsEqualsTheStoredColumns) {
+  const SensorPreset p = kinect_v1_paper();
+  ColumnGrid grid{GridGeometry(p.geometry)};
+  const float lmin = grid.log_odds_min(), lmax = grid.log_odds_max();
+  const int bins = grid.geometry().depth().bins();
+  // Windows after a run of L_min: leading L_min values the store merges, a peak (clamped or not) with ties
+  // and a run at the peak's value, nothing above 0 (the tail wins), and a window reaching the last bin.
+  // The peak as the window's last value, a window rising to the grid's end (the surface beyond it) and a
+  // run holding the maximum itself (a map loaded from elsewhere) cover every read of a value.
+  // Each with the surface read by hand: its bin (from the window's start, -1 for the grid's end) and value.
+  struct Case {
+    std::vector<float> window;
+    float run_value;
+    bool to_the_end;
+    int surface_offset;
+    float surface_value;
+  };
+  const std::vector<Case> cases{
+      {{lmin, lmin, -1.0f, 0.5f, 2.0f, 2.0f, 1.0f, 0.0f}, lmin, false, 4, 2.0f},
+      {{lmin, lmax, lmax, lmax, 0.3f}, lmin, false, 2, lmax},  // saturated: the centre of the run
+      {{lmin, lmin, lmin, -0.5f, -0.2f}, lmin, false, 5, 0.0f},  // the untouched tail is the highest
+      {{lmin, -1.0f, 1.5f, 1.5f + 5e-6f, 0.2f}, lmin, true, 2, 1.5f},  // a tie within the tolerance
+      {{lmin, -1.0f, 0.5f, 2.5f}, lmin, false, 3, 2.5f},
+      {{lmin, lmin, -1.5f, -1.0f, -0.5f}, lmin, true, -1, lmin},  // rising past the grid: bins(), P of bin 0
+      {{1.0f, 1.0f, 0.5f}, 1.0f, false, -40, 1.0f},  // the run holds the maximum: bin 0
+      {{lmax, lmax, 0.3f}, lmax, false, -20, lmax},  // saturated from bin 0 to 41: its centre, bin 20
+  };
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    const ColumnIndex column = static_cast<ColumnIndex>(k);
+    const auto& w = cases[k].window;
+    const std::int32_t run = cases[k].to_the_end ? bins - static_cast<std::int32_t>(w.size()) : 40;
+    const ColumnContents written{column, run, cases[k].run_value, w.data(), static_cast<std::uint32_t>(w.size())};
+    grid.assign(written);
+    const ColumnData* stored = grid.find(column);
+    ASSERT_NE(stored, nullptr);
+    EXPECT_GT(stored->uniform_end, run) << "the store joined the leading values equal to the run's";
+    const SurfaceVoxel from_contents = column_surface(written, grid), from_store = column_surface(stored, grid);
+    EXPECT_EQ(from_contents, from_store) << "case " << k;
+    EXPECT_EQ(from_store.bin, cases[k].surface_offset < 0 && cases[k].to_the_end ? bins : run + cases[k].surface_offset)
+        << "case " << k;
+    EXPECT_FLOAT_EQ(from_store.probability, static_cast<float>(probability_from_logit(cases[k].surface_value)))
+        << "case " << k;
+    EXPECT_FALSE(from_contents.unknown);
+    SurfaceMap surface = compute_surface(ColumnGrid{grid.geometry()});
+    EXPECT_TRUE(refresh_column_surface(grid, written, surface));
+    EXPECT_EQ(surface.at(column), from_store);
+    EXPECT_FALSE(refresh_column_surface(grid, written, surface)) << "unchanged the second time";
+  }
+  EXPECT_TRUE(column_surface(ColumnContents{}, grid).unknown) << "empty contents: never touched";
+}
+
 TEST(Integrate, DepthImageSizeMismatchThrows) {
   const SensorPreset p = kinect_v1_paper();
   ColumnGrid grid{GridGeometry(p.geometry)};

@@ -622,7 +622,7 @@ public:
     for (std::size_t i = 0; i < stored; ++i) {
       const ColumnIndex c = contents_[i].column;
       grid_.mark_changed(c);
-      if (surface && refresh_column_surface(grid_, c, grid_.find(c), *surface)) surface_changed.push_back(c);
+      if (surface && refresh_column_surface(grid_, contents_[i], *surface)) surface_changed.push_back(c);
     }
   }
 

@@ -28,27 +28,40 @@ float window_max(const float* v, std::size_t n) {
   for (std::size_t k = 1; k < kLanes; ++k) best = std::max(best, lane[k]);
   return best;
 }
+
+bool set_if_changed(SurfaceMap& surface, ColumnIndex column, const SurfaceVoxel& v) {
+  if (v == surface.at(column)) return false;
+  surface.set(column, v);
+  return true;
+}
+
+// Bin b's log-odds in contents c (ColumnData::value for a column's contents).
+float value_at(const ColumnContents& c, int b) {
+  if (b < c.uniform_end) return c.uniform_value;
+  const auto i = static_cast<std::uint32_t>(b - c.uniform_end);
+  return i < c.count ? c.values[i] : 0.0f;
+}
 }  // namespace
 
-SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
+SurfaceVoxel column_surface(const ColumnContents& c, const ColumnGrid& grid) {
   SurfaceVoxel s;
-  if (c == nullptr || !c->touched()) return s;
+  if (c.uniform_end == 0 && c.count == 0) return s;  // never touched
   const DepthAxis& depth = grid.geometry().depth();
   const int bins = depth.bins();
-  const int uniform_end = std::min<int>(c->uniform_end, bins);
-  const int window_end = std::min<int>(c->window_end(), bins);
+  const int uniform_end = std::min<int>(c.uniform_end, bins);
+  const int window_end = std::min<int>(c.uniform_end + static_cast<int>(c.count), bins);
 
   // Largest value over the uniform run, the window and the untouched tail (log-odds 0).
-  float best = window_max(c->window.data(), static_cast<std::size_t>(window_end - uniform_end));
-  if (uniform_end > 0) best = std::max(best, c->uniform_value);
+  float best = window_max(c.values, static_cast<std::size_t>(window_end - uniform_end));
+  if (uniform_end > 0) best = std::max(best, c.uniform_value);
   if (window_end < bins) best = std::max(best, 0.0f);
 
   // The nearest run of bins within the tie tolerance of it, walked segment by segment so the uniform run
   // and the tail cost O(1).
   const float floor_value = best - kSurfaceTieTolerance;
-  const auto window_at = [&](int b) { return c->window[static_cast<std::size_t>(b - c->uniform_end)]; };
+  const auto window_at = [&](int b) { return c.values[b - c.uniform_end]; };
   int first = window_end;  // the tail, unless the uniform run or a window bin comes first
-  if (uniform_end > 0 && c->uniform_value >= floor_value) {
+  if (uniform_end > 0 && c.uniform_value >= floor_value) {
     first = 0;
   } else {
     for (int b = uniform_end; b < window_end; ++b)
@@ -71,7 +84,7 @@ SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
   if (last == bins - 1 && best < -kSurfaceTieTolerance) {  // rising to a peak beyond the grid
     s.bin = bins;
     s.depth_m = static_cast<float>(depth.max());
-    s.probability = static_cast<float>(probability_from_logit(c->value(0)));
+    s.probability = static_cast<float>(probability_from_logit(value_at(c, 0)));
     return s;
   }
   if (grid.clamped() && best >= grid.log_odds_max()) {  // saturated peak: centre of the run
@@ -81,15 +94,21 @@ SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
     s.bin = first;
     s.depth_m = static_cast<float>(depth.centre(first));
   }
-  s.probability = static_cast<float>(probability_from_logit(c->value(s.bin)));
+  s.probability = static_cast<float>(probability_from_logit(value_at(c, s.bin)));
   return s;
 }
 
+SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
+  if (c == nullptr) return {};
+  return column_surface(ColumnContents{0, c->uniform_end, c->uniform_value, c->window.data(), static_cast<std::uint32_t>(c->window.size())}, grid);
+}
+
 bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface) {
-  const SurfaceVoxel v = column_surface(data, grid);
-  if (v == surface.at(column)) return false;
-  surface.set(column, v);
-  return true;
+  return set_if_changed(surface, column, column_surface(data, grid));
+}
+
+bool refresh_column_surface(const ColumnGrid& grid, const ColumnContents& written, SurfaceMap& surface) {
+  return set_if_changed(surface, written.column, column_surface(written, grid));
 }
 
 SurfaceMap compute_surface(const ColumnGrid& grid, int threads) {

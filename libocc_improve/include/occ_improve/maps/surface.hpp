@@ -51,6 +51,10 @@ struct SurfaceMap {
 
 /// The surface voxel of one column (nullptr column = never touched).
 SurfaceVoxel column_surface(const ColumnData* column, const ColumnGrid& grid);
+/// The same from a column's contents (uniform run, then `count` values; both empty = never touched): the
+/// surface of the column those contents are written to, whether or not the store has joined leading
+/// values equal to the run's value to the run.
+SurfaceVoxel column_surface(const ColumnContents& column, const ColumnGrid& grid);
 
 inline SurfaceVoxel SurfaceMap::at(std::size_t c) const { return {depth_m[c], probability[c], bin[c], unknown[c] != 0}; }
 inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
@@ -64,6 +68,9 @@ inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
 /// true when it changed (depth, P, bin or flag). The one step of update_surface and of the insertion
 /// that keeps a surface current.
 bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface);
+/// The same for contents just written to the grid (ColumnGrid::store_windows), without looking the column
+/// up again: the insertion's step, with the values still in its cache.
+bool refresh_column_surface(const ColumnGrid& grid, const ColumnContents& written, SurfaceMap& surface);
 
 /// Full computation over the grid (threads: 0 = hardware concurrency).
 SurfaceMap compute_surface(const ColumnGrid& grid, int threads = 0);
