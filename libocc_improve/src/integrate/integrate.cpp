@@ -358,7 +358,8 @@ public:
     return {column, s.run_end, s.run_end > 0 ? lmin_ : 0.0f, s.v + s.run_end, static_cast<std::uint32_t>(s.tail - s.run_end)};
   }
 
-  /// Bins from the first centre above it are beyond the support's end for angular term B (eq. 1's skip).
+  /// The support's last depth for angular term B (eq. 1's skip): bins whose centre lies above it are beyond
+  /// the support's end.
   static double support_last(double rho_bar, double angular_term, double sigma) {
     return rho_bar + sigma * skip_offset_sigmas(angular_term);
   }
@@ -417,8 +418,8 @@ public:
       if (run_end > keep && keep < p.end) {  // a): the run taken back from keep
         run_end = keep;
       } else if (run_end == tail) {  // b) (nothing materialised)
-        // It moves the run only when the bin at the run's end lies below the bound (its first centre above
-        // the bound is beyond the run's end): that comparison first, the lookup only then.
+        // It moves the run only when the centre at the run's end lies at or below the bound (the first
+        // centre above the bound is then beyond the run's end): that comparison first, the lookup only then.
         const double to_lmin_last = m.rho + m.sigma * to_lmin_offset_sigmas(p.angular_term, lmin_);
         if (run_end < bins_ && depth_.centre(run_end) <= to_lmin_last) {
           const int fresh = std::min(depth_.first_centre_above(to_lmin_last), p.end);
@@ -666,12 +667,12 @@ private:
     }
   }
 
-  // Clamped mode: folds measurement m into the FreeSpaceBound of its columns, from the angular terms
-  // for_each_column_of has just computed (every measurement of a part, before the part's columns are
-  // loaded: a column loaded in that part takes them). front_m takes every measurement of the column (as
-  // list_pairs lists them); to_lmin_m only the one at the measurement's smallest B in the tile (its own
-  // column where the tile holds it): a bound from some of the measurements is still a bound, and that
-  // one reaches furthest.
+  // Clamped mode: folds measurement m into the FreeSpaceBound of its columns (every measurement of a
+  // part, before the part's columns are loaded: a column loaded in that part takes them). front_m takes
+  // every measurement of the column, as list_pairs lists them; to_lmin_m, here, from the angular terms
+  // for_each_column_of has just computed, only the one at the measurement's smallest B in the tile (its own
+  // column where the tile holds it): a bound from some of the measurements is still a bound, and that one
+  // reaches furthest.
   void bound_to_lmin(const Measurement& m) {
     const TileColumns r = columns_of(m);
     // Tile-relative: the first column and row of smallest term.
@@ -692,9 +693,9 @@ private:
     measurements_.resize(count);
     for (std::size_t k = 0; k < count; ++k) {
       const Measurement& m = slots[items[k]];
-      measurements_[k] = {&m, g_.depth().first_centre_above(m.rho + m.sigma * kNonPositiveT),
-                          std::numeric_limits<int>::max(), std::numeric_limits<int>::min(), 0};
-      const double front_m = m.rho + m.sigma * kNonPositiveT;
+      const double front_m = m.rho + m.sigma * kNonPositiveT;  // where t = kNonPositiveT
+      measurements_[k] = {&m, g_.depth().first_centre_above(front_m), std::numeric_limits<int>::max(),
+                          std::numeric_limits<int>::min(), 0};
       for_each_column_of(m, [&](int a, int e, double b, float factor) {
         const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
         const int i = slot(a, e);

@@ -39,17 +39,8 @@ std::int64_t orient(const Point& a, const Point& b, const Point& c) {
 /// The order of the symbolic perturbation below: a strict total order on distinct points.
 bool ranks_before(const Point& p, const Point& q) { return p.y != q.y ? p.y < q.y : p.x < q.x; }
 
-/// Whether d lies inside the circle through a, b, c (orient(a, b, c) > 0), with co-circular points
-/// decided by a symbolic perturbation (simulation of simplicity): each point's lift x^2 + y^2 is raised
-/// by an infinitesimal, larger for a point that ranks later. The determinant D of rows (x, y, x^2 + y^2, 1)
-/// for a, b, c, d is linear in each lift, with cofactors orient(b, c, d), -orient(a, c, d), orient(a, b, d)
-/// and -orient(a, b, c); where D = 0 its sign is that of the cofactor of the latest-ranked point among
-/// those whose cofactor is not 0 (d's never is). Every tie is thereby decided the same way whatever the
-/// insertion order, so the triangulation of a set of samples is one and the same (SampleTriangulator
-/// inserting shot after shot gives triangulate_samples' triangles) instead of depending on which of
-/// the co-circular samples came first (on a pixel grid, most ties are such squares and rectangles).
-/// in_circle's tie (D = 0), out of line: the determinant alone, inlined where the triangulation tests
-/// circles, decides all but a few of them.
+/// in_circle's tie (D = 0), by the symbolic perturbation in_circle's comment describes; out of line, so
+/// that the determinant, which decides all but a few tests, inlines where the triangulation tests circles.
 [[gnu::noinline]] bool in_circle_tie(const Point& a, const Point& b, const Point& c, const Point& d) {
   std::array<std::pair<const Point*, std::int64_t>, 4> cofactor{
       {{&a, orient(b, c, d)}, {&b, -orient(a, c, d)}, {&c, orient(a, b, d)}, {&d, -orient(a, b, c)}}};
@@ -59,6 +50,15 @@ bool ranks_before(const Point& p, const Point& q) { return p.y != q.y ? p.y < q.
   return false;  // unreachable: orient(a, b, c) > 0
 }
 
+/// Whether d lies inside the circle through a, b, c (orient(a, b, c) > 0), with co-circular points
+/// decided by a symbolic perturbation (simulation of simplicity): each point's lift x^2 + y^2 is raised
+/// by an infinitesimal, larger for a point that ranks later. The determinant D of rows (x, y, x^2 + y^2, 1)
+/// for a, b, c, d is linear in each lift, with cofactors orient(b, c, d), -orient(a, c, d), orient(a, b, d)
+/// and -orient(a, b, c); where D = 0 its sign is that of the cofactor of the latest-ranked point among
+/// those whose cofactor is not 0 (d's never is). Every tie is thereby decided the same way whatever the
+/// insertion order, so the triangulation of a set of samples is one and the same (SampleTriangulator
+/// inserting shot after shot gives triangulate_samples' triangles) instead of depending on which of
+/// the co-circular samples came first (on a pixel grid, most ties are such squares and rectangles).
 template <class T>
 bool in_circle(const Point& a, const Point& b, const Point& c, const Point& d) {
   const T adx = a.x - d.x, ady = a.y - d.y, bdx = b.x - d.x, bdy = b.y - d.y, cdx = c.x - d.x, cdy = c.y - d.y;
