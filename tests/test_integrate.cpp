@@ -407,9 +407,9 @@ TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {
   EXPECT_NEAR(v.probability, 0.001, 1e-6);
 }
 
-// The insertion refreshes a column's surface from the contents it has just written (refresh_column_surface's
-// ColumnContents overload); the store may have joined leading values equal to the run's value to the run,
-// so the stored column is another representation of the same values, with the same surface.
+// The insertion refreshes a column's surface from the contents it has just written
+// (detail::refresh_written_column_surface); the store may have joined leading values equal to the run's
+// value to the run, so the stored column is another representation of the same values, with the same surface.
 TEST(Integrate, SurfaceOfWrittenContentsEqualsTheStoredColumns) {
   const SensorPreset p = kinect_v1_paper();
   ColumnGrid grid{GridGeometry(p.geometry)};
@@ -419,7 +419,8 @@ TEST(Integrate, SurfaceOfWrittenContentsEqualsTheStoredColumns) {
   // and a run at the peak's value, nothing above 0 (the tail wins), and a window reaching the last bin.
   // The peak as the window's last value, a window rising to the grid's end (the surface beyond it) and a
   // run holding the maximum itself (a map loaded from elsewhere) cover every read of a value.
-  // Each with the surface read by hand: its bin (from the window's start, -1 for the grid's end) and value.
+  // Each with the surface read by hand: its bin as an offset from the run's end (where the window starts;
+  // negative: inside the run), or -1 with to_the_end for bins() (the surface past the grid), and its value.
   struct Case {
     std::vector<float> window;
     float run_value;
@@ -454,9 +455,9 @@ TEST(Integrate, SurfaceOfWrittenContentsEqualsTheStoredColumns) {
         << "case " << k;
     EXPECT_FALSE(from_contents.unknown);
     SurfaceMap surface = compute_surface(ColumnGrid{grid.geometry()});
-    EXPECT_TRUE(refresh_column_surface(grid, written, surface));
+    EXPECT_TRUE(detail::refresh_written_column_surface(grid, written, surface));
     EXPECT_EQ(surface.at(column), from_store);
-    EXPECT_FALSE(refresh_column_surface(grid, written, surface)) << "unchanged the second time";
+    EXPECT_FALSE(detail::refresh_written_column_surface(grid, written, surface)) << "unchanged the second time";
   }
   EXPECT_TRUE(column_surface(ColumnContents{}, grid).unknown) << "empty contents: never touched";
 }

@@ -3,7 +3,8 @@
 // construction is not timed). Args: frame (0 = capture0001, 1 = mOSD learn0), threads, preset
 // (bench::PresetArg: 0 = kinect_v1 with the frame's fitted camera, 1 = kinect_v1_paper).
 // Counters: insert_ms (insertion + surface), improvement_ms, total_ms; targets on kinect_v1 with 2 threads:
-// 10 / 3 / 15 ms (30 ms end to end on 1 thread); store_mb, the store the frame leaves (written once at least).
+// 10 / 3 / 15 ms (30 ms end to end on 1 thread); store_mb, the store's heap after the frame
+// (ColumnGrid::memory_bytes: its windows, records and spare capacity).
 // BM_MemoryBandwidth beside it: what this machine's memory moves per second (a copy of a buffer far beyond
 // the caches, on 1 and 2 threads: bytes read + written), against which a frame's memory traffic is weighed
 // (docs/PERFORMANCE.md: "what bounds the time").
@@ -66,7 +67,7 @@ void BM_FrameThroughMapper(benchmark::State& state) {
 BENCHMARK(BM_FrameThroughMapper)->ArgNames({"frame", "threads", "paper"})->ArgsProduct({{0, 1}, {1, 2}, {0, 1}})
     ->Unit(benchmark::kMillisecond)->Iterations(5)->UseRealTime();
 
-// Each thread copies its own buffer of range(0) MB (far beyond the last-level cache) back and forth;
+// Each thread copies between its own two buffers of range(0) MiB (far beyond the last-level cache);
 // bytes_per_second counts what is read and what is written.
 void BM_MemoryBandwidth(benchmark::State& state) {
   const std::size_t bytes = static_cast<std::size_t>(state.range(0)) << 20;

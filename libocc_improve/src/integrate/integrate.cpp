@@ -404,16 +404,16 @@ public:
       TileMeasurement& tm = measurements[p.measurement];
       p.first = p.end = 0;  // skipped, unless evaluated below
       const int keep = tm.run_keep;
+      const bool negligible = p.angular_term >= kNegligibleB;
+      if (negligible && run_end >= keep) continue;  // b')
       const Measurement& m = *tm.m;
-      if (p.angular_term >= kNegligibleB) {
-        if (run_end >= keep) continue;  // b')
-        // Such a support ends in front of keep (skip_offset_sigmas <= -1.9 < kNonPositiveT), so a) cannot
-        // take the run back and b) cannot extend it past the support's end: the pair does nothing when that
-        // end is at or in front of the run's, i.e. when its last depth lies below the run's first centre
-        // (support_end's own comparison, without the lookup).
-        if (run_end == bins_ || support_last(m.rho, p.angular_term, m.sigma) < depth_.centre(run_end)) continue;
-      }
-      p.first = p.end = support_end(m.rho, p.angular_term, m.sigma);
+      const double last = support_last(m.rho, p.angular_term, m.sigma);
+      // Past b') such a pair has run_end < keep, so a) cannot take the run back, and b) cannot extend it
+      // past the support's end: it does nothing when that end is at or in front of the run's, i.e. when the
+      // support's last depth lies below the centre at the run's end (first_centre_above's own comparison,
+      // without its lookup).
+      if (negligible && (run_end >= bins_ || last < depth_.centre(run_end))) continue;
+      p.first = p.end = depth_.first_centre_above(last);
       int run_before = run_end;
       if (run_end > keep && keep < p.end) {  // a): the run taken back from keep
         run_end = keep;
@@ -623,7 +623,7 @@ public:
     for (std::size_t i = 0; i < stored; ++i) {
       const ColumnIndex c = contents_[i].column;
       grid_.mark_changed(c);
-      if (surface && refresh_column_surface(grid_, contents_[i], *surface)) surface_changed.push_back(c);
+      if (surface && detail::refresh_written_column_surface(grid_, contents_[i], *surface)) surface_changed.push_back(c);
     }
   }
 
@@ -667,12 +667,12 @@ private:
     }
   }
 
-  // Clamped mode: folds measurement m into the FreeSpaceBound of its columns (every measurement of a
-  // part, before the part's columns are loaded: a column loaded in that part takes them). front_m takes
-  // every measurement of the column, as list_pairs lists them; to_lmin_m, here, from the angular terms
-  // for_each_column_of has just computed, only the one at the measurement's smallest B in the tile (its own
-  // column where the tile holds it): a bound from some of the measurements is still a bound, and that one
-  // reaches furthest.
+  // Clamped mode: folds measurement m into the to_lmin_m of one column's FreeSpaceBound, from the angular
+  // terms for_each_column_of has just computed (every measurement of a part, before the part's columns are
+  // loaded: a column loaded in that part takes them; list_pairs gathers front_m, which takes every
+  // measurement of a column). Only the column at the measurement's smallest B in the tile (its own column
+  // where the tile holds it): a bound from some of the measurements is still a bound, and that one reaches
+  // furthest.
   void bound_to_lmin(const Measurement& m) {
     const TileColumns r = columns_of(m);
     // Tile-relative: the first column and row of smallest term.

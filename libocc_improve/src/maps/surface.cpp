@@ -35,12 +35,6 @@ bool set_if_changed(SurfaceMap& surface, ColumnIndex column, const SurfaceVoxel&
   return true;
 }
 
-// Bin b's log-odds in contents c (ColumnData::value for a column's contents).
-float value_at(const ColumnContents& c, int b) {
-  if (b < c.uniform_end) return c.uniform_value;
-  const auto i = static_cast<std::uint32_t>(b - c.uniform_end);
-  return i < c.count ? c.values[i] : 0.0f;
-}
 }  // namespace
 
 SurfaceVoxel column_surface(const ColumnContents& c, const ColumnGrid& grid) {
@@ -84,7 +78,7 @@ SurfaceVoxel column_surface(const ColumnContents& c, const ColumnGrid& grid) {
   if (last == bins - 1 && best < -kSurfaceTieTolerance) {  // rising to a peak beyond the grid
     s.bin = bins;
     s.depth_m = static_cast<float>(depth.max());
-    s.probability = static_cast<float>(probability_from_logit(value_at(c, 0)));
+    s.probability = static_cast<float>(probability_from_logit(c.value(0)));
     return s;
   }
   if (grid.clamped() && best >= grid.log_odds_max()) {  // saturated peak: centre of the run
@@ -94,12 +88,13 @@ SurfaceVoxel column_surface(const ColumnContents& c, const ColumnGrid& grid) {
     s.bin = first;
     s.depth_m = static_cast<float>(depth.centre(first));
   }
-  s.probability = static_cast<float>(probability_from_logit(value_at(c, s.bin)));
+  s.probability = static_cast<float>(probability_from_logit(c.value(s.bin)));
   return s;
 }
 
 SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
   if (c == nullptr) return {};
+  // The column's index plays no part in its surface.
   return column_surface(ColumnContents{0, c->uniform_end, c->uniform_value, c->window.data(), static_cast<std::uint32_t>(c->window.size())}, grid);
 }
 
@@ -107,7 +102,7 @@ bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const Co
   return set_if_changed(surface, column, column_surface(data, grid));
 }
 
-bool refresh_column_surface(const ColumnGrid& grid, const ColumnContents& written, SurfaceMap& surface) {
+bool detail::refresh_written_column_surface(const ColumnGrid& grid, const ColumnContents& written, SurfaceMap& surface) {
   return set_if_changed(surface, written.column, column_surface(written, grid));
 }
 

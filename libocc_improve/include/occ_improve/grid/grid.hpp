@@ -81,6 +81,16 @@ private:
   std::uint32_t place_bins_ = 0;  // bins its place in the tile's storage holds (>= size_)
 };
 
+namespace detail {
+/// Bin `bin`'s log-odds in a column holding `uniform_value` over [0, uniform_end), then `count` values, then
+/// untouched bins (0): ColumnData's and ColumnContents' value().
+inline float column_value(std::int32_t uniform_end, float uniform_value, const float* values, std::size_t count, int bin) {
+  if (bin < uniform_end) return uniform_value;
+  const auto i = static_cast<std::size_t>(bin - uniform_end);
+  return i < count ? values[i] : 0.0f;
+}
+}  // namespace detail
+
 /// One ray's voxels: a uniform run, a dense window, an untouched tail.
 struct ColumnData {
   std::int32_t uniform_end = 0;  ///< bins [0, uniform_end) hold uniform_value
@@ -88,11 +98,7 @@ struct ColumnData {
   ColumnWindow window;  ///< bins [uniform_end, uniform_end + window.size())
 
   std::int32_t window_end() const { return uniform_end + static_cast<std::int32_t>(window.size()); }
-  float value(int bin) const {
-    if (bin < uniform_end) return uniform_value;
-    const int i = bin - uniform_end;
-    return i < static_cast<int>(window.size()) ? window[static_cast<std::size_t>(i)] : 0.0f;
-  }
+  float value(int bin) const { return detail::column_value(uniform_end, uniform_value, window.data(), window.size(), bin); }
   bool touched() const { return uniform_end > 0 || !window.empty(); }
 };
 
@@ -104,6 +110,8 @@ struct ColumnContents {
   float uniform_value = 0.0f;
   const float* values = nullptr;
   std::uint32_t count = 0;
+
+  float value(int bin) const { return detail::column_value(uniform_end, uniform_value, values, count, bin); }
 };
 
 class ColumnGrid {

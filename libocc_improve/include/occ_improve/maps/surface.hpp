@@ -68,9 +68,12 @@ inline void SurfaceMap::set(std::size_t c, const SurfaceVoxel& v) {
 /// true when it changed (depth, P, bin or flag). The one step of update_surface and of the insertion
 /// that keeps a surface current.
 bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface);
-/// The same for contents just written to the grid (ColumnGrid::store_windows), without looking the column
-/// up again: the insertion's step, with the values still in its cache.
-bool refresh_column_surface(const ColumnGrid& grid, const ColumnContents& written, SurfaceMap& surface);
+namespace detail {
+/// refresh_column_surface for contents the caller has just written to the grid (ColumnGrid::store_windows),
+/// without looking the column up again: the insertion's step, with the values still in its cache. The
+/// contents must be what the grid now holds for written.column, or the surface falls out of step.
+bool refresh_written_column_surface(const ColumnGrid& grid, const ColumnContents& written, SurfaceMap& surface);
+}  // namespace detail
 
 /// Full computation over the grid (threads: 0 = hardware concurrency).
 SurfaceMap compute_surface(const ColumnGrid& grid, int threads = 0);
