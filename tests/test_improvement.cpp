@@ -224,6 +224,33 @@ TEST(Improvement, WindowsOnBinBoundariesStillMatchTheOneRayDefinition) {
       ASSERT_NEAR(ray_improvement(g, model, surface, a, e), map.value[g.column(a, e)], 1e-6) << a << ", " << e;
 }
 
+// A large update (over 20000 rays: the parallel row loop) on the threads the caller gives: the same values
+// on one thread and on two, those of the full map; a negative count is refused.
+TEST(Improvement, IncrementalUpdateRunsOnTheThreadsGiven) {
+  const SensorPreset p = kinect_v1(kinect_v1_intrinsics());
+  const GridGeometry g(p.geometry);
+  const SensorModel model(p.model);
+  ColumnGrid grid(g);
+  const auto points = sample::generate_scene().points();
+  insert_points(grid, model, PointSpan::from(points));
+  SurfaceMap surface = compute_surface(grid);
+  ImprovementMap one = compute_improvement(g, model, surface), two = one;
+  std::vector<ColumnIndex> changed;
+  for (int e = 100; e < 200; ++e)
+    for (int a = 0; a < g.width(); a += 2) {
+      const ColumnIndex c = g.column(a, e);
+      surface.depth_m[c] *= 1.01f;
+      changed.push_back(c);
+    }
+  const std::vector<ColumnIndex> rays_one = update_improvement(g, model, surface, changed, one, 1);
+  const std::vector<ColumnIndex> rays_two = update_improvement(g, model, surface, changed, two, 2);
+  EXPECT_GT(rays_one.size(), 20000u);
+  EXPECT_EQ(rays_one, rays_two);
+  EXPECT_EQ(one.value, two.value);
+  EXPECT_EQ(one.value, compute_improvement(g, model, surface, 1).value);
+  EXPECT_THROW(update_improvement(g, model, surface, changed, one, -1), InvalidParameter);
+}
+
 TEST(Improvement, IncrementalUpdateRecomputesExactlyTheAffectedRays) {
   const SensorPreset p = kinect_v1_paper();
   const GridGeometry g = paper_crop(100, 100, 64, 48);

@@ -106,7 +106,9 @@ MapperReport Mapper::insert_now(PointSpan points, const InsertionOptions& option
   grid_.take_changed_columns();  // accounted for by `changed`
   report.surface_columns_changed = changed.size();
   const auto start = SteadyClock::now();
-  const std::vector<ColumnIndex> rays = update_improvement(grid_.geometry(), model_, surface_, changed, improvement_);
+  // On the threads the caller gave the insertion: one means one for the whole frame.
+  const std::vector<ColumnIndex> rays =
+      update_improvement(grid_.geometry(), model_, surface_, changed, improvement_, options.threads);
   report.rays_recomputed = rays.size();
   mask_improvement(column_mask_, rays, improvement_);  // the recomputed rays outside the mask stay NaN
   if (pyramid_) {

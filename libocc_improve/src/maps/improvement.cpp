@@ -311,11 +311,12 @@ ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorMod
 std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const SensorModel& model,
                                             const SurfaceMap& surface,
                                             const std::vector<ColumnIndex>& changed_surface_columns,
-                                            ImprovementMap& map) {
+                                            ImprovementMap& map, int threads) {
+  detail::require_parameter(threads >= 0, "threads", threads, ">= 0");
   require_matching_surface(geometry, surface);
   const std::size_t columns = geometry.column_count();
   if (map.width == 0 && map.height == 0 && map.value.empty()) {
-    map = compute_improvement(geometry, model, surface);
+    map = compute_improvement(geometry, model, surface, threads);
     std::vector<ColumnIndex> all(columns);
     for (std::size_t c = 0; c < columns; ++c) all[c] = static_cast<ColumnIndex>(c);
     return all;
@@ -333,7 +334,7 @@ std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const 
   // both give bit-identical values. Rows are independent.
   constexpr int kSpanGap = 16;
   const int w = geometry.width(), h = geometry.height();
-  const int parts = rays.size() < 20000 ? 1 : std::min(detail::resolve_thread_count(0), h);
+  const int parts = rays.size() < 20000 ? 1 : std::min(detail::resolve_thread_count(threads), h);
   detail::run_parts(parts, [&](int part, int count) {
     std::vector<float> scratch(static_cast<std::size_t>(w)), inv_sigma(static_cast<std::size_t>(w));
     for (int e = h * part / count; e < h * (part + 1) / count; ++e) {

@@ -53,10 +53,12 @@ ImprovementMap compute_improvement(const GridGeometry& geometry, const SensorMod
 /// Incremental update (CONVENTIONS 8): recomputes exactly the rays whose window contains one of
 /// `changed_surface_columns` (as returned by update_surface) and returns them (ascending). The result
 /// equals compute_improvement on the new surface. An empty `map` is computed in full (every ray returned).
-/// Throws InvalidInput for a map or surface of another size, or a column outside the grid.
+/// threads as compute_improvement's (an update of fewer than 20000 rays runs on the calling thread).
+/// Throws InvalidInput for a map or surface of another size, or a column outside the grid, InvalidParameter
+/// for threads < 0.
 std::vector<ColumnIndex> update_improvement(const GridGeometry& geometry, const SensorModel& model,
                                             const SurfaceMap& surface,
                                             const std::vector<ColumnIndex>& changed_surface_columns,
-                                            ImprovementMap& map);
+                                            ImprovementMap& map, int threads = 0);
 
 }  // namespace occ_improve
