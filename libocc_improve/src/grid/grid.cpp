@@ -249,7 +249,7 @@ void ColumnGrid::rebuild(Tile& tile, const ColumnContents* contents, const std::
   ColumnContents next[kTileColumns];
   for (std::size_t s = 0; s < kTileColumns; ++s) {
     const ColumnData& c = tile.columns[s];
-    next[s] = {0, c.uniform_end, c.uniform_value, c.window.data_, c.window.size_};
+    next[s] = c.contents();
   }
   for (std::size_t i = 0; i < count; ++i) next[slots[i]] = contents[i];
   std::size_t live = 0;

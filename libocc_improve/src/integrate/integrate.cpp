@@ -685,8 +685,8 @@ private:
     to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(azimuth_b_[a_near] + elevation_b_[e_near], lmin_));
   }
 
-  // Each column's pairs, in input order, and the columns' FreeSpaceBounds; listed_ names the columns that have some (a small shot's tile has
-  // a few of its 64).
+  // Each column's pairs, in input order, and the columns' FreeSpaceBounds; listed_ names the columns that
+  // have some (a small shot's tile has a few of its 64).
   void list_pairs(const std::uint32_t* items, std::size_t count, const Measurement* slots) {
     for (const int i : listed_) pairs_[i].clear();
     listed_.clear();

@@ -39,11 +39,11 @@ bool set_if_changed(SurfaceMap& surface, ColumnIndex column, const SurfaceVoxel&
 
 SurfaceVoxel column_surface(const ColumnContents& c, const ColumnGrid& grid) {
   SurfaceVoxel s;
-  if (c.uniform_end == 0 && c.count == 0) return s;  // never touched
+  if (!c.touched()) return s;
   const DepthAxis& depth = grid.geometry().depth();
   const int bins = depth.bins();
   const int uniform_end = std::min<int>(c.uniform_end, bins);
-  const int window_end = std::min<int>(c.uniform_end + static_cast<int>(c.count), bins);
+  const int window_end = std::min<int>(c.window_end(), bins);
 
   // Largest value over the uniform run, the window and the untouched tail (log-odds 0).
   float best = window_max(c.values, static_cast<std::size_t>(window_end - uniform_end));
@@ -93,9 +93,7 @@ SurfaceVoxel column_surface(const ColumnContents& c, const ColumnGrid& grid) {
 }
 
 SurfaceVoxel column_surface(const ColumnData* c, const ColumnGrid& grid) {
-  if (c == nullptr) return {};
-  // The column's index plays no part in its surface.
-  return column_surface(ColumnContents{0, c->uniform_end, c->uniform_value, c->window.data(), static_cast<std::uint32_t>(c->window.size())}, grid);
+  return c == nullptr ? SurfaceVoxel{} : column_surface(c->contents(), grid);
 }
 
 bool refresh_column_surface(const ColumnGrid& grid, ColumnIndex column, const ColumnData* data, SurfaceMap& surface) {

@@ -81,29 +81,9 @@ private:
   std::uint32_t place_bins_ = 0;  // bins its place in the tile's storage holds (>= size_)
 };
 
-namespace detail {
-/// Bin `bin`'s log-odds in a column holding `uniform_value` over [0, uniform_end), then `count` values, then
-/// untouched bins (0): ColumnData's and ColumnContents' value().
-inline float column_value(std::int32_t uniform_end, float uniform_value, const float* values, std::size_t count, int bin) {
-  if (bin < uniform_end) return uniform_value;
-  const auto i = static_cast<std::size_t>(bin - uniform_end);
-  return i < count ? values[i] : 0.0f;
-}
-}  // namespace detail
-
-/// One ray's voxels: a uniform run, a dense window, an untouched tail.
-struct ColumnData {
-  std::int32_t uniform_end = 0;  ///< bins [0, uniform_end) hold uniform_value
-  float uniform_value = 0.0f;
-  ColumnWindow window;  ///< bins [uniform_end, uniform_end + window.size())
-
-  std::int32_t window_end() const { return uniform_end + static_cast<std::int32_t>(window.size()); }
-  float value(int bin) const { return detail::column_value(uniform_end, uniform_value, window.data(), window.size(), bin); }
-  bool touched() const { return uniform_end > 0 || !window.empty(); }
-};
-
-/// A column's new contents: bins [0, uniform_end) hold uniform_value, then `count` values from `values`.
-/// Written, leading values equal to uniform_value (when uniform_end > 0) join the run.
+/// A column's contents: bins [0, uniform_end) hold uniform_value, then `count` values from `values`, then
+/// untouched bins (log-odds 0). Written to a grid, leading values equal to uniform_value (when
+/// uniform_end > 0) join the run.
 struct ColumnContents {
   ColumnIndex column = 0;
   std::int32_t uniform_end = 0;
@@ -111,7 +91,28 @@ struct ColumnContents {
   const float* values = nullptr;
   std::uint32_t count = 0;
 
-  float value(int bin) const { return detail::column_value(uniform_end, uniform_value, values, count, bin); }
+  std::int32_t window_end() const { return uniform_end + static_cast<std::int32_t>(count); }
+  float value(int bin) const {
+    if (bin < uniform_end) return uniform_value;
+    const auto i = static_cast<std::uint32_t>(bin - uniform_end);
+    return i < count ? values[i] : 0.0f;
+  }
+  bool touched() const { return uniform_end > 0 || count > 0; }
+};
+
+/// One ray's voxels: a uniform run, a dense window, an untouched tail.
+struct ColumnData {
+  std::int32_t uniform_end = 0;  ///< bins [0, uniform_end) hold uniform_value
+  float uniform_value = 0.0f;
+  ColumnWindow window;  ///< bins [uniform_end, uniform_end + window.size())
+
+  /// The column's voxels as contents (a view of its window: valid as long as the window).
+  ColumnContents contents(ColumnIndex column = 0) const {
+    return {column, uniform_end, uniform_value, window.data(), static_cast<std::uint32_t>(window.size())};
+  }
+  std::int32_t window_end() const { return contents().window_end(); }
+  float value(int bin) const { return contents().value(bin); }
+  bool touched() const { return contents().touched(); }
 };
 
 class ColumnGrid {
