@@ -111,12 +111,11 @@ float* aligned_floats(std::vector<float>& storage, std::size_t count) {
 }
 
 // A measurement of a tile (clamped mode) and the bins [lo, hi) its factored pairs evaluate (lo widened to
-// a block boundary once planned); its terms start at `terms` in the tile's pool.
+// a block boundary once planned).
 struct TileMeasurement {
   const Measurement* m;
   int run_keep;  ///< the first bin with t > kNonPositiveT
   int lo, hi;
-  std::size_t terms;
 };
 
 // The angular factors e^-B of a measurement's columns and rows within a tile, in one vector pass: the
@@ -142,11 +141,12 @@ void exponentiate(AngularFactors& f) {
 // is applied (clamped mode): bins [first, end) are evaluated, none when first >= end (end is looked up
 // only for a pair that b') does not skip).
 struct PairPlan {
-  std::uint32_t measurement;  ///< the pair's measurement in the tile's list
+  /// The pair's measurement in the tile's list; once the terms are placed, its entry of the terms' origins
+  /// (a pair with B > kMaxFactoredB: an entry of its own, for its own terms).
+  std::uint32_t measurement;
   float a;                    ///< e^-B, or 1 where B > kMaxFactoredB is folded into the pair's own terms
   double angular_term;        ///< B
   int first, end;
-  std::size_t terms;          ///< where the terms of bin block_floor(first) are in the tile's pool, once known
 };
 
 // Clamped mode works on odds O = e^L during a call: O <- clamp(O * odds P_s, e^L_min, e^L_max) is eq. 2
@@ -155,14 +155,15 @@ struct PairPlan {
 // the per-pair work is the vector loop alone).
 OCC_IMPROVE_VECTOR_KERNEL
 void multiply_odds_clamped(float* o, const PairPlan* pairs, std::size_t count, const float* e_pool, const float* g_pool,
-                           float omin, float omax) {
+                           const std::ptrdiff_t* origins, float omin, float omax) {
   for (std::size_t k = 0; k < count; ++k) {
     const PairPlan& p = pairs[k];
     if (p.first >= p.end) continue;
     const int from = block_floor(p.first), first = p.first - from, end = p.end - from, to = block_ceil(p.end) - from;
     float* row = block_aligned(o + from);
-    const float* e = block_aligned(e_pool + p.terms);
-    const float* g = block_aligned(g_pool + p.terms);
+    const std::ptrdiff_t terms = origins[p.measurement] + from;
+    const float* e = block_aligned(e_pool + terms);
+    const float* g = block_aligned(g_pool + terms);
     const float a = p.a;
     for (int i = 0; i < to; ++i) {
       const detail::OpdfOdds odds = detail::opdf_odds(e[i] * a, g[i] * a);
@@ -481,8 +482,9 @@ public:
   }
 
   /// Clamped mode: the column's pairs (their terms resolved), in input order.
-  void multiply(ColumnScratch& s, const PairPlan* pairs, std::size_t count, const float* e_pool, const float* g_pool) const {
-    multiply_odds_clamped(s.v, pairs, count, e_pool, g_pool, omin_, omax_);
+  void multiply(ColumnScratch& s, const PairPlan* pairs, std::size_t count, const float* e_pool, const float* g_pool,
+                const std::ptrdiff_t* origins) const {
+    multiply_odds_clamped(s.v, pairs, count, e_pool, g_pool, origins, omin_, omax_);
   }
 
   /// Clamped mode, after the plan's pairs: the leading voxels at the lower clamp join the run (in odds,
@@ -619,12 +621,7 @@ public:
     for (const int i : listed_) {
       ColumnScratch& s = scratch_[i];
       kernel_.to_odds(s, plans_[i]);
-      for (PairPlan& p : pairs_[i]) {
-        if (p.first >= p.end || p.angular_term > kMaxFactoredB) continue;  // folded: compute_terms placed them
-        const TileMeasurement& tm = measurements_[p.measurement];
-        p.terms = tm.terms + static_cast<std::size_t>(block_floor(p.first) - tm.lo);
-      }
-      kernel_.multiply(s, pairs_[i].data(), pairs_[i].size(), tile_terms_.e(), tile_terms_.g());
+      kernel_.multiply(s, pairs_[i].data(), pairs_[i].size(), tile_terms_.e(), tile_terms_.g(), terms_origins_.data());
       kernel_.close(s, plans_[i]);
     }
   }
@@ -722,13 +719,13 @@ private:
       const Measurement& m = slots[items[k]];
       const double front_m = m.rho + m.sigma * kNonPositiveT;  // where t = kNonPositiveT
       measurements_[k] = {&m, g_.depth().first_centre_above(front_m), std::numeric_limits<int>::max(),
-                          std::numeric_limits<int>::min(), 0};
+                          std::numeric_limits<int>::min()};
       for_each_column_of(m, [&](int a, int e, double b, float factor) {
         const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
         const int i = slot(a, e);
         std::vector<PairPlan>& pairs = pairs_[i];
         if (pairs.empty()) listed_.push_back(i);
-        pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0, 0});
+        pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0});
         double& f = free_space_[i].front_m;
         f = std::min(f, front_m);
         ++column_updates_;
@@ -751,19 +748,27 @@ private:
   }
 
   // The depth terms every planned pair reads: a measurement's over its pairs' bins, and those of a pair
-  // with B > kMaxFactoredB (B folded in) over its own.
+  // with B > kMaxFactoredB (B folded in) over its own; terms_origins_ gives where bin 0's would be in the
+  // pool (the terms of bin b at origin + b), per measurement, then per folded pair (which now points there).
   void compute_terms() {
     tile_terms_.clear();
-    for (TileMeasurement& tm : measurements_) {
+    terms_origins_.assign(measurements_.size(), 0);
+    for (std::size_t k = 0; k < measurements_.size(); ++k) {
+      TileMeasurement& tm = measurements_[k];
       if (tm.lo >= tm.hi) continue;
       tm.lo = block_floor(tm.lo);
-      tm.terms = tile_terms_.reserve(tm.lo, tm.hi, tm.m->rho, tm.m->sigma, 0.0);
+      terms_origins_[k] = origin(tile_terms_.reserve(tm.lo, tm.hi, tm.m->rho, tm.m->sigma, 0.0), tm.lo);
     }
     for (PairPlan* p : folded_) {
       const Measurement& m = *measurements_[p->measurement].m;
-      p->terms = tile_terms_.reserve(block_floor(p->first), p->end, m.rho, m.sigma, p->angular_term);
+      const int from = block_floor(p->first);
+      p->measurement = static_cast<std::uint32_t>(terms_origins_.size());
+      terms_origins_.push_back(origin(tile_terms_.reserve(from, p->end, m.rho, m.sigma, p->angular_term), from));
     }
     tile_terms_.compute();
+  }
+  static std::ptrdiff_t origin(std::size_t offset, int first_bin) {
+    return static_cast<std::ptrdiff_t>(offset) - first_bin;
   }
 
   // Free space a part of a call carves in one column, whatever the order of its measurements (clamped
@@ -800,6 +805,7 @@ private:
   MeasurementTerms terms_, column_terms_;  // exact mode
   TileTerms tile_terms_;                    // clamped mode
   std::vector<TileMeasurement> measurements_;
+  std::vector<std::ptrdiff_t> terms_origins_;
   std::vector<PairPlan> pairs_[kTile * kTile];
   std::vector<int> listed_;  // the columns with pairs in the part being applied
   std::vector<PairPlan*> folded_;  // the planned pairs with B > kMaxFactoredB that evaluate
