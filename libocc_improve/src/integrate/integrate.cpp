@@ -118,25 +118,6 @@ struct TileMeasurement {
   int lo, hi;
 };
 
-// The angular factors e^-B of a measurement's columns and rows within a tile, in one vector pass: the
-// columns' -B from lane 0, the rows' from lane row_lane (right after the columns' where both fit in
-// kFactorLanes lanes, a support of a few columns; else kTile, the wide layout). Compiled for AVX2
-// without FMA beside baseline x86-64, so every lane rounds as the scalar fast_exp does (FMA would contract
-// its polynomial and change the factors' last bits): the same factors, 3 % fewer instructions a frame.
-constexpr int kFactorLanes = 8;
-static_assert(kFactorLanes == ColumnGrid::kTileSize, "the wide layout's rows start at lane kTile");
-struct AngularFactors {
-  float minus_b[2 * ColumnGrid::kTileSize] = {};  ///< -B (lanes not in use: 0)
-  float factor[2 * ColumnGrid::kTileSize];        ///< e^-B
-  int row_lane;
-};
-OCC_IMPROVE_CLONES("avx2")
-void exponentiate(AngularFactors& f) {
-  for (int i = 0; i < kFactorLanes; ++i) f.factor[i] = fast_exp(f.minus_b[i]);
-  if (f.row_lane >= kFactorLanes)  // the wide layout: the other half too
-    for (int i = kFactorLanes; i < 2 * ColumnGrid::kTileSize; ++i) f.factor[i] = fast_exp(f.minus_b[i]);
-}
-
 // Where one (measurement, column) pair of a call updates the column, decided before any pair of the column
 // is applied (clamped mode): bins [first, end) are evaluated, none when first >= end (end is looked up
 // only for a pair that b') does not skip).
@@ -671,23 +652,15 @@ private:
   template <typename Visit>
   void for_each_column_of(const Measurement& m, Visit&& visit) {
     const TileColumns r = columns_of(m);
-    AngularFactors f;
-    const int columns = r.a1 - r.a0 + 1, rows = r.e1 - r.e0 + 1;
-    f.row_lane = columns + rows <= kFactorLanes ? columns : kTile;
     for (int a = r.a0; a <= r.a1; ++a) {
       azimuth_b_[a - a_first_] = azimuth_term(a, m);
-      f.minus_b[a - r.a0] = static_cast<float>(-azimuth_b_[a - a_first_]);
+      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-azimuth_b_[a - a_first_]));
     }
     for (int e = r.e0; e <= r.e1; ++e) {
-      elevation_b_[e - e_first_] = elevation_term(e, m);
-      f.minus_b[f.row_lane + e - r.e0] = static_cast<float>(-elevation_b_[e - e_first_]);
-    }
-    exponentiate(f);
-    for (int e = r.e0; e <= r.e1; ++e) {
-      const double elevation_b = elevation_b_[e - e_first_];
-      const float elevation_factor = f.factor[f.row_lane + e - r.e0];
+      const double elevation_b = elevation_b_[e - e_first_] = elevation_term(e, m);
+      const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
       for (int a = r.a0; a <= r.a1; ++a)
-        visit(a, e, azimuth_b_[a - a_first_] + elevation_b, f.factor[a - r.a0] * elevation_factor);
+        visit(a, e, azimuth_b_[a - a_first_] + elevation_b, azimuth_factor_[a - a_first_] * elevation_factor);
     }
   }
 
@@ -815,6 +788,7 @@ private:
   ColumnScratch scratch_[kTile * kTile];
   ColumnContents contents_[kTile * kTile];  // the loaded columns' contents, stored together
   FreeSpaceBound free_space_[kTile * kTile];
+  float azimuth_factor_[kTile];
   double azimuth_b_[kTile], elevation_b_[kTile];
   int a_first_ = 0, e_first_ = 0, a_last_ = -1, e_last_ = -1;
   std::size_t column_updates_ = 0;
