@@ -403,18 +403,14 @@ public:
     for (std::size_t i = 0; i < count; ++i) {
       PairPlan& p = pairs[i];
       TileMeasurement& tm = measurements[p.measurement];
-      p.first = p.end = 0;  // skipped, unless evaluated below
+      // Listed with first = end (the support's end): skipped, unless evaluated below.
       const int keep = tm.run_keep;
       const bool negligible = p.angular_term >= kNegligibleB;
       if (negligible && run_end >= keep) continue;  // b')
-      const Measurement& m = *tm.m;
-      const double last = support_last(m.rho, p.angular_term, m.sigma);
       // Past b') such a pair has run_end < keep, so a) cannot take the run back, and b) cannot extend it
-      // past the support's end: it does nothing when that end is at or in front of the run's, i.e. when the
-      // support's last depth lies below the centre at the run's end (first_centre_above's own comparison,
-      // without its lookup).
-      if (negligible && (run_end >= bins_ || last < depth_.centre(run_end))) continue;
-      p.first = p.end = depth_.first_centre_above(last);
+      // past the support's end: it does nothing when that end is at or in front of the run's.
+      if (negligible && p.end <= run_end) continue;
+      const Measurement& m = *tm.m;
       int run_before = run_end;
       if (run_end > keep && keep < p.end) {  // a): the run taken back from keep
         run_end = keep;
@@ -698,7 +694,10 @@ private:
         const int i = slot(a, e);
         std::vector<PairPlan>& pairs = pairs_[i];
         if (pairs.empty()) listed_.push_back(i);
-        pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, 0, 0});
+        // The support's end, looked up here where no pair waits on it (the plan's decisions for a column
+        // follow one another; these lookups do not depend on them).
+        const int end = kernel_.support_end(m.rho, b, m.sigma);
+        pairs.push_back({static_cast<std::uint32_t>(k), a_factor, b, end, end});
         double& f = free_space_[i].front_m;
         f = std::min(f, front_m);
         ++column_updates_;
