@@ -7,6 +7,7 @@
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -191,6 +192,39 @@ void check_compressed(std::istream& in, std::uint64_t file_size, const PcdHeader
   if (got != uncompressed) fail("compressed data does not expand to the declared " + std::to_string(uncompressed) + " bytes");
 }
 
+// DATA ascii: PCL 1.13 reads each value with a lenient conversion ("1.5abc" as 1.5, "foo" as 0) and keeps
+// a point whose line has too few or too many values as zeros after a warning that does not name the file,
+// so a corrupt text cloud would be inserted as if it were valid. Every point's line (PCL skips empty lines
+// and reads POINTS lines) must hold one number per value of the fields, and nothing but empty lines may
+// follow the last.
+void check_ascii_body(std::istream& in, const PcdHeader& h, const std::string& path) {
+  std::vector<const PcdField*> field_of_value;
+  for (const PcdField& f : h.fields) field_of_value.insert(field_of_value.end(), f.count, &f);
+  std::uint64_t point = 0, line_number = 0;
+  for (std::string line; std::getline(in, line);) {
+    ++line_number;
+    if (line.empty()) continue;
+    const std::vector<std::string> values = tokens(line);
+    const std::string where = "DATA ascii line " + std::to_string(line_number) + " (point " + std::to_string(point + 1) + ")";
+    if (point == h.points) {
+      if (values.empty()) continue;
+      fail(path, where + " is past the POINTS " + std::to_string(h.points) + " the header declares");
+    }
+    if (values.size() != field_of_value.size())
+      fail(path, where + " holds " + std::to_string(values.size()) + " values, the fields take " +
+                     std::to_string(field_of_value.size()));
+    for (std::size_t v = 0; v < values.size(); ++v) {
+      char* end = nullptr;
+      std::strtod(values[v].c_str(), &end);
+      if (end != values[v].c_str() + values[v].size())
+        fail(path, where + ": '" + values[v] + "' for field '" + field_of_value[v]->name + "' is not a number");
+    }
+    ++point;
+  }
+  if (point < h.points)
+    fail(path, "DATA ascii holds " + std::to_string(point) + " points, the header declares POINTS " + std::to_string(h.points));
+}
+
 }  // namespace
 
 std::uint64_t PcdHeader::point_bytes() const {
@@ -227,6 +261,7 @@ PcdHeader validate_pcd_file(const std::string& path) {
     if (h.points * values > available / 2 + 1)
       fail(path, "DATA ascii declares " + std::to_string(h.points) + " points, more than the file's " +
                   std::to_string(available) + " bytes can hold");
+    check_ascii_body(in, h, path);
   }
   return h;
 }

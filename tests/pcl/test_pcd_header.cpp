@@ -67,6 +67,22 @@ TEST_F(PcdHeaderTest, PclWrittenFilesOfEveryEncodingPass) {
   }
 }
 
+// PCL reads "1.5abc" as 1.5 and "foo" as 0, and keeps a line of the wrong length as a point of zeros after a
+// warning that does not name the file: such a cloud is refused, naming the line, the value and its field.
+TEST_F(PcdHeaderTest, AsciiDataMustHoldOneNumberPerValueOnEveryPointsLine) {
+  expect_refused_naming(header() + "0 0 1\n0.05 0.05 1.5abc\n", "line 2 (point 2): '1.5abc' for field 'z' is not a number");
+  expect_refused_naming(header() + "foo 0.05 1.5\n0 0 1\n", "line 1 (point 1): 'foo' for field 'x' is not a number");
+  expect_refused_naming(header() + "0 0 1 2 3\n0 0 1\n", "line 1 (point 1) holds 5 values, the fields take 3");
+  expect_refused_naming(header() + "0 0 1\n\n0.25 0\n", "line 3 (point 2) holds 2 values, the fields take 3");
+  expect_refused_naming(header() + "0.0000001 0 1\n", "DATA ascii holds 1 points, the header declares POINTS 2");
+  expect_refused_naming(header() + "0 0 1\n0 0 1\n0 0 2\n", "line 3 (point 3) is past the POINTS 2");
+  // Numbers as PCL writes them (nan, inf, exponents), CRLF line ends, empty lines between and after.
+  EXPECT_EQ(refusal(header() + "nan nan nan\r\n\n1e-3 -2.5E+1 inf\n\n \n"), "");
+  // COUNT > 1: one number per value.
+  EXPECT_EQ(refusal(header("2", "1", "2", "4 4 4", "2 1 1") + "0 1 2 3\n4 5 6 7\n"), "");
+  expect_refused_naming(header("2", "1", "2", "4 4 4", "2 1 1") + "0 1 2 3\n4 5 6\n", "holds 3 values, the fields take 4");
+}
+
 TEST_F(PcdHeaderTest, WidthTimesHeightMustEqualPointsWithoutWrapping) {
   // 65536 x 65536 is 0 in 32 bits: it "equalled" POINTS 0 and crashed fromPCLPointCloud2.
   expect_refused_naming(header("65536", "65536", "0"), "WIDTH x HEIGHT");
