@@ -1,10 +1,13 @@
 #pragma once
-// Private to pcl_tools/src: the characters a PCD or PLY header line may hold before PCL reads the file.
+// Private to pcl_tools/src: the text of PCD and PLY files before PCL reads them (header lines, ASCII values).
 #include "occ_improve/errors.hpp"
 
+#include <cstdlib>
 #include <exception>
 #include <new>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace occ_improve::detail {
 
@@ -21,6 +24,26 @@ inline const char* refused_header_line(const std::string& line, const char* bina
     vertical_space = vertical_space || ch == '\v' || ch == '\f';
   }
   return vertical_space ? "a header line holds a vertical tab or form feed (PCL cannot read it)" : nullptr;
+}
+
+/// A line's words (split at any white space).
+inline std::vector<std::string> words(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> t;
+  for (std::string s; in >> s;) t.push_back(s);
+  return t;
+}
+
+/// The first of `values` that is not wholly a number (as strtod reads them: digits, exponents, nan, inf),
+/// or values.size(). PCL 1.13's ASCII readers read "1.5abc" as 1.5 and "foo" as 0 (PCD) or NaN (PLY),
+/// so a corrupt text cloud would be read as valid points or as invalid ones for the wrong reason.
+inline std::size_t first_non_number(const std::vector<std::string>& values) {
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    char* end = nullptr;
+    std::strtod(values[i].c_str(), &end);
+    if (end != values[i].c_str() + values[i].size()) return i;
+  }
+  return values.size();
 }
 
 /// PCL's read() on a file the header checks passed: a failed status, or an exception it throws (out of

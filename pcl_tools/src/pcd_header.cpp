@@ -7,7 +7,6 @@
 #include <pcl/io/pcd_io.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -108,13 +107,6 @@ private:
   std::vector<std::string> seen_;
 };
 
-std::vector<std::string> tokens(const std::string& line) {
-  std::istringstream in(line);
-  std::vector<std::string> t;
-  for (std::string s; in >> s;) t.push_back(s);
-  return t;
-}
-
 // PCL 1.13's readHeader does not stop at DATA: it goes on reading lines as header while they start like
 // one (by prefix, empty lines skipped), so a second header after DATA (say binary_compressed with an
 // uncompressed size of 4 GiB) would replace the one checked here. Such a file is refused.
@@ -151,7 +143,7 @@ PcdHeader parse_header(std::istream& file, std::uint64_t file_size, const std::s
     at = next;
     if (const char* refused = detail::refused_header_line(text, "not a PCD file (binary data before the DATA line)"))
       parser.fail(refused);
-    std::vector<std::string> t = tokens(text);
+    std::vector<std::string> t = detail::words(text);
     // PCL 1.13's readHeader skips only truly empty lines: one of white space alone (" ", "\t", a CR of
     // CRLF) before DATA makes its read dereference null (found by make fuzz). Refused, not crashed on.
     if (t.empty() && text != "\n") parser.fail("a header line holds only white space (PCL cannot read such a file)");
@@ -192,9 +184,9 @@ void check_compressed(std::istream& in, std::uint64_t file_size, const PcdHeader
   if (got != uncompressed) fail("compressed data does not expand to the declared " + std::to_string(uncompressed) + " bytes");
 }
 
-// DATA ascii: PCL 1.13 reads each value with a lenient conversion ("1.5abc" as 1.5, "foo" as 0) and keeps
-// a point whose line has too few or too many values as zeros after a warning that does not name the file,
-// so a corrupt text cloud would be inserted as if it were valid. Every point's line (PCL skips empty lines
+// DATA ascii: PCL 1.13 reads values leniently (detail::first_non_number) and keeps a point whose line has
+// too few or too many values as zeros after a warning that does not name the file, so a corrupt text
+// cloud would be inserted as if it were valid. Every point's line (PCL skips empty lines
 // and reads POINTS lines) must hold one number per value of the fields, and nothing but empty lines may
 // follow the last.
 void check_ascii_body(std::istream& in, const PcdHeader& h, const std::string& path) {
@@ -204,7 +196,7 @@ void check_ascii_body(std::istream& in, const PcdHeader& h, const std::string& p
   for (std::string line; std::getline(in, line);) {
     ++line_number;
     if (line.empty()) continue;
-    const std::vector<std::string> values = tokens(line);
+    const std::vector<std::string> values = detail::words(line);
     const std::string where = "DATA ascii line " + std::to_string(line_number) + " (point " + std::to_string(point + 1) + ")";
     if (point == h.points) {
       if (values.empty()) continue;
@@ -213,12 +205,9 @@ void check_ascii_body(std::istream& in, const PcdHeader& h, const std::string& p
     if (values.size() != field_of_value.size())
       fail(path, where + " holds " + std::to_string(values.size()) + " values, the fields take " +
                      std::to_string(field_of_value.size()));
-    for (std::size_t v = 0; v < values.size(); ++v) {
-      char* end = nullptr;
-      std::strtod(values[v].c_str(), &end);
-      if (end != values[v].c_str() + values[v].size())
-        fail(path, where + ": '" + values[v] + "' for field '" + field_of_value[v]->name + "' is not a number");
-    }
+    const std::size_t v = detail::first_non_number(values);
+    if (v < values.size())
+      fail(path, where + ": '" + values[v] + "' for field '" + field_of_value[v]->name + "' is not a number");
     ++point;
   }
   if (point < h.points)

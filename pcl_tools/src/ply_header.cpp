@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <fstream>
 #include <mutex>
-#include <sstream>
 #include <vector>
 
 namespace occ_improve {
@@ -38,6 +37,7 @@ struct Element {
   std::uint64_t min_binary_bytes = 0;  ///< per element: scalars, and each list's length field
   std::uint64_t pcl_point_bytes = 0;   ///< an upper bound of PCL's point step (it widens uchar colour to float)
   std::string colours;                 ///< the vertex's uchar colour properties in order, e.g. "red green blue"
+  std::vector<std::string> property_names;
 };
 
 // PCL 1.13 packs a vertex's uchar red, green, blue (and alpha) into one rgb(a) field that "red" opens
@@ -120,6 +120,32 @@ public:
     }
   }
 
+  // ASCII data, from the first line after end_header (file line `line_number` + 1): PCL 1.13 reads values
+  // leniently (detail::first_non_number), so every vertex line must hold one number per property. The
+  // lines of elements before the vertices are skipped (one instance a line), those after are not read.
+  void check_ascii_vertices(std::istream& in, std::uint64_t line_number) const {
+    std::string line;
+    for (const Element& e : elements_) {
+      for (std::uint64_t i = 0; i < e.count; ++i) {
+        std::vector<std::string> values;
+        while (values.empty()) {
+          if (!std::getline(in, line))
+            fail("ASCII data ends at element '" + e.name + "' " + std::to_string(i + 1) + " of " + std::to_string(e.count));
+          ++line_number;
+          values = detail::words(line);
+        }
+        if (e.name != "vertex") continue;
+        const std::string where = "line " + std::to_string(line_number) + " (vertex " + std::to_string(i + 1) + ")";
+        if (values.size() != e.property_names.size())
+          fail(where + " holds " + std::to_string(values.size()) + " values, the vertex has " +
+               std::to_string(e.property_names.size()) + " properties");
+        const std::size_t v = detail::first_non_number(values);
+        if (v < values.size()) fail(where + ": '" + values[v] + "' for property '" + e.property_names[v] + "' is not a number");
+      }
+      if (e.name == "vertex") return;
+    }
+  }
+
 private:
   // PCL takes num_cols / num_rows as the cloud's width / height; the vertex element only sets them when
   // one is still 0, so both must come together and before the elements, else width x height is neither.
@@ -137,6 +163,7 @@ private:
     if (elements_.empty()) fail("a property comes before any element");
     Element& e = elements_.back();
     if (++e.properties > kMaxProperties) fail("element '" + e.name + "' has over " + std::to_string(kMaxProperties) + " properties");
+    e.property_names.push_back(t.back());
     if (t.size() >= 2 && t[1] == "list") {
       if (t.size() != 5) fail("list property of element '" + e.name + "' needs 'list <count type> <type> <name>'");
       require_type(t[2], e);
@@ -165,13 +192,6 @@ private:
   std::vector<Element> elements_;
 };
 
-std::vector<std::string> tokens(const std::string& line) {
-  std::istringstream in(line);
-  std::vector<std::string> t;
-  for (std::string s; in >> s;) t.push_back(s);
-  return t;
-}
-
 // The header from the file's first 64 KiB only, so a file without line breaks costs no memory.
 PlyHeader parse_header(std::istream& file, std::uint64_t file_size, const std::string& path) {
   std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(file_size, kMaxHeaderBytes)), '\0');
@@ -187,11 +207,16 @@ PlyHeader parse_header(std::istream& file, std::uint64_t file_size, const std::s
     at = newline + 1;
     if (const char* refused = detail::refused_header_line(text, "not a PLY file (binary data before end_header)"))
       parser.fail(refused);
-    const std::vector<std::string> t = tokens(text);
+    const std::vector<std::string> t = detail::words(text);
     if (t.empty()) continue;
     if (t[0] == "end_header" && t.size() == 1) {
       h.data_offset = at;
       parser.check_complete(h, file_size - at);
+      if (h.format == PlyHeader::Format::ascii) {
+        file.clear();
+        file.seekg(static_cast<std::streamoff>(at));
+        parser.check_ascii_vertices(file, static_cast<std::uint64_t>(std::count(head.begin(), head.begin() + static_cast<std::ptrdiff_t>(at), '\n')));
+      }
       return h;
     }
     parser.line(t, h);

@@ -230,6 +230,29 @@ TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
   }
 }
 
+// PCL 1.13's ASCII PLY reader reads "1.5abc" and "foo" as NaN (the points then counted as invalid, not
+// refused): every vertex line must hold one number per property, after any element before the vertices.
+TEST_F(FrameIoPlyFiles, AsciiVertexValuesMustBeNumbers) {
+  const std::string vertices = std::string("element vertex 2\n") + kXyz;
+  const auto refusal = [&](const std::string& lines, const std::string& body) {
+    write_bytes(file("values.ply"), ply("ascii", lines, body));
+    return test::format_error_of([&] { load_frame(file("values.ply"), std::nullopt); });
+  };
+  EXPECT_NE(refusal(vertices, "1 2 3\n0.05 0.05 1.5abc\n").find("(vertex 2): '1.5abc' for property 'z' is not a number"),
+            std::string::npos);
+  EXPECT_NE(refusal(vertices, "foo 2 3\n4 5 6\n").find("(vertex 1): 'foo' for property 'x' is not a number"), std::string::npos);
+  EXPECT_NE(refusal(vertices, "1 2 3\n4 5 6 7\n").find("(vertex 2) holds 4 values, the vertex has 3 properties"),
+            std::string::npos);
+  // An element before the vertices: its lines are skipped, one instance a line.
+  const std::string camera_first = "element camera 1\nproperty int viewportx\n" + vertices;
+  EXPECT_NE(refusal(camera_first, "640\n1 2 3\n4 5 x\n").find("(vertex 2): 'x' for property 'z'"), std::string::npos);
+  write_bytes(file("numbers.ply"), ply("ascii", vertices, "1e-1 2 3\n4 5 6\n"));
+  const LoadedFrame f = load_frame(file("numbers.ply"), std::nullopt);
+  ASSERT_EQ(f.cloud.size(), 2u);
+  EXPECT_FLOAT_EQ(f.cloud[0].x, 0.1f);
+  EXPECT_FLOAT_EQ(f.cloud[1].z, 6.0f);
+}
+
 // Found by make fuzz: PCL 1.13 packs uchar red, green, blue (alpha) into one field that "red" opens, and
 // aborts (an assert in PLYReader::vertexColorCallback) on a blue or alpha without the channels before it.
 TEST_F(FrameIoPlyFiles, VertexColoursMustComeAsRedGreenBlue) {
