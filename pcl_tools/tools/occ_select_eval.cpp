@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -43,9 +44,33 @@ const ToolFlags kFlags{
     "  depth image or FOLDER     16-bit depth with its dataset's camera-intrinsics.txt or -intrinsics; the\n"
     "                            first frame of a folder\n"};
 
+// A scene's name, which names its CSV (OUTDIR/<name>.csv): the file's or folder's name to its first dot.
+std::string scene_name(const std::string& input) {
+  if (input == "sample") return input;
+  std::filesystem::path path(input);
+  if (path.filename().empty()) path = path.parent_path();  // a folder given as "frames/"
+  const std::string name = path.filename().string();
+  return name.substr(0, name.find('.'));
+}
+
+// Every scene writes its own CSV: two scenes of one name (d1/scene.pcd, d2/scene.pcd), or one named like
+// the summary, would replace each other's results.
+void require_distinct_scene_names(const std::vector<std::string>& scenes) {
+  std::map<std::string, std::string> input_of;
+  for (const std::string& input : scenes) {
+    const std::string name = scene_name(input);
+    if (name.empty() || name == "summary")
+      throw InvalidParameter("scene '" + input + "' would write '" + name + ".csv': rename it");
+    const auto [first, fresh] = input_of.emplace(name, input);
+    if (!fresh)
+      throw InvalidParameter("scenes '" + first->second + "' and '" + input + "' would both write " + name +
+                             ".csv: give the scenes distinct file names");
+  }
+}
+
 SelectScene load_scene(const std::string& input, const ToolOptions& options) {
   SelectScene s;
-  s.name = std::filesystem::path(input).stem().string();
+  s.name = scene_name(input);
   if (input == "sample") {
     sample::SceneOptions clean;
     clean.noise = clean.quantise = false;
@@ -58,7 +83,6 @@ SelectScene load_scene(const std::string& input, const ToolOptions& options) {
     throw InvalidInput(input + ": not an organized frame");
   s.intrinsics = *frame.camera;
   s.depth_m = depth_of_organized(frame.cloud);
-  if (s.name.find('.') != std::string::npos) s.name = s.name.substr(0, s.name.find('.'));
   return s;
 }
 
@@ -102,6 +126,7 @@ int run(const CommandLine& command_line) {
   const ToolOptions frame_options = parse_tool_options(command_line);
   const std::vector<std::string>& scenes = command_line.positionals();
   if (scenes.empty()) throw InvalidParameter("no scene given (see -h)");
+  require_distinct_scene_names(scenes);
   OutputFolder out = open_output_folder(command_line);
   std::vector<SelectSummaryRow> all;
   for (const std::string& input : scenes) {

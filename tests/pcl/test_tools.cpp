@@ -593,6 +593,26 @@ TEST_F(Tools, SelectEvalStopsWithinASecondOfSigintAndLeavesNothing) {
   }
 }
 
+// Two scenes of one file name (or one named like the summary) wrote one CSV, the first's rows lost without
+// a word (found by a bad-input trial): refused before any scene runs, naming both inputs.
+TEST_F(Tools, SelectEvalRefusesScenesThatWouldWriteOneCsv) {
+  const sample::SampleFrame scene = sample::generate_scene();
+  const auto cloud = organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height);
+  for (const char* folder : {"a", "b"}) {
+    fs::create_directories(folder_ / folder);
+    ASSERT_EQ(pcl::io::savePCDFileBinary((folder_ / folder / "scene.pcd").string(), cloud), 0);
+  }
+  const ToolRun clash = run(OCC_SELECT_EVAL_EXECUTABLE, "a/scene.pcd b/scene.pcd -frames 1 -o sel");
+  EXPECT_EQ(clash.exit_code, 1);
+  EXPECT_NE(clash.err.find("scenes 'a/scene.pcd' and 'b/scene.pcd' would both write scene.csv"), std::string::npos)
+      << clash.err;
+  fs::copy_file(folder_ / "a" / "scene.pcd", folder_ / "summary.pcd");
+  const ToolRun summary = run(OCC_SELECT_EVAL_EXECUTABLE, "summary.pcd -frames 1 -o sel");
+  EXPECT_EQ(summary.exit_code, 1);
+  EXPECT_NE(summary.err.find("scene 'summary.pcd' would write 'summary.csv'"), std::string::npos) << summary.err;
+  EXPECT_FALSE(fs::exists(folder_ / "sel"));
+}
+
 // -sigma_angle 0.1 ran 4 minutes and 3.2 never finished (tens of columns per point and per ray): refused
 // at once, naming the flag, the value and the bound.
 TEST_F(Tools, AngularSigmaBeyondTheBinningIsRefusedNamingTheBound) {
