@@ -104,7 +104,10 @@ TEST(CommandLine, RefusalsNameTheFlagAndTheValue) {
   refused({"-threads", "5000"}, "-threads 5000 is invalid");
   refused({"-threads", "1e99"}, "-threads 1e99 is invalid");
   refused({"-fps", "nan"}, "-fps nan is invalid");
-  refused({"-budget", "0"}, "-budget 0 is invalid: must be an integer >= 1");
+  refused({"-budget", "0"}, "-budget 0 is invalid: must be an integer in [1, 2147483647]");
+  // Beyond an int: the requirement names int's bound (it said ">= 1", which 1e12 meets).
+  refused({"-budget", "1e12"}, "-budget 1e12 is invalid: must be an integer in [1, 2147483647]");
+  refused({"-budget", "2147483648"}, "-budget 2147483648 is invalid: must be an integer in [1, 2147483647]");
   refused({"-mode", "fast"}, "-mode fast is invalid: must be one of clamped, exact");
   refused({"-threads", "1", "-threads", "2"}, "-threads is given twice");
   refused({"-load", ""}, "-load '' is invalid");

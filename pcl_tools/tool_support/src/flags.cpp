@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
@@ -29,21 +30,28 @@ bool looks_like_flag(const std::string& arg) {
 
 std::string format_bound(double v) {
   std::ostringstream s;
-  s << v;
+  s << std::setprecision(12) << v;  // an int's bound in full
   return s.str();
 }
 
-// "an integer >= 1", "a number in [0, 1]", "a number > 0".
+// An integer flag's value is an int: its bounds are at most int's, and the requirement says so (a value
+// beyond them was refused as not ">= 1").
+constexpr double kIntegerMagnitude = 2147483647.0;
+double upper_bound(const FlagSpec& f) { return f.kind == FlagKind::integer ? std::min(f.maximum, kIntegerMagnitude) : f.maximum; }
+double lower_bound(const FlagSpec& f) { return f.kind == FlagKind::integer ? std::max(f.minimum, -kIntegerMagnitude) : f.minimum; }
+
+// "an integer in [1, 2147483647]", "a number in [0, 1]", "a number > 0".
 std::string requirement(const FlagSpec& f) {
   std::string r = f.kind == FlagKind::integer ? "an integer" : "a finite number";
-  const bool low = std::isfinite(f.minimum), high = std::isfinite(f.maximum);
+  const double minimum = lower_bound(f), maximum = upper_bound(f);
+  const bool low = std::isfinite(minimum), high = std::isfinite(maximum);
   if (low && high)
-    r += std::string(" in ") + (f.minimum_exclusive ? "(" : "[") + format_bound(f.minimum) + ", " +
-         format_bound(f.maximum) + (f.maximum_exclusive ? ")" : "]");
+    r += std::string(" in ") + (f.minimum_exclusive ? "(" : "[") + format_bound(minimum) + ", " + format_bound(maximum) +
+         (f.maximum_exclusive ? ")" : "]");
   else if (low)
-    r += (f.minimum_exclusive ? " > " : " >= ") + format_bound(f.minimum);
+    r += (f.minimum_exclusive ? " > " : " >= ") + format_bound(minimum);
   else if (high)
-    r += (f.maximum_exclusive ? " < " : " <= ") + format_bound(f.maximum);
+    r += (f.maximum_exclusive ? " < " : " <= ") + format_bound(maximum);
   return r;
 }
 
@@ -55,7 +63,7 @@ double checked_number(const FlagSpec& f, const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(text.c_str(), &end);
-  const bool whole = f.kind != FlagKind::integer || (v == std::floor(v) && std::abs(v) <= 2147483647.0);
+  const bool whole = f.kind != FlagKind::integer || (v == std::floor(v) && std::abs(v) <= kIntegerMagnitude);
   if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v) || !whole) refuse(f, text, requirement(f));
   const bool below = f.minimum_exclusive ? !(v > f.minimum) : v < f.minimum;
   const bool above = f.maximum_exclusive ? !(v < f.maximum) : v > f.maximum;
