@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 #include <string>
@@ -204,6 +205,26 @@ TEST(SegmentationEval, BadInputIsRefusedClearly) {
   pcl::PointCloud<pcl::PointXYZ> flat;
   flat.resize(100, pcl::PointXYZ(0.1f, 0.1f, 1.0f));  // height 1: not a range image
   EXPECT_THROW(segment_cloud(flat, kinect_v1(), SegmentationParams{}), InvalidInput);
+  // Labels all below the first object's (found by a bad-input trial): it scored F = 0 and weighed in the
+  // MEAN; the tool now refuses it, naming the cloud, and prints no score.
+  pcl::PointCloud<pcl::PointXYZRGBL> no_object(64, 48);
+  for (std::size_t i = 0; i < no_object.size(); ++i) {
+    no_object[i].x = 0.01f * static_cast<float>(i % 64) - 0.3f;
+    no_object[i].y = 0.01f * static_cast<float>(i / 64) - 0.2f;
+    no_object[i].z = 1.0f;
+    no_object[i].label = i % 2 ? 1 : 0;  // table and nothing
+  }
+  const std::string table_only = (dir / "table_only.pcd").string();
+  ASSERT_EQ(pcl::io::savePCDFileBinary(table_only, no_object), 0);
+  const auto out_path = dir / "out.txt";
+  const std::string command = std::string(OCC_SEGMENT_EVAL_EXECUTABLE) + " -q " + table_only + " > " +
+                              out_path.string() + " 2>&1";
+  EXPECT_NE(std::system(command.c_str()), 0);
+  std::ifstream in(out_path);
+  const std::string output((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(output.find("table_only.pcd"), std::string::npos) << output;
+  EXPECT_NE(output.find("no ground-truth object in it (every label is below 20"), std::string::npos) << output;
+  EXPECT_EQ(output.find("MEAN"), std::string::npos) << output;
   std::filesystem::remove_all(dir);
 }
 
