@@ -118,6 +118,24 @@ struct TileMeasurement {
   int lo, hi;
 };
 
+// A measurement's angular terms within a tile: B of its columns there (lanes [0, kTile), from its first
+// column in the tile) and of its rows (lanes [kTile, 2 kTile)), and e^-B of each (lanes not in use: e^0).
+struct TileAngles {
+  static constexpr int kLanes = 2 * ColumnGrid::kTileSize;
+  double b[kLanes];
+  float factor[kLanes];  ///< -B until exponentiate_factors
+};
+
+// e^x of every factor lane of `count` TileAngles in place, in one vector pass: the exps of a measurement
+// are few and each a chain of a dozen dependent operations, which the pass over a tile's measurements
+// overlaps. Compiled for AVX2 without FMA beside baseline x86-64, so every lane rounds as the scalar
+// fast_exp does (FMA would contract its polynomial and change the factors' last bits).
+OCC_IMPROVE_CLONES("avx2")
+void exponentiate_factors(TileAngles* angles, std::size_t count) {
+  for (std::size_t k = 0; k < count; ++k)
+    for (int i = 0; i < TileAngles::kLanes; ++i) angles[k].factor[i] = fast_exp(angles[k].factor[i]);
+}
+
 // Where one (measurement, column) pair of a call updates the column, decided before any pair of the column
 // is applied (clamped mode): bins [first, end) are evaluated, none when first >= end (end is looked up
 // only for a pair that b') does not skip).
@@ -572,7 +590,10 @@ public:
   /// Exact mode: adds one of the tile's measurements to its columns (loading each on its first).
   void apply_exact(const Measurement& m) {
     terms_.reset(m.rho, m.sigma);
-    for_each_column_of(m, [&](int a, int e, double b, float factor) {
+    TileAngles angles;
+    angles_of(m, angles);
+    exponentiate_factors(&angles, 1);
+    for_each_column_of(m, angles, [&](int a, int e, double b, float factor) {
       const int i = slot(a, e);
       ColumnScratch& s = scratch_[i];
       if (!s.loaded) load(g_.column(a, e), i);
@@ -643,39 +664,46 @@ private:
   }
   int slot(int a, int e) const { return (e - e_first_) * kTile + (a - a_first_); }
 
-  // visit(a, e, B, e^-B) for each of m's columns in the tile, row by row: B = B_azimuth + B_elevation and
-  // e^-B = e^-B_azimuth e^-B_elevation, each factor computed once per column and once per row.
-  template <typename Visit>
-  void for_each_column_of(const Measurement& m, Visit&& visit) {
+  // m's angular terms in the tile, -B in place of the factors (exponentiate_factors makes them e^-B).
+  void angles_of(const Measurement& m, TileAngles& t) const {
     const TileColumns r = columns_of(m);
+    std::fill(std::begin(t.factor), std::end(t.factor), 0.0f);
     for (int a = r.a0; a <= r.a1; ++a) {
-      azimuth_b_[a - a_first_] = azimuth_term(a, m);
-      azimuth_factor_[a - a_first_] = fast_exp(static_cast<float>(-azimuth_b_[a - a_first_]));
+      t.b[a - r.a0] = azimuth_term(a, m);
+      t.factor[a - r.a0] = static_cast<float>(-t.b[a - r.a0]);
     }
     for (int e = r.e0; e <= r.e1; ++e) {
-      const double elevation_b = elevation_b_[e - e_first_] = elevation_term(e, m);
-      const float elevation_factor = fast_exp(static_cast<float>(-elevation_b));
-      for (int a = r.a0; a <= r.a1; ++a)
-        visit(a, e, azimuth_b_[a - a_first_] + elevation_b, azimuth_factor_[a - a_first_] * elevation_factor);
+      t.b[kTile + e - r.e0] = elevation_term(e, m);
+      t.factor[kTile + e - r.e0] = static_cast<float>(-t.b[kTile + e - r.e0]);
     }
   }
 
-  // Clamped mode: folds measurement m into the to_lmin_m of one column's FreeSpaceBound, from the angular
-  // terms for_each_column_of has just computed (every measurement of a part, before the part's columns are
-  // loaded: a column loaded in that part takes them; list_pairs gathers front_m, which takes every
-  // measurement of a column). Only the column at the measurement's smallest B in the tile (its own column
-  // where the tile holds it): a bound from some of the measurements is still a bound, and that one reaches
-  // furthest.
-  void bound_to_lmin(const Measurement& m) {
+  // visit(a, e, B, e^-B) for each of m's columns in the tile, row by row: B = B_azimuth + B_elevation and
+  // e^-B = e^-B_azimuth e^-B_elevation, each factor computed once per column and once per row (`t`).
+  template <typename Visit>
+  void for_each_column_of(const Measurement& m, const TileAngles& t, Visit&& visit) const {
     const TileColumns r = columns_of(m);
-    // Tile-relative: the first column and row of smallest term.
-    const auto nearest = [](const double* terms, int first, int last) {
-      return static_cast<int>(std::min_element(terms + first, terms + last + 1) - terms);
+    for (int e = r.e0; e <= r.e1; ++e) {
+      const double elevation_b = t.b[kTile + e - r.e0];
+      const float elevation_factor = t.factor[kTile + e - r.e0];
+      for (int a = r.a0; a <= r.a1; ++a) visit(a, e, t.b[a - r.a0] + elevation_b, t.factor[a - r.a0] * elevation_factor);
+    }
+  }
+
+  // Clamped mode: folds measurement m into the to_lmin_m of one column's FreeSpaceBound, from its angular
+  // terms `t` (every measurement of a part, before the part's columns are loaded: a column loaded in that
+  // part takes them; list_pairs gathers front_m, which takes every measurement of a column). Only the
+  // column at the measurement's smallest B in the tile (its own column where the tile holds it): a bound
+  // from some of the measurements is still a bound, and that one reaches furthest.
+  void bound_to_lmin(const Measurement& m, const TileAngles& t) {
+    const TileColumns r = columns_of(m);
+    // The first column and row of smallest term, from the first lane of each.
+    const auto nearest = [](const double* terms, int count) {
+      return static_cast<int>(std::min_element(terms, terms + count) - terms);
     };
-    const int a_near = nearest(azimuth_b_, r.a0 - a_first_, r.a1 - a_first_);
-    const int e_near = nearest(elevation_b_, r.e0 - e_first_, r.e1 - e_first_);
-    double& to_lmin_m = free_space_[e_near * kTile + a_near].to_lmin_m;
-    to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(azimuth_b_[a_near] + elevation_b_[e_near], lmin_));
+    const int a_near = nearest(t.b, r.a1 - r.a0 + 1), e_near = nearest(t.b + kTile, r.e1 - r.e0 + 1);
+    double& to_lmin_m = free_space_[slot(r.a0 + a_near, r.e0 + e_near)].to_lmin_m;
+    to_lmin_m = std::max(to_lmin_m, m.rho + m.sigma * to_lmin_offset_sigmas(t.b[a_near] + t.b[kTile + e_near], lmin_));
   }
 
   // Each column's pairs, in input order, and the columns' FreeSpaceBounds; listed_ names the columns that
@@ -684,12 +712,15 @@ private:
     for (const int i : listed_) pairs_[i].clear();
     listed_.clear();
     measurements_.resize(count);
+    angles_.resize(count);
+    for (std::size_t k = 0; k < count; ++k) angles_of(slots[items[k]], angles_[k]);
+    exponentiate_factors(angles_.data(), count);
     for (std::size_t k = 0; k < count; ++k) {
       const Measurement& m = slots[items[k]];
       const double front_m = m.rho + m.sigma * kNonPositiveT;  // where t = kNonPositiveT
       measurements_[k] = {&m, g_.depth().first_centre_above(front_m), std::numeric_limits<int>::max(),
                           std::numeric_limits<int>::min()};
-      for_each_column_of(m, [&](int a, int e, double b, float factor) {
+      for_each_column_of(m, angles_[k], [&](int a, int e, double b, float factor) {
         const float a_factor = b <= kMaxFactoredB ? factor : 1.0f;
         const int i = slot(a, e);
         std::vector<PairPlan>& pairs = pairs_[i];
@@ -702,7 +733,7 @@ private:
         f = std::min(f, front_m);
         ++column_updates_;
       });
-      bound_to_lmin(m);
+      bound_to_lmin(m, angles_[k]);
     }
   }
 
@@ -777,6 +808,7 @@ private:
   MeasurementTerms terms_, column_terms_;  // exact mode
   TileTerms tile_terms_;                    // clamped mode
   std::vector<TileMeasurement> measurements_;
+  std::vector<TileAngles> angles_;  // the part's measurements' (clamped mode)
   std::vector<std::ptrdiff_t> terms_origins_;
   std::vector<PairPlan> pairs_[kTile * kTile];
   std::vector<int> listed_;  // the columns with pairs in the part being applied
@@ -787,8 +819,6 @@ private:
   ColumnScratch scratch_[kTile * kTile];
   ColumnContents contents_[kTile * kTile];  // the loaded columns' contents, stored together
   FreeSpaceBound free_space_[kTile * kTile];
-  float azimuth_factor_[kTile];
-  double azimuth_b_[kTile], elevation_b_[kTile];
   int a_first_ = 0, e_first_ = 0, a_last_ = -1, e_last_ = -1;
   std::size_t column_updates_ = 0;
 };
