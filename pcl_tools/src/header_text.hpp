@@ -2,7 +2,9 @@
 // Private to pcl_tools/src: the text of PCD and PLY files before PCL reads them (header lines, ASCII values).
 #include "occ_improve/errors.hpp"
 
+#include <charconv>
 #include <cstdlib>
+#include <system_error>
 #include <exception>
 #include <new>
 #include <sstream>
@@ -34,15 +36,47 @@ inline std::vector<std::string> words(const std::string& line) {
   return t;
 }
 
-/// The first of `values` that is not wholly a number (as strtod reads them: digits, exponents, nan, inf),
-/// or values.size(). PCL 1.13's ASCII readers read "1.5abc" as 1.5 and "foo" as 0 (PCD) or NaN (PLY),
-/// so a corrupt text cloud would be read as valid points or as invalid ones for the wrong reason.
-inline std::size_t first_non_number(const std::vector<std::string>& values) {
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    char* end = nullptr;
-    std::strtod(values[i].c_str(), &end);
-    if (end != values[i].c_str() + values[i].size()) return i;
+/// A word of a line of data: [begin, end).
+struct Word {
+  const char* begin;
+  const char* end;
+  std::string text() const { return std::string(begin, end); }
+};
+
+/// The words of `line` (split at white space, as words() splits), into `out` (reused between lines: the
+/// data checks read millions of values).
+inline void split_words(const std::string& line, std::vector<Word>& out) {
+  out.clear();
+  const char* c = line.data();
+  const char* const end = c + line.size();
+  const auto space = [](char ch) { return ch == ' ' || (ch >= '\t' && ch <= '\r'); };
+  while (c != end) {
+    while (c != end && space(*c)) ++c;
+    const char* const start = c;
+    while (c != end && !space(*c)) ++c;
+    if (c != start) out.push_back({start, c});
   }
+}
+
+/// Whether a word is wholly a number as strtod reads it (digits, exponents, nan, inf; a value beyond
+/// double's range is still a number). std::from_chars reads a subset of that syntax, quickly; a word it
+/// refuses (a leading '+', a hex float) is left to strtod.
+inline bool is_number(const Word& w) {
+  double value = 0;
+  const std::from_chars_result r = std::from_chars(w.begin, w.end, value);
+  if (r.ptr == w.end && w.begin != w.end && (r.ec == std::errc() || r.ec == std::errc::result_out_of_range)) return true;
+  const std::string text = w.text();
+  char* parsed = nullptr;
+  std::strtod(text.c_str(), &parsed);
+  return !text.empty() && parsed == text.c_str() + text.size();
+}
+
+/// The first of `values` that is not wholly a number, or values.size(). PCL 1.13's ASCII readers read
+/// "1.5abc" as 1.5 and "foo" as 0 (PCD) or NaN (PLY), so a corrupt text cloud would be read as valid points
+/// or as invalid ones for the wrong reason.
+inline std::size_t first_non_number(const std::vector<Word>& values) {
+  for (std::size_t i = 0; i < values.size(); ++i)
+    if (!is_number(values[i])) return i;
   return values.size();
 }
 

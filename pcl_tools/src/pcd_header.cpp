@@ -193,21 +193,22 @@ void check_ascii_body(std::istream& in, const PcdHeader& h, const std::string& p
   std::vector<const PcdField*> field_of_value;
   for (const PcdField& f : h.fields) field_of_value.insert(field_of_value.end(), f.count, &f);
   std::uint64_t point = 0, line_number = 0;
+  std::vector<detail::Word> values;
   for (std::string line; std::getline(in, line);) {
     ++line_number;
     if (line.empty()) continue;
-    const std::vector<std::string> values = detail::words(line);
-    const std::string where = "DATA ascii line " + std::to_string(line_number) + " (point " + std::to_string(point + 1) + ")";
+    detail::split_words(line, values);
+    const auto where = [&] { return "DATA ascii line " + std::to_string(line_number) + " (point " + std::to_string(point + 1) + ")"; };
     if (point == h.points) {
       if (values.empty()) continue;
-      fail(path, where + " is past the POINTS " + std::to_string(h.points) + " the header declares");
+      fail(path, where() + " is past the POINTS " + std::to_string(h.points) + " the header declares");
     }
     if (values.size() != field_of_value.size())
-      fail(path, where + " holds " + std::to_string(values.size()) + " values, the fields take " +
+      fail(path, where() + " holds " + std::to_string(values.size()) + " values, the fields take " +
                      std::to_string(field_of_value.size()));
     const std::size_t v = detail::first_non_number(values);
     if (v < values.size())
-      fail(path, where + ": '" + values[v] + "' for field '" + field_of_value[v]->name + "' is not a number");
+      fail(path, where() + ": '" + values[v].text() + "' for field '" + field_of_value[v]->name + "' is not a number");
     ++point;
   }
   if (point < h.points)

@@ -125,22 +125,24 @@ public:
   // lines of elements before the vertices are skipped (one instance a line), those after are not read.
   void check_ascii_vertices(std::istream& in, std::uint64_t line_number) const {
     std::string line;
+    std::vector<detail::Word> values;
     for (const Element& e : elements_) {
       for (std::uint64_t i = 0; i < e.count; ++i) {
-        std::vector<std::string> values;
+        values.clear();
         while (values.empty()) {
           if (!std::getline(in, line))
             fail("ASCII data ends at element '" + e.name + "' " + std::to_string(i + 1) + " of " + std::to_string(e.count));
           ++line_number;
-          values = detail::words(line);
+          detail::split_words(line, values);
         }
         if (e.name != "vertex") continue;
-        const std::string where = "line " + std::to_string(line_number) + " (vertex " + std::to_string(i + 1) + ")";
+        const auto where = [&] { return "line " + std::to_string(line_number) + " (vertex " + std::to_string(i + 1) + ")"; };
         if (values.size() != e.property_names.size())
-          fail(where + " holds " + std::to_string(values.size()) + " values, the vertex has " +
+          fail(where() + " holds " + std::to_string(values.size()) + " values, the vertex has " +
                std::to_string(e.property_names.size()) + " properties");
         const std::size_t v = detail::first_non_number(values);
-        if (v < values.size()) fail(where + ": '" + values[v] + "' for property '" + e.property_names[v] + "' is not a number");
+        if (v < values.size())
+          fail(where() + ": '" + values[v].text() + "' for property '" + e.property_names[v] + "' is not a number");
       }
       if (e.name == "vertex") return;
     }

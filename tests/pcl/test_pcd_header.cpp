@@ -76,8 +76,10 @@ TEST_F(PcdHeaderTest, AsciiDataMustHoldOneNumberPerValueOnEveryPointsLine) {
   expect_refused_naming(header() + "0 0 1\n\n0.25 0\n", "line 3 (point 2) holds 2 values, the fields take 3");
   expect_refused_naming(header() + "0.0000001 0 1\n", "DATA ascii holds 1 points, the header declares POINTS 2");
   expect_refused_naming(header() + "0 0 1\n0 0 1\n0 0 2\n", "line 3 (point 3) is past the POINTS 2");
-  // Numbers as PCL writes them (nan, inf, exponents), CRLF line ends, empty lines between and after.
-  EXPECT_EQ(refusal(header() + "nan nan nan\r\n\n1e-3 -2.5E+1 inf\n\n \n"), "");
+  // Numbers as PCL writes them (nan, inf, exponents) and as strtod reads them (a leading '+'), CRLF line
+  // ends, empty lines between and after.
+  EXPECT_EQ(refusal(header() + "nan nan nan\r\n\n1e-3 -2.5E+1 +inf\n\n \n"), "");
+  expect_refused_naming(header() + "1 2 3\n4 5 +\n", "'+' for field 'z' is not a number");
   // COUNT > 1: one number per value.
   EXPECT_EQ(refusal(header("2", "1", "2", "4 4 4", "2 1 1") + "0 1 2 3\n4 5 6 7\n"), "");
   expect_refused_naming(header("2", "1", "2", "4 4 4", "2 1 1") + "0 1 2 3\n4 5 6\n", "holds 3 values, the fields take 4");
