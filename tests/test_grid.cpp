@@ -191,6 +191,34 @@ TEST(Grid, StoreWindowsRefusesColumnsOfTwoTiles) {
   EXPECT_THROW(g.store_windows(two, 2), InvalidInput);
 }
 
+// The insertion's overload: the slots it gives are checked against the columns (a multiplication each),
+// and a tile written through it holds what the overload that finds each column's tile writes.
+TEST(Grid, StoreWindowsWithSlotsChecksThemAndStoresTheSame) {
+  ColumnGrid by_slots(paper_geometry()), by_columns(paper_geometry());
+  const auto width = static_cast<ColumnIndex>(by_slots.geometry().width());
+  const ColumnIndex origin = 3 * 8 * width + 16;  // tile (2, 3)
+  const std::vector<float> values{1.0f, 2.0f, 3.0f};
+  std::vector<ColumnContents> tile;
+  std::vector<std::size_t> slots;
+  for (std::size_t slot : {0u, 9u, 63u}) {
+    tile.push_back({origin + static_cast<ColumnIndex>((slot / 8) * width + slot % 8), 2, -1.0f, values.data(), 3});
+    slots.push_back(slot);
+  }
+  by_slots.store_windows(tile.data(), slots.data(), tile.size());
+  by_columns.store_windows(tile.data(), tile.size());
+  for (const ColumnContents& c : tile)
+    for (int bin = 0; bin < 6; ++bin) EXPECT_EQ(by_slots.log_odds(c.column, bin), by_columns.log_odds(c.column, bin));
+  EXPECT_EQ(by_slots.log_odds(tile[2].column, 4), 3.0f);
+  std::vector<std::size_t> wrong = slots;
+  wrong[1] = 10;  // column (1, 1) of the tile given as (2, 1)
+  EXPECT_THROW(by_slots.store_windows(tile.data(), wrong.data(), tile.size()), InvalidInput);
+  wrong[1] = 64;  // outside any tile
+  EXPECT_THROW(by_slots.store_windows(tile.data(), wrong.data(), tile.size()), InvalidInput);
+  const ColumnContents other_tile[2] = {tile[0], {origin + 8, 0, 0.0f, values.data(), 1}};  // slot 8 is (0, 1), not 8 columns right
+  const std::size_t claimed[2] = {0, 8};
+  EXPECT_THROW(by_slots.store_windows(other_tile, claimed, 2), InvalidInput);
+}
+
 TEST(Grid, OneFrameStoresFreeSpaceAsUniformRuns) {
   const SensorPreset p = kinect_v1_paper();
   ColumnGrid g{GridGeometry(p.geometry)};

@@ -196,6 +196,22 @@ void ColumnGrid::store_windows(const ColumnContents* contents, std::size_t count
   write_tile(allocated_tile(tile_index), contents, slots, count, Growth::insertion);
 }
 
+void ColumnGrid::store_windows(const ColumnContents* contents, const std::size_t* slots, std::size_t count) {
+  if (count == 0) return;
+  if (count > kTileColumns) throw InvalidInput("store_windows: " + std::to_string(count) + " columns for one tile");
+  std::size_t first_slot;
+  const std::size_t tile_index = tile_of(contents[0].column, first_slot);
+  const auto width = static_cast<std::size_t>(geometry_.width());
+  const auto at = [&](std::size_t slot) { return (slot / kTileSize) * width + slot % kTileSize; };
+  // The tile's first column, which every column of it is a slot away from.
+  const std::size_t origin = contents[0].column - at(first_slot);
+  for (std::size_t i = 0; i < count; ++i)
+    if (slots[i] >= kTileColumns || contents[i].column != origin + at(slots[i]))
+      throw InvalidInput("store_windows: column " + std::to_string(contents[i].column) + " is not slot " +
+                         std::to_string(slots[i]) + " of the tile of column " + std::to_string(contents[0].column));
+  write_tile(allocated_tile(tile_index), contents, slots, count, Growth::insertion);
+}
+
 void ColumnGrid::write_tile(Tile& tile, const ColumnContents* contents, const std::size_t* slots, std::size_t count,
                             Growth growth) {
   ColumnContents merged[kTileColumns];

@@ -119,21 +119,20 @@ struct TileMeasurement {
 };
 
 // A measurement's angular terms within a tile: B of its columns there (lanes [0, kTile), from its first
-// column in the tile) and of its rows (lanes [kTile, 2 kTile)), and e^-B of each (lanes not in use: e^0).
+// column in the tile) and of its rows (lanes [kTile, 2 kTile)); their factors e^-B lie in the part's
+// factor list from `factors`, the columns' then the rows'.
 struct TileAngles {
-  static constexpr int kLanes = 2 * ColumnGrid::kTileSize;
-  double b[kLanes];
-  float factor[kLanes];  ///< -B until exponentiate_factors
+  double b[2 * ColumnGrid::kTileSize];
+  std::size_t factors;
 };
 
-// e^x of every factor lane of `count` TileAngles in place, in one vector pass: the exps of a measurement
-// are few and each a chain of a dozen dependent operations, which the pass over a tile's measurements
-// overlaps. Compiled for AVX2 without FMA beside baseline x86-64, so every lane rounds as the scalar
-// fast_exp does (FMA would contract its polynomial and change the factors' last bits).
+// e^x of `count` floats in place, in one vector pass over a part's measurements: the exps of one
+// measurement are few and each a chain of a dozen dependent operations, which a pass over ~100
+// measurements overlaps. Compiled for AVX2 without FMA beside baseline x86-64, so every lane rounds as
+// the scalar fast_exp does (FMA would contract its polynomial and change the factors' last bits).
 OCC_IMPROVE_CLONES("avx2")
-void exponentiate_factors(TileAngles* angles, std::size_t count) {
-  for (std::size_t k = 0; k < count; ++k)
-    for (int i = 0; i < TileAngles::kLanes; ++i) angles[k].factor[i] = fast_exp(angles[k].factor[i]);
+void exponentiate(float* x, std::size_t count) {
+  for (std::size_t i = 0; i < count; ++i) x[i] = fast_exp(x[i]);
 }
 
 // Where one (measurement, column) pair of a call updates the column, decided before any pair of the column
@@ -591,8 +590,9 @@ public:
   void apply_exact(const Measurement& m) {
     terms_.reset(m.rho, m.sigma);
     TileAngles angles;
-    angles_of(m, angles);
-    exponentiate_factors(&angles, 1);
+    factors_.resize(2 * kTile);
+    const std::size_t factor_count = angles_of(m, angles, 0);
+    exponentiate(factors_.data(), factor_count);
     for_each_column_of(m, angles, [&](int a, int e, double b, float factor) {
       const int i = slot(a, e);
       ColumnScratch& s = scratch_[i];
@@ -630,10 +630,12 @@ public:
     std::size_t stored = 0;
     for (int e = e_first_; e <= e_last_; ++e)
       for (int a = a_first_; a <= a_last_; ++a) {
-        ColumnScratch& s = scratch_[(e - e_first_) * kTile + (a - a_first_)];
-        if (s.loaded) contents_[stored++] = kernel_.contents(s, g_.column(a, e));
+        const int i = slot(a, e);
+        if (!scratch_[i].loaded) continue;
+        slots_[stored] = static_cast<std::size_t>(i);
+        contents_[stored++] = kernel_.contents(scratch_[i], g_.column(a, e));
       }
-    grid_.store_windows(contents_, stored);
+    grid_.store_windows(contents_, slots_, stored);
     for (std::size_t i = 0; i < stored; ++i) {
       const ColumnIndex c = contents_[i].column;
       grid_.mark_changed(c);
@@ -664,18 +666,20 @@ private:
   }
   int slot(int a, int e) const { return (e - e_first_) * kTile + (a - a_first_); }
 
-  // m's angular terms in the tile, -B in place of the factors (exponentiate_factors makes them e^-B).
-  void angles_of(const Measurement& m, TileAngles& t) const {
+  // m's angular terms in the tile, their -B in factors_ from `at` (exponentiate makes them e^-B); returns
+  // where the next measurement's start.
+  std::size_t angles_of(const Measurement& m, TileAngles& t, std::size_t at) {
     const TileColumns r = columns_of(m);
-    std::fill(std::begin(t.factor), std::end(t.factor), 0.0f);
+    t.factors = at;
     for (int a = r.a0; a <= r.a1; ++a) {
       t.b[a - r.a0] = azimuth_term(a, m);
-      t.factor[a - r.a0] = static_cast<float>(-t.b[a - r.a0]);
+      factors_[at++] = static_cast<float>(-t.b[a - r.a0]);
     }
     for (int e = r.e0; e <= r.e1; ++e) {
       t.b[kTile + e - r.e0] = elevation_term(e, m);
-      t.factor[kTile + e - r.e0] = static_cast<float>(-t.b[kTile + e - r.e0]);
+      factors_[at++] = static_cast<float>(-t.b[kTile + e - r.e0]);
     }
+    return at;
   }
 
   // visit(a, e, B, e^-B) for each of m's columns in the tile, row by row: B = B_azimuth + B_elevation and
@@ -683,10 +687,12 @@ private:
   template <typename Visit>
   void for_each_column_of(const Measurement& m, const TileAngles& t, Visit&& visit) const {
     const TileColumns r = columns_of(m);
+    const float* column_factor = factors_.data() + t.factors;
+    const float* row_factor = column_factor + (r.a1 - r.a0 + 1);
     for (int e = r.e0; e <= r.e1; ++e) {
       const double elevation_b = t.b[kTile + e - r.e0];
-      const float elevation_factor = t.factor[kTile + e - r.e0];
-      for (int a = r.a0; a <= r.a1; ++a) visit(a, e, t.b[a - r.a0] + elevation_b, t.factor[a - r.a0] * elevation_factor);
+      const float elevation_factor = row_factor[e - r.e0];
+      for (int a = r.a0; a <= r.a1; ++a) visit(a, e, t.b[a - r.a0] + elevation_b, column_factor[a - r.a0] * elevation_factor);
     }
   }
 
@@ -713,8 +719,10 @@ private:
     listed_.clear();
     measurements_.resize(count);
     angles_.resize(count);
-    for (std::size_t k = 0; k < count; ++k) angles_of(slots[items[k]], angles_[k]);
-    exponentiate_factors(angles_.data(), count);
+    factors_.resize(count * 2 * kTile);
+    std::size_t factor_count = 0;
+    for (std::size_t k = 0; k < count; ++k) factor_count = angles_of(slots[items[k]], angles_[k], factor_count);
+    exponentiate(factors_.data(), factor_count);
     for (std::size_t k = 0; k < count; ++k) {
       const Measurement& m = slots[items[k]];
       const double front_m = m.rho + m.sigma * kNonPositiveT;  // where t = kNonPositiveT
@@ -809,6 +817,7 @@ private:
   TileTerms tile_terms_;                    // clamped mode
   std::vector<TileMeasurement> measurements_;
   std::vector<TileAngles> angles_;  // the part's measurements' (clamped mode)
+  std::vector<float> factors_;      // their e^-B (TileAngles::factors)
   std::vector<std::ptrdiff_t> terms_origins_;
   std::vector<PairPlan> pairs_[kTile * kTile];
   std::vector<int> listed_;  // the columns with pairs in the part being applied
@@ -818,6 +827,7 @@ private:
   const float lmin_;
   ColumnScratch scratch_[kTile * kTile];
   ColumnContents contents_[kTile * kTile];  // the loaded columns' contents, stored together
+  std::size_t slots_[kTile * kTile];         // and their slots in the tile
   FreeSpaceBound free_space_[kTile * kTile];
   int a_first_ = 0, e_first_ = 0, a_last_ = -1, e_last_ = -1;
   std::size_t column_updates_ = 0;

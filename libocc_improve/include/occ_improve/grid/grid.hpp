@@ -141,6 +141,10 @@ public:
   /// trimmed. The values must not lie in the tile's storage. Throws InvalidInput when the columns are not
   /// all of one tile.
   void store_windows(const ColumnContents* contents, std::size_t count);
+  /// The same, with slots[i] the index of contents[i].column in its tile (row by row), which a caller
+  /// walking the tile knows: the columns are checked against them by a multiplication each, where finding
+  /// each one's tile takes a division (InvalidInput when a slot or a column does not agree).
+  void store_windows(const ColumnContents* contents, const std::size_t* slots, std::size_t count);
   /// Rebuilds every tile's storage with its windows back to back and no spare room.
   void shrink_to_fit();
 
