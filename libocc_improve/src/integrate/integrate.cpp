@@ -136,8 +136,8 @@ void exponentiate(float* x, std::size_t count) {
 }
 
 // Where one (measurement, column) pair of a call updates the column, decided before any pair of the column
-// is applied (clamped mode): bins [first, end) are evaluated, none when first >= end (end is looked up
-// only for a pair that b') does not skip).
+// is applied (clamped mode): bins [first, end) are evaluated, none when first >= end. Listed with end the
+// support's end and first = end; the plan sets first for a pair that evaluates.
 struct PairPlan {
   /// The pair's measurement in the tile's list; once the terms are placed, its entry of the terms' origins
   /// (a pair with B > kMaxFactoredB: an entry of its own, for its own terms).
