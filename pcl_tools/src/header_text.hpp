@@ -4,11 +4,11 @@
 
 #include <charconv>
 #include <cstdlib>
-#include <system_error>
 #include <exception>
 #include <new>
 #include <sstream>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace occ_improve::detail {

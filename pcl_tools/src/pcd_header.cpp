@@ -186,9 +186,8 @@ void check_compressed(std::istream& in, std::uint64_t file_size, const PcdHeader
 
 // DATA ascii: PCL 1.13 reads values leniently (detail::first_non_number) and keeps a point whose line has
 // too few or too many values as zeros after a warning that does not name the file, so a corrupt text
-// cloud would be inserted as if it were valid. Every point's line (PCL skips empty lines
-// and reads POINTS lines) must hold one number per value of the fields, and nothing but empty lines may
-// follow the last.
+// cloud would be inserted as if it were valid. Every point's line (PCL skips empty lines and reads POINTS
+// lines) must hold one number per value of the fields, and nothing but empty lines may follow the last.
 void check_ascii_body(std::istream& in, const PcdHeader& h, const std::string& path) {
   std::vector<const PcdField*> field_of_value;
   for (const PcdField& f : h.fields) field_of_value.insert(field_of_value.end(), f.count, &f);

@@ -37,13 +37,13 @@ std::string format_bound(double v) {
 // An integer flag's value is an int: its bounds are at most int's, and the requirement says so (a value
 // beyond them was refused as not ">= 1").
 constexpr double kIntegerMagnitude = 2147483647.0;
-double upper_bound(const FlagSpec& f) { return f.kind == FlagKind::integer ? std::min(f.maximum, kIntegerMagnitude) : f.maximum; }
-double lower_bound(const FlagSpec& f) { return f.kind == FlagKind::integer ? std::max(f.minimum, -kIntegerMagnitude) : f.minimum; }
+double integer_aware_maximum(const FlagSpec& f) { return f.kind == FlagKind::integer ? std::min(f.maximum, kIntegerMagnitude) : f.maximum; }
+double integer_aware_minimum(const FlagSpec& f) { return f.kind == FlagKind::integer ? std::max(f.minimum, -kIntegerMagnitude) : f.minimum; }
 
 // "an integer in [1, 2147483647]", "a number in [0, 1]", "a number > 0".
 std::string requirement(const FlagSpec& f) {
   std::string r = f.kind == FlagKind::integer ? "an integer" : "a finite number";
-  const double minimum = lower_bound(f), maximum = upper_bound(f);
+  const double minimum = integer_aware_minimum(f), maximum = integer_aware_maximum(f);
   const bool low = std::isfinite(minimum), high = std::isfinite(maximum);
   if (low && high)
     r += std::string(" in ") + (f.minimum_exclusive ? "(" : "[") + format_bound(minimum) + ", " + format_bound(maximum) +
