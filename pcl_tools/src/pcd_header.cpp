@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
-#include <sstream>
 
 namespace occ_improve {
 namespace {
@@ -118,9 +117,8 @@ void require_no_header_after_data(const std::string& head, std::size_t at, const
     const std::string text = head.substr(at, end - at);
     at = end + 1;
     if (text.empty()) continue;  // PCL skips empty lines
-    std::istringstream line(text);
-    std::string first;
-    line >> first;
+    const std::vector<std::string> w = detail::words(text);
+    const std::string first = w.empty() ? std::string() : w[0];
     if (first.rfind('#', 0) == 0) continue;  // and comments
     for (const char* key : kPclKeys)
       if (first.rfind(key, 0) == 0) parser.fail("a header line ('" + first + "') follows the DATA line");

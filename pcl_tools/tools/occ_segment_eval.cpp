@@ -104,10 +104,10 @@ void evaluate_cloud(const std::string& path, const std::string& preset_name, con
   std::vector<std::uint32_t> truth(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) truth[i] = cloud[i].label;
   // A cloud without a ground-truth object scored F = 0 and weighed in the means as a failure of both methods.
-  const std::uint32_t first_object = EvaluationOptions{}.first_object_label;
-  if (std::none_of(truth.begin(), truth.end(), [&](std::uint32_t label) { return label >= first_object; }))
-    throw InvalidInput("no ground-truth object in it (every label is below " + std::to_string(first_object) +
-                       ", the table's or none): nothing to score");
+  const EvaluationOptions evaluation;  // the scores' (evaluate_segmentation's defaults)
+  if (std::none_of(truth.begin(), truth.end(), [&](std::uint32_t label) { return evaluation.is_object_label(label); }))
+    throw InvalidInput("no ground-truth object in it (every label is below " +
+                       std::to_string(evaluation.first_object_label) + ", the table's or none): nothing to score");
   progress.finish();  // the rows below start on a clean line
   if (ours_runs.scores.empty()) print_header();  // only once a cloud has loaded, so an error stands alone
   const int width = static_cast<int>(cloud.width), height = static_cast<int>(cloud.height);

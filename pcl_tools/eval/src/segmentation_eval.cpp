@@ -111,7 +111,7 @@ SegmentationScore evaluate_segmentation(const std::vector<std::uint32_t>& ground
     throw InvalidInput("evaluate_segmentation: label images must both hold width x height labels");
 
   // Ground-truth regions: the table's parts count as one region (label 1), every object label as its own.
-  auto region_of = [&](std::uint32_t gt) { return gt < options.first_object_label ? std::uint32_t{1} : gt; };
+  auto region_of = [&](std::uint32_t gt) { return options.is_object_label(gt) ? gt : std::uint32_t{1}; };
   std::vector<std::uint8_t> valid(n);
   std::vector<std::uint32_t> regions(n);
   std::unordered_map<std::uint32_t, std::size_t> region_size, segment_size;
@@ -136,7 +136,7 @@ SegmentationScore evaluate_segmentation(const std::vector<std::uint32_t>& ground
   }
   std::vector<std::uint32_t> object_labels;
   for (const auto& [region, size] : region_size)
-    if (region >= options.first_object_label) object_labels.push_back(region);
+    if (options.is_object_label(region)) object_labels.push_back(region);
   std::sort(object_labels.begin(), object_labels.end());
 
   for (std::uint32_t object : object_labels) {

@@ -38,6 +38,8 @@ struct EvaluationOptions {
   int boundary_tolerance_px = 2;
   std::size_t min_object_points = 100;    ///< smaller ground-truth objects are left out of the pooled scores
   void validate() const;
+  /// Whether a ground-truth label names an object (0 is no label, below first_object_label the table).
+  bool is_object_label(std::uint32_t label) const { return label >= first_object_label; }
 };
 
 struct ObjectScore {
