@@ -31,7 +31,9 @@ const ToolFlags kFlags{
     "For each scene and budget, strategies (a) full frames, (b) uniform random without replacement,\n"
     "(c) regular decimation, (d) improvement-guided, (e) (d) + return model, (f) (e) + re-acquisition of\n"
     "negative rays, (g) coarse-to-fine (coverage pass, then one ray per block by the multi-scale improvement x\n"
-    "the predictor's residual; g_improvement / g_residual: by one of them) acquire from a virtual Kinect v1,\n"
+    "the predictor's residual; g_improvement / g_residual: by one of them; g_triangles: by the samples'\n"
+    "triangles) acquire from a virtual Kinect v1; o_oracle, run only when named, is a bound that reads the\n"
+    "scene (after (g)'s first shot, the unasked rays whose prediction is wrong, worst first),\n"
     "each scored with every -predictors rule (runs of the linear one are named <strategy>_linear) (virtual_sensor.hpp); quality = share of\n"
     "scene-return rays whose predicted depth lies within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's.\n"
     "Writes OUTDIR/<scene>.csv per scene and OUTDIR/summary.csv.\n",
@@ -105,13 +107,18 @@ SelectEvalOptions parse_options(const CommandLine& command_line) {
   o.radius = *command_line.integer("-radius");
   o.seed = static_cast<std::uint64_t>(*command_line.integer("-seed"));
   const std::string names = *command_line.text("-strategies");
-  for (SelectStrategy s : compared_select_strategies())
-    if (names == "all" || ("," + names + ",").find("," + std::string(select_strategy_name(s)) + ",") != std::string::npos)
-      o.strategies.push_back(s);
+  std::vector<SelectStrategy> known = compared_select_strategies();
+  known.push_back(SelectStrategy::oracle);  // a bound, run when named
+  std::string known_names;
+  for (SelectStrategy s : known) {
+    const std::string name = select_strategy_name(s);
+    known_names += (known_names.empty() ? "" : ", ") + name;
+    const bool in_all = s != SelectStrategy::oracle;
+    if ((names == "all" && in_all) || ("," + names + ",").find("," + name + ",") != std::string::npos) o.strategies.push_back(s);
+  }
   std::size_t listed = names == "all" ? o.strategies.size() : static_cast<std::size_t>(std::count(names.begin(), names.end(), ',') + 1);
   if (o.strategies.empty() || listed != o.strategies.size())
-    throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of b_uniform, "
-                           "c_decimation, d_guided, e_returns, f_reacquire, g_coarse_to_fine, g_improvement, g_residual");
+    throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of " + known_names);
   const std::string predictors = *command_line.text("-predictors");
   for (const std::string& name : {std::string("nearest"), std::string("linear")})
     if (("," + predictors + ",").find("," + name + ",") != std::string::npos)

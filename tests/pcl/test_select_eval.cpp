@@ -1,12 +1,14 @@
 // The selective-acquisition evaluation (select_eval.hpp) on a small generated scene: the CSV rows of a
 // coarse-to-fine run refined by triangles are read back, their values checked against the run's rules
 // (rays asked grow by the budget, qualities are shares, the summary is the curve's), and a run that
-// asks past every observable ray ends instead of looping.
+// asks past every observable ray ends instead of looping; the oracle bound starts as (g) and asks at most
+// a shot of wrong rays.
 #include "occ_improve/eval/select_eval.hpp"
 #include "support/small_camera.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <map>
 #include <sstream>
 #include <string>
@@ -29,7 +31,7 @@ SelectScene wall_and_box() {
 
 struct CsvRow {
   std::size_t shot, rays_asked, returns;
-  double quality, coverage;
+  double quality, coverage, expected_gain;
   int plan_stop;
   double stop_gain_per_ray;
 };
@@ -47,7 +49,7 @@ std::vector<CsvRow> rows_of(const std::string& csv, const std::string& strategy)
     std::istringstream cells(line);
     for (std::string cell; std::getline(cells, cell, ',');) f.push_back(cell);
     if (f.size() < 13 || f[1] != strategy) continue;
-    rows.push_back({std::stoul(f[3]), std::stoul(f[4]), std::stoul(f[5]), std::stod(f[6]), std::stod(f[7]), std::stoi(f[11]),
+    rows.push_back({std::stoul(f[3]), std::stoul(f[4]), std::stoul(f[5]), std::stod(f[6]), std::stod(f[7]), std::stod(f[9]), std::stoi(f[11]),
                     std::stod(f[12])});
   }
   return rows;
@@ -89,6 +91,41 @@ TEST(SelectEval, TrianglesRunReadsBackAsACurveOfShares) {
       EXPECT_LE(s.points_to_95, 1.5);
     }
   EXPECT_TRUE(found);
+}
+
+TEST(SelectEval, OracleStartsAsTrianglesThenAsksWrongRaysAndIsNotInAll) {
+  SelectEvalOptions options;
+  options.budgets = {0.05};
+  options.frames = 0.5;
+  options.strategies = {SelectStrategy::coarse_triangles, SelectStrategy::oracle};
+  options.predictors = {DepthPredictionRule::linear};
+  std::ostringstream csv;
+  const std::vector<SelectSummaryRow> summary = evaluate_select_scene(wall_and_box(), options, csv);
+  const std::vector<CsvRow> triangles = rows_of(csv.str(), "g_triangles_linear"), oracle = rows_of(csv.str(), "o_oracle_linear");
+  const std::size_t budget = 154;
+  ASSERT_EQ(oracle.size(), triangles.size());
+  ASSERT_GE(oracle.size(), 3u);
+  // The same first shot (the sensor's noise is keyed by shot and pixel), so the same map.
+  EXPECT_EQ(oracle[0].quality, triangles[0].quality);
+  EXPECT_EQ(oracle[0].returns, triangles[0].returns);
+  for (std::size_t i = 1; i < oracle.size(); ++i) {
+    // The count of wrong rays asked: a whole number, at most the shot.
+    EXPECT_EQ(oracle[i].expected_gain, std::floor(oracle[i].expected_gain)) << "shot " << oracle[i].shot;
+    EXPECT_LE(oracle[i].expected_gain, static_cast<double>(budget)) << "shot " << oracle[i].shot;
+    EXPECT_EQ(oracle[i].rays_asked, oracle[i].shot * budget);  // filled by (g) to the budget
+  }
+  // After (g)'s coverage the wall's edge and the box are mispredicted somewhere: the second shot asks some.
+  EXPECT_GT(oracle[1].expected_gain, 0.0);
+  // Knowing where the prediction is wrong reaches the bar no later than (g).
+  double oracle_points = -1, triangles_points = -1;
+  for (const SelectSummaryRow& s : summary) {
+    if (s.strategy == "o_oracle_linear") oracle_points = s.points_to_95;
+    if (s.strategy == "g_triangles_linear") triangles_points = s.points_to_95;
+  }
+  ASSERT_GT(oracle_points, 0.0);
+  EXPECT_TRUE(triangles_points < 0 || oracle_points <= triangles_points) << oracle_points << " " << triangles_points;
+  for (SelectStrategy s : compared_select_strategies()) EXPECT_NE(s, SelectStrategy::oracle);  // a bound, run when named
+  EXPECT_STREQ(select_strategy_name(SelectStrategy::oracle), "o_oracle");
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <numeric>
 #include <utility>
 
@@ -23,11 +24,20 @@ constexpr std::size_t kReferenceFrames = 5;  ///< the target's "quality of 5 ful
 
 const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decimation",
                                       "d_guided",    "e_returns",       "f_reacquire",
-                                      "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles"};
+                                      "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles",
+                                      "o_oracle"};
 
 bool is_coarse_to_fine(SelectStrategy s) {
   return s == SelectStrategy::coarse_both || s == SelectStrategy::coarse_improvement ||
          s == SelectStrategy::coarse_residual || s == SelectStrategy::coarse_triangles;
+}
+
+/// The refinement (g) runs under (the oracle fills its shots with (g) triangles').
+RefineBy refinement_of(SelectStrategy s) {
+  return s == SelectStrategy::coarse_both          ? RefineBy::both
+         : s == SelectStrategy::coarse_improvement ? RefineBy::improvement
+         : s == SelectStrategy::coarse_residual    ? RefineBy::residual
+                                                   : RefineBy::triangles;
 }
 
 }  // namespace
@@ -52,7 +62,12 @@ std::string run_name(SelectStrategy s, DepthPredictionRule rule) {
 struct Quality {
   double within = 0, coverage = 0, mean_abs_error_m = 0;
   std::size_t good = 0;
+  /// Scene-return rays never asked whose prediction is off (or missing), and those of them off by at most
+  /// kNoiseScaleTolerances: errors of the noise's size (the scene's own and the samples'), which no planner
+  /// sees before it measures the ray.
+  std::size_t wrong_unasked = 0, wrong_unasked_noise_scale = 0;
 };
+constexpr double kNoiseScaleTolerances = 1.5;  ///< 3 sigma(z)
 
 /// How the grid's columns meet the scene's pixels: the column holding each pixel's centre ray and the
 /// pixel holding each column's centre ray (-1 where none: a column no pixel sees is not observable).
@@ -84,14 +99,26 @@ PixelColumns pixel_columns(const GridGeometry& g, const PinholeIntrinsics& k) {
   return m;
 }
 
-/// The metric: for every scene pixel with a return, the map's z there (the surface sample of the
-/// pixel's column, else predict_depth) within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's z.
-Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelColumns& map, int radius,
-                    DepthPredictionRule rule) {
+PredictedDepth predicted_depth(const Mapper& mapper, int radius, DepthPredictionRule rule) {
   DepthPredictionParams params;
   params.radius_columns = radius;
   params.rule = rule;
-  const PredictedDepth predicted = predict_depth(mapper.surface(), mapper.model(), params);
+  return predict_depth(mapper.surface(), mapper.model(), params);
+}
+
+/// The metric's tolerance at the scene's z: 2 sigma(z) = 2 x 1.425e-3 z^2.
+double tolerance_m(double z) { return 2 * 1.425e-3 * z * z; }
+
+/// The predicted z of a column (the depth axis is z for pinhole binnings, the range for spherical ones).
+double predicted_z(const GridGeometry& g, ColumnIndex column, const PredictedDepth& predicted) {
+  return g.point(g.azimuth_bin_of(column), g.elevation_bin_of(column), predicted.depth_m[column]).z();
+}
+
+/// The metric: for every scene pixel with a return, the map's z there (the surface sample of the
+/// pixel's column, else predict_depth) within tolerance_m of the scene's z.
+Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelColumns& map, int radius,
+                    DepthPredictionRule rule, const std::vector<std::uint8_t>& asked) {
+  const PredictedDepth predicted = predicted_depth(mapper, radius, rule);
   const GridGeometry& g = mapper.geometry();
   Quality q;
   std::size_t returns = 0, covered = 0;
@@ -101,14 +128,21 @@ Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelC
     if (z <= 0) continue;
     ++returns;
     const std::int64_t c = map.column_of_pixel[p];
-    if (c < 0 || predicted.distance[static_cast<std::size_t>(c)] < 0) continue;
-    ++covered;
+    if (c < 0) continue;
     const auto column = static_cast<ColumnIndex>(c);
-    const double predicted_z =  // the depth axis is z (pinhole) or the range (spherical)
-        g.point(g.azimuth_bin_of(column), g.elevation_bin_of(column), predicted.depth_m[column]).z();
-    const double error = std::abs(predicted_z - z);
+    if (predicted.distance[column] < 0) {
+      q.wrong_unasked += asked[column] ? 0 : 1;
+      continue;
+    }
+    ++covered;
+    const double error = std::abs(predicted_z(g, column, predicted) - z);
     abs_error += error;
-    q.good += error <= 2 * 1.425e-3 * z * z ? 1 : 0;
+    const double tolerances = error / tolerance_m(z);
+    q.good += tolerances <= 1 ? 1 : 0;
+    if (tolerances > 1 && !asked[column]) {
+      ++q.wrong_unasked;
+      q.wrong_unasked_noise_scale += tolerances <= kNoiseScaleTolerances ? 1 : 0;
+    }
   }
   q.within = returns ? static_cast<double>(q.good) / returns : 0;
   q.coverage = returns ? static_cast<double>(covered) / returns : 0;
@@ -140,7 +174,7 @@ public:
       : scene_(scene), strategy_(strategy), rule_(rule), budget_(budget), options_(options),
         mapper_(kinect_v1(scene.intrinsics)), sensor_(scene.depth_m, scene.intrinsics, sensor_params(options)),
         returns_(ReturnRecord::for_grid(mapper_.geometry().width(), mapper_.geometry().height())),
-        map_(pixel_columns(mapper_.geometry(), scene.intrinsics)) {
+        map_(pixel_columns(mapper_.geometry(), scene.intrinsics)), asked_(map_.observable.size(), 0) {
     for (ColumnIndex c = 0; c < map_.observable.size(); ++c)
       if (map_.observable[c]) observable_columns_.push_back(c);
   }
@@ -161,11 +195,11 @@ public:
       expected_since += shot.expected_gain;
       if (static_cast<double>(rays_asked_) + 0.5 < next_checkpoint && static_cast<double>(rays_asked_) < limit - 0.5) continue;
       next_checkpoint += checkpoint_every;
-      const Quality q = map_quality(mapper_, scene_, map_, options_.radius, rule_);
+      const Quality q = map_quality(mapper_, scene_, map_, options_.radius, rule_, asked_);
       csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
           << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
           << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << ','
-          << shot.stop_gain_per_ray << '\n';
+          << shot.stop_gain_per_ray << ',' << q.wrong_unasked << ',' << q.wrong_unasked_noise_scale << '\n';
       curve_.push_back({static_cast<double>(rays_asked_), q.within});
       calibration_.push_back({expected_since, static_cast<double>(q.good) - static_cast<double>(good_before)});
       good_before = q.good;
@@ -208,17 +242,41 @@ private:
       request.budget_rays = budget_;
       request.negative_share = strategy_ == SelectStrategy::guided_reacquire ? options_.share : 0.0;
       request.candidates = map_.observable;
-      if (is_coarse_to_fine(strategy_)) {
+      if (is_coarse_to_fine(strategy_) || strategy_ == SelectStrategy::oracle) {
         request.shape = ShotShape::coarse_to_fine;
-        request.refine_by = strategy_ == SelectStrategy::coarse_both          ? RefineBy::both
-                            : strategy_ == SelectStrategy::coarse_improvement ? RefineBy::improvement
-                            : strategy_ == SelectStrategy::coarse_triangles   ? RefineBy::triangles
-                                                                              : RefineBy::residual;
+        request.refine_by = refinement_of(strategy_);
         // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
         request.local_model = rule_ == DepthPredictionRule::linear ? LocalModel::plane : LocalModel::constant;
       }
       shot = plan_next_shot(mapper_, returns_, request, plan_memory_);
+      if (strategy_ == SelectStrategy::oracle && shots_ > 0) shot = oracle_shot(shot);
     }
+    return shot;
+  }
+
+  /// (o): the unasked rays whose predicted depth is more than the tolerance off the scene's (no prediction
+  /// counts as off), worst first, then `planned`'s rays; the expected gain is the count of the former.
+  Shot oracle_shot(const Shot& planned) const {
+    const PredictedDepth predicted = predicted_depth(mapper_, options_.radius, rule_);
+    const GridGeometry& g = mapper_.geometry();
+    std::vector<std::pair<double, ColumnIndex>> wrong;  // (error in tolerances, column)
+    for (ColumnIndex c : observable_columns_) {
+      const double z = scene_.depth_m[static_cast<std::size_t>(map_.pixel_of_column[c])];
+      if (!(z > 0) || asked_[c]) continue;
+      const double error = predicted.distance[c] < 0 ? std::numeric_limits<double>::infinity()
+                                                     : std::abs(predicted_z(g, c, predicted) - z) / tolerance_m(z);
+      if (error > 1) wrong.push_back({error, c});
+    }
+    const std::size_t taken = std::min(wrong.size(), static_cast<std::size_t>(budget_));
+    std::partial_sort(wrong.begin(), wrong.begin() + static_cast<std::ptrdiff_t>(taken), wrong.end(),
+                      [](const auto& a, const auto& b) { return a.first != b.first ? a.first > b.first : a.second < b.second; });
+    Shot shot = planned;
+    shot.columns.clear();
+    std::vector<std::uint8_t> in_shot(map_.observable.size(), 0);
+    for (std::size_t i = 0; i < taken; ++i) shot.columns.push_back(wrong[i].second), in_shot[wrong[i].second] = 1;
+    for (ColumnIndex c : planned.columns)
+      if (shot.columns.size() < static_cast<std::size_t>(budget_) && !in_shot[c]) shot.columns.push_back(c), in_shot[c] = 1;
+    shot.expected_gain = static_cast<double>(taken);
     return shot;
   }
 
@@ -229,10 +287,12 @@ private:
     const std::vector<float> depth = sensor_.shoot(pixels);
     const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
     mapper_.insert(PointSpan::from(points));
-    if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire || is_coarse_to_fine(strategy_)) {
+    if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire || is_coarse_to_fine(strategy_) ||
+        strategy_ == SelectStrategy::oracle) {
       returns_.record_shot(columns, VirtualSensor::returned(depth));
     }
     seconds_ += seconds_since(start);
+    for (ColumnIndex c : columns) asked_[c] = 1;
     rays_asked_ += columns.size();
     returned_ += points.size();
     ++shots_;
@@ -248,6 +308,7 @@ private:
   ReturnRecord returns_;
   PlanMemory plan_memory_;
   PixelColumns map_;
+  std::vector<std::uint8_t> asked_;  ///< per column: asked at least once
   std::vector<ColumnIndex> observable_columns_;
   std::vector<ColumnIndex> order_;
   std::size_t order_position_ = 0, shots_ = 0, rays_asked_ = 0, returned_ = 0, stop_rays_ = 0;
@@ -283,7 +344,7 @@ double pearson(const std::vector<std::pair<double, double>>& xy) {
 std::vector<SelectSummaryRow> evaluate_select_scene(const SelectScene& scene, const SelectEvalOptions& options,
                                                     std::ostream& csv) {
   csv << "scene,strategy,budget_rays,shot,rays_asked,returns,quality,coverage,mean_abs_error_m,expected_gain,"
-         "realised_good_rays,plan_stop,stop_gain_per_ray\n";
+         "realised_good_rays,plan_stop,stop_gain_per_ray,wrong_unasked,wrong_unasked_noise_scale\n";
   const auto n = static_cast<int>(scene.depth_m.size());
   Run reference(scene, SelectStrategy::full, n, options);
   reference.run(csv);

@@ -24,14 +24,19 @@ struct SelectScene {
 /// (a) full frames, (b) uniform random without replacement, (c) regular decimation, (d) improvement-guided,
 /// (e) (d) + return model, (f) (e) + re-acquisition of negative rays, (g) coarse-to-fine by the multi-scale
 /// improvement x the predictor's residual (coarse_both), by one of them, or by the samples' triangles
-/// (coarse_triangles: area x non-planarity).
+/// (coarse_triangles: area x non-planarity). (o) oracle is not a strategy but a bound: it reads the scene
+/// and, after (g) triangles' first shot, asks the unasked rays whose predicted depth is wrong (more than
+/// 2 sigma(z) off the scene's), worst first, then fills the shot with (g) triangles' rays: what a planner
+/// that knew where the prediction fails would reach (docs/SELECTIVE.md, "What bounds (g)").
 enum class SelectStrategy {
   full, uniform, decimation, guided, guided_returns, guided_reacquire, coarse_both, coarse_improvement, coarse_residual,
-  coarse_triangles
+  coarse_triangles, oracle
 };
-/// "a_full", "b_uniform", ..., "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles" (the CSVs' names).
+/// "a_full", "b_uniform", ..., "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles", "o_oracle"
+/// (the CSVs' names).
 const char* select_strategy_name(SelectStrategy strategy);
-/// Every strategy but (a), which is always run (the reference), in the CSVs' order.
+/// Every strategy but (a), which is always run (the reference), and (o), which is run when named, in the
+/// CSVs' order.
 const std::vector<SelectStrategy>& compared_select_strategies();
 
 struct SelectEvalOptions {
