@@ -249,8 +249,13 @@ TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorMo
                          : (this_plan = triangulate_samples(samples, surface.width, surface.height, model));
   struct Ranked {
     double priority;
-    ColumnIndex column;  // the centroid's
-    double gain;         // in rays made good
+    ColumnIndex column;     // the centroid's
+    std::uint32_t triangle;  // for its gain, computed for the few taken (and on a tie of the two above)
+  };
+  // The centroid's expected gain in rays made good (good_rays.hpp).
+  const auto gain = [&](const Ranked& r) {
+    const std::size_t t = r.triangle;
+    return probability[r.column] * triangulation.area_px2(t) * off_plane_share(triangulation.non_planarity_sigmas(t));
   };
   std::vector<Ranked> ranked;
   for (std::size_t t = 0; t < triangulation.triangles.size(); ++t) {
@@ -261,16 +266,16 @@ TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorMo
     if (!unasked[c] || std::isnan(score[c])) continue;
     const double non_planarity = triangulation.non_planarity_sigmas(t), area = triangulation.area_px2(t);
     const double priority = area * std::min(non_planarity, cap_sigmas) * probability[c];
-    if (priority > 0) ranked.push_back({priority, c, probability[c] * area * off_plane_share(non_planarity)});
+    if (priority > 0) ranked.push_back({priority, c, static_cast<std::uint32_t>(t)});
   }
   // In the order of a full sort, sorted a stretch at a time (twice the rays still missing: two small
   // triangles may share a centroid pixel): a dense map has ~2 triangles per sample, a shot takes a few
   // thousand.
   // Ties by column, then by gain (two triangles of one centroid pixel and of one capped priority may
   // differ in it), so that the order does not depend on the triangles' numbering.
-  const auto before = [](const Ranked& a, const Ranked& b) {
+  const auto before = [&](const Ranked& a, const Ranked& b) {
     if (a.priority != b.priority) return a.priority > b.priority;
-    return a.column != b.column ? a.column < b.column : a.gain > b.gain;
+    return a.column != b.column ? a.column < b.column : gain(a) > gain(b);
   };
   TriangleRefinement refinement;
   std::vector<ColumnIndex>& out = refinement.columns;
@@ -285,7 +290,7 @@ TriangleRefinement refine_by_triangles(const SurfaceMap& surface, const SensorMo
     if (!unasked[c]) continue;  // two small triangles may share a centroid pixel
     unasked[c] = 0;
     out.push_back(c);
-    refinement.centroid_gain.push_back(ranked[i].gain);
+    refinement.centroid_gain.push_back(gain(ranked[i]));
   }
   // Once the triangles are a pixel or two (about half the rays measured) their centroids fall on their
   // own vertices: the rest of the shot goes to the unasked rays of highest score, spread as a jittered

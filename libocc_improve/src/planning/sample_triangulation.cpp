@@ -124,11 +124,16 @@ public:
     points_.push_back(p);
     first_of_.push_back(-1);
   }
-  void insert(std::int32_t vertex) {
+  /// Inserts vertex `vertex`, its walk starting beside `near_vertex` when that one is inserted (a vertex
+  /// a pixel or two away: a walk of a step or two), else from the last new triangle. Where the walk starts
+  /// changes which slots the new triangles take, not the triangulation.
+  void insert(std::int32_t vertex, std::int32_t near_vertex = -1) {
     const std::int32_t i = vertex + kCorners;
-    dig_cavity(locate(pt(i)), i);
+    const std::int32_t near_triangle = near_vertex >= 0 ? first_of_[static_cast<std::size_t>(near_vertex + kCorners)] : -1;
+    dig_cavity(locate(pt(i), near_triangle >= 0 ? near_triangle : last_), i);
     fill_cavity(i);
   }
+  bool inserted(std::int32_t vertex) const { return first_of_[static_cast<std::size_t>(vertex + kCorners)] >= 0; }
 
   /// Removes vertex `vertex` (it must have been inserted; false, and the structure unusable, if no ear is
   /// found, which cannot happen for a Delaunay star): its star gives way to the Delaunay triangulation
@@ -290,10 +295,9 @@ private:
   }
   const Point& pt(std::int32_t i) const { return points_[static_cast<std::size_t>(i)]; }
 
-  /// Visibility walk from the last new triangle; in a Delaunay triangulation it cannot cycle. The edge
-  /// tried first rotates so that the walk does not favour one direction.
-  std::int32_t locate(const Point& p) {
-    std::int32_t t = last_;
+  /// Visibility walk from triangle `t`; in a Delaunay triangulation it cannot cycle. The edge tried first
+  /// rotates so that the walk does not favour one direction.
+  std::int32_t locate(const Point& p, std::int32_t t) {
     for (unsigned step = 0;; ++step) {
       const Triangle& T = tris_[static_cast<std::size_t>(t)];
       bool moved = false;
@@ -492,11 +496,10 @@ std::int64_t fixed_inverse_depth(float z) {
   return std::llround(std::min(1.0 / z, kMaxInverseDepth) / kInverseDepthUnit);
 }
 
-// Every vertex's residual, gathering the entries triangle by triangle.
-void measure_non_planarity(SampleTriangulation& s, const SensorModel& model) {
+// Every vertex's residual, gathering the entries triangle by triangle; `inverse` holds each vertex's
+// fixed_inverse_depth.
+void measure_non_planarity(SampleTriangulation& s, const std::vector<std::int64_t>& inverse, const SensorModel& model) {
   std::vector<PlaneSums> sums(s.vertex_count());
-  std::vector<std::int64_t> inverse(s.vertex_count());
-  for (std::size_t v = 0; v < inverse.size(); ++v) inverse[v] = fixed_inverse_depth(s.vertex_depth_m[v]);
   for (const auto& t : s.triangles)
     for (int i = 0; i < 3; ++i) {
       const std::int32_t v = t[static_cast<std::size_t>(i)];
@@ -513,12 +516,12 @@ void measure_non_planarity(SampleTriangulation& s, const SensorModel& model) {
 // The residuals of `dirty` vertices only, gathering each one's entries around it in the triangulation: the
 // same exact sums as measure_non_planarity's, so the same residuals.
 void remeasure_non_planarity(SampleTriangulation& s, const Delaunay& d, const std::vector<std::int32_t>& dirty,
-                             const SensorModel& model) {
+                             const std::vector<std::int64_t>& inverse, const SensorModel& model) {
   s.residual_sigmas.resize(s.vertex_count(), 0.0f);
   for (const std::int32_t v : dirty) {
     PlaneSums sums;
     d.for_each_neighbour_entry(v, [&](std::int32_t j) {
-      sums.add(s.x(j) - s.x(v), s.y(j) - s.y(v), fixed_inverse_depth(s.vertex_depth_m[static_cast<std::size_t>(j)]));
+      sums.add(s.x(j) - s.x(v), s.y(j) - s.y(v), inverse[static_cast<std::size_t>(j)]);
     });
     s.residual_sigmas[static_cast<std::size_t>(v)] = plane_residual_sigmas(sums, s.vertex_depth_m[static_cast<std::size_t>(v)], model);
   }
@@ -565,8 +568,8 @@ double SampleTriangulation::non_planarity_sigmas(std::size_t t) const {
 
 ColumnIndex SampleTriangulation::centroid_column(std::size_t t) const {
   const auto& v = triangles[t];
-  const int cx = static_cast<int>(std::lround((x(v[0]) + x(v[1]) + x(v[2])) / 3.0));
-  const int cy = static_cast<int>(std::lround((y(v[0]) + y(v[1]) + y(v[2])) / 3.0));
+  // round(s / 3) for a sum s >= 0 of pixel coordinates: s / 3 is never halfway, so (s + 1) / 3 in integers.
+  const int cx = (x(v[0]) + x(v[1]) + x(v[2]) + 1) / 3, cy = (y(v[0]) + y(v[1]) + y(v[2]) + 1) / 3;
   return static_cast<ColumnIndex>(cy) * static_cast<ColumnIndex>(width) + static_cast<ColumnIndex>(cx);
 }
 
@@ -581,6 +584,15 @@ struct SampleTriangulator::State {
   SampleTriangulation out;
   Delaunay delaunay{true};
   std::vector<std::int32_t> depth_changed;  ///< vertices whose depth the last refresh changed
+  /// fixed_inverse_depth of each vertex's depth, kept with the depths: a residual reads its neighbours'
+  /// a dozen times each, and most vertices keep their depth from update to update.
+  std::vector<std::int64_t> inverse_depth;
+  /// Per pixel, the vertex there (-1: none); kept by a SampleTriangulator only. An update that does not
+  /// start over starts the walk that inserts a new sample next to an inserted vertex, not next to the
+  /// previous new sample, which a shot puts ~10 pixels away across a dense triangulation (measured: the
+  /// insertion of 4 000 samples grew from 1 to 10 ms as the view filled). A start-over inserts as
+  /// triangulate_samples does, so that it builds its triangles in its order.
+  std::vector<std::int32_t> vertex_at;
   std::vector<std::uint8_t> dirty_mark;     ///< per vertex, all 0 between updates
   /// The model's depth noise the residuals were measured with (sigma_depth_at's parameters).
   std::array<double, 3> depth_noise{};
@@ -613,6 +625,9 @@ bool remove_lost(SampleTriangulator::State& st, const std::vector<std::int32_t>&
   keep(s.vertex_y);
   keep(s.vertex_depth_m);
   keep(s.residual_sigmas);
+  keep(st.inverse_depth);
+  std::fill(st.vertex_at.begin(), st.vertex_at.end(), -1);
+  for (std::size_t v = 0; v < s.vertex_count(); ++v) st.vertex_at[s.vertex_column[v]] = static_cast<std::int32_t>(v);
   std::vector<std::int32_t> changed;
   for (const std::int32_t v : st.depth_changed)
     if (renumbered[static_cast<std::size_t>(v)] >= 0) changed.push_back(renumbered[static_cast<std::size_t>(v)]);
@@ -633,7 +648,10 @@ bool refresh_vertices(SampleTriangulator::State& st, const std::vector<float>& i
       lost.push_back(static_cast<std::int32_t>(v));
       continue;
     }
-    if (z != s.vertex_depth_m[v]) st.depth_changed.push_back(static_cast<std::int32_t>(v));
+    if (z != s.vertex_depth_m[v]) {
+      st.depth_changed.push_back(static_cast<std::int32_t>(v));
+      st.inverse_depth[v] = fixed_inverse_depth(z);
+    }
     s.vertex_depth_m[v] = z;
   }
   st.lost_last = lost.size();
@@ -665,6 +683,26 @@ std::vector<std::int32_t> dirty_vertices(SampleTriangulator::State& st, std::siz
   return dirty;
 }
 
+// An inserted vertex within 3 pixels (chessboard) of vertex v, nearest rings first; -1 when none. Reads
+// st.vertex_at (a SampleTriangulator's).
+std::int32_t inserted_vertex_near(const SampleTriangulator::State& st, std::int32_t v) {
+  const SampleTriangulation& s = st.out;
+  const int x = s.x(v), y = s.y(v);
+  for (int r = 1; r <= 3; ++r)
+    for (int dy = -r; dy <= r; ++dy) {
+      const int yy = y + dy;
+      if (yy < 0 || yy >= s.height) continue;
+      const int step = dy == -r || dy == r ? 1 : 2 * r;  // the ring: whole first and last rows, else two ends
+      for (int dx = -r; dx <= r; dx += step) {
+        const int xx = x + dx;
+        if (xx < 0 || xx >= s.width) continue;
+        const std::int32_t u = st.vertex_at[static_cast<std::size_t>(yy) * static_cast<std::size_t>(s.width) + static_cast<std::size_t>(xx)];
+        if (u >= 0 && st.delaunay.inserted(u)) return u;
+      }
+    }
+  return -1;
+}
+
 // Brings `st` to the image's samples (checked by the caller): the lost ones removed, the new ones appended
 // in column order and inserted in Hilbert order. With `keep` (SampleTriangulator), the insertions after this
 // update record the vertices whose neighbours change, for the next update's residuals (a start-over's own
@@ -674,19 +712,18 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
   st.started_over_last = !refresh_vertices(st, image, width, height);
   if (st.started_over_last) {
     st.out = SampleTriangulation{};
+    st.inverse_depth.clear();
+    if (keep) st.vertex_at.assign(image.size(), -1);
     st.out.width = width;
     st.out.height = height;
     st.delaunay = Delaunay(width < kSmallSide && height < kSmallSide);
   }
   SampleTriangulation& s = st.out;
-  std::vector<std::uint8_t> has_vertex;  // per column, where there are vertices already
-  if (!st.started_over_last) {
-    has_vertex.assign(image.size(), 0);
-    for (const ColumnIndex c : s.vertex_column) has_vertex[c] = 1;
-  }
-  const std::uint8_t* known = has_vertex.empty() ? nullptr : has_vertex.data();
+  // Where there are vertices already (only a kept state has any: a fresh one started over).
+  const std::int32_t* known = st.started_over_last ? nullptr : st.vertex_at.data();
+  std::int32_t* vertex_at = keep ? st.vertex_at.data() : nullptr;
   // Samples without a vertex, counted, then appended in column order (two instantiations: with and
-  // without has_vertex, so that the counting loop vectorises). NaN fails `z > 0`.
+  // without `known`, so that the counting loop vectorises). NaN fails `z > 0`.
   const auto append_new = [&](auto is_new) {
     std::size_t added = 0;
     for (std::size_t c = 0; c < image.size(); ++c) added += is_new(c);
@@ -702,6 +739,7 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
     for (std::int32_t y = 0; y < height; ++y)
       for (std::int32_t x = 0; x < width; ++x, ++c)
         if (is_new(c)) {
+          if (vertex_at) vertex_at[c] = static_cast<std::int32_t>(s.vertex_column.size());
           s.vertex_column.push_back(static_cast<ColumnIndex>(c));
           s.vertex_x.push_back(x);
           s.vertex_y.push_back(y);
@@ -711,14 +749,16 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
     return added;
   };
   const std::size_t first_new = s.vertex_count();
-  const std::size_t added = known ? append_new([&](std::size_t c) { return (image[c] > 0.0f) & (known[c] == 0); })
+  const std::size_t added = known ? append_new([&](std::size_t c) { return (image[c] > 0.0f) & (known[c] < 0); })
                                   : append_new([&](std::size_t c) { return image[c] > 0.0f; });
   const std::vector<std::int32_t> order = insertion_order(s, first_new);
   for (std::size_t k = 0; k < order.size(); ++k) {
     poll_stop(k);
-    st.delaunay.insert(order[k]);
+    st.delaunay.insert(order[k], known ? inserted_vertex_near(st, order[k]) : -1);
   }
   st.inserted_last = added;
+  st.inverse_depth.resize(s.vertex_count());
+  for (std::size_t v = first_new; v < s.vertex_count(); ++v) st.inverse_depth[v] = fixed_inverse_depth(s.vertex_depth_m[v]);
   st.delaunay.vertex_triangles(s.triangles);
   // Residuals: all of them after a start-over, with another model's noise, or where most changed (a pass
   // over the triangles is then cheaper than a walk around each vertex), else those of the dirty vertices.
@@ -728,9 +768,9 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
   st.depth_noise = depth_noise;
   const std::vector<std::int32_t> dirty = st.started_over_last ? std::vector<std::int32_t>{} : dirty_vertices(st, first_new);
   if (st.started_over_last || !same_noise || 2 * dirty.size() > s.vertex_count())
-    measure_non_planarity(s, model);
+    measure_non_planarity(s, st.inverse_depth, model);
   else
-    remeasure_non_planarity(s, st.delaunay, dirty, model);
+    remeasure_non_planarity(s, st.delaunay, dirty, st.inverse_depth, model);
   flag_interpolable(s, model, params);
   st.delaunay.track_touched(keep);
 }
