@@ -12,6 +12,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
 
 namespace occ_improve {
@@ -123,6 +124,47 @@ TEST(Ranking, SpreadBestColumnsIsAJitteredGridAtTheScaleOfK) {
   EXPECT_EQ(few.size(), 2u);
   for (ColumnIndex c : few) EXPECT_TRUE(c == 5 || c == 7);
   EXPECT_TRUE(spread_best_columns(value, eligible.data(), w, 0).empty());
+}
+
+// The rounds of spread_best_columns written out with SamplingCells::cell_of per column: what the
+// row-by-row stepping of the cells must give, on widths the cell side does not divide.
+std::vector<ColumnIndex> spread_reference(const std::vector<float>& value, const std::uint8_t* eligible, int width, std::size_t k) {
+  std::vector<std::uint8_t> open(value.size());
+  std::size_t available = 0;
+  for (std::size_t c = 0; c < value.size(); ++c) available += open[c] = (!eligible || eligible[c]) && !std::isnan(value[c]);
+  k = std::min(k, available);
+  const auto w = static_cast<std::size_t>(width);
+  const SamplingCells cells(available, k, width);
+  std::vector<ColumnIndex> out;
+  while (out.size() < k) {
+    std::map<std::size_t, std::pair<std::uint64_t, ColumnIndex>> best;  // cell -> (key, column)
+    for (std::size_t c = 0; c < value.size(); ++c) {
+      if (!open[c]) continue;
+      const std::uint64_t key = rank_key(value[c], static_cast<ColumnIndex>(c));
+      auto& b = best.try_emplace(cells.cell_of(static_cast<int>(c % w), static_cast<int>(c / w)), key, static_cast<ColumnIndex>(c)).first->second;
+      if (key > b.first) b = {key, static_cast<ColumnIndex>(c)};
+    }
+    std::vector<std::pair<std::uint64_t, ColumnIndex>> round;
+    for (const auto& [cell, b] : best) round.push_back(b);
+    std::sort(round.begin(), round.end(), std::greater<>());
+    for (std::size_t i = 0; i < round.size() && out.size() < k; ++i) out.push_back(round[i].second), open[round[i].second] = 0;
+  }
+  return out;
+}
+
+TEST(Ranking, SpreadBestColumnsStepsItsCellsAsCellOfOnAnyWidth) {
+  for (const auto& [w, h] : {std::pair{37, 23}, std::pair{5, 9}, std::pair{1, 40}, std::pair{64, 48}}) {
+    std::vector<float> value(static_cast<std::size_t>(w * h));
+    std::uint32_t state = 12345;
+    for (float& v : value) v = static_cast<float>((state = state * 1664525u + 1013904223u) >> 28);  // ties in 16 levels
+    value[3] = std::numeric_limits<float>::quiet_NaN();
+    std::vector<std::uint8_t> eligible(value.size(), 1);
+    eligible[value.size() / 2] = 0;
+    for (const std::size_t k : {std::size_t{1}, std::size_t{7}, value.size() / 10, value.size() / 3, value.size()})
+      EXPECT_EQ(spread_best_columns(value, eligible.data(), w, k), spread_reference(value, eligible.data(), w, k))
+          << w << " x " << h << ", k " << k;
+  }
+  EXPECT_THROW(spread_best_columns(std::vector<float>(10, 0.5f), nullptr, 3, 2), InvalidInput);  // not whole rows
 }
 
 TEST(Ranking, RegionsAreEightConnectedAndSorted) {

@@ -111,10 +111,11 @@ BlockBest best_ray_per_block(const ImprovementPyramid& pyramid, int level, const
   std::vector<std::uint32_t> asked(best.column.size(), 0), returned(best.column.size(), 0);
   const int s = ImprovementPyramid::block_size(level), w = pyramid.width(), across = pyramid.blocks_x(level);
   for (int v = 0; v < pyramid.height(); ++v) {
-    const std::size_t row = static_cast<std::size_t>(v / s) * static_cast<std::size_t>(across);
-    for (int u = 0; u < w; ++u) {
+    std::size_t b = static_cast<std::size_t>(v / s) * static_cast<std::size_t>(across);  // steps every s columns
+    for (int u = 0, in_block = 0; u < w; ++u) {
+      if (in_block == s) ++b, in_block = 0;
+      ++in_block;
       const auto c = static_cast<ColumnIndex>(v) * static_cast<ColumnIndex>(w) + static_cast<ColumnIndex>(u);
-      const std::size_t b = row + static_cast<std::size_t>(u / s);
       asked[b] += returns.asked()[c];
       returned[b] += returns.returned()[c];
       best.measured[b] += returns.returned()[c] > 0 ? 1u : 0u;

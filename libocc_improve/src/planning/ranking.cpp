@@ -121,6 +121,9 @@ std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, co
   k = std::min(k, available);
   std::vector<ColumnIndex> out;
   if (k == 0 || width <= 0) return out;
+  if (value.size() % static_cast<std::size_t>(width) != 0)
+    throw InvalidInput("spread_best_columns: " + std::to_string(value.size()) + " values are not whole rows of " +
+                       std::to_string(width) + " columns");
   out.reserve(k);
   const auto w = static_cast<std::size_t>(width);
   const SamplingCells cells(available, k, width);
@@ -130,13 +133,19 @@ std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, co
     ColumnIndex column;
   };
   std::vector<Best> best(cells.count(static_cast<int>(value.size() / w)));
+  const std::size_t rows = value.size() / w, side = static_cast<std::size_t>(cells.side);
   while (out.size() < k) {  // one round: the best open column of every cell
     std::fill(best.begin(), best.end(), Best{0, kNone});
-    for (std::size_t c = 0; c < value.size(); ++c) {
-      if (!open[c]) continue;
-      const std::uint64_t key = rank_key(value[c], static_cast<ColumnIndex>(c));
-      Best& b = best[cells.cell_of(static_cast<int>(c % w), static_cast<int>(c / w))];
-      if (b.column == kNone || key > b.key) b = {key, static_cast<ColumnIndex>(c)};
+    // Row by row, the cell stepping every `side` columns (cell_of without a division per column).
+    for (std::size_t v = 0, c = 0; v < rows; ++v) {
+      Best* cell = best.data() + cells.cell_of(0, static_cast<int>(v));
+      for (std::size_t u = 0, in_cell = 0; u < w; ++u, ++c) {
+        if (in_cell == side) ++cell, in_cell = 0;
+        ++in_cell;
+        if (!open[c]) continue;
+        const std::uint64_t key = rank_key(value[c], static_cast<ColumnIndex>(c));
+        if (cell->column == kNone || key > cell->key) *cell = {key, static_cast<ColumnIndex>(c)};
+      }
     }
     std::vector<Best> round;
     for (const Best& b : best)

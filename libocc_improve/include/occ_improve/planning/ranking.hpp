@@ -57,6 +57,8 @@ struct SamplingCells {
 /// cells of s x s columns, s = floor(sqrt(eligible non-NaN columns / k)), one column per cell per round
 /// (the cell's largest rank_key), each round's cells by that key; so a tie (a view nothing has reached)
 /// is covered evenly rather than as a random sample clumps it. Returns min(k, eligible non-NaN) columns.
+/// Throws InvalidInput when width > 0 and `value` does not hold whole rows of it (and there is a column
+/// to take).
 std::vector<ColumnIndex> spread_best_columns(const std::vector<float>& value, const std::uint8_t* eligible, int width,
                                              std::size_t k);
 
