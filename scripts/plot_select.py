@@ -33,7 +33,7 @@ STYLE = {
     "g_improvement": ("(g) by improvement only", "tab:purple", ":"),
     "g_residual": ("(g) by residual only", "tab:pink", ":"),
     "g_triangles": ("(g) by triangles", "tab:olive", "-"),
-    "o_oracle": ("(o) oracle: reads the scene (a bound)", "black", ":"),
+    "o_oracle": ("(o) oracle: reads the scene (a reference)", "black", ":"),
 }
 # Runs scored with the linear predictor are named <strategy>_linear: same colour, dashed, thinner.
 STYLE.update({s + "_linear": (label + ", linear", colour, "--") for s, (label, colour, line) in list(STYLE.items())})

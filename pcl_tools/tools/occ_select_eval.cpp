@@ -32,9 +32,10 @@ const ToolFlags kFlags{
     "(c) regular decimation, (d) improvement-guided, (e) (d) + return model, (f) (e) + re-acquisition of\n"
     "negative rays, (g) coarse-to-fine (coverage pass, then one ray per block by the multi-scale improvement x\n"
     "the predictor's residual; g_improvement / g_residual: by one of them; g_triangles: by the samples'\n"
-    "triangles) acquire from a virtual Kinect v1; o_oracle, run only when named, is a bound that reads the\n"
-    "scene (after (g)'s first shot, the unasked rays whose prediction is wrong, worst first),\n"
-    "each scored with every -predictors rule (runs of the linear one are named <strategy>_linear) (virtual_sensor.hpp); quality = share of\n"
+    "triangles) acquire from a virtual Kinect v1 (virtual_sensor.hpp), each scored with every -predictors rule\n"
+    "(runs of the linear one are named <strategy>_linear). o_oracle, run only when named, is a reference\n"
+    "that reads the scene (after (g)'s first shot, the unasked rays whose prediction is wrong, worst first).\n"
+    "Quality = share of\n"
     "scene-return rays whose predicted depth lies within 2 sigma(z) = 2 x 1.425e-3 z^2 of the scene's.\n"
     "Writes OUTDIR/<scene>.csv per scene and OUTDIR/summary.csv.\n",
     joined({output_folder_flag_names(), {"-budgets", "-frames", "-negative_share", "-radius", "-seed", "-strategies", "-predictors"},
@@ -106,19 +107,7 @@ SelectEvalOptions parse_options(const CommandLine& command_line) {
   o.share = *command_line.number("-negative_share");
   o.radius = *command_line.integer("-radius");
   o.seed = static_cast<std::uint64_t>(*command_line.integer("-seed"));
-  const std::string names = *command_line.text("-strategies");
-  std::vector<SelectStrategy> known = compared_select_strategies();
-  known.push_back(SelectStrategy::oracle);  // a bound, run when named
-  std::string known_names;
-  for (SelectStrategy s : known) {
-    const std::string name = select_strategy_name(s);
-    known_names += (known_names.empty() ? "" : ", ") + name;
-    const bool in_all = s != SelectStrategy::oracle;
-    if ((names == "all" && in_all) || ("," + names + ",").find("," + name + ",") != std::string::npos) o.strategies.push_back(s);
-  }
-  std::size_t listed = names == "all" ? o.strategies.size() : static_cast<std::size_t>(std::count(names.begin(), names.end(), ',') + 1);
-  if (o.strategies.empty() || listed != o.strategies.size())
-    throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of " + known_names);
+  o.strategies = select_strategies_by_names(*command_line.text("-strategies"));
   const std::string predictors = *command_line.text("-predictors");
   for (const std::string& name : {std::string("nearest"), std::string("linear")})
     if (("," + predictors + ",").find("," + name + ",") != std::string::npos)

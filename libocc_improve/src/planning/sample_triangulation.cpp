@@ -124,13 +124,12 @@ public:
     points_.push_back(p);
     first_of_.push_back(-1);
   }
-  /// Inserts vertex `vertex`, its walk starting beside `near_vertex` when that one is inserted (a vertex
-  /// a pixel or two away: a walk of a step or two), else from the last new triangle. Where the walk starts
-  /// changes which slots the new triangles take, not the triangulation.
+  /// Inserts vertex `vertex`, its walk starting beside `near_vertex` (an inserted vertex a few pixels away:
+  /// a walk of a few steps), or from the last new triangle when that is -1. Where the walk starts changes
+  /// which slots the new triangles take, not the triangulation.
   void insert(std::int32_t vertex, std::int32_t near_vertex = -1) {
     const std::int32_t i = vertex + kCorners;
-    const std::int32_t near_triangle = near_vertex >= 0 ? first_of_[static_cast<std::size_t>(near_vertex + kCorners)] : -1;
-    dig_cavity(locate(pt(i), near_triangle >= 0 ? near_triangle : last_), i);
+    dig_cavity(locate(pt(i), near_vertex >= 0 ? first_of_[static_cast<std::size_t>(near_vertex + kCorners)] : last_), i);
     fill_cavity(i);
   }
   bool inserted(std::int32_t vertex) const { return first_of_[static_cast<std::size_t>(vertex + kCorners)] >= 0; }
@@ -603,11 +602,13 @@ struct SampleTriangulator::State {
 namespace {
 
 // Removes the vertices whose pixel holds no sample any more and renumbers the others in order; false
-// when a removal failed.
+// when a removal failed. Only a kept state (a SampleTriangulator's) has vertices to lose, so st.vertex_at
+// is there to follow.
 bool remove_lost(SampleTriangulator::State& st, const std::vector<std::int32_t>& lost) {
   SampleTriangulation& s = st.out;
   for (const std::int32_t v : lost) {
     if (!st.delaunay.remove(v)) return false;
+    st.vertex_at[s.vertex_column[static_cast<std::size_t>(v)]] = -1;
   }
   std::vector<std::int32_t> renumbered(s.vertex_count(), 0);
   for (const std::int32_t v : lost) renumbered[static_cast<std::size_t>(v)] = -1;
@@ -626,7 +627,6 @@ bool remove_lost(SampleTriangulator::State& st, const std::vector<std::int32_t>&
   keep(s.vertex_depth_m);
   keep(s.residual_sigmas);
   keep(st.inverse_depth);
-  std::fill(st.vertex_at.begin(), st.vertex_at.end(), -1);
   for (std::size_t v = 0; v < s.vertex_count(); ++v) st.vertex_at[s.vertex_column[v]] = static_cast<std::int32_t>(v);
   std::vector<std::int32_t> changed;
   for (const std::int32_t v : st.depth_changed)
@@ -683,12 +683,15 @@ std::vector<std::int32_t> dirty_vertices(SampleTriangulator::State& st, std::siz
   return dirty;
 }
 
-// An inserted vertex within 3 pixels (chessboard) of vertex v, nearest rings first; -1 when none. Reads
-// st.vertex_at (a SampleTriangulator's).
+// An inserted vertex within kNearVertexPixels (chessboard) of vertex v, nearest rings first; -1 when none.
+// Reads st.vertex_at (a SampleTriangulator's). Once the view holds a sample every few pixels a new one
+// almost always has one; the first shots' sparse samples often do not, and walk from the last new
+// triangle as before.
+constexpr int kNearVertexPixels = 3;
 std::int32_t inserted_vertex_near(const SampleTriangulator::State& st, std::int32_t v) {
   const SampleTriangulation& s = st.out;
   const int x = s.x(v), y = s.y(v);
-  for (int r = 1; r <= 3; ++r)
+  for (int r = 1; r <= kNearVertexPixels; ++r)
     for (int dy = -r; dy <= r; ++dy) {
       const int yy = y + dy;
       if (yy < 0 || yy >= s.height) continue;

@@ -27,17 +27,22 @@ const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decim
                                       "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles",
                                       "o_oracle"};
 
-bool is_coarse_to_fine(SelectStrategy s) {
+/// The strategies that plan coarse-to-fine shots: (g), and the oracle, which starts from (g) triangles'.
+bool plans_coarse_to_fine(SelectStrategy s) {
   return s == SelectStrategy::coarse_both || s == SelectStrategy::coarse_improvement ||
-         s == SelectStrategy::coarse_residual || s == SelectStrategy::coarse_triangles;
+         s == SelectStrategy::coarse_residual || s == SelectStrategy::coarse_triangles || s == SelectStrategy::oracle;
 }
 
-/// The refinement (g) runs under (the oracle fills its shots with (g) triangles').
+/// The refinement of a strategy that plans_coarse_to_fine.
 RefineBy refinement_of(SelectStrategy s) {
-  return s == SelectStrategy::coarse_both          ? RefineBy::both
-         : s == SelectStrategy::coarse_improvement ? RefineBy::improvement
-         : s == SelectStrategy::coarse_residual    ? RefineBy::residual
-                                                   : RefineBy::triangles;
+  switch (s) {
+    case SelectStrategy::coarse_both: return RefineBy::both;
+    case SelectStrategy::coarse_improvement: return RefineBy::improvement;
+    case SelectStrategy::coarse_residual: return RefineBy::residual;
+    case SelectStrategy::coarse_triangles:
+    case SelectStrategy::oracle: return RefineBy::triangles;
+    default: throw InvalidParameter(std::string("strategy ") + select_strategy_name(s) + " does not plan coarse-to-fine");
+  }
 }
 
 }  // namespace
@@ -52,6 +57,23 @@ const std::vector<SelectStrategy>& compared_select_strategies() {
   return compared;
 }
 
+std::vector<SelectStrategy> select_strategies_by_names(const std::string& names) {
+  std::vector<SelectStrategy> known = compared_select_strategies();
+  known.push_back(SelectStrategy::oracle);  // run when named
+  if (names == "all") return compared_select_strategies();
+  std::vector<SelectStrategy> out;
+  std::string listing;
+  for (SelectStrategy s : known) {
+    const std::string name = select_strategy_name(s);
+    listing += (listing.empty() ? "" : ", ") + name;
+    if (("," + names + ",").find("," + name + ",") != std::string::npos) out.push_back(s);
+  }
+  const auto listed = static_cast<std::size_t>(std::count(names.begin(), names.end(), ',') + 1);
+  if (out.empty() || listed != out.size())
+    throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of " + listing);
+  return out;
+}
+
 namespace {
 
 /// A run's name: the strategy's, with "_linear" for the linear predictor (the prefix b_, c_, ... stays).
@@ -63,11 +85,11 @@ struct Quality {
   double within = 0, coverage = 0, mean_abs_error_m = 0;
   std::size_t good = 0;
   /// Scene-return rays never asked whose prediction is off (or missing), and those of them off by at most
-  /// kNoiseScaleTolerances: errors of the noise's size (the scene's own and the samples'), which no planner
-  /// sees before it measures the ray.
-  std::size_t wrong_unasked = 0, wrong_unasked_noise_scale = 0;
+  /// 3 sigma(z): how much of what is left wrong is of the sensor noise's size, and how much larger.
+  std::size_t wrong_unasked = 0, wrong_unasked_within_3sigma = 0;
 };
-constexpr double kNoiseScaleTolerances = 1.5;  ///< 3 sigma(z)
+constexpr double kThreeSigmaInTolerances = 1.5;  ///< the tolerance is 2 sigma(z)
+
 
 /// How the grid's columns meet the scene's pixels: the column holding each pixel's centre ray and the
 /// pixel holding each column's centre ray (-1 where none: a column no pixel sees is not observable).
@@ -114,6 +136,15 @@ double predicted_z(const GridGeometry& g, ColumnIndex column, const PredictedDep
   return g.point(g.azimuth_bin_of(column), g.elevation_bin_of(column), predicted.depth_m[column]).z();
 }
 
+/// Whether the scene has a return at depth z (0 or NaN: none).
+bool has_return(double z) { return z > 0; }
+
+/// |the predicted z - the scene's z| at a column, +inf where nothing is predicted.
+double prediction_error_m(const GridGeometry& g, ColumnIndex column, const PredictedDepth& predicted, double z) {
+  if (predicted.distance[column] < 0) return std::numeric_limits<double>::infinity();
+  return std::abs(predicted_z(g, column, predicted) - z);
+}
+
 /// The metric: for every scene pixel with a return, the map's z there (the surface sample of the
 /// pixel's column, else predict_depth) within tolerance_m of the scene's z.
 Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelColumns& map, int radius,
@@ -125,24 +156,20 @@ Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelC
   double abs_error = 0;
   for (std::size_t p = 0; p < scene.depth_m.size(); ++p) {
     const double z = scene.depth_m[p];
-    if (z <= 0) continue;
+    if (!has_return(z)) continue;
     ++returns;
     const std::int64_t c = map.column_of_pixel[p];
     if (c < 0) continue;
     const auto column = static_cast<ColumnIndex>(c);
-    if (predicted.distance[column] < 0) {
-      q.wrong_unasked += asked[column] ? 0 : 1;
-      continue;
-    }
-    ++covered;
-    const double error = std::abs(predicted_z(g, column, predicted) - z);
-    abs_error += error;
-    const double tolerances = error / tolerance_m(z);
-    q.good += tolerances <= 1 ? 1 : 0;
+    const double error = prediction_error_m(g, column, predicted, z), tolerances = error / tolerance_m(z);
     if (tolerances > 1 && !asked[column]) {
       ++q.wrong_unasked;
-      q.wrong_unasked_noise_scale += tolerances <= kNoiseScaleTolerances ? 1 : 0;
+      q.wrong_unasked_within_3sigma += tolerances <= kThreeSigmaInTolerances ? 1 : 0;
     }
+    if (std::isinf(error)) continue;  // nothing predicted
+    ++covered;
+    abs_error += error;
+    q.good += tolerances <= 1 ? 1 : 0;
   }
   q.within = returns ? static_cast<double>(q.good) / returns : 0;
   q.coverage = returns ? static_cast<double>(covered) / returns : 0;
@@ -199,7 +226,7 @@ public:
       csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
           << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
           << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << ','
-          << shot.stop_gain_per_ray << ',' << q.wrong_unasked << ',' << q.wrong_unasked_noise_scale << '\n';
+          << shot.stop_gain_per_ray << ',' << q.wrong_unasked << ',' << q.wrong_unasked_within_3sigma << '\n';
       curve_.push_back({static_cast<double>(rays_asked_), q.within});
       calibration_.push_back({expected_since, static_cast<double>(q.good) - static_cast<double>(good_before)});
       good_before = q.good;
@@ -242,7 +269,7 @@ private:
       request.budget_rays = budget_;
       request.negative_share = strategy_ == SelectStrategy::guided_reacquire ? options_.share : 0.0;
       request.candidates = map_.observable;
-      if (is_coarse_to_fine(strategy_) || strategy_ == SelectStrategy::oracle) {
+      if (plans_coarse_to_fine(strategy_)) {
         request.shape = ShotShape::coarse_to_fine;
         request.refine_by = refinement_of(strategy_);
         // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
@@ -262,9 +289,8 @@ private:
     std::vector<std::pair<double, ColumnIndex>> wrong;  // (error in tolerances, column)
     for (ColumnIndex c : observable_columns_) {
       const double z = scene_.depth_m[static_cast<std::size_t>(map_.pixel_of_column[c])];
-      if (!(z > 0) || asked_[c]) continue;
-      const double error = predicted.distance[c] < 0 ? std::numeric_limits<double>::infinity()
-                                                     : std::abs(predicted_z(g, c, predicted) - z) / tolerance_m(z);
+      if (!has_return(z) || asked_[c]) continue;
+      const double error = prediction_error_m(g, c, predicted, z) / tolerance_m(z);
       if (error > 1) wrong.push_back({error, c});
     }
     const std::size_t taken = std::min(wrong.size(), static_cast<std::size_t>(budget_));
@@ -287,8 +313,8 @@ private:
     const std::vector<float> depth = sensor_.shoot(pixels);
     const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
     mapper_.insert(PointSpan::from(points));
-    if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire || is_coarse_to_fine(strategy_) ||
-        strategy_ == SelectStrategy::oracle) {
+    if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire ||
+        plans_coarse_to_fine(strategy_)) {
       returns_.record_shot(columns, VirtualSensor::returned(depth));
     }
     seconds_ += seconds_since(start);
@@ -344,7 +370,7 @@ double pearson(const std::vector<std::pair<double, double>>& xy) {
 std::vector<SelectSummaryRow> evaluate_select_scene(const SelectScene& scene, const SelectEvalOptions& options,
                                                     std::ostream& csv) {
   csv << "scene,strategy,budget_rays,shot,rays_asked,returns,quality,coverage,mean_abs_error_m,expected_gain,"
-         "realised_good_rays,plan_stop,stop_gain_per_ray,wrong_unasked,wrong_unasked_noise_scale\n";
+         "realised_good_rays,plan_stop,stop_gain_per_ray,wrong_unasked,wrong_unasked_within_3sigma\n";
   const auto n = static_cast<int>(scene.depth_m.size());
   Run reference(scene, SelectStrategy::full, n, options);
   reference.run(csv);

@@ -24,10 +24,11 @@ struct SelectScene {
 /// (a) full frames, (b) uniform random without replacement, (c) regular decimation, (d) improvement-guided,
 /// (e) (d) + return model, (f) (e) + re-acquisition of negative rays, (g) coarse-to-fine by the multi-scale
 /// improvement x the predictor's residual (coarse_both), by one of them, or by the samples' triangles
-/// (coarse_triangles: area x non-planarity). (o) oracle is not a strategy but a bound: it reads the scene
-/// and, after (g) triangles' first shot, asks the unasked rays whose predicted depth is wrong (more than
-/// 2 sigma(z) off the scene's), worst first, then fills the shot with (g) triangles' rays: what a planner
-/// that knew where the prediction fails would reach (docs/SELECTIVE.md, "What bounds (g)").
+/// (coarse_triangles: area x non-planarity). (o) oracle is not a strategy but a reference that reads the
+/// scene: after (g) triangles' first shot it asks the unasked rays whose predicted depth is wrong (more
+/// than 2 sigma(z) off the scene's), worst first, then fills the shot with (g) triangles' rays: a greedy
+/// planner that knows where the prediction fails (not an upper bound: (g) is ahead of it after some shots;
+/// docs/SELECTIVE.md, "An oracle reference for (g)").
 enum class SelectStrategy {
   full, uniform, decimation, guided, guided_returns, guided_reacquire, coarse_both, coarse_improvement, coarse_residual,
   coarse_triangles, oracle
@@ -38,6 +39,10 @@ const char* select_strategy_name(SelectStrategy strategy);
 /// Every strategy but (a), which is always run (the reference), and (o), which is run when named, in the
 /// CSVs' order.
 const std::vector<SelectStrategy>& compared_select_strategies();
+/// The strategies a comma-separated list of names asks for (compared_select_strategies' order, then (o)),
+/// or "all": compared_select_strategies(). Throws InvalidParameter for an unknown or repeated name,
+/// listing the names.
+std::vector<SelectStrategy> select_strategies_by_names(const std::string& names);
 
 struct SelectEvalOptions {
   std::vector<double> budgets;  ///< rays per shot as shares of the image, in (0, 1]
