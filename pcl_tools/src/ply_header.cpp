@@ -33,11 +33,10 @@ std::uint64_t type_size(const std::string& type) {
 struct Element {
   std::string name;
   std::uint64_t count = 0;
-  std::size_t properties = 0;
   std::uint64_t min_binary_bytes = 0;  ///< per element: scalars, and each list's length field
   std::uint64_t pcl_point_bytes = 0;   ///< an upper bound of PCL's point step (it widens uchar colour to float)
-  std::string colours;                 ///< the vertex's uchar colour properties in order, e.g. "red green blue"
-  std::vector<std::string> property_names;
+  std::string colours{};               ///< the vertex's uchar colour properties in order, e.g. "red green blue"
+  std::vector<std::string> property_names{};
 };
 
 // PCL 1.13 packs a vertex's uchar red, green, blue (and alpha) into one rgb(a) field that "red" opens
@@ -96,7 +95,7 @@ public:
     std::uint64_t least_bytes = 0, grid = 0;
     for (const Element& e : elements_) {
       // ASCII: every value at least one character and a separator (the last one may end the file).
-      const std::uint64_t per = h.format == PlyHeader::Format::ascii ? 2 * e.properties : e.min_binary_bytes;
+      const std::uint64_t per = h.format == PlyHeader::Format::ascii ? 2 * e.property_names.size() : e.min_binary_bytes;
       least_bytes += e.count * std::max<std::uint64_t>(per, 1);  // < 2^32 x 2^14: no overflow
       if (e.name == "vertex") h.vertices = e.count;
       if (!e.colours.empty() && e.colours != "red green blue" && e.colours != kColourOrder)
@@ -164,7 +163,7 @@ private:
   void property(const std::vector<std::string>& t) {
     if (elements_.empty()) fail("a property comes before any element");
     Element& e = elements_.back();
-    if (++e.properties > kMaxProperties) fail("element '" + e.name + "' has over " + std::to_string(kMaxProperties) + " properties");
+    if (e.property_names.size() >= kMaxProperties) fail("element '" + e.name + "' has over " + std::to_string(kMaxProperties) + " properties");
     e.property_names.push_back(t.back());
     if (t.size() >= 2 && t[1] == "list") {
       if (t.size() != 5) fail("list property of element '" + e.name + "' needs 'list <count type> <type> <name>'");

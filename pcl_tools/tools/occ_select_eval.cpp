@@ -13,7 +13,6 @@
 #include "occ_improve/tools/tool_main.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
-#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -108,12 +107,7 @@ SelectEvalOptions parse_options(const CommandLine& command_line) {
   o.radius = *command_line.integer("-radius");
   o.seed = static_cast<std::uint64_t>(*command_line.integer("-seed"));
   o.strategies = select_strategies_by_names(*command_line.text("-strategies"));
-  const std::string predictors = *command_line.text("-predictors");
-  for (const std::string& name : {std::string("nearest"), std::string("linear")})
-    if (("," + predictors + ",").find("," + name + ",") != std::string::npos)
-      o.predictors.push_back(name == "linear" ? DepthPredictionRule::linear : DepthPredictionRule::nearest);
-  if (o.predictors.empty() || static_cast<std::size_t>(std::count(predictors.begin(), predictors.end(), ',') + 1) != o.predictors.size())
-    throw InvalidParameter("-predictors " + predictors + " is invalid: a comma-separated list of nearest, linear");
+  o.predictors = select_predictors_by_names(*command_line.text("-predictors"));
   return o;
 }
 

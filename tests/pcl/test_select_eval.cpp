@@ -131,6 +131,10 @@ TEST(SelectEval, StrategiesByNamesRunTheOracleOnlyWhenNamed) {
   EXPECT_EQ(select_strategies_by_names("o_oracle,g_triangles"),
             (std::vector<SelectStrategy>{SelectStrategy::coarse_triangles, SelectStrategy::oracle}));
   EXPECT_STREQ(select_strategy_name(SelectStrategy::oracle), "o_oracle");
+  EXPECT_EQ(select_predictors_by_names("linear,nearest"),
+            (std::vector<DepthPredictionRule>{DepthPredictionRule::nearest, DepthPredictionRule::linear}));
+  EXPECT_THROW(select_predictors_by_names("linear,linear"), InvalidParameter);
+  EXPECT_THROW(select_predictors_by_names("cubic"), InvalidParameter);
   EXPECT_THROW(select_strategies_by_names("g_triangles,bogus"), InvalidParameter);
   EXPECT_THROW(select_strategies_by_names("g_triangles,g_triangles"), InvalidParameter);
   try {

@@ -272,13 +272,14 @@ public:
     size_ = 0;
   }
   /// Asks for bins [first, end) (first on a block boundary; end widened to one) of the terms at rho_bar,
-  /// sigma (with B folded in where folded_angular_term != 0); returns where they start in the pool.
-  std::size_t reserve(int first, int end, double rho_bar, double sigma, double folded_angular_term) {
+  /// sigma (with B folded in where folded_angular_term != 0); returns their origin in the pool: the terms of
+  /// bin b at origin + b (where bin 0's would be).
+  std::ptrdiff_t reserve(int first, int end, double rho_bar, double sigma, double folded_angular_term) {
     const std::size_t offset = size_;
     const int count = block_ceil(end) - first;
     requests_.push_back({offset, first, count, rho_bar, sigma, static_cast<float>(folded_angular_term)});
     size_ += static_cast<std::size_t>(count);
-    return offset;
+    return static_cast<std::ptrdiff_t>(offset) - first;
   }
   void compute() {
     e_ = aligned_floats(e_storage_, size_);
@@ -287,7 +288,7 @@ public:
       opdf_bin_terms(centres_.data() + r.first, r.count, r.rho_bar, 1.0 / r.sigma, r.folded_angular_term, e_ + r.offset,
                      g_ + r.offset);
   }
-  /// The pool: a request's terms start at the offset reserve returned, its first bin there (block-aligned).
+  /// The pool: bin b of a request's terms at the origin reserve returned + b (its first bin block-aligned).
   const float* e() const { return e_; }
   const float* g() const { return g_; }
 
@@ -376,13 +377,10 @@ public:
     return {column, s.run_end, s.run_end > 0 ? lmin_ : 0.0f, s.v + s.run_end, static_cast<std::uint32_t>(s.tail - s.run_end)};
   }
 
-  /// The support's last depth for angular term B (eq. 1's skip): bins whose centre lies above it are beyond
-  /// the support's end.
-  static double support_last(double rho_bar, double angular_term, double sigma) {
-    return rho_bar + sigma * skip_offset_sigmas(angular_term);
-  }
+  /// The first bin beyond the support for angular term B (eq. 1's skip): the first whose centre lies past
+  /// the support's last depth.
   int support_end(double rho_bar, double angular_term, double sigma) const {
-    return depth_.first_centre_above(support_last(rho_bar, angular_term, sigma));
+    return depth_.first_centre_above(rho_bar + sigma * skip_offset_sigmas(angular_term));
   }
 
   /// Exact mode: adds one measurement to the column. `terms` are the measurement's, with a = e^-B the
@@ -768,18 +766,15 @@ private:
       TileMeasurement& tm = measurements_[k];
       if (tm.lo >= tm.hi) continue;
       tm.lo = block_floor(tm.lo);
-      terms_origins_[k] = origin(tile_terms_.reserve(tm.lo, tm.hi, tm.m->rho, tm.m->sigma, 0.0), tm.lo);
+      terms_origins_[k] = tile_terms_.reserve(tm.lo, tm.hi, tm.m->rho, tm.m->sigma, 0.0);
     }
     for (PairPlan* p : folded_) {
       const Measurement& m = *measurements_[p->measurement].m;
       const int from = block_floor(p->first);
       p->measurement = static_cast<std::uint32_t>(terms_origins_.size());
-      terms_origins_.push_back(origin(tile_terms_.reserve(from, p->end, m.rho, m.sigma, p->angular_term), from));
+      terms_origins_.push_back(tile_terms_.reserve(from, p->end, m.rho, m.sigma, p->angular_term));
     }
     tile_terms_.compute();
-  }
-  static std::ptrdiff_t origin(std::size_t offset, int first_bin) {
-    return static_cast<std::ptrdiff_t>(offset) - first_bin;
   }
 
   // Free space a part of a call carves in one column, whatever the order of its measurements (clamped

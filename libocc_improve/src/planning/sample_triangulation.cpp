@@ -127,7 +127,7 @@ public:
   /// Inserts vertex `vertex`, its walk starting beside `near_vertex` (an inserted vertex a few pixels away:
   /// a walk of a few steps), or from the last new triangle when that is -1. Where the walk starts changes
   /// which slots the new triangles take, not the triangulation.
-  void insert(std::int32_t vertex, std::int32_t near_vertex = -1) {
+  void insert(std::int32_t vertex, std::int32_t near_vertex) {
     const std::int32_t i = vertex + kCorners;
     dig_cavity(locate(pt(i), near_vertex >= 0 ? first_of_[static_cast<std::size_t>(near_vertex + kCorners)] : last_), i);
     fill_cavity(i);
@@ -737,6 +737,7 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
     reserve_geometric(s.vertex_x, total);
     reserve_geometric(s.vertex_y, total);
     reserve_geometric(s.vertex_depth_m, total);
+    reserve_geometric(st.inverse_depth, total);
     st.delaunay.reserve(total);
     std::size_t c = 0;
     for (std::int32_t y = 0; y < height; ++y)
@@ -747,6 +748,7 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
           s.vertex_x.push_back(x);
           s.vertex_y.push_back(y);
           s.vertex_depth_m.push_back(image[c]);
+          st.inverse_depth.push_back(fixed_inverse_depth(image[c]));
           st.delaunay.add({x, y});
         }
     return added;
@@ -760,8 +762,6 @@ void update_state(SampleTriangulator::State& st, const std::vector<float>& image
     st.delaunay.insert(order[k], known ? inserted_vertex_near(st, order[k]) : -1);
   }
   st.inserted_last = added;
-  st.inverse_depth.resize(s.vertex_count());
-  for (std::size_t v = first_new; v < s.vertex_count(); ++v) st.inverse_depth[v] = fixed_inverse_depth(s.vertex_depth_m[v]);
   st.delaunay.vertex_triangles(s.triangles);
   // Residuals: all of them after a start-over, with another model's noise, or where most changed (a pass
   // over the triangles is then cheaper than a walk around each vertex), else those of the dirty vertices.

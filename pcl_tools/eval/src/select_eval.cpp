@@ -14,6 +14,7 @@
 #include <fstream>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <utility>
 
 namespace occ_improve {
@@ -27,22 +28,29 @@ const char* const kStrategyNames[] = {"a_full",      "b_uniform",       "c_decim
                                       "g_coarse_to_fine", "g_improvement", "g_residual", "g_triangles",
                                       "o_oracle"};
 
-/// The strategies that plan coarse-to-fine shots: (g), and the oracle, which starts from (g) triangles'.
-bool plans_coarse_to_fine(SelectStrategy s) {
-  return s == SelectStrategy::coarse_both || s == SelectStrategy::coarse_improvement ||
-         s == SelectStrategy::coarse_residual || s == SelectStrategy::coarse_triangles || s == SelectStrategy::oracle;
-}
-
-/// The refinement of a strategy that plans_coarse_to_fine.
-RefineBy refinement_of(SelectStrategy s) {
+/// The refinement of a strategy that plans coarse-to-fine shots ((g), and the oracle, which starts from
+/// (g) triangles'); none for the others.
+std::optional<RefineBy> coarse_refinement(SelectStrategy s) {
   switch (s) {
     case SelectStrategy::coarse_both: return RefineBy::both;
     case SelectStrategy::coarse_improvement: return RefineBy::improvement;
     case SelectStrategy::coarse_residual: return RefineBy::residual;
     case SelectStrategy::coarse_triangles:
     case SelectStrategy::oracle: return RefineBy::triangles;
-    default: throw InvalidParameter(std::string("strategy ") + select_strategy_name(s) + " does not plan coarse-to-fine");
+    default: return std::nullopt;
   }
+}
+
+/// The items of `known` a comma-separated `list` names, in `known`'s order; none when a name is unknown or
+/// repeated (the list then names more items than it found).
+template <class T, class NameOf>
+std::vector<T> named_in_list(const std::string& list, const std::vector<T>& known, NameOf name_of) {
+  std::vector<T> out;
+  for (const T& item : known)
+    if (("," + list + ",").find("," + std::string(name_of(item)) + ",") != std::string::npos) out.push_back(item);
+  const auto listed = static_cast<std::size_t>(std::count(list.begin(), list.end(), ',') + 1);
+  if (listed != out.size()) out.clear();
+  return out;
 }
 
 }  // namespace
@@ -58,19 +66,23 @@ const std::vector<SelectStrategy>& compared_select_strategies() {
 }
 
 std::vector<SelectStrategy> select_strategies_by_names(const std::string& names) {
+  if (names == "all") return compared_select_strategies();
   std::vector<SelectStrategy> known = compared_select_strategies();
   known.push_back(SelectStrategy::oracle);  // run when named
-  if (names == "all") return compared_select_strategies();
-  std::vector<SelectStrategy> out;
-  std::string listing;
-  for (SelectStrategy s : known) {
-    const std::string name = select_strategy_name(s);
-    listing += (listing.empty() ? "" : ", ") + name;
-    if (("," + names + ",").find("," + name + ",") != std::string::npos) out.push_back(s);
-  }
-  const auto listed = static_cast<std::size_t>(std::count(names.begin(), names.end(), ',') + 1);
-  if (out.empty() || listed != out.size())
+  const std::vector<SelectStrategy> out = named_in_list(names, known, select_strategy_name);
+  if (out.empty()) {
+    std::string listing;
+    for (SelectStrategy s : known) listing += (listing.empty() ? "" : ", ") + std::string(select_strategy_name(s));
     throw InvalidParameter("-strategies " + names + " is invalid: 'all' or a comma-separated list of " + listing);
+  }
+  return out;
+}
+
+std::vector<DepthPredictionRule> select_predictors_by_names(const std::string& names) {
+  const auto name_of = [](DepthPredictionRule r) { return r == DepthPredictionRule::linear ? "linear" : "nearest"; };
+  const std::vector<DepthPredictionRule> out =
+      named_in_list(names, std::vector<DepthPredictionRule>{DepthPredictionRule::nearest, DepthPredictionRule::linear}, name_of);
+  if (out.empty()) throw InvalidParameter("-predictors " + names + " is invalid: a comma-separated list of nearest, linear");
   return out;
 }
 
@@ -89,7 +101,6 @@ struct Quality {
   std::size_t wrong_unasked = 0, wrong_unasked_within_3sigma = 0;
 };
 constexpr double kThreeSigmaInTolerances = 1.5;  ///< the tolerance is 2 sigma(z)
-
 
 /// How the grid's columns meet the scene's pixels: the column holding each pixel's centre ray and the
 /// pixel holding each column's centre ray (-1 where none: a column no pixel sees is not observable).
@@ -145,12 +156,15 @@ double prediction_error_m(const GridGeometry& g, ColumnIndex column, const Predi
   return std::abs(predicted_z(g, column, predicted) - z);
 }
 
-/// The metric: for every scene pixel with a return, the map's z there (the surface sample of the
-/// pixel's column, else predict_depth) within tolerance_m of the scene's z.
-Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelColumns& map, int radius,
-                    DepthPredictionRule rule, const std::vector<std::uint8_t>& asked) {
-  const PredictedDepth predicted = predicted_depth(mapper, radius, rule);
-  const GridGeometry& g = mapper.geometry();
+/// The same in tolerances: above 1, the ray's prediction is wrong (the metric and the oracle's rule).
+double error_in_tolerances(const GridGeometry& g, ColumnIndex column, const PredictedDepth& predicted, double z) {
+  return prediction_error_m(g, column, predicted, z) / tolerance_m(z);
+}
+
+/// The metric: for every scene pixel with a return, the map's z there (`predicted`: the surface sample of
+/// the pixel's column, else predict_depth) within tolerance_m of the scene's z.
+Quality map_quality(const GridGeometry& g, const PredictedDepth& predicted, const SelectScene& scene,
+                    const PixelColumns& map, const std::vector<std::uint8_t>& asked) {
   Quality q;
   std::size_t returns = 0, covered = 0;
   double abs_error = 0;
@@ -161,7 +175,7 @@ Quality map_quality(const Mapper& mapper, const SelectScene& scene, const PixelC
     const std::int64_t c = map.column_of_pixel[p];
     if (c < 0) continue;
     const auto column = static_cast<ColumnIndex>(c);
-    const double error = prediction_error_m(g, column, predicted, z), tolerances = error / tolerance_m(z);
+    const double error = prediction_error_m(g, column, predicted, z), tolerances = error_in_tolerances(g, column, predicted, z);
     if (tolerances > 1 && !asked[column]) {
       ++q.wrong_unasked;
       q.wrong_unasked_within_3sigma += tolerances <= kThreeSigmaInTolerances ? 1 : 0;
@@ -222,7 +236,7 @@ public:
       expected_since += shot.expected_gain;
       if (static_cast<double>(rays_asked_) + 0.5 < next_checkpoint && static_cast<double>(rays_asked_) < limit - 0.5) continue;
       next_checkpoint += checkpoint_every;
-      const Quality q = map_quality(mapper_, scene_, map_, options_.radius, rule_, asked_);
+      const Quality q = map_quality(mapper_.geometry(), prediction(), scene_, map_, asked_);
       csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
           << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
           << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << ','
@@ -269,9 +283,9 @@ private:
       request.budget_rays = budget_;
       request.negative_share = strategy_ == SelectStrategy::guided_reacquire ? options_.share : 0.0;
       request.candidates = map_.observable;
-      if (plans_coarse_to_fine(strategy_)) {
+      if (const std::optional<RefineBy> refine_by = coarse_refinement(strategy_)) {
         request.shape = ShotShape::coarse_to_fine;
-        request.refine_by = refinement_of(strategy_);
+        request.refine_by = *refine_by;
         // The residual of the predictor's own local model: nearest sample -> constant, linear -> plane.
         request.local_model = rule_ == DepthPredictionRule::linear ? LocalModel::plane : LocalModel::constant;
       }
@@ -281,16 +295,23 @@ private:
     return shot;
   }
 
+  /// The run's predicted depth of the map as it is, computed once per map: a checkpoint and the oracle's
+  /// next shot (at 5 %, every shot is a checkpoint) read the same one.
+  const PredictedDepth& prediction() {
+    if (!prediction_) prediction_ = predicted_depth(mapper_, options_.radius, rule_);
+    return *prediction_;
+  }
+
   /// (o): the unasked rays whose predicted depth is more than the tolerance off the scene's (no prediction
   /// counts as off), worst first, then `planned`'s rays; the expected gain is the count of the former.
-  Shot oracle_shot(const Shot& planned) const {
-    const PredictedDepth predicted = predicted_depth(mapper_, options_.radius, rule_);
+  Shot oracle_shot(const Shot& planned) {
+    const PredictedDepth& predicted = prediction();
     const GridGeometry& g = mapper_.geometry();
     std::vector<std::pair<double, ColumnIndex>> wrong;  // (error in tolerances, column)
     for (ColumnIndex c : observable_columns_) {
       const double z = scene_.depth_m[static_cast<std::size_t>(map_.pixel_of_column[c])];
       if (!has_return(z) || asked_[c]) continue;
-      const double error = prediction_error_m(g, c, predicted, z) / tolerance_m(z);
+      const double error = error_in_tolerances(g, c, predicted, z);
       if (error > 1) wrong.push_back({error, c});
     }
     const std::size_t taken = std::min(wrong.size(), static_cast<std::size_t>(budget_));
@@ -314,10 +335,11 @@ private:
     const std::vector<Eigen::Vector3f> points = sensor_.points(pixels, depth);
     mapper_.insert(PointSpan::from(points));
     if (strategy_ == SelectStrategy::guided_returns || strategy_ == SelectStrategy::guided_reacquire ||
-        plans_coarse_to_fine(strategy_)) {
+        coarse_refinement(strategy_)) {
       returns_.record_shot(columns, VirtualSensor::returned(depth));
     }
     seconds_ += seconds_since(start);
+    prediction_.reset();  // the map changed
     for (ColumnIndex c : columns) asked_[c] = 1;
     rays_asked_ += columns.size();
     returned_ += points.size();
@@ -335,6 +357,7 @@ private:
   PlanMemory plan_memory_;
   PixelColumns map_;
   std::vector<std::uint8_t> asked_;  ///< per column: asked at least once
+  std::optional<PredictedDepth> prediction_;  ///< of the map as it is (prediction()); reset by a shot
   std::vector<ColumnIndex> observable_columns_;
   std::vector<ColumnIndex> order_;
   std::size_t order_position_ = 0, shots_ = 0, rays_asked_ = 0, returned_ = 0, stop_rays_ = 0;

@@ -63,10 +63,12 @@ double checked_number(const FlagSpec& f, const std::string& text) {
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(text.c_str(), &end);
-  const bool whole = f.kind != FlagKind::integer || (v == std::floor(v) && std::abs(v) <= kIntegerMagnitude);
+  const bool whole = f.kind != FlagKind::integer || v == std::floor(v);
   if (text.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v) || !whole) refuse(f, text, requirement(f));
-  const bool below = f.minimum_exclusive ? !(v > f.minimum) : v < f.minimum;
-  const bool above = f.maximum_exclusive ? !(v < f.maximum) : v > f.maximum;
+  // The bounds the requirement states (an integer flag's are at most int's).
+  const double minimum = integer_aware_minimum(f), maximum = integer_aware_maximum(f);
+  const bool below = f.minimum_exclusive ? !(v > minimum) : v < minimum;
+  const bool above = f.maximum_exclusive ? !(v < maximum) : v > maximum;
   if (below || above) refuse(f, text, requirement(f));
   return v;
 }

@@ -43,6 +43,9 @@ const std::vector<SelectStrategy>& compared_select_strategies();
 /// or "all": compared_select_strategies(). Throws InvalidParameter for an unknown or repeated name,
 /// listing the names.
 std::vector<SelectStrategy> select_strategies_by_names(const std::string& names);
+/// The predictors a comma-separated list of "nearest" and "linear" names, in that order. Throws
+/// InvalidParameter for an unknown or repeated name.
+std::vector<DepthPredictionRule> select_predictors_by_names(const std::string& names);
 
 struct SelectEvalOptions {
   std::vector<double> budgets;  ///< rays per shot as shares of the image, in (0, 1]
