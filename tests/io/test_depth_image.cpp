@@ -12,6 +12,7 @@
 #include <tiffio.h>
 #include <zlib.h>
 
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <functional>
@@ -69,6 +70,26 @@ TEST(DepthImageReal, EncodingsAreGuessedFromTheValues) {
   EXPECT_EQ(guess_depth_encoding(sun, read_depth_image16(sun)), DepthEncoding::sun_rotated_mm);
   OCC_REQUIRE_DATA(nyu, "formats/open3d_rgbd/NYU_depth.pgm");
   EXPECT_EQ(guess_depth_encoding(nyu, read_depth_image16(nyu)), DepthEncoding::kinect_disparity);
+}
+
+// The quantisation test of guess_depth_encoding, on values that are not multiples of 5 or 8: a Kinect's
+// distinct depths 2.85e-3 z^2 m apart written at 5000 units per metre (TUM) are told from millimetres,
+// and from a sensor whose values step by one unit.
+TEST(DepthImage, TumScaleIsGuessedFromTheStepsBetweenDistinctDepths) {
+  std::vector<double> levels_m{1.5};  // the Kinect's distinct depths from 1.5 m: each 2.85e-3 z^2 m beyond the last
+  while (levels_m.back() < 3.0) levels_m.push_back(levels_m.back() + 2.85e-3 * levels_m.back() * levels_m.back());
+  DepthImage16 tum{64, 48, {}}, fine{64, 48, {}};
+  for (std::size_t i = 0; i < 64 * 48; ++i) {
+    const double z_m = levels_m[i % levels_m.size()];
+    tum.values.push_back(static_cast<std::uint16_t>(5000.0 * z_m) | 1);  // odd: not multiples of 5 or 8
+    fine.values.push_back(static_cast<std::uint16_t>(1500 + i % 1400));
+  }
+  EXPECT_EQ(guess_depth_encoding("tum.png", tum), DepthEncoding::tum_5000);
+  EXPECT_EQ(guess_depth_encoding("fine.png", fine), DepthEncoding::millimetres);
+  // The same depths in millimetres: their steps are the ones the millimetre rule predicts.
+  DepthImage16 mm = tum;
+  for (std::size_t i = 0; i < mm.values.size(); ++i) mm.values[i] = static_cast<std::uint16_t>(tum.values[i] / 5) | 1;
+  EXPECT_EQ(guess_depth_encoding("mm.png", mm), DepthEncoding::millimetres);
 }
 
 TEST(DepthImage, ValuesBecomeMetresThroughTheirEncoding) {
