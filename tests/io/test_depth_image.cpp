@@ -92,6 +92,29 @@ TEST(DepthImage, TumScaleIsGuessedFromTheStepsBetweenDistinctDepths) {
   EXPECT_EQ(guess_depth_encoding("mm.png", mm), DepthEncoding::millimetres);
 }
 
+// Millimetre images of round depths match the patterns of other encodings (multiples of 8 like SUN's
+// shifted values, of 5 like TUM's, steps of a few units like TUM's quantisation) but read as what they are.
+TEST(DepthImage, RoundMillimetreImagesAreGuessedAsMillimetres) {
+  // A ramp down the rows, first_mm to last_mm, optionally rounded to whole centimetres.
+  const auto ramp = [](int rows, int first_mm, int last_mm, bool centimetres) {
+    DepthImage16 image{64, rows, {}};
+    for (int row = 0; row < rows; ++row) {
+      const int mm = first_mm + (last_mm - first_mm) * row / rows;
+      image.values.insert(image.values.end(), 64, static_cast<std::uint16_t>(centimetres ? mm / 10 * 10 : mm));
+    }
+    return image;
+  };
+  // 2 m everywhere: multiples of 8, where SUN would read 0.25 m.
+  EXPECT_EQ(guess_depth_encoding("flat.png", DepthImage16::filled(64, 48, 2000)), DepthEncoding::millimetres);
+  // 1-3 m in steps of ~4 mm, what TUM's quantisation looks like near 2 m (it would read 0.2-0.6 m).
+  EXPECT_EQ(guess_depth_encoding("ramp.png", ramp(480, 1000, 3000, false)), DepthEncoding::millimetres);
+  // Whole centimetres: multiples of 5 (and of 10).
+  EXPECT_EQ(guess_depth_encoding("centimetres.png", ramp(480, 1000, 3000, true)), DepthEncoding::millimetres);
+  // 3-5 m in steps of 12.5 mm, whose TUM reading (0.6-1 m) would be plausible: its steps do not grow
+  // with depth as a Kinect's do.
+  EXPECT_EQ(guess_depth_encoding("far.png", ramp(160, 3000, 5000, false)), DepthEncoding::millimetres);
+}
+
 TEST(DepthImage, ValuesBecomeMetresThroughTheirEncoding) {
   const DepthImage16 image{4, 1, {0, 1500, 7500, 2047}};
   const std::vector<float> mm = depth_in_metres(image, DepthEncoding::millimetres);

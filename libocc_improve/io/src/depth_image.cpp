@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <fstream>
+#include <limits>
 #include <vector>
 
 namespace occ_improve {
@@ -120,44 +121,91 @@ bool is_depth_image_path(const std::string& path) {
   return ext == "png" || ext == "pgm" || ext == "tif" || ext == "tiff";
 }
 
+namespace {
+
+// A Kinect's adjacent distinct depths lie 2.85e-3 z^2 m apart (z in m): 2.85e-6 v^2 units of v in millimetres.
+constexpr double kKinectStepPerSquaredUnit = 2.85e-6;
+// Below this median depth (metres) an encoding is not taken on the values' patterns alone: a Kinect
+// measures from 0.5 m, and the presets' grids start there, so a reading whose typical depth lies nearer
+// is what a millimetre image of round numbers looks like through the wrong scale.
+constexpr double kNearestPlausibleMedianM = 0.5;
+// A millimetre reading beyond this median (metres) is past any Kinect's range (SUN's shifted values read so).
+constexpr double kFarthestPlausibleMedianM = 8.0;
+
+// The nonzero values of an image as their occurrences (index = value), with the value at a given rank.
+struct ValueCounts {
+  std::vector<std::uint32_t> occurrences = std::vector<std::uint32_t>(std::size_t{1} << 16, 0);
+  std::size_t nonzero = 0;
+
+  std::size_t value_at_rank(std::size_t rank) const {  // rank < nonzero
+    std::size_t value = 1, below = 0;
+    while (below + occurrences[value] <= rank) below += occurrences[value++];
+    return value;
+  }
+  /// The median step between the distinct values from the one at `rank` up (16 steps), over the step a
+  /// Kinect's millimetres would take there; NaN with fewer than 8 steps.
+  double step_ratio_at(std::size_t rank) const {
+    const std::size_t from = value_at_rank(rank);
+    std::vector<double> steps;
+    for (std::size_t last = from, v = from + 1; v < occurrences.size() && steps.size() < 16; ++v)
+      if (occurrences[v] > 0) {
+        steps.push_back(static_cast<double>(v - last));
+        last = v;
+      }
+    if (steps.size() < 8) return std::numeric_limits<double>::quiet_NaN();
+    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
+    const double v = static_cast<double>(from);
+    return steps[steps.size() / 2] / (kKinectStepPerSquaredUnit * v * v);
+  }
+};
+
+// TUM frames that are not multiples of 5 still carry a Kinect's quantisation, at 5 times fewer units per
+// step than millimetres predict (a ratio of ~0.2; 0.14-0.23 on the data's SUN and TUM frames, 1.0-1.4 on
+// millimetre ones). A Kinect's step grows as v^2, so the ratio is the same at every depth (within 15 %
+// on those frames); a synthetic ramp's steps do not grow, and its ratio falls with depth. So: the ratio
+// in (0.1, 0.45) at the quartiles and the median, and those three within a factor 1.5 of each other.
+bool has_tum_quantisation(const ValueCounts& counts) {
+  double lowest = std::numeric_limits<double>::infinity(), highest = 0.0;
+  for (const std::size_t quarter : {1, 2, 3}) {
+    const double ratio = counts.step_ratio_at(counts.nonzero * quarter / 4);
+    if (!(ratio > 0.1 && ratio < 0.45)) return false;
+    lowest = std::min(lowest, ratio);
+    highest = std::max(highest, ratio);
+  }
+  return highest <= 1.5 * lowest;
+}
+
+}  // namespace
+
 DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image) {
-  std::size_t eleven_bit = 0, nonzero = 0, multiple_of_8 = 0, multiple_of_5 = 0;
-  // How often each value occurs: the median and the steps above it below come from a walk over it, where
-  // sorting a frame's values took ~4 % of a depth sequence's run (occ_improve_map on 7-Scenes).
-  std::vector<std::uint32_t> occurrences(std::size_t{1} << 16, 0);
+  std::size_t eleven_bit = 0, multiple_of_8 = 0, multiple_of_5 = 0, multiple_of_10 = 0;
+  // How often each value occurs: medians and steps come from walks over it, where sorting a frame's
+  // values took ~4 % of a depth sequence's run (occ_improve_map on 7-Scenes).
+  ValueCounts counts;
   for (const std::uint16_t v : image.values) {
     eleven_bit += v <= 2047 ? 1 : 0;
     if (v == 0) continue;
-    ++nonzero;
-    ++occurrences[v];
+    ++counts.nonzero;
+    ++counts.occurrences[v];
     multiple_of_8 += v % 8 == 0 ? 1 : 0;
     multiple_of_5 += v % 5 == 0 ? 1 : 0;
+    multiple_of_10 += v % 10 == 0 ? 1 : 0;
   }
   if (lowercase_extension(path) == "pgm" && eleven_bit == image.values.size()) return DepthEncoding::kinect_disparity;
-  if (nonzero < 100) return DepthEncoding::millimetres;
-  const double n = static_cast<double>(nonzero);
-  // SUN RGB-D: only depths beyond 8.192 m set the low 3 bits, a few percent of a frame at most.
-  if (multiple_of_8 >= 0.9 * n) return DepthEncoding::sun_rotated_mm;
-  // TUM: the sensor's millimetres times 5 (a few interpolated pixels break the pattern).
-  if (multiple_of_5 >= 0.99 * n) return DepthEncoding::tum_5000;
-  // Other TUM frames are not multiples of 5. Their depth quantisation tells: a Kinect's adjacent
-  // distinct depths lie 2.85e-3 z^2 m apart (z in m), i.e. 2.85e-6 v^2 units in millimetres but 5 times
-  // fewer units in TUM's scale. Compare the typical step between distinct values from the median up
-  // with the millimetre prediction; a sensor without that quantisation (steps of ~1 unit) stays millimetres.
-  std::size_t value = 1, below = 0;  // the median: the value at rank nonzero / 2 among the nonzero ones
-  while (below + occurrences[value] <= nonzero / 2) below += occurrences[value++];
-  const double median = static_cast<double>(value);
-  std::vector<double> steps;
-  for (std::size_t last = value, v = value + 1; v < occurrences.size() && steps.size() < 16; ++v)
-    if (occurrences[v] > 0) {
-      steps.push_back(static_cast<double>(v - last));
-      last = v;
-    }
-  if (steps.size() >= 8) {
-    std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2), steps.end());
-    const double ratio = steps[steps.size() / 2] / (2.85e-6 * median * median);
-    if (ratio > 0.1 && ratio < 0.45) return DepthEncoding::tum_5000;
-  }
+  if (counts.nonzero < 100) return DepthEncoding::millimetres;
+  const double n = static_cast<double>(counts.nonzero);
+  const double median = static_cast<double>(counts.value_at_rank(counts.nonzero / 2));
+  // SUN RGB-D: only depths beyond 8.192 m set the low 3 bits, a few percent of a frame at most; its
+  // values read as millimetres lie 8 times too far. A millimetre image of round depths (2000 everywhere)
+  // is multiples of 8 too, but plausible as it stands.
+  if (multiple_of_8 >= 0.9 * n && median / 1000.0 > kFarthestPlausibleMedianM) return DepthEncoding::sun_rotated_mm;
+  // TUM: the sensor's millimetres times 5, so about half of them odd multiples of 5 (a few interpolated
+  // pixels break the pattern); millimetres rounded to centimetres are all multiples of 10.
+  const bool tum_plausible = median / 5000.0 >= kNearestPlausibleMedianM;
+  if (multiple_of_5 >= 0.99 * n && multiple_of_10 < 0.9 * n && tum_plausible) return DepthEncoding::tum_5000;
+  // Other TUM frames are not multiples of 5: their depth quantisation tells (has_tum_quantisation). A
+  // sensor without that quantisation (steps of ~1 unit) stays millimetres.
+  if (tum_plausible && has_tum_quantisation(counts)) return DepthEncoding::tum_5000;
   return DepthEncoding::millimetres;
 }
 

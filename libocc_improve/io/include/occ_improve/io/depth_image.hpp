@@ -41,10 +41,15 @@ bool is_depth_image_path(const std::string& path);
 
 /// The encoding a 16-bit depth image most likely uses, for when the user did not say:
 ///  - .pgm whose values all fit in 11 bits: kinect_disparity (NYU's raw dumps);
-///  - >= 90% of nonzero values multiples of 8: sun_rotated_mm (millimetres below 8.192 m rotate to v << 3);
-///  - >= 99% multiples of 5: tum_5000 (TUM stores the sensor's millimetres times 5);
-///  - steps between distinct values near the median ~1/5 of a Kinect's millimetre quantisation: tum_5000;
-///  - otherwise millimetres (also for an image with fewer than 100 nonzero values).
+///  - >= 90% of nonzero values multiples of 8 and a median beyond 8 m as millimetres: sun_rotated_mm
+///    (millimetres below 8.192 m rotate to v << 3);
+///  - >= 99% multiples of 5 but < 90% multiples of 10: tum_5000 (TUM stores the sensor's millimetres
+///    times 5);
+///  - steps between distinct values ~1/5 of a Kinect's millimetre quantisation at the quartiles and the
+///    median alike (a Kinect's steps grow as z^2, a synthetic ramp's do not): tum_5000;
+///  - neither TUM rule when the median would lie nearer than 0.5 m at TUM's scale;
+///  - otherwise millimetres (also for an image with fewer than 100 nonzero values), so that an image of
+///    round millimetres (2000 everywhere, whole centimetres, a smooth ramp) reads as what it is.
 DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& image);
 
 /// The image's depth per pixel in metres through `encoding`, row-major; 0 = no return.
