@@ -255,6 +255,25 @@ TEST(ToolFrames, PosesMoveFramesIntoTheFirstViewAndAMissingPoseIsRefused) {
   std::filesystem::remove_all(folder);
 }
 
+// A PCD's VIEWPOINT moves its points into the sensor frame, unless -no_poses says to ignore poses (as
+// -h says): then the points stay as written, so a cloud with a wrong VIEWPOINT can still be mapped.
+TEST(ToolFrames, NoPosesIgnoresAPcdViewpoint) {
+  const std::filesystem::path path = std::filesystem::temp_directory_path() /
+                                     ("occ_improve_test_viewpoint_" + std::to_string(::getpid()) + ".pcd");
+  std::ofstream(path) << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n"
+                         "HEIGHT 1\nVIEWPOINT 1 0.5 -2 1 0 0 0\nPOINTS 2\nDATA ascii\n0 0 2\n0.5 0 3\n";
+  const ToolFrame moved = read_tool_frames(parse({path.string(), "-intrinsics", "525,525,319.5,239.5"})).front();
+  const ToolFrame as_written =
+      read_tool_frames(parse({path.string(), "-intrinsics", "525,525,319.5,239.5", "-no_poses"})).front();
+  std::filesystem::remove(path);
+  ASSERT_TRUE(moved.pose);
+  EXPECT_FLOAT_EQ(moved.cloud[1].x, -0.5f);  // 0.5 - 1: into the sensor at (1, 0.5, -2)
+  EXPECT_FLOAT_EQ(moved.cloud[1].z, 5.0f);
+  EXPECT_FALSE(as_written.pose);
+  EXPECT_FLOAT_EQ(as_written.cloud[1].x, 0.5f);
+  EXPECT_FLOAT_EQ(as_written.cloud[1].z, 3.0f);
+}
+
 // -depth_bins 100000000 took 3.1 GB before the cap error: now refused while parsing, before any grid exists.
 TEST(ToolOptions, AGridAboveTheMemoryCapIsRefusedWhileParsing) {
   try {

@@ -41,9 +41,10 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
   LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
   require_valid_points(span_of(loaded.cloud), source.path);
   require_camera_fits(loaded.cloud, camera, source.path, frame.camera_source);
-  if (loaded.viewpoint) {
+  if (loaded.viewpoint && options.use_poses) {
     // PCL's VIEWPOINT: the points are in the cloud's frame, the sensor at the viewpoint; the grid is the
-    // sensor's, so the points go into the sensor frame whether or not poses are used to fuse frames.
+    // sensor's, so the points go into the sensor frame. -no_poses ignores it, as every other pose: the
+    // points are then taken as written in the sensor frame (a cloud whose VIEWPOINT is wrong stays usable).
     pcl::transformPointCloud(loaded.cloud, loaded.cloud, loaded.viewpoint->inverse().matrix().cast<float>());
     frame.pose = loaded.viewpoint;
     frame.pose_source = "VIEWPOINT of " + source.path;
