@@ -386,19 +386,22 @@ TEST(Integrate, SurfaceOfAnotherSizeIsRefused) {
 }
 
 TEST(Integrate, InvalidAndOutOfFieldPointsAreCountedNotInserted) {
-  const SensorPreset p = kinect_v1_paper();
+  SensorPreset p = kinect_v1_paper();
+  p.geometry.depth_min_m = 0.5;  // the paper's grid starts at the sensor: nothing could lie nearer
   ColumnGrid grid{GridGeometry(p.geometry)};
   const SensorModel model(p.model);
   const float nan = std::nanf(""), inf = INFINITY;
   std::vector<Eigen::Vector3f> pts = {{nan, 0, 1}, {0, inf, 1}, {0, 0, 0},     // invalid
                                       {0, 0, -2}, {5, 0, 1},                     // behind, outside fov
-                                      {0, 0, 2}, {0.1f, 0.1f, 7.0f}};            // valid, beyond range
+                                      {0, 0, 2}, {0.1f, 0.1f, 7.0f},             // valid, beyond range
+                                      {0, 0, 0.1f}};                             // valid, nearer than the range
   const InsertionReport r = insert_points(grid, model, PointSpan::from(pts));
-  EXPECT_EQ(r.points_received, 7u);
+  EXPECT_EQ(r.points_received, 8u);
   EXPECT_EQ(r.skipped_invalid, 3u);
   EXPECT_EQ(r.skipped_outside_fov, 2u);
-  EXPECT_EQ(r.points_inserted, 2u);
+  EXPECT_EQ(r.points_inserted, 3u);
   EXPECT_EQ(r.beyond_depth_range, 1u);
+  EXPECT_EQ(r.nearer_than_depth_range, 1u);
   // The point beyond the range still carves its whole ray free.
   ColumnIndex c = 0;
   ASSERT_TRUE(grid.geometry().column_of(0.1, 0.1, 7.0, c));

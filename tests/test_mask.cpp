@@ -40,6 +40,11 @@ TEST(Mask, ColumnsOutsideAreNotObservableAndTheirPointsAreLeftOut) {
   EXPECT_GT(right_valid, 50000u);
   EXPECT_EQ(r.points_masked, right_valid);
   EXPECT_EQ(r.insertion.points_inserted + r.points_masked, all.insertion.points_inserted);
+  // Every point handed in is accounted for, the masked ones too.
+  EXPECT_EQ(r.insertion.skipped_masked, right_valid);
+  EXPECT_EQ(r.insertion.points_received, points.size());
+  EXPECT_EQ(r.insertion.points_received, r.insertion.points_inserted + r.insertion.skipped_invalid +
+                                             r.insertion.skipped_outside_fov + r.insertion.skipped_masked);
 
   const int w = frame.intrinsics.width;
   std::size_t nan = 0;

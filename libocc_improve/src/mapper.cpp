@@ -103,6 +103,8 @@ MapperReport Mapper::insert_now(PointSpan points, const InsertionOptions& option
   // The surface is updated inside the insertion (its time is part of the insertion's).
   std::vector<ColumnIndex> changed;
   report.insertion = insert_points(grid_, model_, points, surface_, changed, options);
+  report.insertion.points_received += report.points_masked;  // every point handed in is accounted for
+  report.insertion.skipped_masked = report.points_masked;
   grid_.take_changed_columns();  // accounted for by `changed`
   report.surface_columns_changed = changed.size();
   const auto start = SteadyClock::now();

@@ -437,8 +437,9 @@ int run(const CommandLine& command_line) {
   const GeometryParams& g = source.preset.geometry;
   pcl::console::print_info("%s\n", source.camera.c_str());
   if (!mask_line.empty()) pcl::console::print_info("%s\n", mask_line.c_str());
-  pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, 0-%.1f m)\n", source.text.c_str(),
-                           source.preset.name.c_str(), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_max_m);
+  pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, %.2f-%.2f m)\n", source.text.c_str(),
+                           source.preset.name.c_str(), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_min_m,
+                           g.depth_max_m);
   pipeline.start();
   const char* stop_reason =
       follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signalled, progress, view.get());

@@ -31,7 +31,7 @@ const ToolFlags kFlags{
     "Writes into OUTDIR: labels.pcd (PointXYZRGBL, opens in pcl_viewer), labels.png (the segments'\n"
     "colours), label_ids.png (16-bit label per ray, 0 = none: what pcl_pcd2png --field label writes),\n"
     "contours.png, segments.csv (label, rays, points, centroid x y z, mean depth, plane).\n",
-    joined({output_folder_flag_names(), {"-contour", "-min_segment", "-no_plane", "-plane_distance"}, sensor_flag_names(),
+    joined({output_folder_flag_names(), {"-q", "-contour", "-min_segment", "-no_plane", "-plane_distance"}, sensor_flag_names(),
             camera_flag_names(), {"-mask"}, batch_flag_names()}),
     {},
     {},

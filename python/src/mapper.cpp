@@ -22,16 +22,19 @@ namespace {
 
 void bind_reports(py::module_& m) {
   py::class_<InsertionReport> r(m, "InsertionReport",
-                                "What happened to every point: received = inserted + skipped_invalid + skipped_outside_fov.");
+                                "What happened to every point: received = inserted + skipped_invalid + skipped_outside_fov + skipped_masked.");
   r.def_readonly("points_received", &InsertionReport::points_received)
       .def_readonly("points_inserted", &InsertionReport::points_inserted)
       .def_readonly("skipped_invalid", &InsertionReport::skipped_invalid, "NaN/Inf coordinate or no return")
       .def_readonly("skipped_outside_fov", &InsertionReport::skipped_outside_fov)
+      .def_readonly("skipped_masked", &InsertionReport::skipped_masked, "valid, on a ray the Mapper's mask leaves out")
       .def_readonly("beyond_depth_range", &InsertionReport::beyond_depth_range, "inserted; only their free space counts")
+      .def_readonly("nearer_than_depth_range", &InsertionReport::nearer_than_depth_range,
+                    "inserted nearer than the depth range's start: in front of the grid, little or nothing kept")
       .def_readonly("column_updates", &InsertionReport::column_updates)
       .def_readonly("seconds", &InsertionReport::seconds);
-  def_fields_repr(r, {"points_received", "points_inserted", "skipped_invalid", "skipped_outside_fov",
-                      "beyond_depth_range", "seconds"});
+  def_fields_repr(r, {"points_received", "points_inserted", "skipped_invalid", "skipped_outside_fov", "skipped_masked",
+                      "beyond_depth_range", "nearer_than_depth_range", "seconds"});
   py::class_<MapperReport> mr(m, "MapperReport", "One Mapper.insert: the insertion and the improvement update.");
   mr.def_readonly("insertion", &MapperReport::insertion)
       .def_readonly("improvement_seconds", &MapperReport::improvement_seconds)

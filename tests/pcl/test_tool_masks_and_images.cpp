@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -177,6 +178,39 @@ TEST_F(ToolMasksAndImages, AMaskOfAnotherSizeOrFormatIsRefusedInOneLineNamingThe
     EXPECT_EQ(r.exit_code, 1) << r.output;
     EXPECT_NE(r.output.find("must be 8-bit or 16-bit single-channel"), std::string::npos) << r.output;
   }
+}
+
+// A mask that leaves no ray is refused naming the mask and the input, not the field of view; a mask
+// that leaves half counts the points it left out in the summary's point line.
+TEST_F(ToolMasksAndImages, AMaskLeavingNoPointIsNamedAndMaskedPointsAreCounted) {
+  occ_improve::Image none{640, 480, 1, std::vector<std::uint8_t>(640 * 480, 0)};
+  occ_improve::write_png((dir_ / "none.png").string(), none);
+  ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -mask " + (dir_ / "none.png").string() + " -o " +
+                                                  (dir_ / "out_none").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("error: -mask leaves out all "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("valid points of 'built-in sample'"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "out_none"));
+
+  occ_improve::Image left{640, 480, 1, std::vector<std::uint8_t>(640 * 480, 0)};
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 320; ++u) left.pixels[static_cast<std::size_t>(v) * 640 + u] = 255;
+  occ_improve::write_png((dir_ / "left.png").string(), left);
+  r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -mask " + (dir_ / "left.png").string() + " -o " +
+                                          (dir_ / "out_left").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  unsigned long read = 0, used = 0, invalid = 0, outside = 0, masked = 0;
+  const std::size_t at = r.output.find("points: ");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  ASSERT_EQ(std::sscanf(r.output.c_str() + at, "points: %lu read, %lu used, %lu skipped invalid, %lu skipped outside",
+                        &read, &used, &invalid, &outside), 4) << r.output;
+  const std::size_t masked_at = r.output.find(" skipped outside -mask");
+  ASSERT_NE(masked_at, std::string::npos) << r.output;
+  const std::size_t number_at = r.output.rfind("; ", masked_at);
+  ASSERT_EQ(std::sscanf(r.output.c_str() + number_at, "; %lu", &masked), 1) << r.output;
+  EXPECT_EQ(read, 640ul * 480ul);  // every point read, before the mask
+  EXPECT_GT(masked, 100000ul);
+  EXPECT_EQ(read, used + invalid + outside + masked);
 }
 
 // regions.png holds regions.csv's ranks: each id's pixels are its row's area, inside its bounding box,

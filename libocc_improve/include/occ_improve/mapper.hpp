@@ -21,7 +21,7 @@ struct MapperReport {
   InsertionReport insertion;  ///< its seconds include the surface update, done column by column inside it
   double improvement_seconds = 0;  ///< the incremental improvement, and the pyramid's update once asked
   std::size_t surface_columns_changed = 0, rays_recomputed = 0;
-  std::size_t points_masked = 0;  ///< valid points outside the mask, left out before the insertion
+  std::size_t points_masked = 0;  ///< valid points outside the mask, left out before the insertion (= insertion.skipped_masked)
 };
 
 class Mapper {

@@ -28,7 +28,9 @@ InsertionReport& InsertionReport::operator+=(const InsertionReport& o) {
   points_inserted += o.points_inserted;
   skipped_invalid += o.skipped_invalid;
   skipped_outside_fov += o.skipped_outside_fov;
+  skipped_masked += o.skipped_masked;
   beyond_depth_range += o.beyond_depth_range;
+  nearer_than_depth_range += o.nearer_than_depth_range;
   column_updates += o.column_updates;
   seconds += o.seconds;
   return *this;

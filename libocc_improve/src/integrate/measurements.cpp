@@ -35,6 +35,7 @@ bool to_measurement(const float* p, const GridGeometry& g, const SensorModel& mo
   g.elevation().overlapping(r.vertical - support.vertical, r.vertical + support.vertical, m.elevation_first,
                             m.elevation_last);
   if (r.depth >= g.depth().max()) ++report.beyond_depth_range;
+  if (r.depth < g.depth().min()) ++report.nearer_than_depth_range;
   ++report.points_inserted;
   return true;
 }

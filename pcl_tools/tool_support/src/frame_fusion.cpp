@@ -62,6 +62,19 @@ private:
   double worst_share_ = 0;
 };
 
+// Why no point of the frames was inserted, naming them: the mask, or the field of view.
+std::string nothing_inserted(const FusedFrames& fused) {
+  const InsertionReport& in = fused.insertion;
+  const std::string inputs = fused.frames == 1 ? "'" + fused.first_name + "'"
+                                               : std::to_string(fused.frames) + " frames from '" + fused.first_name + "'";
+  const std::size_t valid = in.points_received - in.skipped_invalid;
+  if (in.skipped_masked > 0 && in.skipped_outside_fov == 0)
+    return "-mask leaves out all " + std::to_string(valid) + " valid points of " + inputs;
+  return "no point of " + inputs + " lies inside the grid's field of view (" + std::to_string(in.skipped_outside_fov) +
+         " of its " + std::to_string(valid) + " valid points behind the camera or beside the image" +
+         (in.skipped_masked > 0 ? ", the other " + std::to_string(in.skipped_masked) + " outside -mask)" : ")");
+}
+
 }  // namespace
 
 FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
@@ -88,6 +101,7 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
       scenes.add(*frame);
       fused.insertion += insert(*frame);
       fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
+      if (fused.frames == 0) fused.first_name = frame->name;
       progress.update(++fused.frames, frames.count(), fused.insertion.points_received);
     }
   } catch (const Cancelled&) {
@@ -101,8 +115,7 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
   scenes.warn_if_needed();
   fused.first_pose = frames.first_pose();
   fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
-  if (fused.frames > 0 && fused.insertion.points_inserted == 0)
-    throw InvalidInput("no point of the input lies inside the grid's field of view");
+  if (fused.frames > 0 && fused.insertion.points_inserted == 0) throw InvalidInput(nothing_inserted(fused));
   return fused;
 }
 
@@ -110,9 +123,11 @@ std::string describe_points(const InsertionReport& in) {
   char line[400];
   std::snprintf(line, sizeof line,
                 "points: %zu read, %zu used, %zu skipped invalid, %zu skipped outside the field of view; "
-                "%zu used beyond the depth range (free space only)",
+                "%zu used beyond the depth range (free space only), %zu used nearer than its start (in front of "
+                "the grid)",
                 in.points_received, in.points_inserted, in.skipped_invalid, in.skipped_outside_fov,
-                in.beyond_depth_range);
+                in.beyond_depth_range, in.nearer_than_depth_range);
+  if (in.skipped_masked > 0) return line + std::string("; ") + std::to_string(in.skipped_masked) + " skipped outside -mask";
   return line;
 }
 

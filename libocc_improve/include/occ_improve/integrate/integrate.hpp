@@ -67,13 +67,18 @@ struct InsertionOptions {
   void validate() const;  ///< threads outside [0, kMaxThreads] -> InvalidParameter
 };
 
-/// What happened to every point handed in: received = inserted + skipped_invalid + skipped_outside_fov.
+/// What happened to every point handed in: received = inserted + skipped_invalid + skipped_outside_fov
+/// + skipped_masked.
 struct InsertionReport {
   std::size_t points_received = 0;
   std::size_t points_inserted = 0;
   std::size_t skipped_invalid = 0;      ///< NaN/Inf coordinate or rho == 0 (no return)
   std::size_t skipped_outside_fov = 0;  ///< direction outside the grid's angular range
+  std::size_t skipped_masked = 0;       ///< valid, on a ray a Mapper's column mask leaves out (Mapper only)
   std::size_t beyond_depth_range = 0;   ///< inserted; only their free space lies in the grid
+  /// inserted with a range below the depth range's start: their OPDF lies in front of the grid, so little
+  /// or nothing of them is kept (millimetres given as metres, or a sensor nearer than the preset's minimum)
+  std::size_t nearer_than_depth_range = 0;
   std::size_t column_updates = 0;       ///< (measurement, column) pairs applied
   double seconds = 0.0;
 

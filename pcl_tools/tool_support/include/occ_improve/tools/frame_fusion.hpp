@@ -43,6 +43,7 @@ struct FusedFrames {
   std::string camera;                    ///< describe_camera of the first frame
   std::optional<Image> colour;           ///< the first frame's colour
   std::vector<std::string> frame_lines;  ///< "read NAME: N points" per frame
+  std::string first_name;                ///< the first frame's name (errors name the input)
 };
 
 /// Reads every frame (ToolFrameReader), calls `prepare` with the first one (its camera sets the grid), then
