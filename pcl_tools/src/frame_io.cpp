@@ -170,7 +170,10 @@ std::string pose_file_for(const std::string& depth_path) {
   return depth_path.substr(0, depth_path.size() - suffix.size()) + ".pose.txt";
 }
 
-PinholeIntrinsics read_intrinsics_file(const std::string& path) {
+namespace {
+
+// read_intrinsics_file; size_given tells whether the file held a width and height.
+PinholeIntrinsics intrinsics_from_file(const std::string& path, bool& size_given) {
   throw_if_folder(path, "intrinsics file");
   std::ifstream in(path);
   if (!in) throw IoError("cannot open intrinsics file '" + path + "'");
@@ -189,7 +192,8 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
     k.fy = v[1];
     k.cx = v[2];
     k.cy = v[3];
-    if (v.size() == 6) {
+    size_given = v.size() == 6;
+    if (size_given) {
       // Checked before the cast: a double beyond int's range does not convert.
       for (const double size : {v[4], v[5]})
         if (!(size >= 1 && size <= 65536 && size == std::floor(size)))
@@ -204,6 +208,28 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path) {
     k.validate();
   } catch (const InvalidParameter& e) {
     throw FormatError("intrinsics file '" + path + "': " + e.what());
+  }
+  return k;
+}
+
+}  // namespace
+
+PinholeIntrinsics read_intrinsics_file(const std::string& path) {
+  bool size_given = false;
+  return intrinsics_from_file(path, size_given);
+}
+
+PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::string& sized_by) {
+  bool size_given = false;
+  PinholeIntrinsics k = intrinsics_from_file(path, size_given);
+  if (size_given) return k;
+  const DepthImage16 image = read_depth_image16(sized_by);
+  k.width = image.width;
+  k.height = image.height;
+  try {
+    k.validate();
+  } catch (const InvalidParameter& e) {
+    throw FormatError("intrinsics file '" + path + "' sized as '" + sized_by + "': " + e.what());
   }
   return k;
 }
@@ -229,10 +255,11 @@ FrameSource source_of(const std::string& path, const std::optional<PinholeIntrin
   return source;
 }
 
-std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder) {
+// The camera-intrinsics.txt of a frame's folder or its parent, sized as the frame where it gives no size.
+std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder, const std::string& frame) {
   for (const auto& candidate : {folder / "camera-intrinsics.txt", folder.parent_path() / "camera-intrinsics.txt"}) {
     std::error_code ec;
-    if (std::filesystem::is_regular_file(candidate, ec)) return read_intrinsics_file(candidate.string());
+    if (std::filesystem::is_regular_file(candidate, ec)) return read_intrinsics_file(candidate.string(), frame);
   }
   return std::nullopt;
 }
@@ -248,7 +275,7 @@ std::vector<FrameSource> expand_input(const std::string& input) {
                   (ec && ec != std::errc::no_such_file_or_directory ? "cannot be reached: " + ec.message() : "does not exist"));
   if (!fs::is_directory(p, ec)) {
     const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
-    return {source_of(input, is_depth_image_path(input) ? intrinsics_beside(folder) : std::nullopt)};
+    return {source_of(input, is_depth_image_path(input) ? intrinsics_beside(folder, input) : std::nullopt)};
   }
   std::vector<std::string> frames;
   for (fs::recursive_directory_iterator it(p, ec), end; it != end && !ec; it.increment(ec)) {
@@ -258,9 +285,10 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   if (ec) throw IoError("cannot list folder '" + input + "': " + ec.message());
   if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames");
   std::sort(frames.begin(), frames.end());
-  const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p);
+  const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p, frames.front());
   std::vector<FrameSource> sources;
-  for (const auto& f : frames) sources.push_back(source_of(f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path())));
+  for (const auto& f : frames)
+    sources.push_back(source_of(f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path(), f)));
   return sources;
 }
 

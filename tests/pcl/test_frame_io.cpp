@@ -1,6 +1,8 @@
 // Reading frames: every real format in shared/data decodes to plausible Kinect depths, the encoding is
 // guessed right when not given, and broken files raise typed errors naming the file.
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/io/png.hpp"
+#include "occ_improve/pcl/sequence_sources.hpp"
 
 #include "occ_improve/errors.hpp"
 #include "support/test_data.hpp"
@@ -178,6 +180,27 @@ TEST_F(FrameIoFiles, AllZeroDepthImageLoadsAsAFrameWithNoValidPoint) {
   const LoadedFrame f = load_frame(write("zeros.pgm", pgm), k, DepthEncoding::millimetres);
   EXPECT_EQ(f.cloud.size(), 12u);
   EXPECT_EQ(stats_of(f.cloud).valid_fraction, 0.0);
+}
+
+// A 3x3 camera-intrinsics.txt (7-Scenes, 3DMatch) carries no image size: a folder's camera takes its
+// frames' size, as a folder of a 320 x 240 camera needs (it was 640 x 480 whatever the frames).
+TEST_F(FrameIoFiles, AFolderCameraWithoutASizeTakesItsFramesSize) {
+  write_png((dir_ / "frame-000000.depth.png").string(), Image16{32, 24, std::vector<std::uint16_t>(32 * 24, 1500)});
+  write("camera-intrinsics.txt", "26.25 0 15.5\n0 26.25 11.5\n0 0 1\n");
+  const std::vector<FrameSource> sources = expand_input(dir_.string());
+  ASSERT_EQ(sources.size(), 1u);
+  ASSERT_TRUE(sources[0].intrinsics);
+  EXPECT_EQ(sources[0].intrinsics->width, 32);
+  EXPECT_EQ(sources[0].intrinsics->height, 24);
+  EXPECT_DOUBLE_EQ(sources[0].intrinsics->fx, 26.25);
+  const DepthSequence sequence = scan_depth_sequence(dir_.string());
+  ASSERT_TRUE(sequence.intrinsics);
+  EXPECT_EQ(sequence.intrinsics->width, 32);
+  EXPECT_EQ(sequence.intrinsics->height, 24);
+  EXPECT_EQ(load_frame(sources[0].path, sources[0].intrinsics).cloud.width, 32u);
+  // A size in the file is the file's.
+  write("camera-intrinsics.txt", "26.25 26.25 15.5 11.5 64 48\n");
+  EXPECT_EQ(expand_input(dir_.string())[0].intrinsics->width, 64);
 }
 
 TEST_F(FrameIoFiles, FolderWithoutFramesIsInvalidInput) {

@@ -95,5 +95,8 @@ Eigen::Isometry3d read_pose_matrix_file(const std::string& path);
 /// Intrinsics from a text file: either "fx fy cx cy [width height]" or a 3x3 matrix (7-Scenes/3DMatch
 /// camera-intrinsics.txt); width/height default to 640 x 480.
 PinholeIntrinsics read_intrinsics_file(const std::string& path);
+/// The same, with the width and height of the depth image `sized_by` where the file gives none (a 3x3
+/// matrix or four numbers): the camera of a dataset folder is the size of its frames.
+PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::string& sized_by);
 
 }  // namespace occ_improve
