@@ -65,6 +65,71 @@ PixelMask pixel_mask_from(const py::handle& mask) {
   return out;
 }
 
+/// The depth units a scale can convert from, in the order their suggestion is tried.
+struct DepthUnit {
+  double scale;
+  const char* name;
+};
+constexpr DepthUnit kDepthUnits[] = {{1e-3, "millimetres"}, {1.0, "metres"}};
+// Nearer than this no depth camera measures; a median below it is a unit mistake, as one beyond the grid.
+constexpr double kNearestPlausibleDepthM = 0.05;
+// Fewer returns than this say nothing about the unit (the tools' unit guess needs as many).
+constexpr std::size_t kReturnsToJudgeUnit = 100;
+
+/// A unit mistake: the median of some depths or ranges, in metres under the scale given, and the usual
+/// unit that would put it inside the grid's plausible depth range [nearest_m, depth_max_m].
+struct UnitMistake {
+  double median_m, nearest_m;
+  DepthUnit likely;
+};
+
+/// The mistake, when `scale` puts the median of `values` (0, NaN: none) outside the grid's plausible depth
+/// range and one of the usual units would put it inside: every return would otherwise be inserted beyond
+/// the range (the map then says free to its end) or crammed near the sensor, without a word. Nothing for
+/// anything else, and for fewer than kReturnsToJudgeUnit values.
+std::optional<UnitMistake> unit_mistake(std::vector<float> values, double scale, const GeometryParams& g) {
+  values.erase(std::remove_if(values.begin(), values.end(), [](float v) { return !(v > 0.0f && std::isfinite(v)); }),
+               values.end());
+  if (values.size() < kReturnsToJudgeUnit) return std::nullopt;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  const double median = *middle;
+  const double nearest_m = std::max(g.depth_min_m, kNearestPlausibleDepthM);
+  const auto plausible = [&](double s) { return median * s >= nearest_m && median * s <= g.depth_max_m; };
+  if (plausible(scale)) return std::nullopt;
+  for (const DepthUnit& unit : kDepthUnits)
+    if (unit.scale != scale && plausible(unit.scale)) return UnitMistake{median * scale, nearest_m, unit};
+  return std::nullopt;
+}
+
+/// insert_depth: refuses a scale under which the image's median depth is a unit mistake.
+void require_plausible_scale(const float* raw, std::size_t pixels, double scale, const GeometryParams& g) {
+  const std::optional<UnitMistake> mistake = unit_mistake(std::vector<float>(raw, raw + pixels), scale, g);
+  if (!mistake) return;
+  std::ostringstream m;
+  m << "scale = " << scale << " puts the median depth of this image at " << mistake->median_m
+    << " m, outside the grid's plausible depth range [" << mistake->nearest_m << ", " << g.depth_max_m
+    << "] m: the image looks like " << mistake->likely.name << ": pass scale=" << mistake->likely.scale;
+  throw InvalidParameter(m.str());
+}
+
+/// insert: refuses points whose median range is a unit mistake (points are in metres; a cloud in
+/// millimetres took 100 times as long to insert, every point beyond the range, and left the map free).
+void require_plausible_ranges(PointSpan points, const GeometryParams& g) {
+  std::vector<float> ranges(points.count);
+  for (std::size_t i = 0; i < points.count; ++i) {
+    const float* p = points.xyz + i * points.stride_floats;
+    ranges[i] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+  }
+  const std::optional<UnitMistake> mistake = unit_mistake(std::move(ranges), 1.0, g);
+  if (!mistake) return;
+  std::ostringstream m;
+  m << "the points' median range is " << mistake->median_m << " m, outside the grid's plausible depth range ["
+    << mistake->nearest_m << ", " << g.depth_max_m << "] m: the points look like " << mistake->likely.name
+    << ": pass them in metres (times " << mistake->likely.scale << ")";
+  throw InvalidParameter(m.str());
+}
+
 /// Mapper::insert, through set_mask first when a mask is given (None: the mask in place, if any).
 MapperReport insert_masked(Mapper& m, PointSpan points, const InsertionOptions& options,
                            const std::optional<PixelMask>& mask) {
@@ -80,43 +145,10 @@ MapperReport insert_points_array(PyMapper& self, const py::object& points, int t
   const InsertionOptions options = insertion_options(threads);
   const std::optional<PixelMask> pixels = optional_mask(mask);
   const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
-  return with_mapper(self, [&](Mapper& m) { return insert_masked(m, in.span, options, pixels); });
-}
-
-/// The depth units a scale can convert from, in the order their suggestion is tried.
-struct DepthUnit {
-  double scale;
-  const char* name;
-};
-constexpr DepthUnit kDepthUnits[] = {{1e-3, "millimetres"}, {1.0, "metres"}};
-// Nearer than this no depth camera measures; a median below it is a unit mistake, as one beyond the grid.
-constexpr double kNearestPlausibleDepthM = 0.05;
-// Fewer returns than this say nothing about the unit (the tools' unit guess needs as many).
-constexpr std::size_t kReturnsToJudgeUnit = 100;
-
-/// Refuses a `scale` that puts the median return of the image outside the grid's depth range when one
-/// of the usual units would put it inside: every return would otherwise be inserted beyond the range (the
-/// map then says free to its end) or crammed near the sensor, without a word. Anything else is accepted.
-void require_plausible_scale(const float* raw, std::size_t pixels, double scale, const GeometryParams& g) {
-  std::vector<float> returns;
-  returns.reserve(pixels);
-  for (std::size_t i = 0; i < pixels; ++i)
-    if (raw[i] > 0.0f && std::isfinite(raw[i])) returns.push_back(raw[i]);
-  if (returns.size() < kReturnsToJudgeUnit) return;
-  const auto middle = returns.begin() + static_cast<std::ptrdiff_t>(returns.size() / 2);
-  std::nth_element(returns.begin(), middle, returns.end());
-  const double median = *middle;
-  const double nearest_m = std::max(g.depth_min_m, kNearestPlausibleDepthM);
-  const auto plausible = [&](double s) { return median * s >= nearest_m && median * s <= g.depth_max_m; };
-  if (plausible(scale)) return;
-  for (const DepthUnit& unit : kDepthUnits) {
-    if (unit.scale == scale || !plausible(unit.scale)) continue;
-    std::ostringstream m;
-    m << "scale = " << scale << " puts the median depth of this image at " << median * scale
-      << " m, outside the grid's plausible depth range [" << nearest_m << ", " << g.depth_max_m
-      << "] m: the image looks like " << unit.name << ": pass scale=" << unit.scale;
-    throw InvalidParameter(m.str());
-  }
+  return with_mapper(self, [&](Mapper& m) {
+    require_plausible_ranges(in.span, m.geometry().params());
+    return insert_masked(m, in.span, options, pixels);
+  });
 }
 
 MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const PinholeIntrinsics& intrinsics,
@@ -216,7 +248,8 @@ void bind_mapper_insertion(py::class_<PyMapper>& c) {
         "lie at one constant stride (C order, or slices like cloud[..., :3]) are read in place; other dtypes "
         "and layouts are converted to a float32 copy first. NaN/Inf/zero points are skipped and counted. "
         "threads: 0 = all cores, at most 1024 (InvalidParameter otherwise). mask: as set_mask, for this and later "
-        "inserts (None: keep the mask in place). Releases the GIL.");
+        "inserts (None: keep the mask in place). Raises InvalidParameter when the points' median range lies "
+        "outside the depth range while millimetres would not. Releases the GIL.");
   c.def("insert_depth", &insert_depth_array, py::arg("depth"), py::arg("intrinsics"), py::arg("scale") = 1.0,
         py::arg("threads") = 0, py::arg("mask") = py::none(),
         "Inserts an H x W depth image (z-depth; value * scale = metres, 0 or NaN = no return) through its "

@@ -131,6 +131,24 @@ def test_plausible_scales_and_scenes_beyond_the_range_are_accepted(sample):
     assert mapper.insert_depth(sparse, intrinsics).insertion.points_inserted == 50
 
 
+def test_points_in_millimetres_are_refused_and_metres_accepted(sample, sample_points):
+    """A 2 m scene given as millimetre points was inserted 'beyond the depth range' (100 times slower,
+    the map free to its end) without a word; insert_depth already refused such a unit."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    with pytest.raises(oi.InvalidParameter) as e:
+        mapper.insert(sample_points * 1000)
+    text = str(e.value)
+    ranges = np.linalg.norm(sample_points, axis=1)
+    assert text.startswith("the points' median range is ")
+    median_m = float(text.split(" is ")[1].split(" m,")[0])
+    assert median_m == pytest.approx(1000 * np.median(ranges[np.isfinite(ranges) & (ranges > 0)]), rel=1e-3)
+    assert text.endswith("the points look like millimetres: pass them in metres (times 0.001)")
+    assert mapper.touched_columns() == 0
+    r = mapper.insert(sample_points).insertion
+    assert r.points_inserted == np.count_nonzero(depth) and r.beyond_depth_range == 0
+
+
 def test_depth_images_of_another_camera_are_refused(sample):
     """A kinect_v1 grid built for fx = 585 silently dropped most pixels of a depth image given with other
     intrinsics as outside its field of view."""
