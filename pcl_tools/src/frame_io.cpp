@@ -223,7 +223,14 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::strin
   bool size_given = false;
   PinholeIntrinsics k = intrinsics_from_file(path, size_given);
   if (size_given) return k;
-  const DepthImage16 image = read_depth_image16(sized_by);
+  DepthImage16 image;
+  try {
+    image = read_depth_image16(sized_by);
+  } catch (const IoError&) {
+    return k;  // the frame's own load names what is wrong with it; listing a folder does not
+  } catch (const FormatError&) {
+    return k;
+  }
   k.width = image.width;
   k.height = image.height;
   try {
@@ -255,11 +262,15 @@ FrameSource source_of(const std::string& path, const std::optional<PinholeIntrin
   return source;
 }
 
-// The camera-intrinsics.txt of a frame's folder or its parent, sized as the frame where it gives no size.
+// The camera-intrinsics.txt of a frame's folder or its parent. Where it gives no size, a frame of a dataset
+// layout (is_depth_frame_name: one camera for the whole folder) sizes it; another image does not, so that
+// an image of another size than the camera's is still refused as such.
 std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder, const std::string& frame) {
   for (const auto& candidate : {folder / "camera-intrinsics.txt", folder.parent_path() / "camera-intrinsics.txt"}) {
     std::error_code ec;
-    if (std::filesystem::is_regular_file(candidate, ec)) return read_intrinsics_file(candidate.string(), frame);
+    if (!std::filesystem::is_regular_file(candidate, ec)) continue;
+    return is_depth_frame_name(frame) ? read_intrinsics_file(candidate.string(), frame)
+                                      : read_intrinsics_file(candidate.string());
   }
   return std::nullopt;
 }

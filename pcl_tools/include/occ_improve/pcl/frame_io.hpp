@@ -96,7 +96,8 @@ Eigen::Isometry3d read_pose_matrix_file(const std::string& path);
 /// camera-intrinsics.txt); width/height default to 640 x 480.
 PinholeIntrinsics read_intrinsics_file(const std::string& path);
 /// The same, with the width and height of the depth image `sized_by` where the file gives none (a 3x3
-/// matrix or four numbers): the camera of a dataset folder is the size of its frames.
+/// matrix or four numbers): the camera of a dataset folder is the size of its frames. An image that does
+/// not read leaves 640 x 480 (its own load reports it).
 PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::string& sized_by);
 
 }  // namespace occ_improve
