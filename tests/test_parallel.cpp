@@ -1,8 +1,12 @@
 // The fork-join helpers of the insertion (support/parallel.hpp): every task runs once, on any number of
-// workers, and a failing task stops the others from taking more and reaches the caller.
+// workers, and a failing task stops the others from taking more and reaches the caller; the pool of
+// workers they share is kept, bounded, safe to call from its own parts, from several threads at once and
+// after fork().
 #include "../libocc_improve/src/support/parallel.hpp"  // internal: not installed, tested here directly
 
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -49,6 +53,53 @@ TEST(Parallel, RunInTurnStopsTakingTasksAfterAFailureAndRethrows) {
   // starts the hundreds left.
   EXPECT_GE(ran, 4);
   EXPECT_LT(ran, 100);
+}
+
+TEST(Parallel, PartsRunOnceOnKeptWorkersBoundedByTheCores) {
+  std::set<std::thread::id> threads_seen;
+  for (int call = 0; call < 50; ++call) {
+    std::vector<std::atomic<int>> runs(64);
+    std::mutex lock;
+    run_parts(64, [&](int part, int parts) {
+      EXPECT_EQ(parts, 64);
+      ++runs[static_cast<std::size_t>(part)];
+      std::this_thread::sleep_for(std::chrono::microseconds(20));
+      const std::lock_guard<std::mutex> guard(lock);
+      threads_seen.insert(std::this_thread::get_id());
+    });
+    for (int p = 0; p < 64; ++p) ASSERT_EQ(runs[static_cast<std::size_t>(p)], 1) << "call " << call << ", part " << p;
+  }
+  const unsigned cores = std::max(2u, std::thread::hardware_concurrency());
+  // 50 calls of 64 parts ran on the caller and the same few workers: at most one per core beside it.
+  EXPECT_LE(WorkerPool::shared().worker_count(), cores - 1);
+  EXPECT_LE(threads_seen.size(), cores);
+  if (std::thread::hardware_concurrency() >= 2) EXPECT_GE(threads_seen.size(), 2u);
+}
+
+TEST(Parallel, APartMayRunPartsItselfAndSeveralCallersMayShareThePool) {
+  std::atomic<int> inner{0};
+  const auto nested = [&] {
+    run_parts(4, [&](int, int) { run_parts(3, [&](int, int) { ++inner; }); });
+  };
+  std::vector<std::thread> callers;
+  for (int c = 0; c < 4; ++c) callers.emplace_back(nested);
+  nested();
+  for (std::thread& t : callers) t.join();
+  EXPECT_EQ(inner, 5 * 4 * 3);
+}
+
+TEST(Parallel, AForkedChildGetsWorkersOfItsOwn) {
+  run_parts(2, [](int, int) {});  // the parent's pool exists
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    std::atomic<int> runs{0};
+    run_parts(8, [&](int, int) { ++runs; });
+    ::_exit(runs == 8 ? 0 : 1);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "the child's run_parts did not complete";
 }
 
 }  // namespace

@@ -1,10 +1,14 @@
 #pragma once
-// A minimal fork-join helper: runs body(part, parts) on `parts` threads (the caller's thread is one of
-// them) and rethrows the first exception after all have joined, so no thread outlives the call.
+// Fork-join helpers over one pool of worker threads kept for the process: run_parts(parts, body) runs
+// body(part, parts) for every part, the caller's thread taking parts too, and rethrows the first exception
+// once every part has finished, so no part outlives the call.
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
+#include <deque>
 #include <exception>
-#include <system_error>
+#include <functional>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -36,6 +40,44 @@ inline int resolve_thread_count(int requested) {
   return hw == 0 ? 1 : static_cast<int>(hw);
 }
 
+/// The worker threads every run_parts shares, started as calls first need them and kept until the
+/// process ends (a frame calls run_parts 4-5 times; a thread's start and join cost 40-50 us each time, a
+/// few percent of a closed-loop round). A part no worker has taken is run by the caller, so a call
+/// completes whatever the pool's size: with fewer workers than parts (the pool keeps at most one per
+/// core beside the caller), when the system refuses a thread, or when run_parts is called from a part.
+class WorkerPool {
+public:
+  /// The process's pool (a fresh one in a child after fork(), whose workers are not copied).
+  static WorkerPool& shared();
+  WorkerPool() = default;
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+  ~WorkerPool();  ///< lets the workers finish and joins them
+
+  /// task(part) for every part in [0, parts), on the calling thread and up to parts - 1 workers; returns
+  /// once all have returned. `task` must not throw.
+  void run(int parts, const std::function<void(int)>& task);
+  std::size_t worker_count() const;
+
+private:
+  struct Batch {
+    const std::function<void(int)>* task;
+    int parts;
+    std::atomic<int> next{0};  // the next part to take
+    int finished = 0;          // guarded by mutex_
+  };
+  void add_workers(std::size_t wanted);  // with mutex_ held
+  void work();                           // a worker's loop
+  void finish(Batch& batch);
+
+  mutable std::mutex mutex_;
+  std::condition_variable posted_, finished_;
+  std::deque<Batch*> open_;  // batches with parts not yet taken, oldest first
+  std::vector<std::thread> workers_;
+  bool stopping_ = false;
+  bool refused_ = false;  // the system refused a thread: no more are asked for
+};
+
 template <typename Body>
 void run_parts(int parts, Body&& body) {
   if (parts <= 1) {
@@ -43,25 +85,14 @@ void run_parts(int parts, Body&& body) {
     return;
   }
   std::vector<std::exception_ptr> errors(static_cast<std::size_t>(parts));
-  const auto run = [&](int p) {
+  const std::function<void(int)> task = [&](int p) {
     try {
       body(p, parts);
     } catch (...) {
       errors[static_cast<std::size_t>(p)] = std::current_exception();
     }
   };
-  std::vector<std::thread> threads;
-  threads.reserve(static_cast<std::size_t>(parts) - 1);
-  // A thread the system refuses (std::system_error) must not escape with others still joinable, which
-  // would std::terminate: the caller runs the parts left over itself, so every part runs exactly once.
-  int started = 1;
-  try {
-    for (; started < parts; ++started) threads.emplace_back(run, started);
-  } catch (const std::system_error&) {
-  }
-  run(0);
-  for (int p = started; p < parts; ++p) run(p);
-  for (auto& t : threads) t.join();
+  WorkerPool::shared().run(parts, task);
   for (auto& e : errors)
     if (e) std::rethrow_exception(e);
 }

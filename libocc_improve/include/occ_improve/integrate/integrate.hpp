@@ -63,7 +63,10 @@ struct DepthImage {
 struct InsertionOptions {
   /// More threads than this is a mistake (the tools' -threads has the same bound), not a request.
   static constexpr int kMaxThreads = 1024;
-  int threads = 0;  ///< 0: std::thread::hardware_concurrency(); 1: single-threaded; at most kMaxThreads
+  /// 0: std::thread::hardware_concurrency(); 1: single-threaded; at most kMaxThreads. The work is split in
+  /// this many parts (the result does not depend on it), run by the calling thread and the process's pool
+  /// of workers, which keeps at most one per core beside the caller between calls.
+  int threads = 0;
   void validate() const;  ///< threads outside [0, kMaxThreads] -> InvalidParameter
 };
 
