@@ -73,7 +73,9 @@ TEST(Parallel, PartsRunOnceOnKeptWorkersBoundedByTheCores) {
   // 50 calls of 64 parts ran on the caller and the same few workers: at most one per core beside it.
   EXPECT_LE(WorkerPool::shared().worker_count(), cores - 1);
   EXPECT_LE(threads_seen.size(), cores);
-  if (std::thread::hardware_concurrency() >= 2) EXPECT_GE(threads_seen.size(), 2u);
+  if (std::thread::hardware_concurrency() >= 2) {
+    EXPECT_GE(threads_seen.size(), 2u);
+  }
 }
 
 TEST(Parallel, APartMayRunPartsItselfAndSeveralCallersMayShareThePool) {

@@ -240,6 +240,7 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
 std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOptions& options, SensorPreset& preset) {
   if (load_path.empty()) return std::make_shared<Mapper>(preset, options.grid);
   LoadedMap loaded = load_tool_map(load_path, options);
+  require_frames_fit_loaded_map(loaded.grid.geometry(), preset.camera, load_path);
   auto mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
   preset.name = "loaded from " + load_path;
   preset.geometry = mapper->geometry().params();

@@ -89,6 +89,7 @@ int run(const CommandLine& command_line) {
           preset.geometry = loaded.grid.geometry().params();
           preset.model = loaded.model;
           mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+          require_frames_fit_loaded_map(mapper->geometry(), first ? first->camera : std::nullopt, load_path);
         }
         mask_line = apply_tool_mask(command_line, *mapper, first ? &*first : nullptr);
       },
@@ -121,7 +122,7 @@ int run(const CommandLine& command_line) {
   const GeometryParams& g = preset.geometry;
   std::printf("preset %s: %s binning, %d x %d x %d bins, depth %.2f-%.2f m, %s mode\n", preset.name.c_str(),
               to_string(g.angular_binning), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_min_m, g.depth_max_m,
-              options.grid.mode == UpdateMode::clamped ? "clamped" : "exact");
+              mapper->grid().clamped() ? "clamped" : "exact");  // a loaded map keeps its own mode
   std::printf("%s\n", fused.frames ? fused.camera.c_str() : "no frame (the loaded map only)");
   for (const std::string& line : fused.frame_lines) std::printf("%s\n", line.c_str());
   if (fused.frames > 0) std::printf("%s\n", fused.poses.c_str());

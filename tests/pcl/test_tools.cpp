@@ -897,6 +897,23 @@ TEST_F(Tools, AFailedSaveCommitsNothing) {
   EXPECT_FALSE(rays_before.empty());
 }
 
+// A loaded map keeps its camera and its mode: frames of another camera were inserted into it without a
+// word (a fifth of a frame lost outside the field of view), and an exact map was reported as clamped.
+TEST_F(Tools, ALoadedMapRefusesFramesOfAnotherCameraAndReportsItsOwnMode) {
+  const std::string near = write_cloud("near.pcd", 2.0f), far = write_cloud("far.pcd", 3.0f);  // fx 200, 300
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, near + " -mode exact -depth_bins 128 -o a -save exact.occmap").exit_code, 0);
+  const ToolRun alone = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load exact.occmap -o b");
+  ASSERT_EQ(alone.exit_code, 0) << alone.err;
+  EXPECT_NE(alone.out.find("bins, depth 0.50-8.00 m, exact mode"), std::string::npos) << alone.out;
+  const ToolRun same = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load exact.occmap " + near + " -o c");
+  EXPECT_EQ(same.exit_code, 0) << same.err;
+  const ToolRun other = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load exact.occmap " + far + " -o d");
+  EXPECT_EQ(other.exit_code, 1);
+  EXPECT_NE(other.err.find("error: -load exact.occmap: the frames are not of the map's camera"), std::string::npos)
+      << other.err;
+  EXPECT_FALSE(fs::exists(folder_ / "d"));
+}
+
 // A full disk gave PCL's "raw_fallocate ... errno 17 File exists" and an empty-quoted error.
 TEST_F(Tools, AFullDiskIsNamedAndCommitsNothing) {
   fs::create_directory(folder_ / "full");

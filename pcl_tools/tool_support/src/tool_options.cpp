@@ -195,6 +195,16 @@ std::string memory_cap_hint(bool with_depth_bins) {
   return with_depth_bins ? " raise the cap with -memory_cap GIB, or lower -depth_bins" : " raise the cap with -memory_cap GIB";
 }
 
+void require_frames_fit_loaded_map(const GridGeometry& loaded, const std::optional<PinholeIntrinsics>& camera,
+                                   const std::string& path) {
+  if (!camera) return;
+  try {
+    require_grid_camera(loaded, *camera);
+  } catch (const InvalidParameter& e) {
+    throw InvalidParameter("-load " + path + ": the frames are not of the map's camera: " + e.what());
+  }
+}
+
 LoadedMap load_tool_map(const std::string& path, const ToolOptions& options) {
   try {
     return load_map(path, options.grid.memory_cap_bytes);

@@ -52,6 +52,12 @@ SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrid
 /// load_map under the tool's cap; a ResourceLimit says how to raise it (-memory_cap).
 LoadedMap load_tool_map(const std::string& path, const ToolOptions& options);
 
+/// Throws InvalidParameter naming -load PATH and both cameras when frames of `camera` (if known) are not
+/// of the camera the loaded grid was built for (require_grid_camera): their points would fall in other
+/// columns, or outside the field of view, without a word.
+void require_frames_fit_loaded_map(const GridGeometry& loaded, const std::optional<PinholeIntrinsics>& camera,
+                                   const std::string& path);
+
 /// " raise the cap with -memory_cap GIB[, or lower -depth_bins]": the end of a tool's ResourceLimit message.
 std::string memory_cap_hint(bool with_depth_bins);
 
