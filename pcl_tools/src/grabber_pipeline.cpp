@@ -116,7 +116,9 @@ void PipelineEngine::reject(std::uint64_t index, const std::string& message) {
     std::lock_guard<std::mutex> lock(mutex_);
     ++stats_.rejected;
   }
-  emit({PipelineEvent::Kind::rejected_frame, index, "frame " + std::to_string(index) + " rejected: " + message});
+  // Counted from 1 in the message, as the summary counts frames received (index counts from 0).
+  emit({PipelineEvent::Kind::rejected_frame, index,
+        "received frame " + std::to_string(index + 1) + " rejected: " + message});
 }
 
 void PipelineEngine::run() {

@@ -83,7 +83,9 @@ void FileSequenceGrabber::run() {
         std::lock_guard<std::mutex> lock(mutex_);
         on_error = on_error_;
       }
-      if (on_error) on_error(std::string(getName()) + ": frame " + std::to_string(i) + " skipped: " + e.what());
+      if (on_error)
+        on_error(std::string(getName()) + ": file " + std::to_string(i + 1) + " of " + std::to_string(frame_count_) +
+                 " skipped: " + e.what());
       continue;
     }
     if (frame_signal_->num_slots() > 0) (*frame_signal_)(cloud);
@@ -246,15 +248,25 @@ DepthSequenceGrabber::DepthSequenceGrabber(DepthSequence sequence, const Pinhole
       encoding_(options.encoding ? options.encoding : sequence_.encoding) {
   if (sequence_.frames.empty()) throw InvalidParameter("depth sequence: no frames");
   intrinsics_.validate();
-  // Poses are used only when every frame has one: a partly posed sequence cannot be put in one frame.
-  use_poses_ = options.use_poses &&
-               std::all_of(sequence_.frames.begin(), sequence_.frames.end(),
-                           [](const DepthSequenceFrame& f) { return f.camera_to_world.has_value(); });
-  if (use_poses_) world_to_first_ = sequence_.frames.front().camera_to_world->inverse();
+  // Poses are used when some frame has one (TUM's ground truth often starts after the first depth frames):
+  // the map is the first posed frame's view, and a frame without a pose is skipped and counted (loadFrame),
+  // since its points cannot be put in that view.
+  const auto posed = std::find_if(sequence_.frames.begin(), sequence_.frames.end(),
+                                  [](const DepthSequenceFrame& f) { return f.camera_to_world.has_value(); });
+  use_poses_ = options.use_poses && posed != sequence_.frames.end();
+  if (use_poses_) world_to_first_ = posed->camera_to_world->inverse();
+  unposed_ = use_poses_ ? static_cast<std::size_t>(std::count_if(sequence_.frames.begin(), sequence_.frames.end(),
+                                                                  [](const DepthSequenceFrame& f) {
+                                                                    return !f.camera_to_world.has_value();
+                                                                  }))
+                        : 0;
 }
 
 FileSequenceGrabber::Cloud::Ptr DepthSequenceGrabber::loadFrame(std::size_t index) {
   const DepthSequenceFrame& frame = sequence_.frames[index];
+  if (use_poses_ && !frame.camera_to_world)
+    throw InvalidInput("'" + frame.depth_path + "' has no pose while the sequence's others have: skipped (-no_poses "
+                       "uses every frame, without poses)");
   LoadedFrame loaded = load_depth_frame(frame.depth_path, intrinsics_, encoding_);
   Cloud::Ptr cloud(new Cloud);
   if (use_poses_) {

@@ -204,7 +204,9 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
   s.preset = options.preset_for_camera(camera);
   s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
   s.text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
-           poses_text(grabber->posesApplied()) + ")";
+           poses_text(grabber->posesApplied()) +
+           (grabber->unposedFrames() > 0 ? "; " + std::to_string(grabber->unposedFrames()) + " without a pose skipped" : "") +
+           ")";
   s.file_source = grabber.get();
   s.grabber = grabber;
   return s;

@@ -1,6 +1,7 @@
 #include "occ_improve/pcl/grabber_pipeline.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/planning/point_selection.hpp"
@@ -67,7 +68,7 @@ Cloud::Ptr tiny_frame(double depth_m = 2.0) { return wall(depth_m, 64, 48); }
 
 void expect_consistent(const PipelineStatistics& s) {
   EXPECT_EQ(s.in_flight, 0u);
-  EXPECT_EQ(s.received, s.processed + s.dropped + s.rejected);
+  EXPECT_EQ(s.received, s.processed + s.dropped + s.rejected + s.interrupted);
 }
 
 /// A temporary folder removed at the end of the test.
@@ -457,9 +458,44 @@ TEST(SequenceSources, TumLayoutAssociatesPosesByTimestamp) {
   EXPECT_NEAR(sequence.frames[1].camera_to_world->translation().z(), 6.0, 1e-12);
   EXPECT_NEAR(sequence.frames[1].camera_to_world->linear()(1, 0), 1.0, 1e-6);  // 90 deg about z
   EXPECT_FALSE(sequence.frames[2].camera_to_world.has_value());  // no pose within 20 ms
-  // Partly posed: poses are not used rather than mixing frames.
-  DepthSequenceGrabber grabber(sequence, tiny_camera());
-  EXPECT_FALSE(grabber.posesApplied());
+}
+
+// Partly posed (TUM's ground truth often starts late): the posed frames are moved into the first posed
+// frame's view, and the frame without a pose is skipped and counted, naming it. Poses were dropped for
+// the whole sequence without a word, fusing a moving camera's frames as one view.
+TEST(SequenceSources, APartlyPosedSequenceSkipsAndCountsTheFramesWithoutAPose) {
+  TempDir dir("occ_improve_partly_posed");
+  const PinholeIntrinsics k = tiny_camera();
+  DepthSequence sequence;
+  sequence.intrinsics = k;
+  sequence.encoding = DepthEncoding::millimetres;
+  for (int i = 0; i < 3; ++i) {
+    const std::string path = (dir.path / ("frame-00000" + std::to_string(i) + ".depth.png")).string();
+    write_png(path, Image16{k.width, k.height, std::vector<std::uint16_t>(static_cast<std::size_t>(k.width * k.height), 2000)});
+    DepthSequenceFrame frame{path, std::nullopt};
+    if (i > 0) frame.camera_to_world = Eigen::Isometry3d(Eigen::Translation3d(0.1 * i, 0, 0));
+    sequence.frames.push_back(frame);
+  }
+  DepthSequenceGrabber grabber(sequence, k);
+  EXPECT_TRUE(grabber.posesApplied());
+  EXPECT_EQ(grabber.unposedFrames(), 1u);
+  std::vector<Cloud::ConstPtr> emitted;
+  std::vector<std::string> errors;
+  std::function<void(const Cloud::ConstPtr&)> keep = [&](const Cloud::ConstPtr& c) { emitted.push_back(c); };
+  grabber.registerCallback(keep);
+  grabber.setErrorCallback([&](const std::string& e) { errors.push_back(e); });
+  grabber.start();
+  grabber.waitUntilDone();
+  grabber.stop();
+  ASSERT_EQ(emitted.size(), 2u);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("file 1 of 3 skipped: '" + sequence.frames[0].depth_path + "' has no pose"), std::string::npos)
+      << errors[0];
+  // Frame 1 is the map's view; frame 2 lies 0.1 m to its right, so its points move by +0.1 m in x.
+  const std::size_t centre = static_cast<std::size_t>(k.width * (k.height / 2) + k.width / 2);
+  const float x1 = (*emitted[0])[centre].x, x2 = (*emitted[1])[centre].x;
+  EXPECT_NEAR(x2 - x1, 0.1f, 1e-5f);
+  EXPECT_EQ(grabber.errors(), 1u);
 }
 
 TEST(SequenceSources, PlainFolderTakesTheDepthImagesOnly) {

@@ -147,6 +147,8 @@ public:
   const DepthSequence& sequence() const { return sequence_; }
   /// True when frames are transformed by their poses.
   bool posesApplied() const { return use_poses_; }
+  /// Frames skipped for want of a pose while others have one (0 without poses).
+  std::size_t unposedFrames() const { return unposed_; }
 
 protected:
   Cloud::Ptr loadFrame(std::size_t index) override;
@@ -156,6 +158,7 @@ private:
   PinholeIntrinsics intrinsics_;
   std::optional<DepthEncoding> encoding_;
   bool use_poses_ = false;
+  std::size_t unposed_ = 0;
   Eigen::Isometry3d world_to_first_ = Eigen::Isometry3d::Identity();
 };
 
