@@ -164,11 +164,18 @@ void bind_segmentation_result(py::module_& m) {
       .def_readonly("attached_columns", &Segmentation::attached_columns)
       .def_readonly("plane_columns", &Segmentation::plane_columns);
   def_fields_repr(r, {"valid_columns", "contour_columns", "crease_columns", "attached_columns", "plane_columns"});
-  mapper_class(m).def("segment", [](PyMapper& self, const SegmentationParams& params) {
+  mapper_class(m).def("segment", [](PyMapper& self, const std::optional<SegmentationParams>& params) {
     return with_mapper(self, [&](Mapper& mp) {
-      return segment_improvement(mp.geometry(), mp.surface(), mp.improvement(), params);
+      // By default what occ_segment uses for this grid and model (segmentation_defaults).
+      SensorPreset preset;
+      preset.geometry = mp.geometry().params();
+      preset.model = mp.model().params();
+      return segment_improvement(mp.geometry(), mp.surface(), mp.improvement(),
+                                 params ? *params : segmentation_defaults(preset));
     });
-  }, py::arg("params") = SegmentationParams{}, "Segments the surface along the improvement map's negative band.");
+  }, py::arg("params") = py::none(),
+     "Segments the surface along the improvement map's negative band. params: None = "
+     "segmentation_defaults for the Mapper's grid and model, as occ_segment uses them.");
 }
 
 /// An Image as an H x W x 3 (or H x W) uint8 array (a copy).

@@ -182,6 +182,15 @@ def test_malformed_files_name_the_file_and_the_problem(tmp_path, sample):
         oi.read_pcd(variant("header_only.pcd", b"VERSION 0.7\nFIELDS x y z\n"))
     with pytest.raises(oi.IoError, match="missing.pcd"):
         oi.read_pcd(tmp_path / "missing.pcd")
+    # The tools' checks too: a 2-byte float was read as float16 (garbage points), a 1-byte one and a field
+    # named twice raised numpy's errors without the file's name.
+    header_at = raw.index(b"SIZE 4")
+    for name, size, expected in (("half.pcd", b"SIZE 2", "TYPE F of field 'x' needs SIZE 4 or 8, got 2"),
+                                 ("byte.pcd", b"SIZE 1", "TYPE F of field 'x' needs SIZE 4 or 8, got 1")):
+        with pytest.raises(oi.FormatError, match=f"{name}.*{expected}"):
+            oi.read_pcd(variant(name, raw[:header_at] + size + raw[header_at + 6:]))
+    with pytest.raises(oi.FormatError, match="twice.pcd.*field 'x' occurs more than once"):
+        oi.read_pcd(variant("twice.pcd", raw.replace(b"FIELDS x y z", b"FIELDS x y x", 1)))
 
 
 def test_real_kinect_cloud_as_the_data_readme_describes_it():

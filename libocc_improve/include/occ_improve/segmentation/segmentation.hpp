@@ -71,8 +71,9 @@ struct SegmentationParams {
   void validate() const;
 };
 
-/// Defaults for a preset: the improvement's scale depends on the noise model (kinect_v1_paper's
-/// constant 4.7 cm sigma gives a weaker, wider negative band than kinect_v1's range-dependent one).
+/// Defaults for a preset: the improvement's scale depends on the noise model (a constant sigma_rho, as
+/// kinect_v1_paper's 4.7 cm, gives a weaker, wider negative band than kinect_v1's range-dependent one) and
+/// the plane band on the binning (pixel-native). Only the preset's geometry and model are read.
 SegmentationParams segmentation_defaults(const SensorPreset& preset);
 
 struct Segment {
