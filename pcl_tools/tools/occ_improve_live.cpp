@@ -29,6 +29,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <cmath>
 #include <csignal>
 #include <chrono>
@@ -293,13 +294,34 @@ struct StreamLimits {
   int max_frames;
 };
 
+// The stop signal of a processed frame, as the result callback sets it: follow_stream wakes on it at once
+// rather than at its next 200 ms poll, so -stop_on_signal ends the run before the frames after it are
+// taken (at 40-50 ms a frame, a poll let ~4 more into the map).
+struct StopSignal {
+  std::atomic<bool> fired{false};
+  std::mutex mutex;
+  std::condition_variable woken;
+  void fire() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      fired = true;
+    }
+    woken.notify_all();
+  }
+  // Waits up to `period`, or less when the signal fires and `stop_on_signal` asks to end on it.
+  void wait(std::chrono::milliseconds period, bool stop_on_signal) {
+    std::unique_lock<std::mutex> lock(mutex);
+    woken.wait_for(lock, period, [&] { return stop_on_signal && fired.load(); });
+  }
+};
+
 // Polls the running pipeline, showing its counters (and keeping the -view window live), until the source
 // is done or a limit is reached.
 const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const StreamLimits& limits,
-                          const std::atomic<bool>& stop_signalled, ProgressLine& progress, LiveView* view) {
+                          StopSignal& stop_signal, ProgressLine& progress, LiveView* view) {
   for (;;) {
     if (!view)
-      std::this_thread::sleep_for(std::chrono::milliseconds(200));
+      stop_signal.wait(std::chrono::milliseconds(200), limits.stop_on_signal);
     else if (!view->spin_for(std::chrono::milliseconds(200)))
       return "view window closed";
     const PipelineStatistics s = pipeline.statistics();
@@ -310,7 +332,7 @@ const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const 
                   s.processed_per_second());
     progress.show(line);
     if (stop_requested()) return "interrupted";
-    if (limits.stop_on_signal && stop_signalled) return kStopSignalReason;
+    if (limits.stop_on_signal && stop_signal.fired) return kStopSignalReason;
     if (limits.max_frames > 0 && s.processed >= static_cast<std::uint64_t>(limits.max_frames)) return "-max_frames reached";
     if (source.file_source && !source.file_source->isRunning() && s.in_flight == 0) return "source finished";
   }
@@ -411,7 +433,7 @@ int run(const CommandLine& command_line) {
 
   std::mutex report_mutex;
   std::optional<FrameResult> last, fired;
-  std::atomic<bool> stop_signalled{false};
+  StopSignal stop_signal;
   std::atomic<int> maps_written{0};
   std::uint64_t frames_seen = 0;  // only touched by the worker
   pipeline.setResultCallback([&](const FrameResult& r) {
@@ -420,7 +442,7 @@ int run(const CommandLine& command_line) {
       last = r;
       if (r.stop.stop && !fired) fired = r;
     }
-    if (r.stop.stop) stop_signalled = true;
+    if (r.stop.stop) stop_signal.fire();
     ++frames_seen;
     if (view) view->post(pipeline.mapper().improvement(), r.top_regions, frames_seen);
     if (save_every > 0 && frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
@@ -445,7 +467,7 @@ int run(const CommandLine& command_line) {
                            g.depth_max_m);
   pipeline.start();
   const char* stop_reason =
-      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signalled, progress, view.get());
+      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signal, progress, view.get());
   pipeline.stop();
   progress.finish();
   const int signal = take_stop_request();  // the maps so far are still written below

@@ -197,7 +197,8 @@ std::vector<FlagSpec> stream_flags() {
       bounded(value_flag("-save_every", K::integer, "N", kStream, "also write the maps every N processed frames; 0: at the end",
                          "0"),
               0),
-      switch_flag("-stop_on_signal", kStream, "stop once the improvement stop signal fires"),
+      switch_flag("-stop_on_signal", kStream,
+                  "stop once the improvement stop signal fires (frames already taken in are finished)"),
       value_flag("-simulate", K::text, "FRAME", kStream,
                  "the closed loop of docs/SELECTIVE.md against a virtual Kinect v1 over one real frame\n"
                  "(organized PCD or depth image): plan a shot, acquire its rays, insert, learn which rays\n"
