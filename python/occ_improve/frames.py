@@ -34,8 +34,10 @@ def read_depth_png(path: PathLike, scale: float = 0.001) -> np.ndarray:
         raise IoError(f"cannot read depth image '{os.fspath(path)}': {e}") from e
     except Image.DecompressionBombError as e:  # a header claiming gigapixels: Pillow refuses to decode it
         raise InvalidInput(f"depth image '{os.fspath(path)}': {e}") from e
-    # Pillow reports 16-bit grey PNGs as "I;16" or widens them to 32-bit "I".
-    if values.ndim != 2 or mode not in ("I", "I;16", "I;16B") or values.max(initial=0) > 65535:
+    # Pillow reports 16-bit grey PNGs as "I;16" or widens them to 32-bit "I" (as it reads 32-bit signed
+    # TIFFs: their values must then fit 16 bits, negative ones included).
+    if (values.ndim != 2 or mode not in ("I", "I;16", "I;16B") or values.max(initial=0) > 65535
+            or values.min(initial=0) < 0):
         raise InvalidInput(f"'{os.fspath(path)}' is not a 16-bit grey depth image (mode {mode}, shape {values.shape})")
     return (values.astype(np.float32) * np.float32(scale)).astype(np.float32)
 
@@ -57,12 +59,19 @@ def read_intrinsics(path: PathLike, width: int = 640, height: int = 480) -> Pinh
     if len(numbers) in (4, 6):
         fx, fy, cx, cy = numbers[:4]
         if len(numbers) == 6:
-            width, height = int(numbers[4]), int(numbers[5])
+            width, height = _image_size(path, numbers[4], numbers[5])
     else:
         raise InvalidInput(f"intrinsics '{os.fspath(path)}': expected 4, 6 or 9 numbers, got {len(numbers)}")
     k = PinholeIntrinsics(fx=fx, fy=fy, cx=cx, cy=cy, width=width, height=height)
     k.validate()
     return k
+
+
+def _image_size(what, width, height):
+    """Whole numbers of pixels: 320.7 was silently 320."""
+    if any(not float(v).is_integer() for v in (width, height)):
+        raise InvalidInput(f"intrinsics '{os.fspath(what)}': width and height must be whole numbers, got {width} x {height}")
+    return int(width), int(height)
 
 
 def intrinsics_from_matrix(k, width: int, height: int) -> PinholeIntrinsics:
@@ -76,8 +85,9 @@ def intrinsics_from_matrix(k, width: int, height: int) -> PinholeIntrinsics:
         raise InvalidInput(f"K must be a 3 x 3 matrix, got shape {k.shape}")
     if k[0, 1] != 0 or k[1, 0] != 0 or not np.array_equal(k[2], [0.0, 0.0, 1.0]):
         raise InvalidInput(f"K must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew), got {k.tolist()}")
+    width, height = _image_size("K", width, height)
     intrinsics = PinholeIntrinsics(fx=float(k[0, 0]), fy=float(k[1, 1]), cx=float(k[0, 2]), cy=float(k[1, 2]),
-                                   width=int(width), height=int(height))
+                                   width=width, height=height)
     intrinsics.validate()
     return intrinsics
 

@@ -16,6 +16,10 @@ def test_depth_png_round_trip_and_wrong_images(tmp_path):
         oi.read_depth_png(tmp_path / "rgb.png")
     with pytest.raises(oi.IoError, match="missing.png"):
         oi.read_depth_png(tmp_path / "missing.png")
+    # Pillow widens a 32-bit signed TIFF to mode "I" as it does 16-bit PNGs: negative depths came back.
+    Image.fromarray(np.full((4, 4), -1000, np.int32)).save(tmp_path / "negative.tif")
+    with pytest.raises(oi.InvalidInput, match="negative.tif.*not a 16-bit grey depth image"):
+        oi.read_depth_png(tmp_path / "negative.tif")
 
 
 def test_depth_png_claiming_gigapixels_is_invalid_input(tmp_path):
@@ -48,6 +52,12 @@ def test_intrinsics_files_in_both_layouts(tmp_path):
         oi.read_intrinsics(tmp_path / "bad.txt")
     with pytest.raises(OSError):
         oi.read_intrinsics(tmp_path / "none.txt")
+    # A fractional image size was cut to whole pixels without a word.
+    (tmp_path / "fraction.txt").write_text("262.5 262.5 159.5 119.5 320.7 240")
+    with pytest.raises(oi.InvalidInput, match="fraction.txt.*whole numbers, got 320.7 x 240"):
+        oi.read_intrinsics(tmp_path / "fraction.txt")
+    with pytest.raises(oi.InvalidInput, match="whole numbers"):
+        oi.intrinsics_from_matrix(np.diag([525.0, 525.0, 1.0]), 640, 480.5)
 
 
 def test_back_projection_matches_the_pinhole_model(sample):
