@@ -252,7 +252,8 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
                          "the preset's: -0.02, kinect_v1_paper -0.01"),
               -kInf, 0, false, true),
       bounded(value_flag("-min_segment", K::integer, "N", kSegmentation,
-                         "smaller regions are attached to a neighbour [rays]", "200"),
+                         "smaller regions are attached to a neighbour; islands between holes, which have\n"
+                         "none, stay segments [rays]", "200"),
               1),
       switch_flag("-no_plane", kSegmentation,
                   "keep the dominant plane (table, floor); by default it is taken out first, as PCL does"),
