@@ -19,6 +19,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <memory>
 #include <sstream>
 #include <vector>
@@ -262,9 +263,8 @@ FrameSource source_of(const std::string& path, const std::optional<PinholeIntrin
   return source;
 }
 
-// The camera-intrinsics.txt of a frame's folder or its parent. Where it gives no size, a frame of a dataset
-// layout (is_depth_frame_name: one camera for the whole folder) sizes it; another image does not, so that
-// an image of another size than the camera's is still refused as such.
+}  // namespace
+
 std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder, const std::string& frame) {
   for (const auto& candidate : {folder / "camera-intrinsics.txt", folder.parent_path() / "camera-intrinsics.txt"}) {
     std::error_code ec;
@@ -274,8 +274,6 @@ std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& 
   }
   return std::nullopt;
 }
-
-}  // namespace
 
 std::vector<FrameSource> expand_input(const std::string& input) {
   namespace fs = std::filesystem;
@@ -297,9 +295,19 @@ std::vector<FrameSource> expand_input(const std::string& input) {
   if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames");
   std::sort(frames.begin(), frames.end());
   const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p, frames.front());
+  // Otherwise each subfolder's (seq-*/ beside their parent's file), found once per subfolder: sizing a
+  // camera decodes a frame.
+  std::map<fs::path, std::optional<PinholeIntrinsics>> by_folder;
   std::vector<FrameSource> sources;
-  for (const auto& f : frames)
-    sources.push_back(source_of(f, intrinsics ? intrinsics : intrinsics_beside(fs::path(f).parent_path(), f)));
+  for (const auto& f : frames) {
+    if (intrinsics) {
+      sources.push_back(source_of(f, intrinsics));
+      continue;
+    }
+    const fs::path folder = fs::path(f).parent_path();
+    if (by_folder.count(folder) == 0) by_folder[folder] = intrinsics_beside(folder, f);
+    sources.push_back(source_of(f, by_folder[folder]));
+  }
   return sources;
 }
 

@@ -145,12 +145,6 @@ bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// Sized as the first frame where the file gives no size (a 3x3 matrix).
-std::optional<PinholeIntrinsics> seven_scenes_intrinsics(const fs::path& directory, const std::string& first_frame) {
-  for (const fs::path& candidate : {directory / "camera-intrinsics.txt", directory.parent_path() / "camera-intrinsics.txt"})
-    if (fs::exists(candidate)) return read_intrinsics_file(candidate.string(), first_frame);
-  return std::nullopt;
-}
 
 /// "timestamp value..." lines, comments (#) skipped.
 std::vector<std::pair<double, std::string>> timestamped_lines(const fs::path& path) {
@@ -227,7 +221,7 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
   }
   if (seven_scenes) {
     sequence.encoding = DepthEncoding::millimetres;
-    sequence.intrinsics = seven_scenes_intrinsics(directory, sequence.frames.front().depth_path);
+    sequence.intrinsics = intrinsics_beside(directory, sequence.frames.front().depth_path);
   } else {
     auto named_depth = [](const std::string& path) {
       return fs::path(path).filename().string().find("depth") != std::string::npos;

@@ -175,6 +175,7 @@ struct StreamSource {
   std::shared_ptr<pcl::Grabber> grabber;
   FileSequenceGrabber* file_source = nullptr;  ///< the grabber, when it replays files (paced, finite)
   SensorPreset preset;
+  std::optional<PinholeIntrinsics> frames_camera;  ///< the frames' camera, where known (a -load map must fit it)
   std::string text, camera;  ///< for the summary
 };
 
@@ -184,6 +185,7 @@ StreamSource open_device(const ToolOptions& options, const std::optional<std::st
   StreamSource s;
   s.grabber = open_openni2_grabber(device ? *device : oni);
   s.preset = options.preset;
+  s.frames_camera = options.preset.camera;  // the device's frames are taken as this camera's
   s.text = device ? "OpenNI2 device " + (device->empty() ? std::string("(first)") : *device) : "recording " + oni;
   s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag
                                 : "camera: Kinect v1 defaults fx = fy = 525 (give -intrinsics for another device)";
@@ -203,6 +205,7 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
   auto grabber = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
   StreamSource s;
   s.preset = options.preset_for_camera(camera);
+  s.frames_camera = camera;
   s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
   s.text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
            poses_text(grabber->posesApplied()) +
@@ -231,6 +234,7 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
   auto grabber = std::make_shared<ToolFrameGrabber>(options, first, std::move(frames), static_cast<float>(fps));
   StreamSource s;
   s.preset = options.preset_for_camera(first.camera);
+  s.frames_camera = first.camera;
   s.camera = describe_camera({first});
   s.text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(grabber->frameCount()) + " frames, " +
            poses_text(first.pose && options.use_poses) + ")";
@@ -240,10 +244,11 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
 }
 
 // A saved map fixes the geometry and the model; the source's frames must fit it.
-std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOptions& options, SensorPreset& preset) {
+std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOptions& options, StreamSource& source) {
+  SensorPreset& preset = source.preset;
   if (load_path.empty()) return std::make_shared<Mapper>(preset, options.grid);
   LoadedMap loaded = load_tool_map(load_path, options);
-  require_frames_fit_loaded_map(loaded.grid.geometry(), preset.camera, load_path);
+  require_frames_fit_loaded_map(loaded.grid.geometry(), source.frames_camera, load_path);
   auto mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
   preset.name = "loaded from " + load_path;
   preset.geometry = mapper->geometry().params();
@@ -296,8 +301,9 @@ struct StreamLimits {
 
 // The stop signal of a processed frame, as the result callback sets it: follow_stream wakes on it at once
 // rather than at its next 200 ms poll, so -stop_on_signal ends the run before the frames after it are
-// taken (at 40-50 ms a frame, a poll let ~4 more into the map).
-struct StopSignal {
+// taken (at 40-50 ms a frame, a poll let ~4 more into the map). With -view the window's own 200 ms
+// refresh still paces the loop.
+struct StopWake {
   std::atomic<bool> fired{false};
   std::mutex mutex;
   std::condition_variable woken;
@@ -318,10 +324,10 @@ struct StopSignal {
 // Polls the running pipeline, showing its counters (and keeping the -view window live), until the source
 // is done or a limit is reached.
 const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const StreamLimits& limits,
-                          StopSignal& stop_signal, ProgressLine& progress, LiveView* view) {
+                          StopWake& stop_wake, ProgressLine& progress, LiveView* view) {
   for (;;) {
     if (!view)
-      stop_signal.wait(std::chrono::milliseconds(200), limits.stop_on_signal);
+      stop_wake.wait(std::chrono::milliseconds(200), limits.stop_on_signal);
     else if (!view->spin_for(std::chrono::milliseconds(200)))
       return "view window closed";
     const PipelineStatistics s = pipeline.statistics();
@@ -332,7 +338,7 @@ const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const 
                   s.processed_per_second());
     progress.show(line);
     if (stop_requested()) return "interrupted";
-    if (limits.stop_on_signal && stop_signal.fired) return kStopSignalReason;
+    if (limits.stop_on_signal && stop_wake.fired) return kStopSignalReason;
     if (limits.max_frames > 0 && s.processed >= static_cast<std::uint64_t>(limits.max_frames)) return "-max_frames reached";
     if (source.file_source && !source.file_source->isRunning() && s.in_flight == 0) return "source finished";
   }
@@ -426,14 +432,14 @@ int run(const CommandLine& command_line) {
   pipeline_options.regions = region_options;  // the regions shown by -view are regions.csv's
   pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
   pipeline_options.keep_fraction = *command_line.number("-keep");
-  const std::shared_ptr<Mapper> mapper = make_mapper(load_path, options, source.preset);
+  const std::shared_ptr<Mapper> mapper = make_mapper(load_path, options, source);
   // A stream has no first frame yet: -mask finite is refused here, a PNG mask applies to every frame.
   const std::string mask_line = apply_tool_mask(command_line, *mapper, nullptr);
   Pipeline pipeline(mapper, with_camera(pipeline_options, source.preset));
 
   std::mutex report_mutex;
   std::optional<FrameResult> last, fired;
-  StopSignal stop_signal;
+  StopWake stop_wake;
   std::atomic<int> maps_written{0};
   std::uint64_t frames_seen = 0;  // only touched by the worker
   pipeline.setResultCallback([&](const FrameResult& r) {
@@ -442,7 +448,7 @@ int run(const CommandLine& command_line) {
       last = r;
       if (r.stop.stop && !fired) fired = r;
     }
-    if (r.stop.stop) stop_signal.fire();
+    if (r.stop.stop) stop_wake.fire();
     ++frames_seen;
     if (view) view->post(pipeline.mapper().improvement(), r.top_regions, frames_seen);
     if (save_every > 0 && frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
@@ -467,7 +473,7 @@ int run(const CommandLine& command_line) {
                            g.depth_max_m);
   pipeline.start();
   const char* stop_reason =
-      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_signal, progress, view.get());
+      follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_wake, progress, view.get());
   pipeline.stop();
   progress.finish();
   const int signal = take_stop_request();  // the maps so far are still written below

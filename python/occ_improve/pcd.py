@@ -136,8 +136,9 @@ def _parse_header(path: str, head: bytes) -> _Header:
     for required in ("FIELDS", "SIZE", "TYPE", "WIDTH", "HEIGHT"):
         if required not in seen and not (required == "FIELDS" and "COLUMNS" in seen):
             _fail(path, f"the header has no {required} line")
-    # The tools' checks (pcd_header.cpp): a float of 1 or 2 bytes is no PCL type (numpy would read 2 as
-    # float16, garbage), and a field named twice would leave one of them unreadable.
+    # A float of 1 or 2 bytes is no PCL type (the tools refuse it, pcd_header.cpp; numpy would read 2 as
+    # float16, garbage), and a field named twice would leave one of them unreadable (numpy's record type
+    # refuses the name without saying which file).
     for name, size, kind in zip(header.names, header.sizes, header.types):
         if kind == "F" and size not in (4, 8):
             _fail(path, f"TYPE F of field '{name}' needs SIZE 4 or 8, got {size}")

@@ -82,13 +82,17 @@ TEST(DepthImage, TumScaleIsGuessedFromTheStepsBetweenDistinctDepths) {
   for (std::size_t i = 0; i < 64 * 48; ++i) {
     const double z_m = levels_m[i % levels_m.size()];
     tum.values.push_back(static_cast<std::uint16_t>(5000.0 * z_m) | 1);  // odd: not multiples of 5 or 8
-    fine.values.push_back(static_cast<std::uint16_t>(1500 + i % 1400));
+    fine.values.push_back(static_cast<std::uint16_t>(3000 + i % 1400));  // steps of 1 unit, median 3.7 m
   }
   EXPECT_EQ(guess_depth_encoding("tum.png", tum), DepthEncoding::tum_5000);
   EXPECT_EQ(guess_depth_encoding("fine.png", fine), DepthEncoding::millimetres);
-  // The same depths in millimetres: their steps are the ones the millimetre rule predicts.
-  DepthImage16 mm = tum;
-  for (std::size_t i = 0; i < mm.values.size(); ++i) mm.values[i] = static_cast<std::uint16_t>(tum.values[i] / 5) | 1;
+  // Such depths from 2.6 m in millimetres: their steps are the ones the millimetre rule predicts (the
+  // median, 3.7 m, would be 0.74 m at TUM's scale: plausible, so the steps decide).
+  std::vector<double> far_levels_m{2.6};
+  while (far_levels_m.back() < 5.0) far_levels_m.push_back(far_levels_m.back() + 2.85e-3 * far_levels_m.back() * far_levels_m.back());
+  DepthImage16 mm{64, 48, {}};
+  for (std::size_t i = 0; i < 64 * 48; ++i)
+    mm.values.push_back(static_cast<std::uint16_t>(1000.0 * far_levels_m[i % far_levels_m.size()]) | 1);
   EXPECT_EQ(guess_depth_encoding("mm.png", mm), DepthEncoding::millimetres);
 }
 
@@ -104,15 +108,19 @@ TEST(DepthImage, RoundMillimetreImagesAreGuessedAsMillimetres) {
     }
     return image;
   };
-  // 2 m everywhere: multiples of 8, where SUN would read 0.25 m.
-  EXPECT_EQ(guess_depth_encoding("flat.png", DepthImage16::filled(64, 48, 2000)), DepthEncoding::millimetres);
-  // 1-3 m in steps of ~4 mm, what TUM's quantisation looks like near 2 m (it would read 0.2-0.6 m).
-  EXPECT_EQ(guess_depth_encoding("ramp.png", ramp(480, 1000, 3000, false)), DepthEncoding::millimetres);
+  // 5 m everywhere: multiples of 8, where SUN would read 0.625 m.
+  EXPECT_EQ(guess_depth_encoding("flat.png", DepthImage16::filled(64, 48, 5000)), DepthEncoding::millimetres);
+  // 2.6-4.6 m in steps of ~4 mm, what TUM's quantisation looks like near 2 m (it would read 0.5-0.9 m).
+  EXPECT_EQ(guess_depth_encoding("ramp.png", ramp(480, 2600, 4600, false)), DepthEncoding::millimetres);
   // Whole centimetres: multiples of 5 (and of 10).
-  EXPECT_EQ(guess_depth_encoding("centimetres.png", ramp(480, 1000, 3000, true)), DepthEncoding::millimetres);
+  EXPECT_EQ(guess_depth_encoding("centimetres.png", ramp(480, 2600, 4600, true)), DepthEncoding::millimetres);
   // 3-5 m in steps of 12.5 mm, whose TUM reading (0.6-1 m) would be plausible: its steps do not grow
   // with depth as a Kinect's do.
   EXPECT_EQ(guess_depth_encoding("far.png", ramp(160, 3000, 5000, false)), DepthEncoding::millimetres);
+  // A SUN frame of a near scene (0.6-0.9 m, a Kinect's millimetres shifted by 3 bits) is still SUN.
+  DepthImage16 sun{64, 48, {}};
+  for (std::size_t i = 0; i < 64 * 48; ++i) sun.values.push_back(static_cast<std::uint16_t>(8 * (601 + i % 300)));
+  EXPECT_EQ(guess_depth_encoding("sun.png", sun), DepthEncoding::sun_rotated_mm);
 }
 
 TEST(DepthImage, ValuesBecomeMetresThroughTheirEncoding) {

@@ -129,8 +129,9 @@ constexpr double kKinectStepPerSquaredUnit = 2.85e-6;
 // measures from 0.5 m, and the presets' grids start there, so a reading whose typical depth lies nearer
 // is what a millimetre image of round numbers looks like through the wrong scale.
 constexpr double kNearestPlausibleMedianM = 0.5;
-// A millimetre reading beyond this median (metres) is past any Kinect's range (SUN's shifted values read so).
-constexpr double kFarthestPlausibleMedianM = 8.0;
+// SUN's shifted values read as millimetres lie 8 times too far: a true median of 0.5 m or more reads 4 m or
+// more (metres).
+constexpr double kSunShiftedMedianM = 8.0 * kNearestPlausibleMedianM;
 
 // The nonzero values of an image as their occurrences (index = value), with the value at a given rank.
 struct ValueCounts {
@@ -196,9 +197,11 @@ DepthEncoding guess_depth_encoding(const std::string& path, const DepthImage16& 
   const double n = static_cast<double>(counts.nonzero);
   const double median = static_cast<double>(counts.value_at_rank(counts.nonzero / 2));
   // SUN RGB-D: only depths beyond 8.192 m set the low 3 bits, a few percent of a frame at most; its
-  // values read as millimetres lie 8 times too far. A millimetre image of round depths (2000 everywhere)
-  // is multiples of 8 too, but plausible as it stands.
-  if (multiple_of_8 >= 0.9 * n && median / 1000.0 > kFarthestPlausibleMedianM) return DepthEncoding::sun_rotated_mm;
+  // values read as millimetres lie 8 times too far, and only a fifth of them are multiples of 10 (those
+  // of millimetres that are multiples of 5). A millimetre image of round depths (2000 everywhere, whole
+  // centimetres) is multiples of 8 too, but of 10 as well.
+  if (multiple_of_8 >= 0.9 * n && multiple_of_10 < 0.9 * n && median / 1000.0 >= kSunShiftedMedianM)
+    return DepthEncoding::sun_rotated_mm;
   // TUM: the sensor's millimetres times 5, so about half of them odd multiples of 5 (a few interpolated
   // pixels break the pattern); millimetres rounded to centimetres are all multiples of 10.
   const bool tum_plausible = median / 5000.0 >= kNearestPlausibleMedianM;

@@ -1,7 +1,6 @@
 #include "support/parallel.hpp"
 
 #include <algorithm>
-#include <memory>
 #include <system_error>
 
 #include <unistd.h>
@@ -9,15 +8,16 @@
 namespace occ_improve::detail {
 
 WorkerPool& WorkerPool::shared() {
-  // A forked child holds none of the parent's workers (and maybe a mutex some worker held): it takes a
-  // pool of its own and never touches the parent's copy, which is left unfreed on purpose.
+  // Never destroyed: at exit another thread (a Python thread with the GIL released) may still be in run(),
+  // or a part may call exit(); the workers wait idle and end with the process. A forked child holds none
+  // of the parent's workers (and maybe a mutex some worker held): it takes a pool of its own and never
+  // touches the parent's copy.
   static std::mutex guard;
   static pid_t owner = 0;
-  static std::unique_ptr<WorkerPool> pool;
+  static WorkerPool* pool = nullptr;
   const std::lock_guard<std::mutex> lock(guard);
   if (!pool || owner != ::getpid()) {
-    if (pool) static_cast<void>(pool.release());  // the parent's: see above
-    pool = std::make_unique<WorkerPool>();
+    pool = new WorkerPool();  // NOLINT(cppcoreguidelines-owning-memory): kept for the process, see above
     owner = ::getpid();
   }
   return *pool;
@@ -39,9 +39,9 @@ std::size_t WorkerPool::worker_count() const {
 
 void WorkerPool::add_workers(std::size_t wanted) {
   // One worker per core beside the caller: more parts than that wait for a free worker (or the caller)
-  // rather than share a core.
+  // rather than share a core. One core (or a count the system does not know): none, the caller runs all.
   const unsigned cores = std::thread::hardware_concurrency();
-  const std::size_t most = cores > 1 ? cores - 1 : 1;
+  const std::size_t most = cores > 1 ? cores - 1 : 0;
   while (!refused_ && workers_.size() < std::min(wanted, most)) {
     try {
       workers_.emplace_back([this] { work(); });

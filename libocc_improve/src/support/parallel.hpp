@@ -47,12 +47,13 @@ inline int resolve_thread_count(int requested) {
 /// core beside the caller), when the system refuses a thread, or when run_parts is called from a part.
 class WorkerPool {
 public:
-  /// The process's pool (a fresh one in a child after fork(), whose workers are not copied).
+  /// The process's pool, kept until the process ends (a fresh one in a child after fork(), whose workers
+  /// are not copied).
   static WorkerPool& shared();
   WorkerPool() = default;
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
-  ~WorkerPool();  ///< lets the workers finish and joins them
+  ~WorkerPool();  ///< lets the workers finish and joins them (a pool of one's own; shared() is never destroyed)
 
   /// task(part) for every part in [0, parts), on the calling thread and up to parts - 1 workers; returns
   /// once all have returned. `task` must not throw.

@@ -249,7 +249,7 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
   using K = FlagKind;
   return {
       bounded(value_flag("-contour", K::number, "V", kSegmentation, "contour rays have improvement < V", "",
-                         "the preset's: -0.02, kinect_v1_paper -0.01"),
+                         "the preset's: -0.02, -0.01 for a constant depth sigma (kinect_v1_paper)"),
               -kInf, 0, false, true),
       bounded(value_flag("-min_segment", K::integer, "N", kSegmentation,
                          "smaller regions are attached to a neighbour; islands between holes, which have\n"

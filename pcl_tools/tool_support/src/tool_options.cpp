@@ -31,7 +31,10 @@ void warn_if_depth_bins_wider_than_sigma(const SensorPreset& preset) {
   double widest = 0, at_m = 0;
   for (const double centre : axis.centres()) {
     const double width_in_sigmas = axis.width_at(centre) / model.sigma_depth_at(centre);
-    if (width_in_sigmas > widest) widest = width_in_sigmas, at_m = centre;
+    if (width_in_sigmas > widest) {
+      widest = width_in_sigmas;
+      at_m = centre;
+    }
   }
   if (widest <= 1.0) return;
   std::fprintf(stderr,

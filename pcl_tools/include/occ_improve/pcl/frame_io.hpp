@@ -13,6 +13,7 @@
 
 #include <Eigen/Geometry>
 
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -99,5 +100,11 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path);
 /// matrix or four numbers): the camera of a dataset folder is the size of its frames. An image that does
 /// not read leaves 640 x 480 (its own load reports it).
 PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::string& sized_by);
+
+/// The camera-intrinsics.txt of `folder` or of its parent (7-Scenes, 3DMatch), if any. Where it gives no
+/// size, `frame` sizes it when its name is of a dataset layout (is_depth_frame_name: one camera for the
+/// whole folder); another image does not, so that an image of another size than the camera's is still
+/// refused as such.
+std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder, const std::string& frame);
 
 }  // namespace occ_improve

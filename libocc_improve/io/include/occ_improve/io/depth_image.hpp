@@ -41,8 +41,8 @@ bool is_depth_image_path(const std::string& path);
 
 /// The encoding a 16-bit depth image most likely uses, for when the user did not say:
 ///  - .pgm whose values all fit in 11 bits: kinect_disparity (NYU's raw dumps);
-///  - >= 90% of nonzero values multiples of 8 and a median beyond 8 m as millimetres: sun_rotated_mm
-///    (millimetres below 8.192 m rotate to v << 3);
+///  - >= 90% of nonzero values multiples of 8 but < 90% multiples of 10, and a median of 4 m or more as
+///    millimetres (0.5 m or more as SUN): sun_rotated_mm (millimetres below 8.192 m rotate to v << 3);
 ///  - >= 99% multiples of 5 but < 90% multiples of 10: tum_5000 (TUM stores the sensor's millimetres
 ///    times 5);
 ///  - steps between distinct values ~1/5 of a Kinect's millimetre quantisation at the quartiles and the
