@@ -188,7 +188,8 @@ ToolOptions parse_tool_options(const CommandLine& c) {
     throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov;" +
                         memory_cap_hint(true) + ")");
   }
-  warn_if_depth_bins_wider_than_sigma(t.preset);
+  // A loaded map brings its own bins and model: the preset of the flags is not the grid then.
+  if (!(c.declares("-load") && c.has("-load"))) warn_if_depth_bins_wider_than_sigma(t.preset);
   if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);
   t.use_poses = !(c.declares("-no_poses") && c.has("-no_poses"));
   return t;
