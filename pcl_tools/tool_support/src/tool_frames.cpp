@@ -58,7 +58,12 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
     if (loaded.cloud.height <= 1)
       throw InvalidInput("'" + source.path + "' is not organized, so its camera cannot be fitted; preset " +
                          options.preset_name + " needs one: give -intrinsics (or -preset kinect_v1_paper)");
-    const IntrinsicsFit fit = estimate_intrinsics_fit(loaded.cloud, kMaxIntrinsicsFitResidualPx);
+    IntrinsicsFit fit;
+    try {
+      fit = estimate_intrinsics_fit(loaded.cloud, kMaxIntrinsicsFitResidualPx);
+    } catch (const InvalidInput& e) {  // the fit knows the points, not the file
+      throw InvalidInput("'" + source.path + "': " + e.what() + "; give -intrinsics if it is a camera image");
+    }
     camera = fit.intrinsics;
     std::ostringstream why;
     why << "fitted to " << source.path << ", RMS residual " << fit.rms_residual_px << " px over " << fit.points_used
