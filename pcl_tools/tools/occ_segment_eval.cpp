@@ -58,7 +58,8 @@ void print_row(const std::string& name, const char* method, const SegmentationSc
               s.boundary_recall, 1e3 * segmentation_seconds, 1e3 * total_seconds);
 }
 
-// MEAN: today's mean of per-cloud means (every object of a cloud, each cloud weighing the same).
+// MEAN: today's mean of per-cloud means (every object of a cloud, each cloud weighing the same); the over-
+// and under-segmented objects, counts, are summed.
 void print_mean(const char* method, const MethodRuns& runs) {
   SegmentationScore mean;
   for (const SegmentationScore& s : runs.scores) {

@@ -84,6 +84,17 @@ std::vector<T> to_whole_numbers(const py::handle& values, const std::string& wha
   return out;
 }
 
+/// Counts given as a 2-D array must be H x W: a W x H one (indexed [u, v]) has the right size and would be
+/// read scrambled. Flat ones are row-major, as documented.
+void require_rows_of_the_grid(const py::handle& values, const std::string& what, int width, int height) {
+  const py::array a = py::array::ensure(values);
+  if (!a || a.ndim() != 2 || (a.shape(0) == height && a.shape(1) == width)) return;
+  std::ostringstream m;
+  m << what << " is " << a.shape(0) << " x " << a.shape(1) << ": must be height x width = " << height << " x " << width
+    << " (row v, column u), or flat";
+  throw InvalidInput(m.str());
+}
+
 /// An improvement map: a Mapper's own, or an H x W array (copied once into the library's type).
 ImprovementMap improvement_from(const py::handle& source) {
   if (py::isinstance<PyMapper>(source)) {
@@ -120,6 +131,8 @@ void bind_return_model(py::module_& m) {
       .def_static("for_grid", &ReturnRecord::for_grid, py::arg("width"), py::arg("height"),
                   "An empty record for width x height columns.")
       .def_static("from_counts", [](int width, int height, const py::object& asked, const py::object& returned) {
+        require_rows_of_the_grid(asked, "asked", width, height);
+        require_rows_of_the_grid(returned, "returned", width, height);
         return ReturnRecord::from_counts(width, height, to_whole_numbers<std::uint32_t>(asked, "asked"),
                                          to_whole_numbers<std::uint32_t>(returned, "returned"));
       }, py::arg("width"), py::arg("height"), py::arg("asked"), py::arg("returned"),

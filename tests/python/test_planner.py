@@ -100,6 +100,13 @@ def test_return_record_refuses_bad_shots_and_counts_nothing():
         oi.ReturnRecord.from_counts(4, 3, np.ones(12), np.full(12, 2))  # more returns than asks
     with pytest.raises(oi.InvalidInput):
         oi.ReturnRecord.from_counts(4, 3, np.ones(11), np.ones(11))
+    # A W x H array has the right size but would be read scrambled (indexed [u, v]); H x W and flat are taken.
+    counts = np.zeros((3, 4))
+    counts[1, 2] = 5
+    with pytest.raises(oi.InvalidInput, match="asked is 4 x 3: must be height x width = 3 x 4"):
+        oi.ReturnRecord.from_counts(4, 3, counts.T, np.zeros((4, 3)))
+    assert oi.ReturnRecord.from_counts(4, 3, counts, np.zeros((3, 4))).asked[1, 2] == 5
+    assert oi.ReturnRecord.from_counts(4, 3, counts.ravel(), np.zeros(12)).asked[1, 2] == 5
     with pytest.raises(oi.InvalidInput):
         record.check_matches(640, 480)
     with pytest.raises(oi.InvalidParameter):
