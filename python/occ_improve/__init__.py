@@ -69,6 +69,7 @@ from ._core import (  # noqa: F401  (re-exported)
     registered_angular_binnings,
     registered_depth_binnings,
     load_map,
+    load_map_and_returns,
     plan_next_shot,
     preset_by_name,
     preset_from_pinhole,

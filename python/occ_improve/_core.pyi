@@ -513,8 +513,9 @@ class Mapper:
     def predict_depth(self, params: DepthPredictionParams = ...
                       ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
     def render_improvement(self) -> npt.NDArray[np.uint8]: ...
-    def save(self, path: _Path, overwrite: bool = False) -> None:
-        """Replaces an existing file only when it is a map occ_improve wrote, or with overwrite=True."""
+    def save(self, path: _Path, overwrite: bool = False, returns: Optional[ReturnRecord] = None) -> None:
+        """Replaces an existing file only when it is a map occ_improve wrote, or with overwrite=True; keeps
+        the planner's ReturnRecord with the map when given (load_map_and_returns reads it back)."""
     def export_octomap(self, path: _Path, resolution_m: float,
                        world_from_sensor: Optional[_ArrayLike] = None,
                        options: OctomapExportOptions = ...,
@@ -523,6 +524,7 @@ class Mapper:
         only when occ_improve wrote it, or with overwrite=True."""
 
 def load_map(path: _Path) -> Mapper: ...
+def load_map_and_returns(path: _Path) -> Tuple[Mapper, ReturnRecord]: ...
 
 class DepthPredictionRule(enum.Enum):
     nearest = ...

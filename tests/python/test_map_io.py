@@ -93,3 +93,26 @@ def test_save_replaces_its_own_map_but_not_a_users_file(tmp_path, paper_mapper):
     paper_mapper.save(notes, overwrite=True)
     assert notes.read_bytes().startswith(b"OCCIMAP")
     assert oi.load_map(notes).width == paper_mapper.width
+
+
+def test_a_return_record_saved_with_the_map_comes_back(tmp_path, sample):
+    """The planner's record of asks and returns can be kept with the map (C++ save_map always could):
+    a closed loop continues where it stopped."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mapper.insert_depth(depth, intrinsics)
+    record = oi.ReturnRecord.for_grid(mapper.width, mapper.height)
+    record.record_shot([0, 1, 640 * 240 + 320], [False, True, True])
+    mapper.save(tmp_path / "with.occmap", returns=record)
+    loaded, returns = oi.load_map_and_returns(tmp_path / "with.occmap")
+    assert np.array_equal(returns.asked, record.asked) and np.array_equal(returns.returned, record.returned)
+    assert (returns.total_asked, returns.total_returned) == (3, 2)
+    assert np.array_equal(loaded.improvement(), mapper.improvement())
+    # Without a record: an empty one of the grid's size. A record of another grid is refused, nothing written.
+    mapper.save(tmp_path / "without.occmap")
+    _, none = oi.load_map_and_returns(tmp_path / "without.occmap")
+    assert none.total_asked == 0 and none.asked.shape == (mapper.height, mapper.width)
+    with pytest.raises(oi.InvalidInput):
+        mapper.save(tmp_path / "other.occmap", returns=oi.ReturnRecord.for_grid(4, 3))
+    assert not (tmp_path / "other.occmap").exists()
+
