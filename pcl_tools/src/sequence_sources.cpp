@@ -249,11 +249,12 @@ DepthSequenceGrabber::DepthSequenceGrabber(DepthSequence sequence, const Pinhole
                                   [](const DepthSequenceFrame& f) { return f.camera_to_world.has_value(); });
   use_poses_ = options.use_poses && posed != sequence_.frames.end();
   if (use_poses_) world_to_first_ = posed->camera_to_world->inverse();
-  unposed_ = use_poses_ ? static_cast<std::size_t>(std::count_if(sequence_.frames.begin(), sequence_.frames.end(),
-                                                                  [](const DepthSequenceFrame& f) {
-                                                                    return !f.camera_to_world.has_value();
-                                                                  }))
-                        : 0;
+}
+
+std::size_t DepthSequenceGrabber::unposedFrames() const {
+  if (!use_poses_) return 0;
+  return static_cast<std::size_t>(std::count_if(sequence_.frames.begin(), sequence_.frames.end(),
+                                                [](const DepthSequenceFrame& f) { return !f.camera_to_world; }));
 }
 
 FileSequenceGrabber::Cloud::Ptr DepthSequenceGrabber::loadFrame(std::size_t index) {

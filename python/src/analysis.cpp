@@ -132,7 +132,7 @@ void bind_segmentation_types(py::module_& m) {
       .def_readwrite("threads", &SegmentationParams::threads)
       .def("validate", &SegmentationParams::validate);
   def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane", "split_concave_creases"});
-  m.def("segmentation_defaults", &segmentation_defaults, py::arg("preset"),
+  m.def("segmentation_defaults", py::overload_cast<const SensorPreset&>(&segmentation_defaults), py::arg("preset"),
         "Segmentation parameters scaled for a preset's noise model.");
   py::class_<Segment> s(m, "Segment", "One segment (read-only).");
   s.def_readonly("label", &Segment::label)
@@ -166,12 +166,9 @@ void bind_segmentation_result(py::module_& m) {
   def_fields_repr(r, {"valid_columns", "contour_columns", "crease_columns", "attached_columns", "plane_columns"});
   mapper_class(m).def("segment", [](PyMapper& self, const std::optional<SegmentationParams>& params) {
     return with_mapper(self, [&](Mapper& mp) {
-      // By default what occ_segment uses for this grid and model (segmentation_defaults).
-      SensorPreset preset;
-      preset.geometry = mp.geometry().params();
-      preset.model = mp.model().params();
+      // By default what occ_segment uses for this grid and model.
       return segment_improvement(mp.geometry(), mp.surface(), mp.improvement(),
-                                 params ? *params : segmentation_defaults(preset));
+                                 params ? *params : segmentation_defaults(mp.geometry().params(), mp.model().params()));
     });
   }, py::arg("params") = py::none(),
      "Segments the surface along the improvement map's negative band. params: None = "

@@ -83,10 +83,7 @@ void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
   c.def("save", [](PyMapper& self, const py::object& path, bool overwrite, const ReturnRecord* returns) {
     const std::string p = path_string(path);
     require_replaceable(p, overwrite, &is_map_file, "a map");
-    with_mapper(self, [&](Mapper& mp) {
-      if (returns && !returns->empty()) returns->check_matches(mp.geometry().width(), mp.geometry().height());
-      save_map(p, mp.grid(), mp.model().params(), returns ? *returns : ReturnRecord());
-    });
+    with_mapper(self, [&](Mapper& mp) { save_map(p, mp.grid(), mp.model().params(), returns ? *returns : ReturnRecord()); });
   }, py::arg("path"), py::arg("overwrite") = false, py::arg("returns") = py::none(),
         "Writes the grid and its sensor model (atomically: temp file + rename), with the planner's "
         "ReturnRecord when given (InvalidInput when it is of another grid). An existing file is replaced "
@@ -95,18 +92,18 @@ void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
   // Both loaders read the whole file; the record is what save(returns=...) wrote, else an empty one.
   const auto load = [](const py::object& path) {
     const std::string p = path_string(path);
-    return run_interruptible([&] { return load_map(p); });
+    return run_interruptible([&] {
+      LoadedMap loaded = load_map(p);
+      return std::make_pair(std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model))),
+                            std::move(loaded.returns));
+    });
   };
-  m.def("load_map", [load](const py::object& path) {
-    LoadedMap loaded = load(path);
-    return std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model)));
-  }, py::arg("path"),
+  m.def("load_map", [load](const py::object& path) { return std::move(load(path).first); }, py::arg("path"),
         "A Mapper continuing from a saved map (surface and improvement recomputed). Raises IoError when "
         "the file cannot be read, FormatError when it is not a valid map.");
   m.def("load_map_and_returns", [load](const py::object& path) {
-    LoadedMap loaded = load(path);
-    auto mapper = std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model)));
-    return py::make_tuple(std::move(mapper), std::move(loaded.returns));
+    auto [mapper, returns] = load(path);
+    return py::make_tuple(std::move(mapper), std::move(returns));
   }, py::arg("path"),
         "(Mapper, ReturnRecord): load_map and the return record saved with the map (an empty record of the "
         "grid's size when none was saved), to continue a closed loop where it stopped.");

@@ -81,6 +81,12 @@ constexpr std::size_t kReturnsToJudgeUnit = 100;
 struct UnitMistake {
   double median_m, nearest_m;
   DepthUnit likely;
+  /// "<median> m, outside the grid's plausible depth range [a, b] m"
+  std::string outside(const GeometryParams& g) const {
+    std::ostringstream m;
+    m << median_m << " m, outside the grid's plausible depth range [" << nearest_m << ", " << g.depth_max_m << "] m";
+    return m.str();
+  }
 };
 
 /// The mistake, when `scale` puts the median of `values` (0, NaN: none) outside the grid's plausible depth
@@ -107,9 +113,8 @@ void require_plausible_scale(const float* raw, std::size_t pixels, double scale,
   const std::optional<UnitMistake> mistake = unit_mistake(std::vector<float>(raw, raw + pixels), scale, g);
   if (!mistake) return;
   std::ostringstream m;
-  m << "scale = " << scale << " puts the median depth of this image at " << mistake->median_m
-    << " m, outside the grid's plausible depth range [" << mistake->nearest_m << ", " << g.depth_max_m
-    << "] m: the image looks like " << mistake->likely.name << ": pass scale=" << mistake->likely.scale;
+  m << "scale = " << scale << " puts the median depth of this image at " << mistake->outside(g)
+    << ": the image looks like " << mistake->likely.name << ": pass scale=" << mistake->likely.scale;
   throw InvalidParameter(m.str());
 }
 
@@ -124,8 +129,7 @@ void require_plausible_ranges(PointSpan points, const GeometryParams& g) {
   const std::optional<UnitMistake> mistake = unit_mistake(std::move(ranges), 1.0, g);
   if (!mistake) return;
   std::ostringstream m;
-  m << "the points' median range is " << mistake->median_m << " m, outside the grid's plausible depth range ["
-    << mistake->nearest_m << ", " << g.depth_max_m << "] m: the points look like " << mistake->likely.name
+  m << "the points' median range is " << mistake->outside(g) << ": the points look like " << mistake->likely.name
     << ": pass them in metres (times " << mistake->likely.scale << ")";
   throw InvalidParameter(m.str());
 }

@@ -43,13 +43,17 @@ void SegmentationParams::validate() const {
 }
 
 SegmentationParams segmentation_defaults(const SensorPreset& preset) {
+  return segmentation_defaults(preset.geometry, preset.model);
+}
+
+SegmentationParams segmentation_defaults(const GeometryParams& geometry, const SensorModelParams& model) {
   SegmentationParams params;
   // With a constant sigma_rho (the paper's 4.7 cm) the band is shallow: a lower bar keeps the contours closed.
-  if (preset.model.sigma_depth_per_m2 == 0.0) params.contour_improvement_below = -0.01f;
+  if (model.sigma_depth_per_m2 == 0.0) params.contour_improvement_below = -0.01f;
   // Pixel-native surfaces lie along z with no range rings, within the Kinect's ~2-3 mm noise of a table at
   // 1-1.5 m: a 6 mm band keeps the objects' bottom rows out of the plane (mean F on mosd_learn 0.839 with
   // 6 mm against 0.818 with 10 mm; 0.83-0.84 anywhere in 4-7.5 mm: make segment-eval -plane_distance).
-  if (preset.geometry.angular_binning == AngularBinning::pinhole) params.plane_distance_m = 0.006;
+  if (geometry.angular_binning == AngularBinning::pinhole) params.plane_distance_m = 0.006;
   return params;
 }
 

@@ -75,6 +75,8 @@ struct SegmentationParams {
 /// kinect_v1_paper's 4.7 cm, gives a weaker, wider negative band than kinect_v1's range-dependent one) and
 /// the plane band on the binning (pixel-native). Only the preset's geometry and model are read.
 SegmentationParams segmentation_defaults(const SensorPreset& preset);
+/// The same from a grid's geometry and model (a Mapper's, or a loaded map's).
+SegmentationParams segmentation_defaults(const GeometryParams& geometry, const SensorModelParams& model);
 
 struct Segment {
   std::uint32_t label = 0;       ///< 1-based, as in Segmentation::label

@@ -148,7 +148,7 @@ public:
   /// True when frames are transformed by their poses.
   bool posesApplied() const { return use_poses_; }
   /// Frames skipped for want of a pose while others have one (0 without poses).
-  std::size_t unposedFrames() const { return unposed_; }
+  std::size_t unposedFrames() const;
 
 protected:
   Cloud::Ptr loadFrame(std::size_t index) override;
@@ -158,7 +158,6 @@ private:
   PinholeIntrinsics intrinsics_;
   std::optional<DepthEncoding> encoding_;
   bool use_poses_ = false;
-  std::size_t unposed_ = 0;
   Eigen::Isometry3d world_to_first_ = Eigen::Isometry3d::Identity();
 };
 
