@@ -31,6 +31,12 @@ def test_bt_and_ot_files_are_written_with_occupied_and_free_space(tmp_path):
     assert moved.occupied_written == pytest.approx(report.occupied_written, rel=0.2)
 
 
+def test_export_prints_nothing(tmp_path, capfd):
+    # liboctomap's own copy of writeBinaryData prints "Writing N nodes..." to stderr (its debug output).
+    small_mapper().export_octomap(tmp_path / "map.bt", 0.05)
+    assert capfd.readouterr() == ("", "")
+
+
 def test_bad_extension_pose_and_resolution_raise_invalid_parameter(tmp_path):
     mapper = small_mapper()
     with pytest.raises(oi.InvalidParameter, match="txt"):

@@ -591,8 +591,8 @@ bool write_tree(const octomap::OcTree& tree, bool full, std::ostream& out) {
   out << "data" << std::endl;
   if (full)
     tree.writeData(out);
-  else
-    tree.writeBinaryData(out);
+  else  // qualified: a virtual call reaches liboctomap's own copy, which prints "Writing N nodes" to stderr
+    tree.octomap::OccupancyOcTreeBase<octomap::OcTreeNode>::writeBinaryData(out);
   return out.good();
 }
 
