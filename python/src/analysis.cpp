@@ -18,7 +18,8 @@ void bind_region_types(py::module_& m) {
   py::class_<RegionOptions> o(m, "RegionOptions", "Which rays form regions (improvement threshold, minimum area).");
   def_keyword_init<RegionOptions>(o);
   o.def_readwrite("min_improvement", &RegionOptions::min_improvement)
-      .def_readwrite("min_area_columns", &RegionOptions::min_area_columns)
+      .def_property("min_area_columns", int_field_getter(&RegionOptions::min_area_columns),
+                    int_field_setter(&RegionOptions::min_area_columns, "min_area_columns"))
       .def("validate", &RegionOptions::validate);
   def_fields_repr(o, {"min_improvement", "min_area_columns"});
   py::class_<Region> r(m, "Region",
@@ -57,7 +58,8 @@ void bind_stop_types(py::module_& m) {
   py::class_<ProgressCriteria> p(m, "ProgressCriteria", "When a sequence of frames has stopped paying.");
   def_keyword_init<ProgressCriteria>(p);
   p.def_readwrite("min_relative_gain", &ProgressCriteria::min_relative_gain)
-      .def_readwrite("patience", &ProgressCriteria::patience)
+      .def_property("patience", int_field_getter(&ProgressCriteria::patience),
+                    int_field_setter(&ProgressCriteria::patience, "patience"))
       .def("validate", &ProgressCriteria::validate);
   def_fields_repr(p, {"min_relative_gain", "patience"});
   py::class_<StopSignal> s(m, "StopSignal", "Whether to stop acquiring, with the totals and a reason for logs.");
@@ -117,19 +119,25 @@ void bind_segmentation_types(py::module_& m) {
   py::class_<SegmentationParams> p(m, "SegmentationParams", "Contour threshold, minimum segment size, dominant plane.");
   def_keyword_init<SegmentationParams>(p);
   p.def_readwrite("contour_improvement_below", &SegmentationParams::contour_improvement_below)
-      .def_readwrite("min_segment_columns", &SegmentationParams::min_segment_columns)
+      .def_property("min_segment_columns", int_field_getter(&SegmentationParams::min_segment_columns),
+                    int_field_setter(&SegmentationParams::min_segment_columns, "min_segment_columns"))
       .def_readwrite("remove_dominant_plane", &SegmentationParams::remove_dominant_plane)
       .def_readwrite("plane_distance_m", &SegmentationParams::plane_distance_m)
-      .def_readwrite("plane_min_columns", &SegmentationParams::plane_min_columns)
-      .def_readwrite("plane_ransac_iterations", &SegmentationParams::plane_ransac_iterations)
-      .def_readwrite("plane_seed", &SegmentationParams::plane_seed)
+      .def_property("plane_min_columns", int_field_getter(&SegmentationParams::plane_min_columns),
+                    int_field_setter(&SegmentationParams::plane_min_columns, "plane_min_columns"))
+      .def_property("plane_ransac_iterations", int_field_getter(&SegmentationParams::plane_ransac_iterations),
+                    int_field_setter(&SegmentationParams::plane_ransac_iterations, "plane_ransac_iterations"))
+      .def_property("plane_seed", int_field_getter(&SegmentationParams::plane_seed),
+                    int_field_setter(&SegmentationParams::plane_seed, "plane_seed"))
       .def_readwrite("split_concave_creases", &SegmentationParams::split_concave_creases)
       .def_readwrite("crease_arm_m", &SegmentationParams::crease_arm_m)
       .def_readwrite("crease_smoothing_share", &SegmentationParams::crease_smoothing_share)
       .def_readwrite("crease_min_bend_deg", &SegmentationParams::crease_min_bend_deg)
       .def_readwrite("crease_min_view_angle_deg", &SegmentationParams::crease_min_view_angle_deg)
-      .def_readwrite("crease_max_arm_px", &SegmentationParams::crease_max_arm_px)
-      .def_readwrite("threads", &SegmentationParams::threads)
+      .def_property("crease_max_arm_px", int_field_getter(&SegmentationParams::crease_max_arm_px),
+                    int_field_setter(&SegmentationParams::crease_max_arm_px, "crease_max_arm_px"))
+      .def_property("threads", int_field_getter(&SegmentationParams::threads),
+                    int_field_setter(&SegmentationParams::threads, "threads"))
       .def("validate", &SegmentationParams::validate);
   def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane", "split_concave_creases"});
   m.def("segmentation_defaults", py::overload_cast<const SensorPreset&>(&segmentation_defaults), py::arg("preset"),

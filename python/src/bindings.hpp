@@ -2,13 +2,16 @@
 // Shared pieces of the Python module: one bind_* function per library header group, the Mapper holder
 // that serialises calls from several Python threads, and small helpers for struct bindings.
 #include "interrupt.hpp"
+#include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 
 #include <pybind11/pybind11.h>
 
 #include <initializer_list>
+#include <limits>
 #include <mutex>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace occ_improve::python {
@@ -61,6 +64,35 @@ void def_keyword_init(Class& cls) {
             return self.cast<T>();
           }),
           "Defaults for every field; keyword arguments set fields by name.");
+}
+
+/// A Python int (or anything with __index__, as numpy's integers) as integer type T, for the field named
+/// `field`: out of T's range is InvalidParameter naming the field, the value and the range, where
+/// pybind11's own conversion raises a TypeError that only lists the setter's signature.
+template <class T>
+T int_for_field(const py::object& value, const std::string& field) {
+  if (py::isinstance<py::bool_>(value) || !PyIndex_Check(value.ptr()))
+    throw py::type_error(field + " takes an int, not " + std::string(py::repr(value)));
+  const py::int_ number = py::reinterpret_steal<py::int_>(PyNumber_Index(value.ptr()));
+  const py::int_ lowest(std::numeric_limits<T>::lowest()), highest(std::numeric_limits<T>::max());
+  if (number < lowest || number > highest)
+    throw InvalidParameter(field + " = " + std::string(py::repr(number)) + " is out of range [" +
+                           std::string(py::repr(lowest)) + ", " + std::string(py::repr(highest)) + "]");
+  return number.cast<T>();
+}
+
+/// Getter and setter of an integer field for def_property, the setter through int_for_field.
+template <class C, class T>
+auto int_field_getter(T C::*member) {
+  return [member](const C& object) { return object.*member; };
+}
+template <class C, class T>
+auto int_field_setter(T C::*member, std::string name) {
+  static_assert(std::is_integral_v<T> && !std::is_same_v<T, bool>, "for integer fields");
+  return [member, name](C& object, const py::object& value) {
+    const std::string class_name = py::str(py::type::of<C>().attr("__name__"));
+    object.*member = int_for_field<T>(value, class_name + "." + name);
+  };
 }
 
 /// __repr__ as Name(field=value, ...) over the listed fields.

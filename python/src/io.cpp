@@ -130,7 +130,8 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
   def_keyword_init<OctomapExportOptions>(o);
   o.def_readwrite("occupancy_threshold", &OctomapExportOptions::occupancy_threshold)
       .def_readwrite("unknown_band_probability", &OctomapExportOptions::unknown_band_probability)
-      .def_readwrite("memory_cap_bytes", &OctomapExportOptions::memory_cap_bytes)
+      .def_property("memory_cap_bytes", int_field_getter(&OctomapExportOptions::memory_cap_bytes),
+                    int_field_setter(&OctomapExportOptions::memory_cap_bytes, "memory_cap_bytes"))
       .def("validate", &OctomapExportOptions::validate);
   def_fields_repr(o, {"occupancy_threshold", "unknown_band_probability", "memory_cap_bytes"});
   py::class_<OctomapExportReport> r(m, "OctomapExportReport", "What the export wrote.");

@@ -188,15 +188,19 @@ void bind_plan_request(py::module_& m) {
       .value("plane", LocalModel::plane, "linear prediction");
   py::class_<PlanRequest> q(m, "PlanRequest", "Budget, shape, re-acquisition share, stop level, candidate mask.");
   def_keyword_init<PlanRequest>(q);
-  q.def_readwrite("budget_rays", &PlanRequest::budget_rays)
+  q.def_property("budget_rays", int_field_getter(&PlanRequest::budget_rays),
+                 int_field_setter(&PlanRequest::budget_rays, "budget_rays"))
       .def_readwrite("shape", &PlanRequest::shape)
-      .def_readwrite("window_width_columns", &PlanRequest::window_width_columns)
-      .def_readwrite("window_height_columns", &PlanRequest::window_height_columns)
+      .def_property("window_width_columns", int_field_getter(&PlanRequest::window_width_columns),
+                    int_field_setter(&PlanRequest::window_width_columns, "window_width_columns"))
+      .def_property("window_height_columns", int_field_getter(&PlanRequest::window_height_columns),
+                    int_field_setter(&PlanRequest::window_height_columns, "window_height_columns"))
       .def_readwrite("negative_share", &PlanRequest::negative_share)
       .def_readwrite("stop_gain_per_ray_below", &PlanRequest::stop_gain_per_ray_below)
       .def_readwrite("stop_view_share", &PlanRequest::stop_view_share)
       .def_readwrite("return_model", &PlanRequest::return_model)
-      .def_readwrite("coverage_block_columns", &PlanRequest::coverage_block_columns)
+      .def_property("coverage_block_columns", int_field_getter(&PlanRequest::coverage_block_columns),
+                    int_field_setter(&PlanRequest::coverage_block_columns, "coverage_block_columns"))
       .def_readwrite("refine_by", &PlanRequest::refine_by)
       .def_readwrite("local_model", &PlanRequest::local_model)
       .def_readwrite("residual_cap_sigmas", &PlanRequest::residual_cap_sigmas)

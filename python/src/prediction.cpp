@@ -47,7 +47,8 @@ void bind_prediction(py::module_& m) {
   py::class_<DepthPredictionParams> p(m, "DepthPredictionParams",
                                       "Rule, radius [columns] and discontinuity test [sigma(z)] of a depth prediction.");
   def_keyword_init<DepthPredictionParams>(p);
-  p.def_readwrite("radius_columns", &DepthPredictionParams::radius_columns)
+  p.def_property("radius_columns", int_field_getter(&DepthPredictionParams::radius_columns),
+                 int_field_setter(&DepthPredictionParams::radius_columns, "radius_columns"))
       .def_readwrite("rule", &DepthPredictionParams::rule)
       .def_readwrite("discontinuity_sigmas", &DepthPredictionParams::discontinuity_sigmas)
       .def("validate", &DepthPredictionParams::validate);

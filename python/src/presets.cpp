@@ -21,8 +21,10 @@ void bind_intrinsics(py::module_& m) {
       .def_readwrite("fy", &PinholeIntrinsics::fy)
       .def_readwrite("cx", &PinholeIntrinsics::cx)
       .def_readwrite("cy", &PinholeIntrinsics::cy)
-      .def_readwrite("width", &PinholeIntrinsics::width)
-      .def_readwrite("height", &PinholeIntrinsics::height)
+      .def_property("width", int_field_getter(&PinholeIntrinsics::width),
+                    int_field_setter(&PinholeIntrinsics::width, "width"))
+      .def_property("height", int_field_getter(&PinholeIntrinsics::height),
+                    int_field_setter(&PinholeIntrinsics::height, "height"))
       .def("validate", &PinholeIntrinsics::validate, "Raises InvalidParameter naming the first bad field.");
   def_fields_repr(k, {"fx", "fy", "cx", "cy", "width", "height"});
   m.def("kinect_v1_intrinsics", &kinect_v1_intrinsics, "Kinect v1 as OpenNI reports it (fx = fy = 525).");
@@ -50,9 +52,12 @@ void bind_geometry_params(py::module_& m) {
   g.def_readwrite("angular_binning", &GeometryParams::angular_binning)
       .def_readwrite("camera", &GeometryParams::camera,
                      "pinhole: the camera whose pixels are the columns; spherical: marks observable columns, or None.")
-      .def_readwrite("azimuth_bins", &GeometryParams::azimuth_bins)
-      .def_readwrite("elevation_bins", &GeometryParams::elevation_bins)
-      .def_readwrite("depth_bins", &GeometryParams::depth_bins)
+      .def_property("azimuth_bins", int_field_getter(&GeometryParams::azimuth_bins),
+                    int_field_setter(&GeometryParams::azimuth_bins, "azimuth_bins"))
+      .def_property("elevation_bins", int_field_getter(&GeometryParams::elevation_bins),
+                    int_field_setter(&GeometryParams::elevation_bins, "elevation_bins"))
+      .def_property("depth_bins", int_field_getter(&GeometryParams::depth_bins),
+                    int_field_setter(&GeometryParams::depth_bins, "depth_bins"))
       .def_readwrite("azimuth_min_rad", &GeometryParams::azimuth_min_rad)
       .def_readwrite("azimuth_max_rad", &GeometryParams::azimuth_max_rad)
       .def_readwrite("elevation_min_rad", &GeometryParams::elevation_min_rad)
@@ -105,7 +110,8 @@ void bind_preset(py::module_& m) {
   py::class_<PinholePresetOptions> o(m, "PinholePresetOptions", "Depth axis and noise for preset_from_pinhole.");
   def_keyword_init<PinholePresetOptions>(o);
   o.def_readwrite("angular_binning", &PinholePresetOptions::angular_binning)
-      .def_readwrite("depth_bins", &PinholePresetOptions::depth_bins)
+      .def_property("depth_bins", int_field_getter(&PinholePresetOptions::depth_bins),
+                    int_field_setter(&PinholePresetOptions::depth_bins, "depth_bins"))
       .def_readwrite("depth_binning", &PinholePresetOptions::depth_binning)
       .def_readwrite("depth_min_m", &PinholePresetOptions::depth_min_m)
       .def_readwrite("depth_max_m", &PinholePresetOptions::depth_max_m)
@@ -118,10 +124,12 @@ void bind_preset(py::module_& m) {
   py::class_<LidarRingsOptions> l(m, "LidarRingsOptions", "A spinning LiDAR's rings, azimuth steps, depth and noise.");
   def_keyword_init<LidarRingsOptions>(l);
   l.def_readwrite("ring_elevations_deg", &LidarRingsOptions::ring_elevations_deg)
-      .def_readwrite("azimuth_steps", &LidarRingsOptions::azimuth_steps)
+      .def_property("azimuth_steps", int_field_getter(&LidarRingsOptions::azimuth_steps),
+                    int_field_setter(&LidarRingsOptions::azimuth_steps, "azimuth_steps"))
       .def_readwrite("azimuth_min_deg", &LidarRingsOptions::azimuth_min_deg)
       .def_readwrite("azimuth_max_deg", &LidarRingsOptions::azimuth_max_deg)
-      .def_readwrite("depth_bins", &LidarRingsOptions::depth_bins)
+      .def_property("depth_bins", int_field_getter(&LidarRingsOptions::depth_bins),
+                    int_field_setter(&LidarRingsOptions::depth_bins, "depth_bins"))
       .def_readwrite("depth_binning", &LidarRingsOptions::depth_binning)
       .def_readwrite("depth_min_m", &LidarRingsOptions::depth_min_m)
       .def_readwrite("depth_max_m", &LidarRingsOptions::depth_max_m)
@@ -162,7 +170,8 @@ void bind_grid_options(py::module_& m) {
   g.def_readwrite("mode", &GridOptions::mode)
       .def_readwrite("probability_min", &GridOptions::probability_min)
       .def_readwrite("probability_max", &GridOptions::probability_max)
-      .def_readwrite("memory_cap_bytes", &GridOptions::memory_cap_bytes)
+      .def_property("memory_cap_bytes", int_field_getter(&GridOptions::memory_cap_bytes),
+                    int_field_setter(&GridOptions::memory_cap_bytes, "memory_cap_bytes"))
       .def("validate", &GridOptions::validate, "Raises InvalidParameter naming the first bad field.")
       .def_static("octomap_clamping", &GridOptions::octomap_clamping, "OctoMap's clamping (0.1192 / 0.971).");
   def_fields_repr(g, {"mode", "probability_min", "probability_max", "memory_cap_bytes"});

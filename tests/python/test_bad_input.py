@@ -251,3 +251,30 @@ def test_lidar_rings_without_a_ring_table_is_invalid_parameter_not_a_crash():
         oi.GeometryParams(angular_binning="lidar_rings").validate()
     with pytest.raises(oi.InvalidParameter, match="row_elevations_rad"):
         oi.preset_from_pinhole(oi.kinect_v1_intrinsics(), oi.PinholePresetOptions(angular_binning="lidar_rings"))
+
+
+@pytest.mark.parametrize("make, field, value", [
+    (oi.PlanRequest, "budget_rays", 2**40),
+    (oi.PlanRequest, "budget_rays", -2**31 - 1),
+    (oi.SegmentationParams, "min_segment_columns", -1),
+    (oi.GridOptions, "memory_cap_bytes", 2**64),
+    (oi.PinholeIntrinsics, "width", 2**31),
+])
+def test_integer_fields_out_of_their_range_raise_invalid_parameter_naming_field_and_range(make, field, value):
+    name = f"{make.__name__}.{field}"
+    with pytest.raises(oi.InvalidParameter, match=rf"{name} = {value} is out of range \[-?\d+, \d+\]"):
+        make(**{field: value})
+    params = make()
+    before = getattr(params, field)
+    with pytest.raises(oi.InvalidParameter, match=name):
+        setattr(params, field, value)
+    assert getattr(params, field) == before
+
+
+def test_integer_fields_take_numpy_integers_and_refuse_floats_bools_and_strings():
+    request = oi.PlanRequest(budget_rays=np.int64(5000))
+    assert request.budget_rays == 5000 and isinstance(request.budget_rays, int)
+    for value in (1.5, True, "3"):
+        with pytest.raises(TypeError, match=r"PlanRequest.budget_rays takes an int"):
+            request.budget_rays = value
+    assert request.budget_rays == 5000
