@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <sstream>
 
@@ -200,6 +201,53 @@ DepthSequence scan_tum(const fs::path& directory) {
 
 }  // namespace
 
+namespace {
+
+// 7-Scenes frames among `images` (name order), each with its pose file when there is one.
+std::vector<DepthSequenceFrame> seven_scenes_frames(const std::vector<std::string>& images) {
+  std::vector<DepthSequenceFrame> frames;
+  for (const std::string& path : images) {
+    if (!ends_with(path, ".depth.png")) continue;
+    DepthSequenceFrame frame;
+    frame.depth_path = path;
+    const std::string pose_path = pose_file_for(path);
+    if (fs::exists(pose_path)) frame.camera_to_world = read_pose_matrix_file(pose_path);
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
+// A 7-Scenes scene folder holds no frame itself but seq-NN/ subfolders of frames whose poses share the
+// scene's world frame: their frames in folder then name order, as occ_improve_map reads such a folder.
+// Empty when no subfolder holds 7-Scenes frames.
+DepthSequence scene_folder_sequence(const fs::path& directory) {
+  std::error_code ec;
+  std::vector<fs::path> subfolders;
+  for (fs::directory_iterator it(directory, ec), end; it != end && !ec; it.increment(ec))
+    if (it->is_directory(ec)) subfolders.push_back(it->path());
+  if (ec) throw IoError("cannot read folder '" + directory.string() + "': " + ec.message());
+  std::sort(subfolders.begin(), subfolders.end());
+  DepthSequence sequence;
+  sequence.encoding = DepthEncoding::millimetres;
+  std::string camera_folder;
+  for (const fs::path& folder : subfolders) {
+    std::vector<DepthSequenceFrame> frames = seven_scenes_frames(files_in(folder.string(), {".png"}));
+    if (frames.empty()) continue;
+    const std::optional<PinholeIntrinsics> camera = intrinsics_beside(folder, frames.front().depth_path);
+    if (camera_folder.empty()) {
+      sequence.intrinsics = camera;
+      camera_folder = folder.string();
+    } else if (camera != sequence.intrinsics) {
+      throw InvalidInput("'" + folder.string() + "' and '" + camera_folder +
+                         "' have different camera-intrinsics.txt: give one of them as the sequence");
+    }
+    std::move(frames.begin(), frames.end(), std::back_inserter(sequence.frames));
+  }
+  return sequence;
+}
+
+}  // namespace
+
 DepthSequence scan_depth_sequence(const std::string& directory_name) {
   const fs::path directory(directory_name);
   if (fs::exists(directory / "depth.txt")) {
@@ -209,19 +257,12 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
   }
   DepthSequence sequence;
   const std::vector<std::string> images = files_in(directory_name, {".png", ".pgm", ".tif", ".tiff"});
-  bool seven_scenes = false;
-  for (const std::string& path : images) {
-    if (!ends_with(path, ".depth.png")) continue;
-    seven_scenes = true;
-    DepthSequenceFrame frame;
-    frame.depth_path = path;
-    const std::string pose_path = pose_file_for(path);
-    if (fs::exists(pose_path)) frame.camera_to_world = read_pose_matrix_file(pose_path);
-    sequence.frames.push_back(std::move(frame));
-  }
-  if (seven_scenes) {
+  sequence.frames = seven_scenes_frames(images);
+  if (!sequence.frames.empty()) {
     sequence.encoding = DepthEncoding::millimetres;
     sequence.intrinsics = intrinsics_beside(directory, sequence.frames.front().depth_path);
+  } else if (images.empty()) {
+    sequence = scene_folder_sequence(directory);
   } else {
     auto named_depth = [](const std::string& path) {
       return fs::path(path).filename().string().find("depth") != std::string::npos;
@@ -230,7 +271,9 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
     for (const std::string& path : images)
       if (!some_named_depth || named_depth(path)) sequence.frames.push_back({path, std::nullopt});
   }
-  if (sequence.frames.empty()) throw InvalidInput("no depth image (.png/.pgm/.tif/.tiff) found in '" + directory_name + "'");
+  if (sequence.frames.empty())
+    throw InvalidInput("no depth image (.png/.pgm/.tif/.tiff) found in '" + directory_name +
+                       "' (nor 7-Scenes frames in its subfolders)");
   return sequence;
 }
 

@@ -37,8 +37,8 @@ const ToolFlags kFlags{
             {"-intrinsics", "-intrinsics_file"}}),  // the sequence's layout fixes its depth encoding
     {{"-o", "out/filter"}},
     {},
-    "  SEQUENCE_FOLDER           7-Scenes (frame-*.depth.png + .pose.txt) or TUM RGB-D (depth.txt,\n"
-    "                            groundtruth.txt) folder\n"};
+    "  SEQUENCE_FOLDER           7-Scenes (frame-*.depth.png + .pose.txt; a scene folder reads its seq-*/\n"
+    "                            subfolders in turn) or TUM RGB-D (depth.txt, groundtruth.txt) folder\n"};
 
 std::vector<double> parse_fractions(const CommandLine& command_line) {
   const std::string text = *command_line.text("-fractions");

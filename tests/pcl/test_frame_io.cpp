@@ -203,6 +203,39 @@ TEST_F(FrameIoFiles, AFolderCameraWithoutASizeTakesItsFramesSize) {
   EXPECT_EQ(expand_input(dir_.string())[0].intrinsics->width, 64);
 }
 
+// A 7-Scenes scene folder (seq-01/, seq-02/ beside the scene's camera) is one sequence: its subfolders'
+// frames in folder then name order, each with its own pose, as occ_improve_map reads such a folder.
+TEST_F(FrameIoFiles, ASceneFolderIsTheSequenceOfItsSubfolders) {
+  const Image16 frame{32, 24, std::vector<std::uint16_t>(32 * 24, 1500)};
+  for (const char* seq : {"seq-02", "seq-01"}) {
+    fs::create_directories(dir_ / seq);
+    for (int i = 0; i < 2; ++i) {
+      const std::string stem = (dir_ / seq / ("frame-00000" + std::to_string(i))).string();
+      write_png(stem + ".depth.png", frame);
+      std::ofstream(stem + ".pose.txt") << "1 0 0 " << (seq[5] - '0') << "\n0 1 0 " << i << "\n0 0 1 0\n0 0 0 1\n";
+    }
+  }
+  write("camera-intrinsics.txt", "26.25 0 15.5\n0 26.25 11.5\n0 0 1\n");
+  const DepthSequence sequence = scan_depth_sequence(dir_.string());
+  ASSERT_EQ(sequence.frames.size(), 4u);
+  ASSERT_TRUE(sequence.intrinsics);
+  EXPECT_EQ(sequence.intrinsics->width, 32);
+  for (std::size_t k = 0; k < 4; ++k) {
+    EXPECT_NE(sequence.frames[k].depth_path.find(k < 2 ? "seq-01" : "seq-02"), std::string::npos);
+    ASSERT_TRUE(sequence.frames[k].camera_to_world);
+    EXPECT_EQ(sequence.frames[k].camera_to_world->translation().x(), k < 2 ? 1.0 : 2.0);
+    EXPECT_EQ(sequence.frames[k].camera_to_world->translation().y(), static_cast<double>(k % 2));
+  }
+  // Subfolders of two cameras are not one sequence.
+  std::ofstream((dir_ / "seq-02" / "camera-intrinsics.txt").string()) << "30 0 15.5\n0 30 11.5\n0 0 1\n";
+  try {
+    scan_depth_sequence(dir_.string());
+    FAIL() << "two cameras were read as one sequence";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("seq-02"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(FrameIoFiles, FolderWithoutFramesIsInvalidInput) {
   write("notes.txt", "nothing here");
   EXPECT_THROW(expand_input(dir_.string()), InvalidInput);

@@ -179,9 +179,10 @@ std::vector<FlagSpec> stream_flags() {
       value_flag("-oni", K::text, "FILE", kStream, "OpenNI2 recording", "", "none"),
       value_flag("-pcd_dir", K::text, "DIR", kStream, "the .pcd files of a folder, in name order", "", "none"),
       value_flag("-depth_dir", K::text, "DIR", kStream,
-                 "depth-image sequence: 7-Scenes (frame-*.depth.png, .pose.txt, camera-intrinsics.txt),\n"
-                 "TUM RGB-D (depth.txt, groundtruth.txt) or a folder of 16-bit PNG/PGM/TIFF (PCL's grabber\n"
-                 "layout: *_depth.tiff)", "", "none"),
+                 "depth-image sequence: 7-Scenes (frame-*.depth.png, .pose.txt, camera-intrinsics.txt;\n"
+                 "a scene folder reads its seq-*/ subfolders in turn), TUM RGB-D (depth.txt,\n"
+                 "groundtruth.txt) or a folder of 16-bit PNG/PGM/TIFF (PCL's grabber layout: *_depth.tiff)",
+                 "", "none"),
       bounded(value_flag("-fps", K::number, "F", kStream,
                          "file sources: frames per second, 0 (as fast as possible) or at least 0.001", "0"),
               0, 1000),

@@ -120,7 +120,9 @@ struct DepthSequence {
 
 /// Recognises the layout of `directory`:
 ///  - 7-Scenes: `frame-NNNNNN.depth.png` (mm), poses from `frame-NNNNNN.pose.txt` (4x4 camera-to-world)
-///    when present; intrinsics from `camera-intrinsics.txt` in the folder or its parent;
+///    when present; intrinsics from `camera-intrinsics.txt` in the folder or its parent; a scene folder
+///    without frames of its own reads its subfolders' (seq-01/, seq-02/, ... in name order: 7-Scenes'
+///    poses share the scene's world frame), all of one camera (else InvalidInput);
 ///  - TUM RGB-D: `depth.txt` ("timestamp depth/file.png" lines, 1/5000 m), poses from `groundtruth.txt`
 ///    ("t tx ty tz qx qy qz qw", nearest timestamp within 20 ms) when present;
 ///  - otherwise every .png/.pgm/.tif/.tiff in name order (only those with "depth" in their name when some
