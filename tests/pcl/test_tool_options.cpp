@@ -15,6 +15,7 @@
 #include "support/test_data.hpp"
 
 #include <Eigen/Geometry>
+#include <pcl/io/pcd_io.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -217,6 +218,32 @@ TEST(ToolFrames, IntrinsicsAreNeverAssumed) {
   // Frames through different cameras are refused; the paper preset needs no camera at all.
   EXPECT_THROW(read_tool_frames(parse({capture, office})), InvalidInput);
   EXPECT_FALSE(read_tool_frames(parse({"-preset", "kinect_v1_paper", capture})).front().camera);
+}
+
+// An unorganized cloud fits no camera: after an organized first frame it takes that frame's camera (its
+// points are projected through it), and alone it is refused naming -intrinsics.
+TEST(ToolFrames, AnUnorganizedCloudAfterTheFirstFrameTakesItsCamera) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "occ_improve_test_unorganized_after";
+  std::filesystem::create_directories(folder);
+  const std::string organized = (folder / "a_organized.pcd").string(), loose = (folder / "b_loose.pcd").string();
+  pcl::io::savePCDFileBinary(organized, sample_tool_frame().cloud);
+  pcl::PointCloud<pcl::PointXYZ> points;
+  points.push_back({0.1f, -0.2f, 2.0f});
+  points.push_back({-0.3f, 0.1f, 1.5f});
+  pcl::io::savePCDFileASCII(loose, points);
+  const std::vector<ToolFrame> frames = read_tool_frames(parse({organized, loose}));
+  ASSERT_EQ(frames.size(), 2u);
+  ASSERT_TRUE(frames[0].camera && frames[1].camera);
+  EXPECT_TRUE(same_camera(*frames[0].camera, *frames[1].camera));
+  EXPECT_NE(frames[1].camera_source.find("a_organized.pcd"), std::string::npos) << frames[1].camera_source;
+  EXPECT_EQ(frames[1].cloud.size(), 2u);
+  try {
+    read_tool_frames(parse({loose}));
+    FAIL() << "an unorganized cloud alone got a camera";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("-intrinsics"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(folder);
 }
 
 // Poses move every frame into the first one's sensor frame; a frame without one among posed frames is refused.

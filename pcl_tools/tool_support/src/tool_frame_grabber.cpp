@@ -10,7 +10,7 @@ ToolFrameGrabber::ToolFrameGrabber(const ToolOptions& options, const ToolFrame& 
       sources_(std::move(sources)) {}
 
 FileSequenceGrabber::Cloud::Ptr ToolFrameGrabber::loadFrame(std::size_t index) {
-  ToolFrame frame = load_tool_frame(options_, sources_[index]);
+  ToolFrame frame = load_tool_frame(options_, sources_[index], &first_);
   require_same_camera(first_, frame);
   move_into_first_frame(options_, first_, frame);
   return Cloud::Ptr(new Cloud(std::move(frame.cloud)));

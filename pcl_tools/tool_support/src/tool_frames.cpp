@@ -31,7 +31,7 @@ void require_camera_fits(const pcl::PointCloud<pcl::PointXYZ>& cloud, const std:
 
 }  // namespace
 
-ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source) {
+ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source, const ToolFrame* first) {
   ToolFrame frame;
   std::optional<PinholeIntrinsics> camera = options.intrinsics ? options.intrinsics : source.intrinsics;
   frame.camera_source = options.intrinsics ? options.intrinsics_flag : source.intrinsics ? "the dataset's camera-intrinsics.txt" : "";
@@ -54,10 +54,14 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
   }
   frame.name = source.path;
   if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
-  if (!camera && options.preset_needs_camera()) {
-    if (loaded.cloud.height <= 1)
+  if (!camera && options.preset_needs_camera() && loaded.cloud.height <= 1) {
+    if (!first || !first->camera)
       throw InvalidInput("'" + source.path + "' is not organized, so its camera cannot be fitted; preset " +
                          options.preset_name + " needs one: give -intrinsics (or -preset kinect_v1_paper)");
+    camera = first->camera;  // its points are projected through it: an unorganized cloud fits any camera
+    frame.camera_source = "that of " + first->name;
+  }
+  if (!camera && options.preset_needs_camera()) {
     IntrinsicsFit fit;
     try {
       fit = estimate_intrinsics_fit(loaded.cloud, kMaxIntrinsicsFitResidualPx);
@@ -76,10 +80,10 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source)
   return frame;
 }
 
-ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source) {
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source, const ToolFrame* first) {
   throw_if_stop_requested();
   const InputScope scope(source.path);
-  return load_tool_frame(options, source);
+  return load_tool_frame(options, source, first);
 }
 
 ToolFrame sample_tool_frame() {
@@ -112,7 +116,7 @@ std::optional<ToolFrame> ToolFrameReader::read_next() {
     ++next_;
     return sample_tool_frame();
   }
-  ToolFrame frame = read_tool_frame(options_, sources_[next_++]);
+  ToolFrame frame = read_tool_frame(options_, sources_[next_++], first_ ? &*first_ : nullptr);
   if (first_) {
     require_same_camera(*first_, frame);
     move_into_first_frame(options_, *first_, frame);
@@ -166,7 +170,8 @@ std::string describe_camera(const std::vector<ToolFrame>& frames) {
 
 std::string frame_inputs_help() {
   return R"(  FILE.pcd / FILE.ply       a cloud with x y z in metres, optical frame (z forward, y down); with a
-                            camera preset its intrinsics are fitted to its organized points
+                            camera preset its intrinsics are fitted to its organized points (an
+                            unorganized cloud after the first frame takes the first frame's camera)
   FILE.png/.pgm/.tif/.tiff  16-bit depth image, back-projected through -intrinsics or its dataset's file
   FOLDER                    a dataset folder: 7-Scenes/3DMatch/SUN3D (*.depth.png, camera-intrinsics.txt,
                             *.pose.txt) or PCL's image-grabber layout (*_depth.tiff)

@@ -79,12 +79,13 @@ std::vector<ToolFrame> read_tool_frames(const ToolOptions& options);
 /// One frame: a depth image is back-projected through -intrinsics/-intrinsics_file or its dataset's
 /// intrinsics file and refused without either (intrinsics are never assumed); a cloud's camera, when the
 /// preset needs one and none was given, is fitted to its organized points (estimate_intrinsics_fit;
-/// refused when unorganized or a poor fit, naming -intrinsics). A frame without a valid point is refused
-/// (require_valid_points). Checks for a stop signal first and names the input for run_tool's error line
-/// (InputScope).
-ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source);
+/// refused when a poor fit, naming -intrinsics). An unorganized cloud fits no camera: after a first frame
+/// (`first`, whose camera the sequence's frames share) it takes that frame's camera, else it is refused
+/// naming -intrinsics. A frame without a valid point is refused (require_valid_points). Checks for a stop
+/// signal first and names the input for run_tool's error line (InputScope).
+ToolFrame read_tool_frame(const ToolOptions& options, const FrameSource& source, const ToolFrame* first = nullptr);
 /// The same without the stop check and the InputScope, for a reading thread (a grabber's).
-ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source);
+ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source, const ToolFrame* first = nullptr);
 
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
