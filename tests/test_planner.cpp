@@ -122,6 +122,22 @@ TEST(Planner, DecimationFitsTheBudgetAtTheBestOffset) {
   EXPECT_EQ(s.columns.size(), 12u);
 }
 
+// The smallest step within the budget, checked against the straightforward search; sizes that give no
+// grid, or columns beyond a 32-bit index, are InvalidParameter (they overflowed or gave 1 ray).
+TEST(Planner, DecimationStepIsTheSmallestWithinTheBudgetAndSizesAreChecked) {
+  for (const auto& [w, h] : {std::pair{640, 480}, {1, 1}, {7, 1000}, {1280, 720}})
+    for (const int budget : {1, 2, 5, 99, 3072, 640 * 480}) {
+      int step = 1;
+      while (static_cast<long long>((w + step - 1) / step) * ((h + step - 1) / step) > budget) ++step;
+      EXPECT_EQ(decimation_step(w, h, budget), step) << w << " x " << h << ", budget " << budget;
+    }
+  EXPECT_EQ(decimation_step(2147483647, 2, 1), 2147483647);
+  for (const auto& [w, h] : {std::pair{-640, 480}, {640, 0}, {131072, 65536}, {2147483647, 2147483647}}) {
+    EXPECT_THROW(decimation_step(w, h, 100), InvalidParameter) << w << " x " << h;
+    EXPECT_THROW(decimation_pattern(w, h, 64, 0, 0), InvalidParameter) << w << " x " << h;
+  }
+}
+
 TEST(Planner, StopsWhenTheBestRaysAreWorthLittle) {
   PlanRequest r;
   r.budget_rays = 10;

@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -14,14 +15,6 @@ std::string shape_text(const py::array& a) {
   for (py::ssize_t i = 0; i < a.ndim(); ++i) s << (i ? ", " : "") << a.shape(i);
   s << (a.ndim() == 1 ? ",)" : ")");
   return s.str();
-}
-
-/// Booleans, complex numbers, strings and objects are not coordinates: a TypeError, as numpy gives.
-void require_real_numbers(const py::array& a, const char* what) {
-  const char kind = a.dtype().kind();
-  if (kind != 'f' && kind != 'i' && kind != 'u')
-    throw py::type_error(std::string(what) + " must be a real numeric array, got dtype " +
-                         std::string(py::str(a.dtype())));
 }
 
 /// The only element layout the library reads in place: 4-byte floats, native byte order, aligned.
@@ -86,10 +79,31 @@ py::array as_array(const py::handle& object, const char* what, const char* expec
 
 }  // namespace
 
+py::array real_array(const py::handle& object, const char* what, const char* expected, Booleans booleans) {
+  const py::array a = as_array(object, what, expected);
+  const char kind = a.dtype().kind();
+  if (kind != 'f' && kind != 'i' && kind != 'u' && !(kind == 'b' && booleans == Booleans::taken))
+    throw py::type_error(std::string(what) + " must be a real numeric array" +
+                         (booleans == Booleans::taken ? " or booleans" : "") + ", got dtype " +
+                         std::string(py::str(a.dtype())));
+  return a;
+}
+
+std::vector<std::uint8_t> flags_of(const py::handle& values, const char* what) {
+  const auto a = c_array_of<double>(real_array(values, what, "an array-like of flags", Booleans::taken));
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(a.size()));
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const double v = a.data()[i];
+    if (std::isnan(v))
+      throw InvalidInput(std::string(what) + ": element " + std::to_string(i) + " is NaN (flags are 0 or nonzero)");
+    out[i] = v != 0 ? 1 : 0;
+  }
+  return out;
+}
+
 PointsInput points_from_array(const py::handle& object) {
   static const char* const expected = "an N x 3 or H x W x 3 array of x, y, z";
-  const py::array points = as_array(object, "points", expected);
-  require_real_numbers(points, "points");
+  const py::array points = real_array(object, "points", expected, Booleans::refused);
   const bool shaped = (points.ndim() == 2 || points.ndim() == 3) && points.shape(points.ndim() - 1) == 3;
   if (!shaped) throw InvalidInput(std::string("points must be ") + expected + ", got shape " + shape_text(points));
   PointsInput in;
@@ -102,8 +116,7 @@ PointsInput points_from_array(const py::handle& object) {
     in.span.stride_floats = stride;
     return in;
   }
-  auto converted = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(points);
-  if (!converted) throw py::error_already_set();
+  auto converted = c_array_of<float>(points);
   in.span.xyz = converted.data();
   in.keep = std::move(converted);
   in.copied = true;
@@ -111,8 +124,7 @@ PointsInput points_from_array(const py::handle& object) {
 }
 
 DepthInput depth_from_array(const py::handle& object, const PinholeIntrinsics& intrinsics) {
-  const py::array depth = as_array(object, "depth", "an H x W array of depths");
-  require_real_numbers(depth, "depth");
+  const py::array depth = real_array(object, "depth", "an H x W array of depths", Booleans::refused);
   if (depth.ndim() != 2 || depth.shape(0) != intrinsics.height || depth.shape(1) != intrinsics.width) {
     throw InvalidInput("depth must be an H x W array matching the intrinsics (" + std::to_string(intrinsics.height) +
                        ", " + std::to_string(intrinsics.width) + "), got shape " + shape_text(depth));
@@ -120,9 +132,7 @@ DepthInput depth_from_array(const py::handle& object, const PinholeIntrinsics& i
   DepthInput in;
   in.pixels = static_cast<std::size_t>(depth.size());
   const bool readable = is_native_float32(depth) && (depth.flags() & py::array::c_style);
-  auto converted = readable ? py::reinterpret_borrow<py::array>(depth)
-                            : py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(depth);
-  if (!converted) throw py::error_already_set();
+  const py::array converted = readable ? depth : c_array_of<float>(depth);
   in.depth = static_cast<const float*>(converted.data());
   in.keep = std::move(converted);
   in.copied = !readable;

@@ -8,6 +8,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
 #include <cstring>
 #include <vector>
 
@@ -33,6 +34,26 @@ struct DepthInput {
 };
 /// Raises InvalidInput when the shape is not intrinsics.height x intrinsics.width.
 DepthInput depth_from_array(const py::handle& depth, const PinholeIntrinsics& intrinsics);
+
+/// Whether an array of booleans is taken as numbers (0 and 1): masks and flags, not coordinates or maps.
+enum class Booleans { refused, taken };
+
+/// Any array-like (nested lists too) as an ndarray of real numbers, without a copy when it already is
+/// one. A dtype that is not a real number (complex, strings, objects; booleans unless taken) is a
+/// TypeError naming `what`, as numpy gives; a nested sequence numpy cannot make an array of is
+/// InvalidInput naming `expected`.
+py::array real_array(const py::handle& object, const char* what, const char* expected, Booleans booleans);
+
+/// `a` as a C-contiguous array of T: itself when it already is one, else a converted copy (numpy's own
+/// error, MemoryError when the copy does not fit, propagates: `ensure` would have cleared it).
+template <class T>
+py::array_t<T, py::array::c_style | py::array::forcecast> c_array_of(const py::array& a) {
+  return py::array_t<T, py::array::c_style | py::array::forcecast>(py::reinterpret_borrow<py::object>(a));
+}
+
+/// A flag array-like (bool or numbers) as 0/1 bytes in C order: nonzero is set (a cast to 8 bits made 0.5
+/// and 256 unset); NaN is InvalidInput naming `what` and the element; types as real_array.
+std::vector<std::uint8_t> flags_of(const py::handle& values, const char* what);
 
 /// A read-only H x W array over `data` that keeps `owner` alive (a view: it follows later changes).
 template <class T>

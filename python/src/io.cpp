@@ -22,7 +22,11 @@ namespace {
 
 /// Accepts str and os.PathLike (pathlib.Path), as Python's own file functions do.
 std::string path_string(const py::object& path) {
-  return py::str(py::module_::import("os").attr("fspath")(path));
+  // os.fsdecode: str, bytes and os.PathLike, as open() takes them (str() of bytes would be "b'...'").
+  const std::string p = py::str(py::module_::import("os").attr("fsdecode")(path));
+  if (p.find('\0') != std::string::npos)  // C++ would stop at it: another file than the one named
+    throw InvalidParameter("path " + std::string(py::repr(path)) + " holds a NUL character");
+  return p;
 }
 
 /// LZF decompression (liblzf's format, as PCL's binary_compressed PCD data uses it), so that the

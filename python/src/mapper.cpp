@@ -45,22 +45,19 @@ void bind_reports(py::module_& m) {
                        "points_masked"});
 }
 
-InsertionOptions insertion_options(int threads) {
+InsertionOptions insertion_options(const py::object& threads) {
   InsertionOptions options;
-  options.threads = threads;
+  options.threads = int_for_field<int>(threads, "threads");  // 2**40 too is InvalidParameter naming threads
   options.validate();  // before any work: a bad count is the caller's mistake, not a failure halfway
   return options;
 }
 
 /// An H x W array (bool or numbers, nonzero = valid) as the library's mask over the camera's pixels.
 PixelMask pixel_mask_from(const py::handle& mask) {
-  const auto a = py::array_t<std::uint8_t, py::array::c_style | py::array::forcecast>::ensure(
-      py::module_::import("numpy").attr("not_equal")(mask, 0));
-  if (!a) throw py::error_already_set();
+  const py::array a = real_array(mask, "mask", "an H x W array of flags", Booleans::taken);
   if (a.ndim() != 2)
     throw InvalidInput("mask must be an H x W array, got " + std::to_string(a.ndim()) + " dimensions");
-  PixelMask out{static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
-                std::vector<std::uint8_t>(a.data(), a.data() + a.size())};
+  PixelMask out{static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), flags_of(a, "mask")};
   out.validate();
   return out;
 }
@@ -145,7 +142,8 @@ std::optional<PixelMask> optional_mask(const py::object& mask) {
   return pixel_mask_from(mask);
 }
 
-MapperReport insert_points_array(PyMapper& self, const py::object& points, int threads, const py::object& mask) {
+MapperReport insert_points_array(PyMapper& self, const py::object& points, const py::object& threads,
+                                  const py::object& mask) {
   const InsertionOptions options = insertion_options(threads);
   const std::optional<PixelMask> pixels = optional_mask(mask);
   const PointsInput in = points_from_array(points);  // with the GIL: it may ask numpy for a copy
@@ -156,7 +154,7 @@ MapperReport insert_points_array(PyMapper& self, const py::object& points, int t
 }
 
 MapperReport insert_depth_array(PyMapper& self, const py::object& depth, const PinholeIntrinsics& intrinsics,
-                                double scale, int threads, const py::object& mask) {
+                                double scale, const py::object& threads, const py::object& mask) {
   occ_improve::detail::require_parameter(std::isfinite(scale) && scale > 0, "scale", scale, "finite and > 0");
   const InsertionOptions options = insertion_options(threads);
   // The camera first: an image of another camera's size is better explained by the camera than the shape.

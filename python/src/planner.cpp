@@ -39,37 +39,11 @@ py::array flat_array(const std::vector<T>& values) {
   return out;
 }
 
-/// An array-like of numbers as doubles, flattened in C order (an H x W mask is row-major, as columns
-/// are); InvalidInput naming `what` for anything else (numpy's own refusal left no Python error set, and
-/// pybind11 raised an internal RuntimeError).
-Array<double> numbers_of(const py::handle& values, const std::string& what) {
-  auto a = Array<double>::ensure(values);
-  if (!a) {
-    PyErr_Clear();
-    throw InvalidInput(what + ": expected an array-like of numbers, got " +
-                       std::string(py::str(py::type::of(values).attr("__name__"))));
-  }
-  return a;
-}
-
-/// An array-like of flags as 0/1 bytes: nonzero is set (a cast to 8 bits made 0.5 and 256 unset, so a
-/// float mask silently planned nothing); NaN is InvalidInput naming `what` and the element.
-std::vector<std::uint8_t> to_flags(const py::handle& values, const std::string& what) {
-  const auto a = numbers_of(values, what);
-  std::vector<std::uint8_t> out(static_cast<std::size_t>(a.size()));
-  for (std::size_t i = 0; i < out.size(); ++i) {
-    const double v = a.data()[i];
-    if (std::isnan(v)) throw InvalidInput(what + ": element " + std::to_string(i) + " is NaN (flags are 0 or nonzero)");
-    out[i] = v != 0 ? 1 : 0;
-  }
-  return out;
-}
-
 /// An array-like of whole numbers in [0, max of T] (counts, column indices) as a vector of T; InvalidInput
 /// naming `what`, the element and its value otherwise (a cast would turn -1 into 4294967295 and 1.5 into 1).
 template <class T>
 std::vector<T> to_whole_numbers(const py::handle& values, const std::string& what) {
-  const auto a = numbers_of(values, what);
+  const auto a = c_array_of<double>(real_array(values, what.c_str(), "an array-like of whole numbers", Booleans::refused));
   std::vector<T> out(static_cast<std::size_t>(a.size()));
   const double most = static_cast<double>(std::numeric_limits<T>::max());
   for (std::size_t i = 0; i < out.size(); ++i) {
@@ -100,8 +74,7 @@ ImprovementMap improvement_from(const py::handle& source) {
   if (py::isinstance<PyMapper>(source)) {
     return with_mapper(source.cast<PyMapper&>(), [](Mapper& mp) { return mp.improvement(); });
   }
-  const auto a = Array<float>::ensure(source);
-  if (!a) throw py::error_already_set();
+  const auto a = c_array_of<float>(real_array(source, "improvement", "an H x W array or a Mapper", Booleans::refused));
   if (a.ndim() != 2) throw InvalidInput("improvement must be an H x W array or a Mapper, got " +
                                         std::to_string(a.ndim()) + " dimensions");
   ImprovementMap map;
@@ -156,7 +129,7 @@ void bind_return_model(py::module_& m) {
   r.def("check_matches", &ReturnRecord::check_matches, py::arg("grid_width"), py::arg("grid_height"),
         "Raises InvalidInput naming both sizes unless the record is of this grid.");
   r.def("record_shot", [](ReturnRecord& record, const py::object& columns, const py::object& got_return) {
-    record.record_shot(to_whole_numbers<ColumnIndex>(columns, "columns"), to_flags(got_return, "got_return"));
+    record.record_shot(to_whole_numbers<ColumnIndex>(columns, "columns"), flags_of(got_return, "got_return"));
   }, py::arg("columns"), py::arg("got_return"),
         "Adds one shot: got_return[i] (bool) says whether ray columns[i] (row-major index v * width + u) returned. "
         "Checked before anything is counted: InvalidInput for different lengths or a column that is not a whole "
@@ -208,7 +181,14 @@ void bind_plan_request(py::module_& m) {
         if (r.candidates.empty()) return py::none();
         return flat_array(r.candidates).attr("astype")("?");
       }, [](PlanRequest& r, const py::object& mask) {
-        r.candidates = mask.is_none() ? std::vector<std::uint8_t>{} : to_flags(mask, "candidates");
+        if (mask.is_none()) {
+          r.candidates.clear();
+          return;
+        }
+        std::vector<std::uint8_t> flags = flags_of(mask, "candidates");
+        // The request's empty mask means every ray: an empty array given for one would mean that too.
+        if (flags.empty()) throw InvalidInput("candidates: an empty mask (give None for every ray)");
+        r.candidates = std::move(flags);
       }, "rays shape: which rays the sensor may take, an H x W bool mask (stored flat, row-major; read back as "
          "a 1-D bool array), or None for every ray.")
       .def("validate", &PlanRequest::validate, py::arg("grid_width"), py::arg("grid_height"),

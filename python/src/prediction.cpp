@@ -24,9 +24,7 @@ py::tuple to_arrays(const PredictedDepth& p) {
 }
 
 py::tuple predict_from_image(const py::handle& sparse, const SensorModelParams& model, const DepthPredictionParams& params) {
-  using Array = py::array_t<float, py::array::c_style | py::array::forcecast>;
-  const Array image = Array::ensure(sparse);
-  if (!image) throw InvalidInput("predict_dense_depth: sparse_depth is not a numeric array");
+  const auto image = c_array_of<float>(real_array(sparse, "sparse_depth", "an H x W array of depths", Booleans::refused));
   if (image.ndim() != 2)
     throw InvalidInput("predict_dense_depth: sparse_depth has " + std::to_string(image.ndim()) +
                        " dimensions, not 2 (H x W)");

@@ -278,3 +278,13 @@ def test_integer_fields_take_numpy_integers_and_refuse_floats_bools_and_strings(
         with pytest.raises(TypeError, match=r"PlanRequest.budget_rays takes an int"):
             request.budget_rays = value
     assert request.budget_rays == 5000
+
+
+def test_a_thread_count_beyond_a_c_int_is_invalid_parameter_naming_threads(mapper, sample):
+    depth, intrinsics = sample
+    for threads in (2**40, -2**40):
+        with pytest.raises(oi.InvalidParameter, match="threads"):
+            mapper.insert_depth(depth, intrinsics, threads=threads)
+    with pytest.raises(TypeError, match="threads takes an int"):
+        mapper.insert_depth(depth, intrinsics, threads=1.5)
+    assert mapper.touched_columns() == 0

@@ -116,3 +116,17 @@ def test_a_return_record_saved_with_the_map_comes_back(tmp_path, sample):
         mapper.save(tmp_path / "other.occmap", returns=oi.ReturnRecord.for_grid(4, 3))
     assert not (tmp_path / "other.occmap").exists()
 
+
+
+def test_bytes_paths_are_file_names_and_a_nul_is_refused(tmp_path, paper_mapper):
+    # os.fsdecode, as open() reads them: str() of bytes made a file named "b'...'".
+    path = os.fsencode(tmp_path / "bytes.occmap")
+    paper_mapper.save(path)
+    assert sorted(os.listdir(tmp_path)) == ["bytes.occmap"]
+    assert_same_maps(oi.load_map(path), paper_mapper)
+    # C++ stops at a NUL: the path would name another file than the one given.
+    with pytest.raises(oi.InvalidParameter, match="NUL"):
+        paper_mapper.save(str(tmp_path / "victim.occmap") + "\0.suffix")
+    with pytest.raises(oi.InvalidParameter, match="NUL"):
+        oi.load_map(str(tmp_path / "bytes.occmap") + "\0anything")
+    assert sorted(os.listdir(tmp_path)) == ["bytes.occmap"]

@@ -341,10 +341,30 @@ def test_candidates_and_return_flags_are_nonzero_flags_and_anything_else_is_name
         assert len(shot) == 5 and all(c < 20 for c in shot.columns), marked
     with pytest.raises(oi.InvalidInput, match="candidates: element 3 is NaN"):
         oi.PlanRequest(candidates=np.array([0, 1, 0, np.nan]))
-    for bad in ("abc", {}):
-        with pytest.raises(oi.InvalidInput, match="candidates: expected an array-like of numbers"):
+    # Not numbers (strings, objects, complex): a TypeError naming the argument, as the other arrays give.
+    for bad in ("abc", {}, [None], np.array([1j, 0])):
+        with pytest.raises(TypeError, match="candidates must be a real numeric array or booleans"):
             oi.PlanRequest(candidates=bad)
-    with pytest.raises(oi.InvalidInput, match="NaN"):  # numpy makes None a NaN
-        oi.PlanRequest(candidates=[None])
+    # An empty array would mean every ray (the request's own empty mask): refused, None says that.
+    with pytest.raises(oi.InvalidInput, match="empty mask"):
+        oi.PlanRequest(candidates=np.zeros(0, bool))
     returns.record_shot([0, 1], np.array([0.5, 0.0]))
     assert returns.returned.ravel()[:2].tolist() == [1, 0]
+
+
+def test_improvement_arrays_and_masks_of_other_types_raise_type_error_naming_them(pixel_mapper):
+    # A string or object used to leak pybind11's "error_already_set ... indicator not set" RuntimeError,
+    # a bool map was planned as numbers, a complex one lost its imaginary part with a warning only.
+    returns = oi.ReturnRecord.for_grid(10, 10)
+    for bad in ("abc", {}, object(), np.zeros((10, 10), bool), np.zeros((10, 10), complex)):
+        with pytest.raises(TypeError, match="improvement must be a real numeric array"):
+            oi.plan_next_shot(bad, returns)
+        with pytest.raises(TypeError, match="improvement must be a real numeric array"):
+            oi.shot_scores(bad, returns)
+    with pytest.raises(TypeError, match="mask must be a real numeric array or booleans"):
+        pixel_mapper.set_mask(np.full((480, 640), "x"))
+    nan_mask = np.ones((480, 640))
+    nan_mask[0, 0] = np.nan
+    with pytest.raises(oi.InvalidInput, match="mask: element 0 is NaN"):
+        pixel_mapper.set_mask(nan_mask)
+    assert pixel_mapper.column_mask is None

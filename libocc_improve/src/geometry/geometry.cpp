@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace occ_improve {
 
@@ -120,6 +121,14 @@ bool GridGeometry::operator==(const GridGeometry& o) const {
          a.azimuth_min_rad == b.azimuth_min_rad && a.azimuth_max_rad == b.azimuth_max_rad &&
          a.elevation_min_rad == b.elevation_min_rad && a.elevation_max_rad == b.elevation_max_rad &&
          a.depth_binning == b.depth_binning && a.depth_min_m == b.depth_min_m && a.depth_max_m == b.depth_max_m;
+}
+
+void require_column_grid_size(int width, int height) {
+  detail::require_parameter(width > 0, "width", width, "> 0");
+  detail::require_parameter(height > 0, "height", height, "> 0");
+  const std::uint64_t columns = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
+  detail::require_parameter(columns <= std::numeric_limits<ColumnIndex>::max(), "width x height",
+                            static_cast<double>(columns), "at most 2^32 - 1 columns (a column index is 32-bit)");
 }
 
 }  // namespace occ_improve

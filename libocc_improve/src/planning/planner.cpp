@@ -490,13 +490,20 @@ Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const Pla
 }
 
 int decimation_step(int width, int height, int budget_rays) {
+  require_column_grid_size(width, height);
   detail::require_parameter(budget_rays > 0, "budget_rays", budget_rays, "> 0");
-  int step = 1;
-  while ((static_cast<long long>(width + step - 1) / step) * ((height + step - 1) / step) > budget_rays) ++step;
-  return step;
+  const auto rays_at = [&](long long step) { return ((width + step - 1) / step) * ((height + step - 1) / step); };
+  // The rays fall as the step grows, to 1 at the larger side: the smallest step within the budget by bisection.
+  long long low = 1, high = std::max(width, height);
+  while (low < high) {
+    const long long mid = low + (high - low) / 2;
+    if (rays_at(mid) > budget_rays) low = mid + 1; else high = mid;
+  }
+  return static_cast<int>(low);
 }
 
 std::vector<ColumnIndex> decimation_pattern(int width, int height, int step, int offset_x, int offset_y) {
+  require_column_grid_size(width, height);
   detail::require_parameter(step > 0, "step", step, "> 0");
   detail::require_parameter(offset_x >= 0 && offset_x < step, "offset_x", offset_x, "in [0, step)");
   detail::require_parameter(offset_y >= 0 && offset_y < step, "offset_y", offset_y, "in [0, step)");

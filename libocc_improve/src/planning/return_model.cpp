@@ -25,11 +25,8 @@ void for_each_neighbour(int x, int y, int width, int height, Visit&& visit) {
 }  // namespace
 
 ReturnRecord ReturnRecord::for_grid(int width, int height) {
-  detail::require_parameter(width > 0, "width", width, "> 0");
-  detail::require_parameter(height > 0, "height", height, "> 0");
+  require_column_grid_size(width, height);
   const std::uint64_t columns = static_cast<std::uint64_t>(width) * static_cast<std::uint64_t>(height);
-  detail::require_parameter(columns <= std::numeric_limits<ColumnIndex>::max(), "width x height",
-                            static_cast<double>(columns), "at most 2^32 - 1 columns (a column index is 32-bit)");
   ReturnRecord r;
   r.width_ = width;
   r.height_ = height;

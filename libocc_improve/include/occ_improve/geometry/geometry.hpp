@@ -93,6 +93,10 @@ Eigen::Vector3d from_spherical(const SphericalPoint& s);
 
 using ColumnIndex = std::uint32_t;
 
+/// InvalidParameter unless width and height are > 0 and every column of width x height has a ColumnIndex
+/// (at most 2^32 - 1 columns), for functions given a grid's size rather than a grid.
+void require_column_grid_size(int width, int height);
+
 /// CONVENTIONS 1: a point is valid when every coordinate is finite and it is not the origin (no return).
 inline bool is_valid_point(double x, double y, double z) {
   return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) && !(x == 0 && y == 0 && z == 0);
