@@ -47,8 +47,9 @@ int main(int argc, char** argv) {
     const bool from_files = argc >= 3;
     const Cloud::Ptr first = from_files ? Cloud::Ptr(new Cloud(occ_improve::load_pcd_frame(argv[1]).cloud)) : sample_frame(1);
     const Cloud::Ptr second = from_files ? Cloud::Ptr(new Cloud(occ_improve::load_pcd_frame(argv[2]).cloud)) : sample_frame(2);
-    auto mapper = std::make_shared<occ_improve::Mapper>(from_files ? occ_improve::kinect_v1()
-                                                                   : occ_improve::kinect_v1_paper());
+    // A file's camera is fitted to its organized points (as the tools do): never assumed.
+    auto mapper = std::make_shared<occ_improve::Mapper>(
+        from_files ? occ_improve::kinect_v1(occ_improve::estimate_intrinsics(*first)) : occ_improve::kinect_v1_paper());
     mapper->insert(occ_improve::span_of(*first));
 
     // Insert the second frame and keep 20 % of it, chosen by the map (ImprovementFilter's top modes).

@@ -58,13 +58,16 @@ PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<PointT>& cloud) {
   return estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
 }
 
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZ>&, double);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBL>&, double);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGBA>&, double);
-template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<pcl::PointXYZRGB>&, double);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZ>&);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBL>&);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGBA>&);
-template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<pcl::PointXYZRGB>&);
+// The filter's and the pipeline's point types (ImprovementFilter fits its default map's camera), and XYZRGBL.
+#define OCC_IMPROVE_INSTANTIATE_INTRINSICS(T)                                      \
+  template IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<T>&, double); \
+  template PinholeIntrinsics estimate_intrinsics(const pcl::PointCloud<T>&);
+OCC_IMPROVE_INSTANTIATE_INTRINSICS(pcl::PointXYZ)
+OCC_IMPROVE_INSTANTIATE_INTRINSICS(pcl::PointXYZI)
+OCC_IMPROVE_INSTANTIATE_INTRINSICS(pcl::PointXYZL)
+OCC_IMPROVE_INSTANTIATE_INTRINSICS(pcl::PointXYZRGB)
+OCC_IMPROVE_INSTANTIATE_INTRINSICS(pcl::PointXYZRGBA)
+OCC_IMPROVE_INSTANTIATE_INTRINSICS(pcl::PointXYZRGBL)
+#undef OCC_IMPROVE_INSTANTIATE_INTRINSICS
 
 }  // namespace occ_improve

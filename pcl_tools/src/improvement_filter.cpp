@@ -4,6 +4,8 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/planning/point_selection.hpp"
+#include "occ_improve/sensor/intrinsics_fit.hpp"
+#include "occ_improve/sensor/presets.hpp"
 
 #include <pcl/filters/impl/filter_indices.hpp>
 
@@ -13,6 +15,18 @@
 #include <numeric>
 
 namespace occ_improve {
+namespace {
+
+// Indices 0, 1, ..., count - 1 in order: the whole cloud, inserted in place (a list of that length may
+// repeat or leave out points).
+bool is_every_index(const pcl::Indices& indices, std::size_t count) {
+  if (indices.size() != count) return false;
+  for (std::size_t k = 0; k < count; ++k)
+    if (indices[k] != static_cast<pcl::index_t>(k)) return false;
+  return true;
+}
+
+}  // namespace
 
 template <typename PointT>
 ImprovementFilter<PointT>::ImprovementFilter(bool extract_removed_indices)
@@ -23,6 +37,44 @@ ImprovementFilter<PointT>::ImprovementFilter(bool extract_removed_indices)
 template <typename PointT>
 void ImprovementFilter<PointT>::setSensorPreset(const SensorPreset& preset, const GridOptions& grid_options) {
   mapper_ = std::make_shared<Mapper>(preset, grid_options);
+  camera_assumed_ = false;
+}
+
+template <typename PointT>
+bool ImprovementFilter<PointT>::cameraFits() {
+  const auto& cloud = *input_;
+  const GridGeometry& geometry = mapper_->geometry();
+  const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
+  if (cloud.height <= 1 || geometry.binning() != AngularBinning::pinhole || !camera) return true;
+  if (camera_assumed_ && mapper_->grid().touched_column_count() == 0) {
+    try {
+      const PinholeIntrinsics fitted = estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
+      if (!same_camera(fitted, *camera)) mapper_ = std::make_shared<Mapper>(kinect_v1(fitted));
+      camera_assumed_ = false;
+      return true;
+    } catch (const InvalidInput& e) {
+      PCL_ERROR("[occ_improve::%s::applyFilter] the default map needs the cloud's camera, which cannot be fitted "
+                "(%s): give setSensorPreset(kinect_v1(intrinsics)).\n", getClassName().c_str(), e.what());
+      return false;
+    }
+  }
+  // Every point of a pinhole camera's organized cloud lies on its own pixel's ray: its column is its index.
+  std::size_t checked = 0, elsewhere = 0;
+  const bool sized = static_cast<int>(cloud.width) == camera->width && static_cast<int>(cloud.height) == camera->height;
+  for (std::size_t i = 0; sized && i < cloud.size(); i += 97) {
+    ColumnIndex column = 0;
+    const PointT& p = cloud[i];
+    if (!is_valid_point(p.x, p.y, p.z) || !(p.z > 0)) continue;
+    ++checked;
+    if (!geometry.column_of(p.x, p.y, p.z, column) || column != i) ++elsewhere;
+  }
+  if (sized && elsewhere * 100 <= checked) return true;  // a stray point or two, not another camera
+  PCL_ERROR("[occ_improve::%s::applyFilter] the organized cloud (%u x %u) was not taken through the map's camera "
+            "(fx=%g fy=%g cx=%g cy=%g, %d x %d): %zu of %zu sampled points fall on another pixel's ray; give the "
+            "map the cloud's camera (setSensorPreset(kinect_v1(intrinsics))).\n",
+            getClassName().c_str(), cloud.width, cloud.height, camera->fx, camera->fy, camera->cx, camera->cy,
+            camera->width, camera->height, elsewhere, checked);
+  return false;
 }
 
 template <typename PointT>
@@ -83,9 +135,10 @@ template <typename PointT>
 bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement, std::vector<ColumnIndex>& point_column) {
   const auto& cloud = *input_;
   last_report_ = {};
+  if (!cameraFits()) return false;
   if (update_map_) {
     try {
-      if (indices_->size() == cloud.size()) {
+      if (is_every_index(*indices_, cloud.size())) {
         last_report_ = mapper_->insert(span_of(cloud), insertion_options_);
       } else {
         std::vector<Eigen::Vector3f> points;

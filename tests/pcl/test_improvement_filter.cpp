@@ -328,7 +328,7 @@ void check_selective_sensing(const pcl::PointCloud<pcl::PointXYZRGBA>::Ptr& clou
 // kinect_v1 map as it is (empty at first), the frame not inserted by the filter.
 struct SelectiveSensing {
   Cloud::Ptr cloud = sample_cloud();
-  std::shared_ptr<Mapper> mapper = std::make_shared<Mapper>(kinect_v1());
+  std::shared_ptr<Mapper> mapper = std::make_shared<Mapper>(kinect_v1(sample::generate_scene().intrinsics));
   ImprovementFilter<pcl::PointXYZ> filter;
   explicit SelectiveSensing(double fraction) {
     filter.setMapper(mapper);
@@ -424,9 +424,64 @@ TEST(ImprovementFilter, ACellsSampleIsMeasuredAgainBeforeTheRaysBesideIt) {
   run.filter.filter(second);
   EXPECT_EQ(second.size(), first.size());
   EXPECT_TRUE(std::includes(second.begin(), second.end(), sampled.begin(), sampled.end()));
+  // Not by the improvement: the cells' other rays at the no-data level (0.324) outrank the samples (seen
+  // once, 0.138), and outnumber them.
   const auto& improvement = run.filter.getImprovementCloud();
-  const pcl::Indices others = minus(with_ray(improvement), second);
-  EXPECT_LT(mean_improvement(improvement, second) + 0.1, mean_improvement(improvement, others));
+  float highest_sampled = -std::numeric_limits<float>::infinity();
+  for (const auto i : sampled) highest_sampled = std::max(highest_sampled, improvement[static_cast<std::size_t>(i)].improvement);
+  std::size_t outranking = 0;
+  for (const auto i : minus(with_ray(improvement), second))
+    outranking += improvement[static_cast<std::size_t>(i)].improvement > highest_sampled + 0.1f ? 1 : 0;
+  EXPECT_GT(outranking, second.size());
+}
+
+// The default map is Kinect v1's nominal camera (fx 525) until the first organized cloud: the sample's
+// camera (fx 585) replaces it, so every point lies on its own ray. A camera given by the user is checked
+// instead: the sample through fx 525 is an error (PCL_ERROR, nothing kept), not a map of misplaced points.
+TEST(ImprovementFilter, TheDefaultMapTakesTheCloudsCameraAndAGivenOneIsChecked) {
+  const Cloud::Ptr cloud = sample_cloud();
+  const PinholeIntrinsics camera = sample::generate_scene().intrinsics;
+  ImprovementFilter<pcl::PointXYZ> filter;
+  filter.setInputCloud(cloud);
+  filter.setTopFraction(0.05);
+  pcl::Indices kept;
+  filter.filter(kept);
+  ASSERT_FALSE(kept.empty());
+  ASSERT_TRUE(filter.getMapper()->geometry().params().camera);
+  EXPECT_TRUE(same_camera(*filter.getMapper()->geometry().params().camera, camera));
+  const GridGeometry& geometry = filter.getMapper()->geometry();
+  for (const auto i : kept) {
+    ColumnIndex c = 0;
+    const auto& p = (*cloud)[static_cast<std::size_t>(i)];
+    ASSERT_TRUE(geometry.column_of(p.x, p.y, p.z, c));
+    EXPECT_EQ(c, static_cast<ColumnIndex>(i));
+  }
+  EXPECT_EQ(filter.getMapper()->grid().touched_column_count() > 0, true);
+
+  ImprovementFilter<pcl::PointXYZ> given;
+  given.setSensorPreset(kinect_v1());  // fx 525: not the sample's camera
+  given.setInputCloud(cloud);
+  pcl::Indices none;
+  given.filter(none);
+  EXPECT_TRUE(none.empty());
+  EXPECT_EQ(given.getMapper()->grid().touched_column_count(), 0u);
+}
+
+// An index list as long as the cloud is not the whole cloud unless it is 0, 1, ..., n - 1: repeated
+// indices insert what they name, and a point they leave out is not inserted.
+TEST(ImprovementFilter, IndicesAsLongAsTheCloudInsertWhatTheyName) {
+  const Cloud::Ptr cloud = sample_cloud();
+  const std::size_t middle = cloud->size() / 2 + cloud->width / 2;  // a return away from the image border
+  ASSERT_GT((*cloud)[middle].z, 0.0f);
+  pcl::IndicesPtr indices(new pcl::Indices(cloud->size(), static_cast<pcl::index_t>(middle)));
+  ImprovementFilter<pcl::PointXYZ> filter;
+  filter.setSensorPreset(kinect_v1(sample::generate_scene().intrinsics));
+  filter.setInputCloud(cloud);
+  filter.setIndices(indices);
+  pcl::Indices kept;
+  filter.filter(kept);
+  EXPECT_EQ(filter.getMapper()->grid().touched_column_count(), 9u);  // one return's 3 x 3 columns
+  EXPECT_EQ(filter.getLastReport().insertion.points_received, cloud->size());
 }
 
 TEST(ImprovementFilterRealData, SelectiveSensingOnFivePeople) {

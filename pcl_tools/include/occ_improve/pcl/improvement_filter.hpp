@@ -27,10 +27,17 @@
 // getImprovementCloud(): per input point (aligned with the input cloud, same width/height) its x y z,
 // and the surface depth, surface probability and improvement of its ray (NaN where it has no ray).
 //
-// Default map: its own, preset kinect_v1 (pixel-native, Kinect v1 intrinsics fx = fy = 525); give
-// setSensorPreset(kinect_v1(intrinsics)) for another camera.
+// Default map: its own, preset kinect_v1 (pixel-native), of the camera fitted to the first organized cloud
+// filtered (as the tools fit it: a principal point half a pixel off would put every point on its
+// neighbour's ray, and the map would read as no data); until then Kinect v1's nominal camera. With a
+// pixel-native map (its own or given), an organized cloud whose points do not fall on their own pixels
+// through the map's camera is an error (PCL_ERROR naming both). setSensorPreset / setMapper fix the camera.
 //
-// Explicitly instantiated for PointXYZ, PointXYZI, PointXYZRGB, PointXYZRGBA and PointXYZL.
+// Each filter() with the map updated inserts its input again (PCL's filters are idempotent; this one
+// integrates a stream): ask about one frame twice with setUpdateMap(false) the second time.
+//
+// Explicitly instantiated for PointXYZ, PointXYZI, PointXYZRGB, PointXYZRGBA and PointXYZL (for another
+// type, pcl::copyPointCloud into one of them: only x, y, z are read).
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/point_types.hpp"
 #include "occ_improve/planning/point_selection.hpp"
@@ -56,7 +63,10 @@ public:
   /// A map of its own for the preset (replaces any mapper set before).
   void setSensorPreset(const SensorPreset& preset, const GridOptions& grid_options = {});
   /// Shares a mapper with the caller (nullptr unsets it).
-  void setMapper(std::shared_ptr<Mapper> mapper) { mapper_ = std::move(mapper); }
+  void setMapper(std::shared_ptr<Mapper> mapper) {
+    mapper_ = std::move(mapper);
+    camera_assumed_ = false;
+  }
   std::shared_ptr<Mapper> getMapper() const { return mapper_; }
   /// true (default): insert the input before selecting; false: select against the map as it is.
   void setUpdateMap(bool update) { update_map_ = update; }
@@ -91,6 +101,9 @@ private:
   /// Fills per-point improvement (NaN without a ray), the point's column (meaningful where the improvement
   /// is not NaN) and the improvement cloud; false on error.
   bool evaluate(std::vector<float>& point_improvement, std::vector<ColumnIndex>& point_column);
+  /// The default map takes the first organized cloud's fitted camera; then an organized cloud must fall on
+  /// its own pixels through a pixel-native map's camera. False (after PCL_ERROR) otherwise.
+  bool cameraFits();
   /// Indices (into input_) selected in normal mode, ascending.
   pcl::Indices select(const std::vector<float>& point_improvement, const std::vector<ColumnIndex>& point_column) const;
   pcl::Indices stratified_top(const pcl::Indices& with_ray, const std::vector<ColumnIndex>& point_column,
@@ -98,6 +111,7 @@ private:
   bool parametersValid() const;
 
   std::shared_ptr<Mapper> mapper_;
+  bool camera_assumed_ = true;  ///< the default map, of Kinect v1's nominal camera, before any organized cloud
   bool update_map_ = true;
   InsertionOptions insertion_options_;
   ImprovementSelection selection_ = ImprovementSelection::top_fraction;
