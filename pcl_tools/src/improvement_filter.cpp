@@ -41,40 +41,20 @@ void ImprovementFilter<PointT>::setSensorPreset(const SensorPreset& preset, cons
 }
 
 template <typename PointT>
-bool ImprovementFilter<PointT>::cameraFits() {
+void ImprovementFilter<PointT>::fitDefaultCamera() {
   const auto& cloud = *input_;
-  const GridGeometry& geometry = mapper_->geometry();
-  const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
-  if (cloud.height <= 1 || geometry.binning() != AngularBinning::pinhole || !camera) return true;
-  if (camera_assumed_ && mapper_->grid().touched_column_count() == 0) {
-    try {
-      const PinholeIntrinsics fitted = estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
-      if (!same_camera(fitted, *camera)) mapper_ = std::make_shared<Mapper>(kinect_v1(fitted));
-      camera_assumed_ = false;
-      return true;
-    } catch (const InvalidInput& e) {
-      PCL_ERROR("[occ_improve::%s::applyFilter] the default map needs the cloud's camera, which cannot be fitted "
-                "(%s): give setSensorPreset(kinect_v1(intrinsics)).\n", getClassName().c_str(), e.what());
-      return false;
-    }
+  if (!camera_assumed_ || cloud.height <= 1 || mapper_->grid().touched_column_count() != 0 ||
+      mapper_->geometry().binning() != AngularBinning::pinhole)
+    return;
+  camera_assumed_ = false;
+  try {
+    const PinholeIntrinsics fitted = estimate_intrinsics_fit(cloud, kMaxIntrinsicsFitResidualPx).intrinsics;
+    if (!same_camera(fitted, *mapper_->geometry().params().camera)) mapper_ = std::make_shared<Mapper>(kinect_v1(fitted));
+  } catch (const InvalidInput& e) {  // not a pinhole range image as it is (a registered or resampled cloud)
+    PCL_WARN("[occ_improve::%s::applyFilter] the cloud's camera cannot be fitted (%s): the default map keeps Kinect "
+             "v1's nominal camera; give setSensorPreset(kinect_v1(intrinsics)) for the cloud's own.\n",
+             getClassName().c_str(), e.what());
   }
-  // Every point of a pinhole camera's organized cloud lies on its own pixel's ray: its column is its index.
-  std::size_t checked = 0, elsewhere = 0;
-  const bool sized = static_cast<int>(cloud.width) == camera->width && static_cast<int>(cloud.height) == camera->height;
-  for (std::size_t i = 0; sized && i < cloud.size(); i += 97) {
-    ColumnIndex column = 0;
-    const PointT& p = cloud[i];
-    if (!is_valid_point(p.x, p.y, p.z) || !(p.z > 0)) continue;
-    ++checked;
-    if (!geometry.column_of(p.x, p.y, p.z, column) || column != i) ++elsewhere;
-  }
-  if (sized && elsewhere * 100 <= checked) return true;  // a stray point or two, not another camera
-  PCL_ERROR("[occ_improve::%s::applyFilter] the organized cloud (%u x %u) was not taken through the map's camera "
-            "(fx=%g fy=%g cx=%g cy=%g, %d x %d): %zu of %zu sampled points fall on another pixel's ray; give the "
-            "map the cloud's camera (setSensorPreset(kinect_v1(intrinsics))).\n",
-            getClassName().c_str(), cloud.width, cloud.height, camera->fx, camera->fy, camera->cx, camera->cy,
-            camera->width, camera->height, elsewhere, checked);
-  return false;
 }
 
 template <typename PointT>
@@ -135,7 +115,7 @@ template <typename PointT>
 bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement, std::vector<ColumnIndex>& point_column) {
   const auto& cloud = *input_;
   last_report_ = {};
-  if (!cameraFits()) return false;
+  fitDefaultCamera();
   if (update_map_) {
     try {
       if (is_every_index(*indices_, cloud.size())) {

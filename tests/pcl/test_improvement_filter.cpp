@@ -19,6 +19,7 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <random>
 
 namespace occ_improve {
 namespace {
@@ -436,9 +437,9 @@ TEST(ImprovementFilter, ACellsSampleIsMeasuredAgainBeforeTheRaysBesideIt) {
 }
 
 // The default map is Kinect v1's nominal camera (fx 525) until the first organized cloud: the sample's
-// camera (fx 585) replaces it, so every point lies on its own ray. A camera given by the user is checked
-// instead: the sample through fx 525 is an error (PCL_ERROR, nothing kept), not a map of misplaced points.
-TEST(ImprovementFilter, TheDefaultMapTakesTheCloudsCameraAndAGivenOneIsChecked) {
+// camera (fx 585) replaces it, so every point lies on its own ray. A cloud that fits no camera (its points
+// shuffled) leaves the nominal one; a camera given by the user is kept whatever the cloud.
+TEST(ImprovementFilter, TheDefaultMapTakesTheCloudsCamera) {
   const Cloud::Ptr cloud = sample_cloud();
   const PinholeIntrinsics camera = sample::generate_scene().intrinsics;
   ImprovementFilter<pcl::PointXYZ> filter;
@@ -458,13 +459,20 @@ TEST(ImprovementFilter, TheDefaultMapTakesTheCloudsCameraAndAGivenOneIsChecked) 
   }
   EXPECT_EQ(filter.getMapper()->grid().touched_column_count() > 0, true);
 
+  const PinholeIntrinsics nominal = *kinect_v1().geometry.camera;
+  Cloud::Ptr shuffled(new Cloud(*cloud));
+  std::mt19937 random(7);
+  std::shuffle(shuffled->points.begin(), shuffled->points.end(), random);
+  ImprovementFilter<pcl::PointXYZ> unfitted;
+  unfitted.setInputCloud(shuffled);
+  unfitted.filter(kept);
+  EXPECT_FALSE(kept.empty());
+  EXPECT_TRUE(same_camera(*unfitted.getMapper()->geometry().params().camera, nominal));
   ImprovementFilter<pcl::PointXYZ> given;
-  given.setSensorPreset(kinect_v1());  // fx 525: not the sample's camera
+  given.setSensorPreset(kinect_v1());
   given.setInputCloud(cloud);
-  pcl::Indices none;
-  given.filter(none);
-  EXPECT_TRUE(none.empty());
-  EXPECT_EQ(given.getMapper()->grid().touched_column_count(), 0u);
+  given.filter(kept);
+  EXPECT_TRUE(same_camera(*given.getMapper()->geometry().params().camera, nominal));
 }
 
 // An index list as long as the cloud is not the whole cloud unless it is 0, 1, ..., n - 1: repeated

@@ -29,9 +29,8 @@
 //
 // Default map: its own, preset kinect_v1 (pixel-native), of the camera fitted to the first organized cloud
 // filtered (as the tools fit it: a principal point half a pixel off would put every point on its
-// neighbour's ray, and the map would read as no data); until then Kinect v1's nominal camera. With a
-// pixel-native map (its own or given), an organized cloud whose points do not fall on their own pixels
-// through the map's camera is an error (PCL_ERROR naming both). setSensorPreset / setMapper fix the camera.
+// neighbour's ray, and the map would read as no data); until then, and when that cloud fits no pinhole
+// camera (PCL_WARN), Kinect v1's nominal camera. setSensorPreset / setMapper give the camera instead.
 //
 // Each filter() with the map updated inserts its input again (PCL's filters are idempotent; this one
 // integrates a stream): ask about one frame twice with setUpdateMap(false) the second time.
@@ -101,9 +100,9 @@ private:
   /// Fills per-point improvement (NaN without a ray), the point's column (meaningful where the improvement
   /// is not NaN) and the improvement cloud; false on error.
   bool evaluate(std::vector<float>& point_improvement, std::vector<ColumnIndex>& point_column);
-  /// The default map takes the first organized cloud's fitted camera; then an organized cloud must fall on
-  /// its own pixels through a pixel-native map's camera. False (after PCL_ERROR) otherwise.
-  bool cameraFits();
+  /// The default map, before anything is inserted, takes the first organized cloud's fitted camera
+  /// (PCL_WARN when it fits none: the nominal camera stays).
+  void fitDefaultCamera();
   /// Indices (into input_) selected in normal mode, ascending.
   pcl::Indices select(const std::vector<float>& point_improvement, const std::vector<ColumnIndex>& point_column) const;
   pcl::Indices stratified_top(const pcl::Indices& with_ray, const std::vector<ColumnIndex>& point_column,
