@@ -39,5 +39,14 @@ install(FILES ${PROJECT_BINARY_DIR}/occ_improve-config.cmake
               ${PROJECT_BINARY_DIR}/occ_improve-config-version.cmake
         DESTINATION ${occ_improve_cmake_dir})
 
+# The prefix relative to the .pc file (pkg-config's ${pcfiledir}): an install moved or made with
+# `cmake --install --prefix` elsewhere than the configured prefix still points at its own headers.
+if(IS_ABSOLUTE "${CMAKE_INSTALL_LIBDIR}")
+  set(occ_improve_pc_prefix "${CMAKE_INSTALL_PREFIX}")
+else()
+  file(RELATIVE_PATH occ_improve_pc_up "/${CMAKE_INSTALL_LIBDIR}/pkgconfig" "/")
+  string(REGEX REPLACE "/$" "" occ_improve_pc_up "${occ_improve_pc_up}")
+  set(occ_improve_pc_prefix "\${pcfiledir}/${occ_improve_pc_up}")
+endif()
 configure_file(${PROJECT_SOURCE_DIR}/cmake/occ_improve.pc.in ${PROJECT_BINARY_DIR}/occ_improve.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/occ_improve.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

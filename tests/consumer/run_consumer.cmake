@@ -6,6 +6,8 @@
 # component.
 #   cmake -DBUILD_DIR=... -DSOURCE_DIR=... -DWORK_DIR=... [-DLINKER_FLAGS=...] -P run_consumer.cmake
 # LINKER_FLAGS are the build's own (a sanitizer build's static libraries need its runtime to link).
+# With -DCXX=<compiler>, the core alone is also built from pkg-config's flags of the scratch install
+# (whose prefix is not the configured one: the .pc file must point at where it lies).
 foreach(var BUILD_DIR SOURCE_DIR WORK_DIR)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "run_consumer.cmake needs -D${var}=...")
@@ -47,3 +49,19 @@ foreach(case core io all build_tree_core build_tree_all)
   run(${CMAKE_COMMAND} --build ${build})
   run(${build}/occ_improve_consumer)
 endforeach()
+
+find_program(PKG_CONFIG_EXECUTABLE pkg-config)
+if(DEFINED CXX AND PKG_CONFIG_EXECUTABLE)
+  file(GLOB_RECURSE pc_file ${prefix}/occ_improve.pc)
+  get_filename_component(pc_dir "${pc_file}" DIRECTORY)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pc_dir}
+                          ${PKG_CONFIG_EXECUTABLE} --cflags --libs occ_improve
+                  OUTPUT_VARIABLE pc_flags OUTPUT_STRIP_TRAILING_WHITESPACE RESULT_VARIABLE rc)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "consumer test: pkg-config --cflags --libs occ_improve failed (${rc})")
+  endif()
+  separate_arguments(pc_flags UNIX_COMMAND "${pc_flags}")
+  separate_arguments(linker_flags UNIX_COMMAND "${LINKER_FLAGS}")
+  run(${CXX} -std=c++17 ${SOURCE_DIR}/main.cpp -o ${WORK_DIR}/pkg_config_consumer ${pc_flags} ${linker_flags})
+  run(${WORK_DIR}/pkg_config_consumer)
+endif()
