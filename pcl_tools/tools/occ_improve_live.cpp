@@ -184,8 +184,8 @@ std::string poses_text(bool applied) { return applied ? "poses applied: map in t
 StreamSource open_device(const ToolOptions& options, const std::optional<std::string>& device, const std::string& oni) {
   StreamSource s;
   s.grabber = open_openni2_grabber(device ? *device : oni);
-  s.preset = options.preset;
-  s.frames_camera = options.preset.camera;  // the device's frames are taken as this camera's
+  s.preset = options.preset_for_camera(std::nullopt);
+  s.frames_camera = s.preset.camera;  // the device's frames are taken as this camera's
   s.text = device ? "OpenNI2 device " + (device->empty() ? std::string("(first)") : *device) : "recording " + oni;
   s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag
                                 : "camera: Kinect v1 defaults fx = fy = 525 (give -intrinsics for another device)";

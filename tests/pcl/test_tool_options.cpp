@@ -22,6 +22,7 @@
 #include <cmath>
 #include <csignal>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <initializer_list>
 #include <string>
@@ -301,15 +302,36 @@ TEST(ToolFrames, NoPosesIgnoresAPcdViewpoint) {
   EXPECT_FLOAT_EQ(as_written.cloud[1].z, 3.0f);
 }
 
-// -depth_bins 100000000 took 3.1 GB before the cap error: now refused while parsing, before any grid exists.
-TEST(ToolOptions, AGridAboveTheMemoryCapIsRefusedWhileParsing) {
-  try {
-    parse({"-depth_bins", "100000000"});
-    FAIL() << "640 x 480 x 1e8 bins must exceed the cap";
-  } catch (const ResourceLimit& e) {
-    EXPECT_NE(std::string(e.what()).find("-depth_bins"), std::string::npos) << e.what();
-  }
+// -depth_bins 100000000 took 3.1 GB before the cap error: now refused before any grid exists, while
+// parsing when the camera is known (-intrinsics, or a preset without one), else when the inputs' camera is
+// (preset_for_camera). The cap and the pixel sigmas are checked against that camera, not Kinect v1's
+// nominal one: a 320 x 240 cloud's grid is a quarter of a 640 x 480 one's, and -sigma_angle 0.01 is 5.25 px
+// at fx 525 (above the 4 px limit) but 2.6 px at fx 262.5.
+TEST(ToolOptions, AGridAboveTheMemoryCapIsRefusedBeforeAnyGridForTheInputsCamera) {
+  const auto cap_error = [](const std::function<void()>& f) {
+    try {
+      f();
+    } catch (const ResourceLimit& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(cap_error([] { parse({"-depth_bins", "100000000", "-intrinsics", "525,525,319.5,239.5"}); }).find("-depth_bins"),
+            std::string::npos);
+  EXPECT_NE(cap_error([] { parse({"-depth_bins", "100000000", "-preset", "kinect_v1_paper"}); }).find("-depth_bins"),
+            std::string::npos);
+  const ToolOptions pending = parse({"-depth_bins", "100000000"});
+  EXPECT_NE(cap_error([&] { pending.preset_for_camera(PinholeIntrinsics{262.5, 262.5, 159.5, 119.5, 320, 240}); })
+                .find("-depth_bins"), std::string::npos);
   EXPECT_NO_THROW(parse({"-depth_bins", "4096"}));
+
+  const PinholeIntrinsics qvga{262.5, 262.5, 159.5, 119.5, 320, 240};
+  const ToolOptions capped = parse({"-memory_cap", "1"});  // 640 x 480 x 2048 needs 2.4 GiB, 320 x 240 0.6
+  EXPECT_EQ(capped.preset_for_camera(qvga).camera->width, 320);
+  EXPECT_THROW(capped.preset_for_camera(PinholeIntrinsics{525, 525, 319.5, 239.5, 640, 480}), ResourceLimit);
+  const ToolOptions angle = parse({"-sigma_angle", "0.01"});
+  EXPECT_NEAR(angle.preset_for_camera(qvga).model.sigma_u_px, 2.625, 1e-3);
+  EXPECT_THROW(angle.preset_for_camera(std::nullopt), InvalidParameter);  // a device: the nominal camera
 }
 
 }  // namespace
@@ -339,6 +361,26 @@ TEST(RunTool, ASignalAfterTheLastPollStillEndsIn128PlusTheSignal) {
       << err;
   // Without a signal the run's own exit code is kept.
   EXPECT_EQ(run_tool(2, argv, flags, [](const CommandLine&) { return 0; }), 0);
+}
+
+// A signal during a step no poll interrupts (PCL reading a large ASCII PLY), then an error from the next
+// step (a cap the file exceeds): the run was interrupted, not failed; it exited 1 with the error before.
+TEST(RunTool, AnErrorAfterASignalEndsAsInterrupted) {
+  const ToolFlags flags{"occ_test", {"[options]"}, "A tool that fails after a signal.\n", {"-q"}, {}, {}, ""};
+  char name[] = "occ_test", quiet[] = "-q";
+  char* argv[] = {name, quiet, nullptr};
+  clear_stop_request();
+  testing::internal::CaptureStderr();
+  const int code = run_tool(2, argv, flags, [](const CommandLine&) -> int {
+    std::raise(SIGINT);
+    throw ResourceLimit("grid above the memory cap");
+  });
+  const std::string err = testing::internal::GetCapturedStderr();
+  clear_stop_request();
+  EXPECT_EQ(code, 128 + SIGINT);
+  EXPECT_NE(err.find("grid above the memory cap"), std::string::npos) << err;
+  EXPECT_NE(err.find("interrupted by SIGINT"), std::string::npos) << err;
+  EXPECT_EQ(run_tool(2, argv, flags, [](const CommandLine&) -> int { throw ResourceLimit("cap"); }), 1);
 }
 
 }  // namespace

@@ -17,9 +17,15 @@ namespace occ_improve {
 
 namespace {
 
-// One line on stderr: the message, and the input being worked on when the message does not name it.
+// One line on stderr: the message, and the input being worked on when the message does not name it. After
+// a stop signal the run ends as interrupted (128 + signal) whatever failed next: the user asked it to stop
+// (a long read that no poll interrupts, then the error the next step found).
 int report_failure(const std::string& message) {
   std::fprintf(stderr, "%s\n", failure_line(message).c_str());
+  if (const int signal = stop_requested()) {
+    std::fprintf(stderr, "%s\n", Cancelled(signal).what());
+    return 128 + signal;
+  }
   return 1;
 }
 

@@ -92,7 +92,7 @@ std::string describe_overrides(const PresetOverrides& o) {
 
 }  // namespace
 
-SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
+SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o, bool camera_checks) {
   if (o.sigma_depth_m) p.model.sigma_depth_m = *o.sigma_depth_m;
   if (o.sigma_depth_per_m2) p.model.sigma_depth_per_m2 = *o.sigma_depth_per_m2;
   if (o.sigma_angle_rad) {
@@ -126,16 +126,33 @@ SensorPreset apply_overrides(SensorPreset p, const PresetOverrides& o) {
   // for example, only shows here. The message names the field; say which flags set it.
   try {
     p.geometry.validate();
-    p.model.validate_for(p.geometry);
+    if (camera_checks) p.model.validate_for(p.geometry);
   } catch (const InvalidParameter& e) {
     throw InvalidParameter(std::string(e.what()) + " (after -preset " + p.name + describe_overrides(o) + ")");
   }
   return p;
 }
 
+namespace {
+
+// The grid's worst case against the cap, before any grid exists (-depth_bins 1e8 took 3.1 GB before the
+// cap's error), naming the flags that size it.
+void require_tool_grid_within_cap(const SensorPreset& preset, const GridOptions& grid, const std::string& preset_name) {
+  try {
+    require_within_memory_cap(preset.geometry, grid.memory_cap_bytes);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit(std::string(e.what()) + " (after -preset " + preset_name + " and -depth_bins/-fov;" +
+                        memory_cap_hint(true) + ")");
+  }
+}
+
+}  // namespace
+
 SensorPreset ToolOptions::preset_for_camera(const std::optional<PinholeIntrinsics>& camera) const {
-  if (intrinsics || !camera || !preset.camera) return preset;
-  return apply_overrides(preset_by_name(preset_name, *camera), overrides);
+  if (intrinsics || !preset.camera) return preset;  // checked while parsing
+  const SensorPreset p = apply_overrides(camera ? preset_by_name(preset_name, *camera) : preset, overrides);
+  require_tool_grid_within_cap(p, grid, preset_name);
+  return p;
 }
 
 ToolOptions parse_tool_options(const CommandLine& c) {
@@ -171,7 +188,9 @@ ToolOptions parse_tool_options(const CommandLine& c) {
     o.fov_vertical_deg = fov[1];
   }
 
-  t.preset = apply_overrides(t.intrinsics ? preset_by_name(t.preset_name, *t.intrinsics) : preset_by_name(t.preset_name), o);
+  const SensorPreset named = t.intrinsics ? preset_by_name(t.preset_name, *t.intrinsics) : preset_by_name(t.preset_name);
+  const bool camera_known = t.intrinsics || !named.camera;  // else the inputs' camera, found later
+  t.preset = apply_overrides(named, o, camera_known);
 
   if (declared_text(c, "-mode") == std::string("exact")) t.grid.mode = UpdateMode::exact;
   if (declared_text(c, "-clamp") == std::string("octomap")) {
@@ -182,12 +201,7 @@ ToolOptions parse_tool_options(const CommandLine& c) {
 
   if (const auto gib = declared_number(c, "-memory_cap"))
     t.grid.memory_cap_bytes = static_cast<std::size_t>(std::min(*gib * double(1 << 30), 1e18));
-  try {
-    require_within_memory_cap(t.preset.geometry, t.grid.memory_cap_bytes);
-  } catch (const ResourceLimit& e) {
-    throw ResourceLimit(std::string(e.what()) + " (after -preset " + t.preset_name + " and -depth_bins/-fov;" +
-                        memory_cap_hint(true) + ")");
-  }
+  if (camera_known) require_tool_grid_within_cap(t.preset, t.grid, t.preset_name);
   // A loaded map brings its own bins and model: the preset of the flags is not the grid then.
   if (!(c.declares("-load") && c.has("-load"))) warn_if_depth_bins_wider_than_sigma(t.preset);
   if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);

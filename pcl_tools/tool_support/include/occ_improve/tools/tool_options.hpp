@@ -24,7 +24,10 @@ struct PresetOverrides {
 struct ToolOptions {
   std::string preset_name;
   PresetOverrides overrides;
-  SensorPreset preset;  ///< the named preset (built from `intrinsics` when it is camera-based) + overrides
+  /// The named preset (built from `intrinsics` when it is camera-based) + overrides. A camera-based preset
+  /// without -intrinsics has Kinect v1's nominal camera here and its camera-dependent checks (sigmas in
+  /// pixels, the memory cap) wait for the inputs' camera: preset_for_camera does them.
+  SensorPreset preset;
   GridOptions grid;
   std::optional<PinholeIntrinsics> intrinsics;  ///< from -intrinsics or -intrinsics_file
   std::string intrinsics_flag;                  ///< "-intrinsics" or "-intrinsics_file PATH", for messages
@@ -33,8 +36,11 @@ struct ToolOptions {
   bool use_poses = true;            ///< false with -no_poses: every frame taken from the first's viewpoint
   std::vector<std::string> inputs;  ///< positional arguments, in command-line order
 
-  /// The preset again for a camera found with the input (e.g. a folder's camera-intrinsics.txt) when no
-  /// intrinsics were given on the command line; overrides are re-applied. Paper presets ignore it.
+  /// The preset again for a camera found with the input (e.g. a folder's camera-intrinsics.txt, a fitted
+  /// cloud) when no intrinsics were given on the command line; overrides are re-applied and checked for
+  /// that camera, the memory cap too (a 320 x 240 camera's grid is a quarter of the nominal one's). Without
+  /// a camera, the preset as parsed, checked (a device's frames are taken as the nominal camera's). Paper
+  /// presets ignore it.
   SensorPreset preset_for_camera(const std::optional<PinholeIntrinsics>& camera) const;
   /// Whether the preset is built from a camera (kinect_v1, kinect_v1_spherical), so frames need one.
   bool preset_needs_camera() const { return preset.camera.has_value(); }
@@ -46,8 +52,9 @@ struct ToolOptions {
 /// IoError/FormatError for an unreadable -intrinsics_file.
 ToolOptions parse_tool_options(const CommandLine& command_line);
 
-/// Applies overrides to a preset and validates the result (InvalidParameter naming the flag).
-SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides);
+/// Applies overrides to a preset and validates the result (InvalidParameter naming the flag); with
+/// `camera_checks` false, only what does not depend on the camera (its geometry).
+SensorPreset apply_overrides(SensorPreset preset, const PresetOverrides& overrides, bool camera_checks = true);
 
 /// load_map under the tool's cap; a ResourceLimit says how to raise it (-memory_cap).
 LoadedMap load_tool_map(const std::string& path, const ToolOptions& options);
