@@ -232,6 +232,14 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::strin
   } catch (const FormatError&) {
     return k;
   }
+  // A camera whose principal point lies outside the image is another camera's (a dataset's file beside
+  // an image of another size): refused as a size mismatch is, rather than sized by it.
+  if (!(k.cx >= -0.5 && k.cx <= image.width - 0.5 && k.cy >= -0.5 && k.cy <= image.height - 0.5)) {
+    std::ostringstream m;
+    m << "depth image '" << sized_by << "' is " << image.width << " x " << image.height << " but the camera of '"
+      << path << "' has its principal point at (" << k.cx << ", " << k.cy << "), outside it: not this image's camera";
+    throw InvalidInput(m.str());
+  }
   k.width = image.width;
   k.height = image.height;
   try {
@@ -269,8 +277,7 @@ std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& 
   for (const auto& candidate : {folder / "camera-intrinsics.txt", folder.parent_path() / "camera-intrinsics.txt"}) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(candidate, ec)) continue;
-    return is_depth_frame_name(frame) ? read_intrinsics_file(candidate.string(), frame)
-                                      : read_intrinsics_file(candidate.string());
+    return read_intrinsics_file(candidate.string(), frame);
   }
   return std::nullopt;
 }
@@ -309,6 +316,15 @@ std::vector<FrameSource> expand_input(const std::string& input) {
     sources.push_back(source_of(f, by_folder[folder]));
   }
   return sources;
+}
+
+FrameSource single_frame_source(const std::string& input, const std::string& flag) {
+  std::vector<FrameSource> sources = expand_input(input);
+  std::error_code ec;
+  if (std::filesystem::is_directory(input, ec))
+    throw InvalidParameter(flag + " takes one frame, and '" + input + "' is a folder of " +
+                           std::to_string(sources.size()) + " frames: give one of them");
+  return std::move(sources.front());
 }
 
 }  // namespace occ_improve

@@ -109,7 +109,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
                    OutputFolder& out, MapSaveTarget& save) {
   const std::string frame_path = *command_line.text("-simulate");
   const int budget = *command_line.integer("-budget"), max_shots = *command_line.integer("-max_shots");
-  const ToolFrame frame = read_tool_frame(options, FrameSource{frame_path, std::nullopt});
+  const ToolFrame frame = read_tool_frame(options, single_frame_source(frame_path, "-simulate"));
   const SensorPreset preset = options.preset_for_camera(frame.camera);
   if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
     throw InvalidParameter("-simulate " + frame_path + " needs an organized frame and a pixel-native preset "

@@ -80,7 +80,7 @@ SelectScene load_scene(const std::string& input, const ToolOptions& options) {
     return {"sample", f.depth_m, f.intrinsics};
   }
   // The tools' frame rules: intrinsics from -intrinsics, the dataset or fitted to the cloud; never assumed.
-  const ToolFrame frame = read_tool_frame(options, expand_input(input).front());
+  const ToolFrame frame = read_tool_frame(options, single_frame_source(input, "a scene"));
   if (!frame.cloud.isOrganized() || frame.cloud.height <= 1 || !frame.camera)
     throw InvalidInput(input + ": not an organized frame");
   s.intrinsics = *frame.camera;

@@ -236,6 +236,26 @@ TEST_F(FrameIoFiles, ASceneFolderIsTheSequenceOfItsSubfolders) {
   }
 }
 
+// A 3 x 3 matrix says nothing of the size: a depth image beside it, whatever its name, sizes it (a
+// 320 x 240 scene.png was refused against an assumed 640 x 480). A tool taking one frame refuses a folder.
+TEST_F(FrameIoFiles, AnyDepthImageSizesTheCameraBesideItAndOneFrameIsNotAFolder) {
+  write_png((dir_ / "scene.png").string(), Image16{32, 24, std::vector<std::uint16_t>(32 * 24, 1500)});
+  write("camera-intrinsics.txt", "26.25 0 15.5\n0 26.25 11.5\n0 0 1\n");
+  const FrameSource source = single_frame_source((dir_ / "scene.png").string(), "-simulate");
+  ASSERT_TRUE(source.intrinsics);
+  EXPECT_EQ(source.intrinsics->width, 32);
+  EXPECT_EQ(source.intrinsics->height, 24);
+  EXPECT_EQ(load_frame(source.path, source.intrinsics).cloud.width, 32u);
+  write_png((dir_ / "frame-000000.depth.png").string(), Image16{32, 24, std::vector<std::uint16_t>(32 * 24, 1500)});
+  write_png((dir_ / "frame-000001.depth.png").string(), Image16{32, 24, std::vector<std::uint16_t>(32 * 24, 1500)});
+  try {
+    single_frame_source(dir_.string(), "-simulate");
+    FAIL() << "a folder was taken as one frame";
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("folder of 2 frames"), std::string::npos) << e.what();
+  }
+}
+
 TEST_F(FrameIoFiles, FolderWithoutFramesIsInvalidInput) {
   write("notes.txt", "nothing here");
   EXPECT_THROW(expand_input(dir_.string()), InvalidInput);

@@ -38,7 +38,14 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
   if (!camera && is_depth_image_path(source.path))
     throw InvalidParameter("'" + source.path + "' is a depth image and no intrinsics were found for it: give "
                            "-intrinsics FX,FY,CX,CY[,W,H] or -intrinsics_file PATH");
-  LoadedFrame loaded = load_frame(source.path, camera, options.depth_encoding);
+  LoadedFrame loaded = [&] {
+    try {
+      return load_frame(source.path, camera, options.depth_encoding);
+    } catch (const InvalidInput& e) {  // a size mismatch: say whose the camera is
+      if (frame.camera_source.empty()) throw;
+      throw InvalidInput(std::string(e.what()) + " (intrinsics from " + frame.camera_source + ")");
+    }
+  }();
   require_valid_points(span_of(loaded.cloud), source.path);
   require_camera_fits(loaded.cloud, camera, source.path, frame.camera_source);
   if (loaded.viewpoint && options.use_poses) {

@@ -80,6 +80,9 @@ struct FrameSource {
 /// Throws IoError when the input does not exist, InvalidInput for a folder with no depth frames,
 /// FormatError for a malformed pose file.
 std::vector<FrameSource> expand_input(const std::string& input);
+/// The one frame a file input is (expand_input's rules: the intrinsics and pose beside it); a folder is
+/// InvalidParameter naming `flag` and how many frames it holds (a tool that takes one frame).
+FrameSource single_frame_source(const std::string& input, const std::string& flag);
 
 /// Whether the file name is a dataset folder's depth frame: 7-Scenes / 3DMatch `*.depth.png`, PCL
 /// ImageGrabber `*_depth.tif(f)` (what expand_input takes from a folder; its other images are colour).
@@ -102,9 +105,8 @@ PinholeIntrinsics read_intrinsics_file(const std::string& path);
 PinholeIntrinsics read_intrinsics_file(const std::string& path, const std::string& sized_by);
 
 /// The camera-intrinsics.txt of `folder` or of its parent (7-Scenes, 3DMatch), if any. Where it gives no
-/// size, `frame` sizes it when its name is of a dataset layout (is_depth_frame_name: one camera for the
-/// whole folder); another image does not, so that an image of another size than the camera's is still
-/// refused as such.
+/// size (a 3 x 3 matrix), the depth image `frame` sizes it: the file says nothing of the size, so no image
+/// is refused for one (640 x 480 was assumed for images not named as a dataset's frames).
 std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& folder, const std::string& frame);
 
 }  // namespace occ_improve
