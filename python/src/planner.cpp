@@ -272,13 +272,22 @@ void bind_planning(py::module_& m) {
 }
 
 /// An organized cloud (H x W x 3) as the library's fit reads it: the pixel (u, v) at xyz[(v W + u) stride].
+/// A cloud the fit refuses gets the Python way round it appended (the library names no way: the tools
+/// add their flag where they catch it).
 template <class Fit>
 IntrinsicsFit fit_organized(const py::object& points, Fit&& fit) {
   const PointsInput in = points_from_array(points);
   const py::array a = py::reinterpret_borrow<py::array>(py::module_::import("numpy").attr("asarray")(points));
   if (a.ndim() != 3) throw InvalidInput("points must be an organized H x W x 3 cloud to fit intrinsics");
   const int height = static_cast<int>(a.shape(0)), width = static_cast<int>(a.shape(1));
-  return run_interruptible([&] { return fit(in.span.xyz, width, height, in.span.stride_floats); });
+  return run_interruptible([&] {
+    try {
+      return fit(in.span.xyz, width, height, in.span.stride_floats);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(std::string(e.what()) + "; if it is a camera image, build the preset from the camera's "
+                                                 "own intrinsics instead (read_intrinsics, intrinsics_from_matrix)");
+    }
+  });
 }
 
 void bind_intrinsics_fit(py::module_& m) {
@@ -301,7 +310,8 @@ void bind_intrinsics_fit(py::module_& m) {
     });
   }, py::arg("points"), py::arg("max_rms_px") = kMaxIntrinsicsFitResidualPx,
         "fit_intrinsics that also raises InvalidInput naming the residual when the RMS exceeds max_rms_px (the "
-        "cloud is not a pinhole range image: give the intrinsics instead).");
+        "cloud is not a pinhole range image: give the intrinsics instead). max_rms_px must be finite and > 0 "
+        "(InvalidParameter otherwise).");
 }
 
 }  // namespace
