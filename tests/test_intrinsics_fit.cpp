@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <random>
 #include <utility>
 #include <vector>
@@ -42,7 +43,7 @@ TEST(IntrinsicsFit, RecoversTheCameraOfAPinholeRangeImage) {
   }
 }
 
-TEST(IntrinsicsFit, APoorFitIsRefusedNamingTheFlag) {
+TEST(IntrinsicsFit, APoorFitIsRefusedNamingTheResidualNotAToolsFlag) {
   const PinholeIntrinsics k{525, 525, 319.5, 239.5, 160, 120};
   std::vector<float> xyz = cloud_from(k);
   // Points moved off their pixels (a resampled cloud): each swapped with a random other one nearby.
@@ -57,7 +58,22 @@ TEST(IntrinsicsFit, APoorFitIsRefusedNamingTheFlag) {
     fit_intrinsics_checked(xyz.data(), k.width, k.height, 3);
     FAIL() << "expected InvalidInput";
   } catch (const InvalidInput& e) {
-    EXPECT_NE(std::string(e.what()).find("-intrinsics"), std::string::npos) << e.what();
+    // The library does not know the tools: their flag is added where they catch it (tool_frames.cpp).
+    EXPECT_NE(std::string(e.what()).find("px RMS"), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find("-intrinsics"), std::string::npos) << e.what();
+  }
+}
+
+TEST(IntrinsicsFit, ALimitNoFitCanMeetIsInvalidParameter) {
+  const PinholeIntrinsics k{525, 525, 319.5, 239.5, 160, 120};
+  const std::vector<float> xyz = cloud_from(k);
+  for (const double limit : {-1.0, 0.0, std::nan(""), std::numeric_limits<double>::infinity()}) {
+    try {
+      fit_intrinsics_checked(xyz.data(), k.width, k.height, 3, limit);
+      FAIL() << "expected InvalidParameter for max_rms_px = " << limit;
+    } catch (const InvalidParameter& e) {
+      EXPECT_NE(std::string(e.what()).find("max_rms_px"), std::string::npos) << e.what();
+    }
   }
 }
 

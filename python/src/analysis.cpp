@@ -9,19 +9,29 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <array>
+
 namespace occ_improve::python {
+
+// Region.centre_direction back from a pickle through std::array, not the Eigen caster: GCC 12 gives a
+// false maybe-uninitialized warning inside that caster for fixed-size matrices.
+template <>
+Eigen::Vector3d from_state<Eigen::Vector3d>(const py::handle& value) {
+  const auto v = value.cast<std::array<double, 3>>();
+  return {v[0], v[1], v[2]};
+}
+
 namespace {
 
 py::class_<PyMapper> mapper_class(py::module_& m) { return py::reinterpret_borrow<py::class_<PyMapper>>(m.attr("Mapper")); }
 
 void bind_region_types(py::module_& m) {
   py::class_<RegionOptions> o(m, "RegionOptions", "Which rays form regions (improvement threshold, minimum area).");
-  def_keyword_init<RegionOptions>(o);
+  def_value_struct<RegionOptions>(o);
   o.def_readwrite("min_improvement", &RegionOptions::min_improvement)
       .def_property("min_area_columns", int_field_getter(&RegionOptions::min_area_columns),
                     int_field_setter(&RegionOptions::min_area_columns, "min_area_columns"))
       .def("validate", &RegionOptions::validate);
-  def_fields_repr(o, {"min_improvement", "min_area_columns"});
   py::class_<Region> r(m, "Region",
                        "An 8-connected region of high improvement (read-only). Positions are grid coordinates u "
                        "(column) and v (row, grows downwards): image pixels with the pixel-native presets.");
@@ -42,26 +52,28 @@ void bind_region_types(py::module_& m) {
       .def_readonly("centre_direction", &Region::centre_direction,
                     "Unit vector through the centre ray, sensor frame, shape (3,).")
       .def_readonly("mean_depth_m", &Region::mean_depth_m, "Over known rays, 0 if none.");
+  def_members_pickle<Region>(r, &Region::summed_improvement, &Region::area_columns, &Region::peak_improvement,
+                             &Region::peak_u, &Region::peak_v, &Region::centre_u, &Region::centre_v, &Region::min_u,
+                             &Region::min_v, &Region::max_u, &Region::max_v, &Region::centre_direction,
+                             &Region::centre_azimuth_rad, &Region::centre_elevation_rad, &Region::mean_depth_m);
   def_fields_repr(r, {"summed_improvement", "area_columns", "peak_improvement", "centre_u", "centre_v", "peak_u",
-                      "peak_v", "min_u", "min_v", "max_u", "max_v", "centre_azimuth_rad", "centre_elevation_rad",
-                      "mean_depth_m"});
+                      "peak_v", "min_u", "min_v", "max_u", "max_v", "centre_direction", "centre_azimuth_rad",
+                      "centre_elevation_rad", "mean_depth_m"});
 }
 
 void bind_stop_types(py::module_& m) {
   py::class_<StopCriteria> c(m, "StopCriteria", "Absolute thresholds of the stop signal.");
-  def_keyword_init<StopCriteria>(c);
+  def_value_struct<StopCriteria>(c);
   c.def_readwrite("total_improvement_below", &StopCriteria::total_improvement_below)
       .def_readwrite("best_region_below", &StopCriteria::best_region_below)
       .def_readwrite("ray_floor", &StopCriteria::ray_floor)
       .def("validate", &StopCriteria::validate);
-  def_fields_repr(c, {"total_improvement_below", "best_region_below", "ray_floor"});
   py::class_<ProgressCriteria> p(m, "ProgressCriteria", "When a sequence of frames has stopped paying.");
-  def_keyword_init<ProgressCriteria>(p);
+  def_value_struct<ProgressCriteria>(p);
   p.def_readwrite("min_relative_gain", &ProgressCriteria::min_relative_gain)
       .def_property("patience", int_field_getter(&ProgressCriteria::patience),
                     int_field_setter(&ProgressCriteria::patience, "patience"))
       .def("validate", &ProgressCriteria::validate);
-  def_fields_repr(p, {"min_relative_gain", "patience"});
   py::class_<StopSignal> s(m, "StopSignal", "Whether to stop acquiring, with the totals and a reason for logs.");
   s.def_readonly("stop", &StopSignal::stop)
       .def_readonly("total_improvement", &StopSignal::total_improvement)
@@ -117,7 +129,7 @@ void bind_ranking(py::module_& m) {
 
 void bind_segmentation_types(py::module_& m) {
   py::class_<SegmentationParams> p(m, "SegmentationParams", "Contour threshold, minimum segment size, dominant plane.");
-  def_keyword_init<SegmentationParams>(p);
+  def_value_struct<SegmentationParams>(p);
   p.def_readwrite("contour_improvement_below", &SegmentationParams::contour_improvement_below)
       .def_property("min_segment_columns", int_field_getter(&SegmentationParams::min_segment_columns),
                     int_field_setter(&SegmentationParams::min_segment_columns, "min_segment_columns"))
@@ -139,7 +151,6 @@ void bind_segmentation_types(py::module_& m) {
       .def_property("threads", int_field_getter(&SegmentationParams::threads),
                     int_field_setter(&SegmentationParams::threads, "threads"))
       .def("validate", &SegmentationParams::validate);
-  def_fields_repr(p, {"contour_improvement_below", "min_segment_columns", "remove_dominant_plane", "split_concave_creases"});
   m.def("segmentation_defaults", py::overload_cast<const SensorPreset&>(&segmentation_defaults), py::arg("preset"),
         "Segmentation parameters scaled for a preset's noise model.");
   py::class_<Segment> s(m, "Segment", "One segment (read-only).");
@@ -148,7 +159,7 @@ void bind_segmentation_types(py::module_& m) {
       .def_readonly("centroid_m", &Segment::centroid_m)
       .def_readonly("mean_depth_m", &Segment::mean_depth_m)
       .def_readonly("plane", &Segment::plane);
-  def_fields_repr(s, {"label", "columns", "mean_depth_m", "plane"});
+  def_fields_repr(s, {"label", "columns", "centroid_m", "mean_depth_m", "plane"});
 }
 
 void bind_segmentation_result(py::module_& m) {

@@ -131,13 +131,12 @@ Eigen::Isometry3d pose_from(const std::optional<PoseArray>& world_from_sensor) {
 
 void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
   py::class_<OctomapExportOptions> o(m, "OctomapExportOptions", "Occupancy threshold, unknown band, memory cap.");
-  def_keyword_init<OctomapExportOptions>(o);
+  def_value_struct<OctomapExportOptions>(o);
   o.def_readwrite("occupancy_threshold", &OctomapExportOptions::occupancy_threshold)
       .def_readwrite("unknown_band_probability", &OctomapExportOptions::unknown_band_probability)
       .def_property("memory_cap_bytes", int_field_getter(&OctomapExportOptions::memory_cap_bytes),
                     int_field_setter(&OctomapExportOptions::memory_cap_bytes, "memory_cap_bytes"))
       .def("validate", &OctomapExportOptions::validate);
-  def_fields_repr(o, {"occupancy_threshold", "unknown_band_probability", "memory_cap_bytes"});
   py::class_<OctomapExportReport> r(m, "OctomapExportReport", "What the export wrote.");
   r.def_readonly("leaves_examined", &OctomapExportReport::leaves_examined)
       .def_readonly("occupied_written", &OctomapExportReport::occupied_written)

@@ -34,7 +34,7 @@ void bind_reports(py::module_& m) {
       .def_readonly("column_updates", &InsertionReport::column_updates)
       .def_readonly("seconds", &InsertionReport::seconds);
   def_fields_repr(r, {"points_received", "points_inserted", "skipped_invalid", "skipped_outside_fov", "skipped_masked",
-                      "beyond_depth_range", "nearer_than_depth_range", "seconds"});
+                      "beyond_depth_range", "nearer_than_depth_range", "column_updates", "seconds"});
   py::class_<MapperReport> mr(m, "MapperReport", "One Mapper.insert: the insertion and the improvement update.");
   mr.def_readonly("insertion", &MapperReport::insertion)
       .def_readonly("improvement_seconds", &MapperReport::improvement_seconds)
@@ -303,6 +303,12 @@ void bind_mapper_properties(py::class_<PyMapper>& c) {
   c.def("touched_columns", [](PyMapper& s) {
     return with_mapper(s, [](Mapper& mp) { return mp.grid().touched_column_count(); });
   }, "Rays that hold any data.");
+  // pickle's default said only "cannot pickle 'Mapper' object"; copying a grid of gigabytes by accident
+  // is no better: the way to keep or move a map is its file.
+  c.def("__reduce__", [](const py::object&) -> py::object {
+    throw py::type_error("Mapper cannot be pickled or copied (it holds the whole grid): use Mapper.save(path) "
+                         "and load_map(path)");
+  }, "Raises TypeError: a Mapper is kept or moved through its file (save, load_map).");
   c.def("__repr__", [](PyMapper& s) {
     const GridGeometry& g = s.mapper.geometry();
     return "Mapper(" + std::to_string(g.width()) + " x " + std::to_string(g.height()) + " x " +

@@ -90,12 +90,31 @@ ImprovementMap improvement_from(const py::handle& source) {
   return map;
 }
 
+/// ReturnRecord.from_counts: counts as H x W or flat (row-major) array-likes, checked before use.
+ReturnRecord record_from_counts(int width, int height, const py::object& asked, const py::object& returned) {
+  require_rows_of_the_grid(asked, "asked", width, height);
+  require_rows_of_the_grid(returned, "returned", width, height);
+  return ReturnRecord::from_counts(width, height, to_whole_numbers<std::uint32_t>(asked, "asked"),
+                                   to_whole_numbers<std::uint32_t>(returned, "returned"));
+}
+
+/// A record pickled as (width, height, asked, returned) and rebuilt by from_counts: the neighbour sums
+/// and totals follow from the counts. A record of no grid (ReturnRecord()) stays one.
+py::tuple record_state(const ReturnRecord& r) {
+  return py::make_tuple(r.width(), r.height(), flat_array(r.asked()), flat_array(r.returned()));
+}
+ReturnRecord record_from_state(const py::tuple& state) {
+  if (state.size() != 4) throw InvalidInput("a pickled ReturnRecord holds (width, height, asked, returned)");
+  const int width = state[0].cast<int>(), height = state[1].cast<int>();
+  if (width == 0 && height == 0) return ReturnRecord();
+  return record_from_counts(width, height, state[2], state[3]);
+}
+
 void bind_return_model(py::module_& m) {
   py::class_<ReturnModelParams> p(m, "ReturnModelParams", "Weight of the neighbourhood prior of the return model.");
-  def_keyword_init<ReturnModelParams>(p);
+  def_value_struct<ReturnModelParams>(p);
   p.def_readwrite("prior_strength_shots", &ReturnModelParams::prior_strength_shots)
       .def("validate", &ReturnModelParams::validate, "Raises InvalidParameter unless finite and > 0.");
-  def_fields_repr(p, {"prior_strength_shots"});
 
   py::class_<ReturnRecord> r(m, "ReturnRecord",
                              "Per ray: the shots that asked for it and those that got a return. Counts are H x W "
@@ -103,12 +122,8 @@ void bind_return_model(py::module_& m) {
   r.def(py::init<>(), "An empty record of no grid (use for_grid).")
       .def_static("for_grid", &ReturnRecord::for_grid, py::arg("width"), py::arg("height"),
                   "An empty record for width x height columns.")
-      .def_static("from_counts", [](int width, int height, const py::object& asked, const py::object& returned) {
-        require_rows_of_the_grid(asked, "asked", width, height);
-        require_rows_of_the_grid(returned, "returned", width, height);
-        return ReturnRecord::from_counts(width, height, to_whole_numbers<std::uint32_t>(asked, "asked"),
-                                         to_whole_numbers<std::uint32_t>(returned, "returned"));
-      }, py::arg("width"), py::arg("height"), py::arg("asked"), py::arg("returned"),
+      .def_static("from_counts", &record_from_counts, py::arg("width"), py::arg("height"), py::arg("asked"),
+                  py::arg("returned"),
                   "A record from saved counts (H x W or flat, row-major). Raises InvalidInput for other sizes, "
                   "counts that are not whole numbers >= 0, more returns than asks or more than 2^28 asks of a ray.")
       .def_property_readonly("width", &ReturnRecord::width)
@@ -135,6 +150,8 @@ void bind_return_model(py::module_& m) {
         "Checked before anything is counted: InvalidInput for different lengths or a column that is not a whole "
         "number >= 0, InvalidParameter for a column outside the grid.");
   def_fields_repr(r, {"width", "height", "total_asked", "total_returned"});
+  def_copy<ReturnRecord>(r);
+  r.def(py::pickle(&record_state, &record_from_state));
 
   m.def("record_return_rate", &record_return_rate, py::arg("record"),
         "Returns / asks over the whole record (1 for an empty record).");
@@ -160,7 +177,7 @@ void bind_plan_request(py::module_& m) {
       .value("constant", LocalModel::constant, "nearest-sample prediction")
       .value("plane", LocalModel::plane, "linear prediction");
   py::class_<PlanRequest> q(m, "PlanRequest", "Budget, shape, re-acquisition share, stop level, candidate mask.");
-  def_keyword_init<PlanRequest>(q);
+  def_value_struct<PlanRequest>(q);
   q.def_property("budget_rays", int_field_getter(&PlanRequest::budget_rays),
                  int_field_setter(&PlanRequest::budget_rays, "budget_rays"))
       .def_readwrite("shape", &PlanRequest::shape)
@@ -193,8 +210,6 @@ void bind_plan_request(py::module_& m) {
          "a 1-D bool array), or None for every ray.")
       .def("validate", &PlanRequest::validate, py::arg("grid_width"), py::arg("grid_height"),
            "Raises InvalidParameter naming the bad value, InvalidInput for a mask of the wrong size.");
-  def_fields_repr(q, {"budget_rays", "shape", "window_width_columns", "window_height_columns", "negative_share",
-                      "stop_gain_per_ray_below", "stop_view_share", "return_model"});
 }
 
 void bind_shot(py::module_& m) {
@@ -272,13 +287,22 @@ void bind_planning(py::module_& m) {
 }
 
 /// An organized cloud (H x W x 3) as the library's fit reads it: the pixel (u, v) at xyz[(v W + u) stride].
+/// A cloud the fit refuses gets the Python way round it appended (the library names no way: the tools
+/// add their flag where they catch it).
 template <class Fit>
 IntrinsicsFit fit_organized(const py::object& points, Fit&& fit) {
   const PointsInput in = points_from_array(points);
   const py::array a = py::reinterpret_borrow<py::array>(py::module_::import("numpy").attr("asarray")(points));
   if (a.ndim() != 3) throw InvalidInput("points must be an organized H x W x 3 cloud to fit intrinsics");
   const int height = static_cast<int>(a.shape(0)), width = static_cast<int>(a.shape(1));
-  return run_interruptible([&] { return fit(in.span.xyz, width, height, in.span.stride_floats); });
+  return run_interruptible([&] {
+    try {
+      return fit(in.span.xyz, width, height, in.span.stride_floats);
+    } catch (const InvalidInput& e) {
+      throw InvalidInput(std::string(e.what()) + "; if it is a camera image, build the preset from the camera's "
+                                                 "own intrinsics instead (read_intrinsics, intrinsics_from_matrix)");
+    }
+  });
 }
 
 void bind_intrinsics_fit(py::module_& m) {
@@ -301,7 +325,8 @@ void bind_intrinsics_fit(py::module_& m) {
     });
   }, py::arg("points"), py::arg("max_rms_px") = kMaxIntrinsicsFitResidualPx,
         "fit_intrinsics that also raises InvalidInput naming the residual when the RMS exceeds max_rms_px (the "
-        "cloud is not a pinhole range image: give the intrinsics instead).");
+        "cloud is not a pinhole range image: give the intrinsics instead). max_rms_px must be finite and > 0 "
+        "(InvalidParameter otherwise).");
 }
 
 }  // namespace

@@ -44,13 +44,12 @@ void bind_prediction(py::module_& m) {
              "linear in inverse depth over the samples' Delaunay triangles, never across a depth discontinuity");
   py::class_<DepthPredictionParams> p(m, "DepthPredictionParams",
                                       "Rule, radius [columns] and discontinuity test [sigma(z)] of a depth prediction.");
-  def_keyword_init<DepthPredictionParams>(p);
+  def_value_struct<DepthPredictionParams>(p);
   p.def_property("radius_columns", int_field_getter(&DepthPredictionParams::radius_columns),
                  int_field_setter(&DepthPredictionParams::radius_columns, "radius_columns"))
       .def_readwrite("rule", &DepthPredictionParams::rule)
       .def_readwrite("discontinuity_sigmas", &DepthPredictionParams::discontinuity_sigmas)
       .def("validate", &DepthPredictionParams::validate);
-  def_fields_repr(p, {"radius_columns", "rule", "discontinuity_sigmas"});
   m.def("predict_dense_depth", &predict_from_image, py::arg("sparse_depth"), py::arg("model"),
         py::arg("params") = DepthPredictionParams{},
         "A dense depth from a sparse H x W depth image in metres (0 or NaN: no sample). Returns (depth_m "

@@ -16,7 +16,7 @@ namespace {
 
 void bind_intrinsics(py::module_& m) {
   py::class_<PinholeIntrinsics> k(m, "PinholeIntrinsics", "A pinhole depth camera (pixels; u right, v down).");
-  def_keyword_init<PinholeIntrinsics>(k);
+  def_value_struct<PinholeIntrinsics>(k);
   k.def_readwrite("fx", &PinholeIntrinsics::fx)
       .def_readwrite("fy", &PinholeIntrinsics::fy)
       .def_readwrite("cx", &PinholeIntrinsics::cx)
@@ -26,7 +26,6 @@ void bind_intrinsics(py::module_& m) {
       .def_property("height", int_field_getter(&PinholeIntrinsics::height),
                     int_field_setter(&PinholeIntrinsics::height, "height"))
       .def("validate", &PinholeIntrinsics::validate, "Raises InvalidParameter naming the first bad field.");
-  def_fields_repr(k, {"fx", "fy", "cx", "cy", "width", "height"});
   m.def("kinect_v1_intrinsics", &kinect_v1_intrinsics, "Kinect v1 as OpenNI reports it (fx = fy = 525).");
 }
 
@@ -48,7 +47,7 @@ void bind_geometry_params(py::module_& m) {
   m.def("registered_angular_binnings", &registered_angular_binnings, "The tags angular_binning may name.");
   py::class_<GeometryParams> g(m, "GeometryParams",
                                "The grid's binning, bins and ranges (radians or pixels, metres).");
-  def_keyword_init<GeometryParams>(g);
+  def_value_struct<GeometryParams>(g);
   g.def_readwrite("angular_binning", &GeometryParams::angular_binning)
       .def_readwrite("camera", &GeometryParams::camera,
                      "pinhole: the camera whose pixels are the columns; spherical: marks observable columns, or None.")
@@ -68,13 +67,12 @@ void bind_geometry_params(py::module_& m) {
       .def_readwrite("depth_min_m", &GeometryParams::depth_min_m)
       .def_readwrite("depth_max_m", &GeometryParams::depth_max_m)
       .def("validate", &GeometryParams::validate, "Raises InvalidParameter naming the first bad field.");
-  def_fields_repr(g, {"angular_binning", "azimuth_bins", "elevation_bins", "depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
 }
 
 void bind_model_params(py::module_& m) {
   py::class_<SensorModelParams> s(m, "SensorModelParams",
                                   "Eq. 1's noise model: sigma_rho = max(floor, sigma_depth_m + sigma_depth_per_m2 rho^2).");
-  def_keyword_init<SensorModelParams>(s);
+  def_value_struct<SensorModelParams>(s);
   s.def_readwrite("sigma_azimuth_rad", &SensorModelParams::sigma_azimuth_rad)
       .def_readwrite("sigma_elevation_rad", &SensorModelParams::sigma_elevation_rad)
       .def_readwrite("sigma_u_px", &SensorModelParams::sigma_u_px)
@@ -84,8 +82,6 @@ void bind_model_params(py::module_& m) {
       .def_readwrite("sigma_depth_floor_m", &SensorModelParams::sigma_depth_floor_m)
       .def_readwrite("support_k", &SensorModelParams::support_k)
       .def("validate", &SensorModelParams::validate, "Raises InvalidParameter naming the first bad field.");
-  def_fields_repr(s, {"sigma_azimuth_rad", "sigma_elevation_rad", "sigma_depth_m", "sigma_depth_per_m2",
-                      "sigma_depth_floor_m", "support_k"});
 }
 
 /// preset_by_name(name) for a preset that does not depend on a camera; a camera preset is refused
@@ -100,15 +96,14 @@ SensorPreset preset_by_name_without_camera(const std::string& name) {
 
 void bind_preset(py::module_& m) {
   py::class_<SensorPreset> p(m, "SensorPreset", "A grid geometry and a sensor model that belong together.");
-  def_keyword_init<SensorPreset>(p);
+  def_value_struct<SensorPreset>(p);
   p.def_readwrite("name", &SensorPreset::name)
       .def_readwrite("geometry", &SensorPreset::geometry)
       .def_readwrite("model", &SensorPreset::model)
       .def_readwrite("camera", &SensorPreset::camera, "The intrinsics it was built from, or None.");
-  def_fields_repr(p, {"name", "geometry", "camera"});
 
   py::class_<PinholePresetOptions> o(m, "PinholePresetOptions", "Depth axis and noise for preset_from_pinhole.");
-  def_keyword_init<PinholePresetOptions>(o);
+  def_value_struct<PinholePresetOptions>(o);
   o.def_readwrite("angular_binning", &PinholePresetOptions::angular_binning)
       .def_property("depth_bins", int_field_getter(&PinholePresetOptions::depth_bins),
                     int_field_setter(&PinholePresetOptions::depth_bins, "depth_bins"))
@@ -119,10 +114,9 @@ void bind_preset(py::module_& m) {
       .def_readwrite("sigma_depth_per_m2", &PinholePresetOptions::sigma_depth_per_m2)
       .def_readwrite("sigma_depth_floor_m", &PinholePresetOptions::sigma_depth_floor_m)
       .def_readwrite("support_k", &PinholePresetOptions::support_k);
-  def_fields_repr(o, {"depth_bins", "depth_binning", "depth_min_m", "depth_max_m"});
 
   py::class_<LidarRingsOptions> l(m, "LidarRingsOptions", "A spinning LiDAR's rings, azimuth steps, depth and noise.");
-  def_keyword_init<LidarRingsOptions>(l);
+  def_value_struct<LidarRingsOptions>(l);
   l.def_readwrite("ring_elevations_deg", &LidarRingsOptions::ring_elevations_deg)
       .def_property("azimuth_steps", int_field_getter(&LidarRingsOptions::azimuth_steps),
                     int_field_setter(&LidarRingsOptions::azimuth_steps, "azimuth_steps"))
@@ -137,7 +131,6 @@ void bind_preset(py::module_& m) {
       .def_readwrite("sigma_azimuth_rad", &LidarRingsOptions::sigma_azimuth_rad)
       .def_readwrite("sigma_elevation_rad", &LidarRingsOptions::sigma_elevation_rad)
       .def_readwrite("support_k", &LidarRingsOptions::support_k);
-  def_fields_repr(l, {"azimuth_steps", "azimuth_min_deg", "azimuth_max_deg", "depth_bins", "depth_min_m", "depth_max_m"});
   m.def("lidar_rings", &lidar_rings, py::arg("options") = LidarRingsOptions{}, py::arg("name") = "lidar_rings",
         "A spinning LiDAR's range image (lidar_rings binning); the default options are a Velodyne VLP-16.");
 
@@ -166,7 +159,7 @@ void bind_grid_options(py::module_& m) {
       .value("clamped", UpdateMode::clamped, "clamped after each update, as OctoMap does (default)")
       .value("exact", UpdateMode::exact, "eq. 2 exactly, no bounds");
   py::class_<GridOptions> g(m, "GridOptions", "Update mode, clamping probabilities and the memory cap.");
-  def_keyword_init<GridOptions>(g);
+  def_value_struct<GridOptions>(g);
   g.def_readwrite("mode", &GridOptions::mode)
       .def_readwrite("probability_min", &GridOptions::probability_min)
       .def_readwrite("probability_max", &GridOptions::probability_max)
@@ -174,7 +167,6 @@ void bind_grid_options(py::module_& m) {
                     int_field_setter(&GridOptions::memory_cap_bytes, "memory_cap_bytes"))
       .def("validate", &GridOptions::validate, "Raises InvalidParameter naming the first bad field.")
       .def_static("octomap_clamping", &GridOptions::octomap_clamping, "OctoMap's clamping (0.1192 / 0.971).");
-  def_fields_repr(g, {"mode", "probability_min", "probability_max", "memory_cap_bytes"});
 }
 
 /// The built-in sample frame as (depth H x W float32 metres, intrinsics); 0 = no return.

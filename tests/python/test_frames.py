@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 import occ_improve as oi
+from conftest import assert_same_maps
 
 
 def test_depth_png_round_trip_and_wrong_images(tmp_path):
@@ -10,7 +11,7 @@ def test_depth_png_round_trip_and_wrong_images(tmp_path):
     millimetres = (np.arange(480 * 640, dtype=np.uint32) % 60000).astype(np.uint16).reshape(480, 640)
     Image.fromarray(millimetres).save(tmp_path / "d.png")
     depth = oi.read_depth_png(tmp_path / "d.png")
-    np.testing.assert_array_equal(depth, (millimetres * np.float32(0.001)).astype(np.float32))
+    np.testing.assert_array_equal(depth, (millimetres * 0.001).astype(np.float32))  # in double, rounded once
     Image.fromarray(np.zeros((4, 4, 3), np.uint8)).save(tmp_path / "rgb.png")
     with pytest.raises(oi.InvalidInput, match="not a 16-bit grey depth image"):
         oi.read_depth_png(tmp_path / "rgb.png")
@@ -20,6 +21,36 @@ def test_depth_png_round_trip_and_wrong_images(tmp_path):
     Image.fromarray(np.full((4, 4), -1000, np.int32)).save(tmp_path / "negative.tif")
     with pytest.raises(oi.InvalidInput, match="negative.tif.*not a 16-bit grey depth image"):
         oi.read_depth_png(tmp_path / "negative.tif")
+
+
+def test_a_depth_png_read_or_inserted_raw_gives_one_map(tmp_path, sample):
+    """read_depth_png multiplied in float32 (float32(mm) * float32(0.001)), insert_depth(mm, scale=0.001)
+    in double: 1 ulp apart on about half the pixels, so the two routes for one PNG built different maps."""
+    Image = pytest.importorskip("PIL.Image", reason="reading depth PNGs needs Pillow (Debian: python3-pil)")
+    depth, k = sample
+    millimetres = np.round(depth * 1000).astype(np.uint16)
+    Image.fromarray(millimetres).save(tmp_path / "d.png")
+    read = oi.read_depth_png(tmp_path / "d.png")
+    assert read.dtype == np.float32
+    np.testing.assert_array_equal(read, (millimetres.astype(np.float64) * 0.001).astype(np.float32))
+    via_png, via_raw = oi.Mapper(oi.kinect_v1(k)), oi.Mapper(oi.kinect_v1(k))
+    via_png.insert_depth(read, k)
+    via_raw.insert_depth(millimetres, k, scale=0.001)
+    assert_same_maps(via_png, via_raw)
+    tum = oi.read_depth_png(tmp_path / "d.png", scale=1 / 5000)  # any scale: the product is the double's
+    np.testing.assert_array_equal(tum, (millimetres.astype(np.float64) / 5000).astype(np.float32))
+
+
+@pytest.mark.parametrize("scale", [-1.0, 0.0, float("nan"), float("inf"), -0.001])
+def test_depth_png_scale_must_be_finite_and_positive(tmp_path, scale):
+    """A negative scale gave negative depths and NaN a frame of NaN, without a word; insert_depth
+    refuses both naming scale."""
+    Image = pytest.importorskip("PIL.Image", reason="reading depth PNGs needs Pillow (Debian: python3-pil)")
+    Image.fromarray(np.full((4, 4), 1000, np.uint16)).save(tmp_path / "d.png")
+    with pytest.raises(oi.InvalidParameter, match=r"scale = .* must be finite and > 0"):
+        oi.read_depth_png(tmp_path / "d.png", scale=scale)
+    with pytest.raises(oi.InvalidParameter, match=r"scale = .* must be finite and > 0"):
+        oi.read_depth_png(tmp_path / "missing.png", scale=scale)  # checked before the file is read
 
 
 def test_depth_png_claiming_gigapixels_is_invalid_input(tmp_path):

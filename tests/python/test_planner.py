@@ -204,6 +204,29 @@ def test_fit_intrinsics_refuses_what_is_no_pinhole_image(sample):
         oi.fit_intrinsics(np.full((20, 20, 3), np.nan, np.float32))
 
 
+def test_a_refused_fit_names_no_command_line_flag(sample):
+    """The library's message once ended "give the camera with -intrinsics", a flag of the tools that
+    Python has not: from Python the way round is the camera's own intrinsics."""
+    depth, k = sample
+    shifted = oi.depth_to_points(depth, k)
+    shifted[::2, :, 0] += 0.01
+    with pytest.raises(oi.InvalidInput) as refused:
+        oi.fit_intrinsics_checked(shifted)
+    message = str(refused.value)
+    assert "px RMS" in message and "-intrinsics" not in message and "read_intrinsics" in message
+
+
+@pytest.mark.parametrize("limit", [-1.0, 0.0, float("nan"), float("inf")])
+def test_fit_intrinsics_checked_refuses_a_limit_no_fit_can_meet(sample, limit):
+    """max_rms_px = -1, 0 or NaN was an InvalidInput saying the cloud is no pinhole image (every fit
+    "exceeds" it); inf let any fit through. The limit is checked first, as every parameter."""
+    depth, k = sample
+    cloud = oi.depth_to_points(depth, k)
+    with pytest.raises(oi.InvalidParameter, match="max_rms_px"):
+        oi.fit_intrinsics_checked(cloud, max_rms_px=limit)
+    assert oi.fit_intrinsics_checked(cloud, max_rms_px=0.5).rms_residual_px < 0.5
+
+
 def test_coarse_to_fine_covers_every_block_once_on_a_fresh_view(sample):
     """Strategy (g) from Python: on a map without data, a shot of one ray per 16-column block is the
     coverage pass (planner.hpp): exactly one ray in every block, none twice."""

@@ -111,5 +111,6 @@ def test_python_maps_equal_the_cpp_tools_maps(tmp_path):
     python = oi.Mapper(oi.kinect_v1(k))
     python.insert_depth(depth, k)
     assert cpp.geometry.depth_bins == python.geometry.depth_bins
-    # Same decoding (mm * 0.001 in double, then float), same back-projection, same insertion: bit for bit.
+    # Same decoding (mm * 0.001 in double, rounded to float once: read_depth_png here, insert_depth(mm,
+    # scale=0.001) and the tool's depth_in_metres alike), same back-projection, same insertion: bit for bit.
     assert_same_maps(cpp, python)

@@ -29,10 +29,19 @@ def stub_tree():
     return names, classes
 
 
+# Dunders the stub must declare where the module defines them (copy.copy and deepcopy are typed by them).
+CHECKED_DUNDERS = {"__copy__", "__deepcopy__"}
+
+
 def runtime_members(cls):
-    if hasattr(cls, "__members__"):  # a pybind11 enum: its values are its members
-        return set(cls.__members__)
-    return {n for n in vars(cls) if not n.startswith("_")}
+    """Public names a class defines (a pybind11 enum's values are among them, with its name and value),
+    and the checked dunders."""
+    return {n for n in vars(cls) if not n.startswith("_") or n in CHECKED_DUNDERS}
+
+
+def runtime_enums():
+    """The module's pybind11 enums: classes with __members__ (name -> value)."""
+    return {n: c for n, c in vars(_core).items() if isinstance(c, type) and hasattr(c, "__members__")}
 
 
 def test_every_module_name_is_in_the_stub_and_back():
@@ -56,8 +65,38 @@ def test_every_class_member_is_in_the_stub_and_back():
         if not oi.HAS_OCTOMAP and name == "Mapper":
             members = members - {"export_octomap"}
         assert built - members == set(), f"{name}: in the module, missing from the stub"
-        members = {m for m in members if not m.startswith("_")}
+        members = {m for m in members if not m.startswith("_") or m in CHECKED_DUNDERS}
         assert members - built == set(), f"{name}: in the stub, not in the module"
+
+
+def test_enum_stubs_declare_pybind11_enums_as_they_are_at_runtime():
+    """The stub declared UpdateMode, ShotShape, ... as enum.Enum subclasses, but pybind11 enums are not:
+    isinstance(x, enum.Enum) is False and list(UpdateMode) raises. They are declared as pybind11-stubgen
+    does: a plain class with __members__, every value a class attribute of the class's type, name and
+    value properties, __int__, __index__, __eq__, __hash__ and __init__(self, value: int)."""
+    import enum
+
+    enums = runtime_enums()
+    assert set(enums) >= {"UpdateMode", "ShotShape", "RefineBy", "LocalModel", "DepthPredictionRule"}
+    stub = {n.name: n for n in ast.parse(STUB.read_text()).body if isinstance(n, ast.ClassDef)}
+    for name, cls in enums.items():
+        some = next(iter(cls.__members__.values()))
+        assert not isinstance(some, enum.Enum)  # what the stub must not claim
+        assert cls(some.value) == some and int(some) == some.value and hash(some) == hash(cls(some.value))
+        node = stub[name]
+        assert node.bases == [], f"{name}: a base in the stub ({ast.unparse(node.bases[0])}), none at runtime"
+        annotated = {n.target.id: ast.unparse(n.annotation) for n in node.body if isinstance(n, ast.AnnAssign)}
+        assert annotated.pop("__members__") == f"ClassVar[dict[str, {name}]]"
+        assert annotated == {m: f"ClassVar[{name}]" for m in cls.__members__}, f"{name}: values differ"
+        functions = {f.name: f for f in node.body if isinstance(f, ast.FunctionDef)}
+        for method in ("__init__", "__int__", "__index__", "__eq__", "__hash__", "name", "value"):
+            assert method in functions and hasattr(cls, method), f"{name}.{method}"
+        assert [ast.unparse(a) for a in functions["__init__"].args.args] == ["self", "value: int"]
+        for prop in ("name", "value"):
+            assert [ast.unparse(d) for d in functions[prop].decorator_list] == ["property"], f"{name}.{prop}"
+            assert isinstance(vars(cls)[prop], property)
+    subclasses_enum = [n for n, c in stub.items() if any("Enum" in ast.unparse(b) for b in c.bases)]
+    assert subclasses_enum == []
 
 
 def test_functions_and_methods_have_docstrings():

@@ -64,11 +64,14 @@ IntrinsicsFit fit_intrinsics(const float* xyz, int width, int height, std::size_
 
 IntrinsicsFit fit_intrinsics_checked(const float* xyz, int width, int height, std::size_t stride_floats,
                                      double max_rms_px) {
+  // Before the fit: a limit no fit can meet (<= 0, NaN) is the caller's mistake, not the cloud's.
+  detail::require_parameter(std::isfinite(max_rms_px) && max_rms_px > 0, "max_rms_px", max_rms_px, "finite and > 0");
   const IntrinsicsFit fit = fit_intrinsics(xyz, width, height, stride_floats);
   if (!(fit.rms_residual_px <= max_rms_px)) {
+    // No hint how to give the camera: that is the caller's (a tool's flag, a Python argument).
     std::ostringstream m;
     m << "the cloud is not a pinhole range image: intrinsics fitted from its points miss their pixels by "
-      << fit.rms_residual_px << " px RMS (at most " << max_rms_px << " accepted); give the camera with -intrinsics";
+      << fit.rms_residual_px << " px RMS (at most " << max_rms_px << " accepted)";
     throw InvalidInput(m.str());
   }
   return fit;

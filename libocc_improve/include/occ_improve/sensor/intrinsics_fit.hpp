@@ -26,7 +26,8 @@ constexpr double kMaxIntrinsicsFitResidualPx = 0.01;
 IntrinsicsFit fit_intrinsics(const float* xyz, int width, int height, std::size_t stride_floats);
 
 /// fit_intrinsics that also refuses a poor fit (RMS above max_rms_px) with InvalidInput naming the
-/// residual, so that callers tell the user to give the intrinsics instead.
+/// residual, so that callers tell the user to give the intrinsics instead (the message names no way to
+/// give them: the caller knows its own). max_rms_px not finite or <= 0 is InvalidParameter.
 IntrinsicsFit fit_intrinsics_checked(const float* xyz, int width, int height, std::size_t stride_floats,
                                      double max_rms_px = kMaxIntrinsicsFitResidualPx);
 
