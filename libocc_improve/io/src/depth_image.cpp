@@ -65,14 +65,16 @@ DepthImage16 read_pgm16(const std::string& path) {
   return image;
 }
 
+// value x scale in double, rounded to float once: what the Python module's insert_depth(values, scale) and
+// read_depth_png compute, so that one PNG read either way gives one map (float x float rounded twice: 1 ulp
+// off on half of a frame's pixels).
+float scaled(std::uint16_t v, double scale) { return static_cast<float>(v * scale); }
+
 float decode(std::uint16_t v, DepthEncoding e) {
   switch (e) {
-    case DepthEncoding::millimetres: return v * 1e-3f;
-    case DepthEncoding::tum_5000: return v / 5000.0f;
-    case DepthEncoding::sun_rotated_mm: {
-      const std::uint16_t mm = static_cast<std::uint16_t>((v >> 3) | (v << 13));
-      return mm * 1e-3f;
-    }
+    case DepthEncoding::millimetres: return scaled(v, 1e-3);
+    case DepthEncoding::tum_5000: return scaled(v, 1.0 / 5000.0);
+    case DepthEncoding::sun_rotated_mm: return scaled(static_cast<std::uint16_t>((v >> 3) | (v << 13)), 1e-3);
     case DepthEncoding::kinect_disparity:
       if (v >= 1092) return 0.0f;  // 2047 = no return; beyond 1092.5 the model has no depth
       return 351.3f / (1092.5f - static_cast<float>(v));
