@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <sys/wait.h>
 #include <unistd.h>
 
 namespace occ_improve {
@@ -94,6 +95,32 @@ TEST_F(OutputFolderTest, ForeignFolderIsRefusedAndKept) {
   }
   EXPECT_EQ(contents(file("data/frame.depth.png")), "frame");
   EXPECT_EQ(entry_count(), 1u);
+}
+
+// An empty folder the user made read-only was replaced by the staged (writable) one, its parent being
+// writable. Root writes anywhere, so as root the check runs in a child process as nobody.
+TEST_F(OutputFolderTest, AReadOnlyFolderIsRefusedAndKeepsItsMode) {
+  fs::create_directory(file("locked"));
+  fs::permissions(file("locked"), fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                      fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  fs::permissions(folder_, fs::perms::all);  // the parent: writable by anyone, as in the trial
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0)) ::_exit(3);
+    try {
+      OutputFolder out(file("locked"), "tool_a", false);
+      ::_exit(1);
+    } catch (const IoError& e) {
+      ::_exit(std::string(e.what()).find("cannot write") != std::string::npos ? 0 : 2);
+    }
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "1: the read-only folder was taken; 2: another error; 3: no nobody user";
+  EXPECT_EQ(fs::status(file("locked")).permissions() & fs::perms::owner_write, fs::perms::none);
+  fs::permissions(file("locked"), fs::perms::owner_all);
 }
 
 TEST_F(OutputFolderTest, AnotherToolsOutputIsForeign) {

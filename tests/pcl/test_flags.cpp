@@ -111,7 +111,13 @@ TEST(CommandLine, RefusalsNameTheFlagAndTheValue) {
   refused({"-mode", "fast"}, "-mode fast is invalid: must be one of clamped, exact");
   refused({"-threads", "1", "-threads", "2"}, "-threads is given twice");
   refused({"-load", ""}, "-load '' is invalid");
+  refused({"-o", ""}, "-o '' is invalid: must be a non-empty");
+  // strtod reads hex: -budget 0x10 was 16 rays.
+  refused({"-budget", "0x10"}, "-budget 0x10 is invalid: must be an integer in [1, 2147483647]");
+  refused({"-fps", "0x1p3"}, "-fps 0x1p3 is invalid");
+  refused({"-fps", " 2"}, "-fps  2 is invalid");
   EXPECT_EQ(error_of({"-threads", "0", "-fps", "2.5", "-mode", "exact"}), "");
+  EXPECT_EQ(error_of({"-budget", "1e3", "-fps", "+.5"}), "");
 }
 
 TEST(CommandLine, AToolWithoutInputsRefusesPositionals) {
@@ -145,6 +151,7 @@ TEST(NumberLists, NameTheFlagAndTheItem) {
     EXPECT_NE(std::string(e.what()).find("-fov 57,abc is invalid: 'abc'"), std::string::npos) << e.what();
   }
   EXPECT_THROW(parse_number_list("-fov", ""), InvalidParameter);
+  EXPECT_THROW(parse_number_list("-fov", "0x39,43"), InvalidParameter);
 }
 
 }  // namespace

@@ -261,6 +261,9 @@ OutputFolder::OutputFolder(const std::string& target, const std::string& tool, b
   std::error_code ec;
   if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
     throw IoError("output folder '" + shown_ + "' exists and is not a folder");
+  // A folder the user made read-only stays so: replacing it by the staged one (its parent is writable)
+  // would give a writable folder in its place.
+  if (fs::exists(target_, ec)) require_writable_folder(target_, "output folder", shown_);
   recover_interrupted_commit();
   require_no_input_inside(inputs);
   if (!overwrite_ && !target_is_own())

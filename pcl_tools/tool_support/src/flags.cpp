@@ -59,7 +59,14 @@ std::string requirement(const FlagSpec& f) {
   throw InvalidParameter(f.name + " " + value + " is invalid: must be " + must);
 }
 
+// A decimal number as written on a command line: digits, sign, point and exponent only (strtod also
+// reads hex, so "-k 0x10" was 16, and "inf"/"nan", which the finite checks refuse anyway).
+bool is_decimal_text(const std::string& text) {
+  return !text.empty() && text.find_first_not_of("0123456789+-.eE") == std::string::npos;
+}
+
 double checked_number(const FlagSpec& f, const std::string& text) {
+  if (!is_decimal_text(text)) refuse(f, text, requirement(f));
   char* end = nullptr;
   errno = 0;
   const double v = std::strtod(text.c_str(), &end);
@@ -87,7 +94,7 @@ void check_value(const FlagSpec& f, const std::string& value) {
       }
       break;
     case FlagKind::text:
-      if (value.empty()) refuse(f, "''", "a " + f.value_name);
+      if (value.empty()) refuse(f, "''", "a non-empty " + f.value_name);
       break;
     case FlagKind::switch_flag:
       break;
@@ -102,8 +109,8 @@ std::vector<double> parse_number_list(const std::string& flag, const std::string
   for (std::string item; std::getline(in, item, ',');) {
     char* end = nullptr;
     const double v = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(v))
-      throw InvalidParameter(flag + " " + text + " is invalid: '" + item + "' is not a finite number");
+    if (!is_decimal_text(item) || *end != '\0' || !std::isfinite(v))
+      throw InvalidParameter(flag + " " + text + " is invalid: '" + item + "' is not a finite decimal number");
     values.push_back(v);
   }
   if (values.empty()) throw InvalidParameter(flag + " " + text + " is invalid: no number in it");
