@@ -11,6 +11,7 @@
 #include "occ_improve/tools/tool_options.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/png.hpp"
 #include "support/command_line_args.hpp"
 #include "support/test_data.hpp"
 
@@ -219,6 +220,26 @@ TEST(ToolFrames, IntrinsicsAreNeverAssumed) {
   // Frames through different cameras are refused; the paper preset needs no camera at all.
   EXPECT_THROW(read_tool_frames(parse({capture, office})), InvalidInput);
   EXPECT_FALSE(read_tool_frames(parse({"-preset", "kinect_v1_paper", capture})).front().camera);
+}
+
+// A TUM-scaled image (1/5000 m) whose values are not multiples of 5 is guessed as millimetres: its median
+// lands 5 x too far, beyond the grid. Said on stderr (a scene may lie far), not with -depth_encoding given.
+TEST(ToolFrames, AGuessedEncodingThatPutsTheImageBeyondTheGridIsSaid) {
+  const std::filesystem::path folder = std::filesystem::temp_directory_path() / "occ_improve_test_beyond_grid";
+  std::filesystem::create_directories(folder);
+  const std::string png = (folder / "scene.png").string();
+  Image16 image{64, 48, {}};
+  for (int i = 0; i < 64 * 48; ++i) image.pixels.push_back(static_cast<std::uint16_t>(10001 + (i * 7) % 2000));
+  write_png(png, image);
+  testing::internal::CaptureStderr();
+  read_tool_frames(parse({png, "-intrinsics", "52.5,52.5,31.5,23.5,64,48"}));
+  const std::string guessed = testing::internal::GetCapturedStderr();
+  EXPECT_NE(guessed.find("beyond the grid's 8.00 m"), std::string::npos) << guessed;
+  EXPECT_NE(guessed.find("-depth_encoding"), std::string::npos) << guessed;
+  testing::internal::CaptureStderr();
+  read_tool_frames(parse({png, "-intrinsics", "52.5,52.5,31.5,23.5,64,48", "-depth_encoding", "tum"}));
+  EXPECT_EQ(testing::internal::GetCapturedStderr().find("warning"), std::string::npos);
+  std::filesystem::remove_all(folder);
 }
 
 // An unorganized cloud fits no camera: after an organized first frame it takes that frame's camera (its

@@ -10,6 +10,10 @@
 
 #include <pcl/common/transforms.h>
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <vector>
 #include <sstream>
 
 namespace occ_improve {
@@ -27,6 +31,22 @@ void require_camera_fits(const pcl::PointCloud<pcl::PointXYZ>& cloud, const std:
     << ") is " << camera->width << " x " << camera->height << ": give the cloud's own intrinsics (FX,FY,CX,CY,"
     << cloud.width << "," << cloud.height << ")";
   throw InvalidInput(m.str());
+}
+
+// A guessed encoding that puts most of an image beyond the grid is likely the wrong one (a TUM-scaled
+// image of values that are not multiples of 5 reads as millimetres: 5 x too far). Said, not refused: a
+// scene may lie far.
+void warn_if_mostly_beyond_range(const LoadedFrame& loaded, const std::string& path, double depth_max_m) {
+  std::vector<float> z;
+  for (const auto& p : loaded.cloud)
+    if (std::isfinite(p.z) && p.z > 0) z.push_back(p.z);
+  if (z.empty()) return;
+  std::nth_element(z.begin(), z.begin() + static_cast<std::ptrdiff_t>(z.size() / 2), z.end());
+  if (!(z[z.size() / 2] > depth_max_m)) return;
+  std::fprintf(stderr,
+               "warning: '%s' read as %s puts its median depth at %.2f m, beyond the grid's %.2f m: if its values "
+               "are in another unit, give -depth_encoding\n",
+               path.c_str(), depth_encoding_name(*loaded.encoding), z[z.size() / 2], depth_max_m);
 }
 
 }  // namespace
@@ -47,6 +67,7 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
     }
   }();
   require_valid_points(span_of(loaded.cloud), source.path);
+  if (loaded.encoding && !options.depth_encoding) warn_if_mostly_beyond_range(loaded, source.path, options.preset.geometry.depth_max_m);
   require_camera_fits(loaded.cloud, camera, source.path, frame.camera_source);
   if (loaded.viewpoint && options.use_poses) {
     // PCL's VIEWPOINT: the points are in the cloud's frame, the sensor at the viewpoint; the grid is the
