@@ -143,10 +143,15 @@ Source load_saved_map(const std::string& path, const ToolOptions& options) {
 
 // Every grid into the tree at its pose; the first map set the tree's clamping, the others merge into it.
 OctomapExportReport export_grids(const std::vector<Source>& grids, const std::vector<Eigen::Isometry3d>& poses,
-                                 octomap::OcTree& tree) {
+                                 const OctomapExportOptions& options, octomap::OcTree& tree) {
   OctomapExportReport report;
   for (std::size_t i = 0; i < grids.size(); ++i) {
-    const OctomapExportReport r = add_to_octree(tree, *grids[i].grid, poses[i]);
+    OctomapExportReport r;
+    try {
+      r = add_to_octree(tree, *grids[i].grid, poses[i], options);
+    } catch (const ResourceLimit& e) {
+      throw ResourceLimit(std::string(e.what()) + ", or raise the cap with -memory_cap GIB");
+    }
     report.occupied_written += r.occupied_written;
     report.free_written += r.free_written;
     report.left_unknown += r.left_unknown;
@@ -197,8 +202,11 @@ int run(const CommandLine& command_line) {
     save_seconds = seconds_since(start);
   }
 
-  const auto tree = make_octree(*grids.front().grid, resolution);
-  const OctomapExportReport report = export_grids(grids, poses, *tree);
+  // -memory_cap bounds the tree too when given (the export's own default cap is 2 GiB).
+  OctomapExportOptions export_options;
+  if (command_line.has("-memory_cap")) export_options.memory_cap_bytes = options.grid.memory_cap_bytes;
+  const auto tree = make_octree(*grids.front().grid, resolution, export_options);
+  const OctomapExportReport report = export_grids(grids, poses, export_options, *tree);
   throw_if_stop_requested();  // before the output is written: an interrupted run leaves nothing behind
   start = SteadyClock::now();
   write_octree(*tree, tree_file->staged());

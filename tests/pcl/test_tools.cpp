@@ -295,6 +295,18 @@ TEST_F(Tools, OctomapExportIsInAZUpWorldFrameUnlessAskedForTheOpticalOne) {
   EXPECT_NEAR(z_up.z(), -optical.y(), 0.05);
 }
 
+// -memory_cap bounds the tree as well as the grid (the export kept its own 2 GiB, so a user could neither
+// raise nor lower it): at 5 mm the sample's tree (about 2.7 GiB) is refused under 1 GiB, naming the flag,
+// where the grid of 256 bins fits; at 5 cm it is built.
+TEST_F(Tools, MemoryCapBoundsTheOctomapTreeToo) {
+  const ToolRun capped = run(OCC_TO_OCTOMAP_EXECUTABLE, "-sample -depth_bins 256 -resolution 0.005 -memory_cap 1 -o capped.bt");
+  EXPECT_EQ(capped.exit_code, 1);
+  EXPECT_NE(capped.err.find("exceed memory_cap_bytes = 1024 MiB"), std::string::npos) << capped.err;
+  EXPECT_NE(capped.err.find("-memory_cap"), std::string::npos) << capped.err;
+  EXPECT_FALSE(fs::exists(file("capped.bt")));
+  EXPECT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-sample -depth_bins 256 -resolution 0.05 -memory_cap 1 -o fits.bt").exit_code, 0);
+}
+
 // A 7-Scenes folder of the given frames of redkitchen (links to the data: nothing is copied).
 std::string seven_scenes_folder(const fs::path& folder, const std::string& frames_dir,
                                 std::initializer_list<const char*> frames) {

@@ -89,8 +89,9 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
   try {  // the first frame's camera sizes the grid: a grid beyond the cap is refused naming the frame
     prepare(frame);
   } catch (const ResourceLimit& e) {
-    throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what() + ";" +
-                        memory_cap_hint(true));
+    const std::string hint = memory_cap_hint(true), what = e.what();  // the preset's own check gives it already
+    throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + what +
+                        (what.find(hint) == std::string::npos ? ";" + hint : ""));
   }
   // Poses move every frame into the first one's view; without them, frames of other scenes go unnoticed.
   SceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose);
