@@ -3,6 +3,7 @@
 // position in the binning, its depth sigma and the columns its +-k sigma box overlaps), and the split of
 // the tile rows into bands of equal work for the threads.
 #include "occ_improve/integrate/integrate.hpp"
+#include "support/default_init.hpp"
 
 #include <cstddef>
 #include <cstdint>
@@ -20,7 +21,7 @@ struct Measurement {
 // The measurements of one call in input order: each input chunk's valid points at the chunk's start, so
 // the threads that convert the chunks write in place and nothing is merged.
 struct MeasurementChunks {
-  std::vector<Measurement> slots;
+  std::vector<Measurement, DefaultInitAllocator<Measurement>> slots;  ///< not zeroed: written before read
   std::vector<std::pair<std::size_t, std::size_t>> ranges;  ///< [begin, end) of each chunk's measurements
 };
 
