@@ -284,6 +284,7 @@ std::optional<PinholeIntrinsics> intrinsics_beside(const std::filesystem::path& 
 
 std::vector<FrameSource> expand_input(const std::string& input) {
   namespace fs = std::filesystem;
+  if (input.empty()) throw InvalidParameter("an input path is empty ('')");
   std::error_code ec;
   const fs::path p(input);
   if (!fs::exists(p, ec))

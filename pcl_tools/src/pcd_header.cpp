@@ -253,6 +253,16 @@ PcdHeader validate_pcd_file(const std::string& path) {
   return h;
 }
 
+namespace {
+
+// pcl::PCLPointField's datatype as PCL's headers write it (TYPE and SIZE): "F 8" for FLOAT64.
+std::string pcl_type_text(std::uint8_t datatype) {
+  static const char* const kNames[] = {"?", "I 1", "U 1", "I 2", "U 2", "I 4", "U 4", "F 4", "F 8"};
+  return datatype < sizeof(kNames) / sizeof(kNames[0]) ? kNames[datatype] : "type " + std::to_string(datatype);
+}
+
+}  // namespace
+
 void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path, const std::string& name,
                        std::uint8_t datatype) {
   const auto f = std::find_if(blob.fields.begin(), blob.fields.end(),
@@ -260,8 +270,9 @@ void require_pcd_field(const pcl::PCLPointCloud2& blob, const std::string& path,
   // Not fail(): the blob may come from a PLY file as well.
   if (f == blob.fields.end()) throw FormatError("'" + path + "' has no '" + name + "' field");
   if (f->datatype != datatype || f->count != 1)
-    throw FormatError("'" + path + "': field '" + name + "' has PCL type " + std::to_string(f->datatype) + " x " +
-                      std::to_string(f->count) + ", expected one value of type " + std::to_string(datatype));
+    throw FormatError("'" + path + "': field '" + name + "' is " + std::to_string(f->count) + " x " +
+                      pcl_type_text(f->datatype) + " (TYPE SIZE), expected one " + pcl_type_text(datatype) +
+                      (datatype == pcl::PCLPointField::FLOAT32 ? " (float32: convert the cloud's x y z)" : ""));
 }
 
 void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob) {

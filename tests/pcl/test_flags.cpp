@@ -112,6 +112,7 @@ TEST(CommandLine, RefusalsNameTheFlagAndTheValue) {
   refused({"-threads", "1", "-threads", "2"}, "-threads is given twice");
   refused({"-load", ""}, "-load '' is invalid");
   refused({"-o", ""}, "-o '' is invalid: must be a non-empty");
+  refused({""}, "an input path is empty");
   // strtod reads hex: -budget 0x10 was 16 rays.
   refused({"-budget", "0x10"}, "-budget 0x10 is invalid: must be an integer in [1, 2147483647]");
   refused({"-fps", "0x1p3"}, "-fps 0x1p3 is invalid");

@@ -179,6 +179,7 @@ CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* cons
     if (!looks_like_flag(arg)) {
       if (tool.positionals.empty())
         throw InvalidParameter("unexpected argument '" + arg + "': " + tool.tool + " takes no input files (see -h)");
+      if (arg.empty()) throw InvalidParameter("an input path is empty ('')");  // names no file (a shell's unset variable)
       positionals.push_back(arg);
       continue;
     }

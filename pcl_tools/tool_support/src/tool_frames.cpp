@@ -165,11 +165,15 @@ ToolFrame frame_header(const ToolFrame& frame) {
 
 void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame) {
   if (!options.use_poses || (!first.pose && !frame.pose)) return;
-  if (!first.pose || !frame.pose)
-    throw InvalidInput("'" + (frame.pose ? first.name : frame.name) + "' has no pose while '" +
-                       (frame.pose ? frame.name : first.name) + "' has one (" +
-                       (frame.pose ? frame.pose_source : first.pose_source) +
-                       "): give every frame a pose, or -no_poses to take every frame from the first's viewpoint");
+  if (!first.pose || !frame.pose) {
+    const std::string& unposed = frame.pose ? first.name : frame.name;
+    const bool pcd = unposed.size() > 4 && unposed.compare(unposed.size() - 4, 4, ".pcd") == 0;
+    throw InvalidInput("'" + unposed + "' has no pose while '" + (frame.pose ? frame.name : first.name) +
+                       "' has one (" + (frame.pose ? frame.pose_source : first.pose_source) + ")" +
+                       (pcd ? " (a PCD's VIEWPOINT at the identity is read as none: old PCL grabbers wrote it "
+                              "for every cloud)" : "") +
+                       ": give every frame a pose, or -no_poses to take every frame from the first's viewpoint");
+  }
   const Eigen::Isometry3d into_first = first.pose->inverse() * *frame.pose;
   pcl::transformPointCloud(frame.cloud, frame.cloud, into_first.matrix().cast<float>());
 }

@@ -39,8 +39,8 @@ void warn_if_depth_bins_wider_than_sigma(const SensorPreset& preset) {
   if (widest <= 1.0) return;
   std::fprintf(stderr,
                "warning: depth bins up to %.1f sigma wide (%.1f mm at %.2f m, sigma %.1f mm): flat surfaces will show "
-               "stripes of higher improvement where they cross bin boundaries; give more -depth_bins or a larger "
-               "-sigma_depth\n",
+               "stripes of higher improvement where they cross bin boundaries (and occ_segment cuts them into bands "
+               "there); give more -depth_bins or a larger -sigma_depth\n",
                widest, 1000.0 * axis.width_at(at_m), at_m, 1000.0 * model.sigma_depth_at(at_m));
 }
 
