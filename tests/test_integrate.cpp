@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -511,6 +513,19 @@ TEST(Integrate, DepthImageOfAnotherCameraThanTheGridsIsRefused) {
     nearly.cx += 0.04;  // within same_camera's 0.05 px
     EXPECT_EQ(insert_depth_image(grid, model, DepthImage{depth.data(), depth.size(), nearly}).points_inserted,
               depth.size()) << p.name;
+  }
+  // Intrinsics that are no camera at all (NaN, 0 x 0) are reported as such, not as another camera.
+  {
+    const SensorPreset p = kinect_v1(camera);
+    ColumnGrid grid{GridGeometry(p.geometry)};
+    PinholeIntrinsics broken = camera;
+    broken.fx = std::numeric_limits<double>::quiet_NaN();
+    try {
+      insert_depth_image(grid, SensorModel(p.model), DepthImage{depth.data(), depth.size(), broken});
+      ADD_FAILURE() << "NaN fx was accepted";
+    } catch (const InvalidInput& e) {
+      EXPECT_EQ(std::string(e.what()).rfind("depth image intrinsics: fx", 0), 0u) << e.what();
+    }
   }
   // A grid that does not depend on a camera takes any.
   const SensorPreset paper = kinect_v1_paper();

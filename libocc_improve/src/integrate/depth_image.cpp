@@ -10,13 +10,22 @@
 
 namespace occ_improve {
 
-std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image) {
-  const PinholeIntrinsics& k = image.intrinsics;
+namespace {
+
+// The image's own intrinsics first: NaN or 0 x 0 ones are reported as such, not as another camera.
+void require_valid_intrinsics(const PinholeIntrinsics& k) {
   try {
     k.validate();
   } catch (const InvalidParameter& e) {
     throw InvalidInput(std::string("depth image intrinsics: ") + e.what());
   }
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector3f> depth_image_to_points(const DepthImage& image) {
+  const PinholeIntrinsics& k = image.intrinsics;
+  require_valid_intrinsics(k);
   const std::size_t expected = static_cast<std::size_t>(k.width) * static_cast<std::size_t>(k.height);
   if (image.pixel_count != expected) {
     std::ostringstream m;
@@ -50,6 +59,7 @@ void require_grid_camera(const GridGeometry& geometry, const PinholeIntrinsics& 
 
 InsertionReport insert_depth_image(ColumnGrid& grid, const SensorModel& model, const DepthImage& image,
                                    const InsertionOptions& options) {
+  require_valid_intrinsics(image.intrinsics);
   require_grid_camera(grid.geometry(), image.intrinsics);
   const auto points = depth_image_to_points(image);
   return insert_points(grid, model, PointSpan::from(points), options);
