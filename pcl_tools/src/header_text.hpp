@@ -2,9 +2,13 @@
 // Private to pcl_tools/src: the text of PCD and PLY files before PCL reads them (header lines, ASCII values).
 #include "occ_improve/errors.hpp"
 
+#include <Eigen/Geometry>
+#include <pcl/PCLPointCloud2.h>
+
 #include <charconv>
 #include <cstdlib>
 #include <exception>
+#include <functional>
 #include <new>
 #include <string>
 #include <system_error>
@@ -80,20 +84,19 @@ inline std::size_t first_non_number(const std::vector<Word>& values) {
   return values.size();
 }
 
-/// PCL's read() on a file the header checks passed: a failed status, or an exception it throws (out of
-/// memory stays itself), becomes a FormatError naming the file.
-template <typename Read>
-void read_or_throw(const std::string& path, const char* format, Read&& read) {
-  const std::string unreadable = "'" + path + "' is not a readable " + format + " file";
-  int status = 0;
-  try {
-    status = read();
-  } catch (const std::bad_alloc&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw FormatError(unreadable + " (PCL's reader: " + e.what() + ")");
-  }
-  if (status < 0) throw FormatError(unreadable);
-}
+/// What a PCL reader gives: the blob, and a PCD's VIEWPOINT.
+struct PclRead {
+  pcl::PCLPointCloud2 blob;
+  Eigen::Vector4f origin = Eigen::Vector4f::Zero();
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+};
+
+/// PCL's read on a file the header checks passed: `read` fills a PclRead of its own and returns PCL's
+/// status. A failed status, or an exception it throws (out of memory stays itself), becomes a FormatError
+/// naming the file. PCL's readers poll no stop request, and an ASCII PLY of a few million points reads for
+/// seconds: `read` runs on a thread of its own while the caller polls every 50 ms, and a stop request
+/// abandons it (Cancelled; its thread runs on, detached, into state it owns: pcl_read_abandoned()). So
+/// `read` must capture nothing by reference.
+PclRead read_or_throw(const std::string& path, const char* format, std::function<int(PclRead&)> read);
 
 }  // namespace occ_improve::detail

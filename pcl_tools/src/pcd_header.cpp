@@ -284,11 +284,16 @@ void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob) {
 void read_pcd_file(const std::string& path, pcl::PCLPointCloud2& blob, Eigen::Vector4f& origin,
                    Eigen::Quaternionf& orientation) {
   validate_pcd_file(path);
-  pcl::PCDReader reader;
-  int version = 0;
   // The checks above refuse every input known to make PCL's reader throw; one they miss still ends as a
   // typed error naming the file.
-  detail::read_or_throw(path, "PCD", [&] { return reader.read(path, blob, origin, orientation, version); });
+  detail::PclRead read = detail::read_or_throw(path, "PCD", [path](detail::PclRead& out) {
+    pcl::PCDReader reader;
+    int version = 0;
+    return reader.read(path, out.blob, out.origin, out.orientation, version);
+  });
+  blob = std::move(read.blob);
+  origin = read.origin;
+  orientation = read.orientation;
 }
 
 }  // namespace occ_improve

@@ -272,9 +272,11 @@ PlyHeader validate_ply_file(const std::string& path) {
 
 void read_ply_file(const std::string& path, pcl::PCLPointCloud2& blob) {
   validate_ply_file(path);
-  pcl::PLYReader reader;
-  const QuietPclWarnings quiet;
-  detail::read_or_throw(path, "PLY", [&] { return reader.read(path, blob); });
+  blob = detail::read_or_throw(path, "PLY", [path](detail::PclRead& out) {
+           pcl::PLYReader reader;
+           const QuietPclWarnings quiet;
+           return reader.read(path, out.blob);
+         }).blob;
   require_consistent(blob, path);
 }
 

@@ -1,5 +1,6 @@
 #include "occ_improve/pcl/sequence_sources.hpp"
 
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 
 #include <pcl/common/transforms.h>
@@ -77,6 +78,8 @@ void FileSequenceGrabber::run() {
     Cloud::Ptr cloud;
     try {
       cloud = loadFrame(i);
+    } catch (const Cancelled&) {
+      break;  // the user's stop, met inside a read (PCL's readers are waited for with polls): not a bad file
     } catch (const std::exception& e) {
       ++errors_;
       ErrorCallback on_error;

@@ -2,6 +2,8 @@
 // depth (with the registered RGB TIFF beside it), PLY clouds, and the poses that come with frames
 // (7-Scenes .pose.txt beside a depth image, a PCD's or PLY's VIEWPOINT).
 #include "occ_improve/pcl/frame_io.hpp"
+#include "../../pcl_tools/src/header_text.hpp"  // internal: not installed, tested here directly
+#include "occ_improve/cancel.hpp"
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/pcl/tiff_image.hpp"  // the deprecated path still compiles (docs/LAYOUT.md)
@@ -13,6 +15,12 @@
 #include <pcl/io/ply_io.h>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <future>
+#include <memory>
+#include <stdexcept>
+#include <thread>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -383,6 +391,54 @@ TEST(FrameIo, PoseFileForSevenScenesNamesOnly) {
   EXPECT_EQ(pose_file_for("/d/frame-000150.depth.png"), "/d/frame-000150.pose.txt");
   EXPECT_EQ(pose_file_for("/d/frame_1_depth.tiff"), "");
   EXPECT_EQ(pose_file_for("/d/1_depth.png"), "");
+}
+
+}  // namespace
+}  // namespace occ_improve
+
+namespace occ_improve {
+namespace {
+
+// PCL's readers poll no stop request (an ASCII PLY of a few million points read for 4.4 s whatever
+// Ctrl-C said): they run on a thread of their own while the caller polls. A read slower than the stop is
+// abandoned within the poll's 50 ms (Cancelled, and pcl_read_abandoned() tells the program to end without
+// destroying statics under it); one that finishes gives its blob; one that fails is a FormatError.
+TEST(PclRead, AStopRequestAbandonsASlowReadWithinAPoll) {
+  clear_stop_request();
+  // The slow read waits for `release`; the test releases it at the end and waits for it to return, so
+  // that no thread outlives the test (a leak checker would see its state).
+  auto release = std::make_shared<std::promise<void>>();
+  auto returned = std::make_shared<std::promise<void>>();
+  std::shared_future<void> released = release->get_future().share();
+  std::future<void> finished = returned->get_future();
+  const auto slow = [released, returned](detail::PclRead& out) {
+    released.wait_for(std::chrono::seconds(5));
+    out.blob.width = 7;
+    returned->set_value();
+    return 0;
+  };
+  std::thread stopper([] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    request_stop(SIGINT);
+  });
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_THROW(detail::read_or_throw("slow.ply", "PLY", slow), Cancelled);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stopper.join();
+  clear_stop_request();
+  EXPECT_LT(seconds, 0.5);
+  EXPECT_TRUE(pcl_read_abandoned());
+  const detail::PclRead done = detail::read_or_throw("fast.ply", "PLY", [](detail::PclRead& out) {
+    out.blob.width = 3;
+    return 0;
+  });
+  EXPECT_EQ(done.blob.width, 3u);
+  EXPECT_THROW(detail::read_or_throw("bad.ply", "PLY", [](detail::PclRead&) { return -1; }), FormatError);
+  EXPECT_THROW(detail::read_or_throw("bad.ply", "PLY", [](detail::PclRead&) -> int { throw std::runtime_error("x"); }),
+               FormatError);
+  release->set_value();
+  EXPECT_EQ(finished.wait_for(std::chrono::seconds(5)), std::future_status::ready);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // its last statements: setting done, freeing
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "occ_improve/tools/tool_main.hpp"
 
 #include "occ_improve/cancel.hpp"
+#include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/batch.hpp"
 #include "occ_improve/tools/input_scope.hpp"
 #include "occ_improve/tools/signals.hpp"
@@ -8,6 +9,7 @@
 #include <pcl/console/print.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <filesystem>
@@ -61,6 +63,10 @@ int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const Com
     return code;
   } catch (const Cancelled& e) {
     std::fprintf(stderr, "%s\n", e.what());
+    if (pcl_read_abandoned()) {  // the staged outputs were removed while unwinding; the read runs on
+      std::fflush(nullptr);
+      std::_Exit(128 + e.reason());
+    }
     return 128 + e.reason();
   } catch (const std::bad_alloc&) {
     return report_failure("out of memory (std::bad_alloc)");

@@ -80,6 +80,10 @@ struct FrameSource {
 /// Throws IoError when the input does not exist, InvalidInput for a folder with no depth frames,
 /// FormatError for a malformed pose file.
 std::vector<FrameSource> expand_input(const std::string& input);
+/// Whether a stop request abandoned a PCL read (PCD/PLY readers poll none: theirs runs on a thread of its
+/// own, detached when the caller stops waiting). A program that sees it ends with std::_Exit once its own
+/// cleanup is done, so that no static object is destroyed under the running read.
+bool pcl_read_abandoned();
 /// The one frame a file input is (expand_input's rules: the intrinsics and pose beside it); a folder is
 /// InvalidParameter naming `flag` and how many frames it holds (a tool that takes one frame).
 FrameSource single_frame_source(const std::string& input, const std::string& flag);
