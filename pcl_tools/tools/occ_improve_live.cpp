@@ -418,6 +418,10 @@ int run(const CommandLine& command_line) {
     throw InvalidParameter("-predicted_depth is written by -simulate runs only");
   if (simulate && command_line.has("-keep"))
     throw InvalidParameter("-keep thins a stream's frames; -simulate plans its own shots (-budget)");
+  for (const char* flag : {"-budget", "-shape", "-refine", "-window", "-negative_share", "-stop_gain", "-stop_share",
+                           "-max_shots"})
+    warn_if_ignored(command_line, flag, "-simulate", simulate);
+  warn_if_ignored(command_line, "-radius", "-predicted_depth", *command_line.text("-predicted_depth") != "none");
   const std::unique_ptr<OutputFile> screenshot = open_screenshot(command_line, out, save);
   const std::unique_ptr<LiveView> view = open_view(command_line);
   if (simulate) return run_simulation(command_line, options, region_options, out, save);

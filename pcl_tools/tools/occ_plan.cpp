@@ -136,6 +136,7 @@ int run(const CommandLine& command_line) {
 
   write_mask(out.file("shot_mask.png"), source.mapper->geometry(), shot);
   write_rays(out.file("shot_rays.csv"), *source.mapper, source.returns, shot, request.return_model);
+  warn_if_ignored(command_line, "-radius", "-predicted_depth", *command_line.text("-predicted_depth") != "none");
   const std::string predicted =
       write_predicted_depth(out, *source.mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
   char summary[512];

@@ -143,6 +143,16 @@ TEST(Usage, ListsOnlyTheToolsFlagsEachWithItsDefault) {
     EXPECT_LE(end - start, 110u) << usage.substr(start, end - start);
 }
 
+// A flag that does nothing in this run (occ_plan -window without -shape window) is said, not refused, and
+// only when given: its default is not the user's.
+TEST(CommandLine, AFlagGivenWhereItDoesNothingIsSaid) {
+  testing::internal::CaptureStderr();
+  warn_if_ignored(parse({"-budget", "5"}), "-budget", "-simulate", false);
+  warn_if_ignored(parse({"-budget", "5"}), "-budget", "-simulate", true);
+  warn_if_ignored(parse({}), "-budget", "-simulate", false);
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "warning: -budget applies with -simulate only: ignored\n");
+}
+
 TEST(NumberLists, NameTheFlagAndTheItem) {
   EXPECT_EQ(parse_number_list("-fov", "57,43"), (std::vector<double>{57, 43}));
   try {

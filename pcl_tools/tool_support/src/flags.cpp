@@ -6,6 +6,7 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <iomanip>
 #include <sstream>
@@ -206,6 +207,11 @@ CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* cons
     values.emplace_back(argv[++i]);
   }
   return CommandLine(tool, std::move(given), std::move(positionals));
+}
+
+void warn_if_ignored(const CommandLine& command_line, const char* flag, const char* applies_with, bool applies) {
+  if (applies || !command_line.has(flag)) return;
+  std::fprintf(stderr, "warning: %s applies with %s only: ignored\n", flag, applies_with);
 }
 
 }  // namespace occ_improve

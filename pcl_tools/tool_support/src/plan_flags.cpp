@@ -36,6 +36,8 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
   request.negative_share = *command_line.number("-negative_share");
   request.stop_gain_per_ray_below = *command_line.number("-stop_gain");
   request.stop_view_share = *command_line.number("-stop_share");
+  warn_if_ignored(command_line, "-window", "-shape window", request.shape == ShotShape::window);
+  warn_if_ignored(command_line, "-refine", "-shape coarse_to_fine", request.shape == ShotShape::coarse_to_fine);
   return request;
 }
 

@@ -66,4 +66,8 @@ CommandLine parse_command_line(const ToolFlags& tool, int argc, const char* cons
 /// flag, the value and the item that is not a number.
 std::vector<double> parse_number_list(const std::string& flag, const std::string& text);
 
+/// A flag given where it does nothing (occ_plan -window without -shape window) is said on stderr, not
+/// refused: "warning: -window applies with -shape window only: ignored".
+void warn_if_ignored(const CommandLine& command_line, const char* flag, const char* applies_with, bool applies);
+
 }  // namespace occ_improve
