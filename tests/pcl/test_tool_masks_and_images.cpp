@@ -3,7 +3,9 @@
 // depth_mm.png), whose values are read back and compared with the CSVs and the surface cloud.
 #include "occ_improve/io/png.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/point_types.hpp"
+#include "occ_improve/sample_scene.hpp"
 #include "support/csv_table.hpp"
 #include "support/test_data.hpp"
 #include "support/tool_run.hpp"
@@ -188,9 +190,18 @@ TEST_F(ToolMasksAndImages, AMaskLeavingNoPointIsNamedAndMaskedPointsAreCounted) 
   ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -mask " + (dir_ / "none.png").string() + " -o " +
                                                   (dir_ / "out_none").string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
-  EXPECT_NE(r.output.find("error: -mask leaves out all "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("valid points of 'built-in sample'"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("error: -mask " + (dir_ / "none.png").string() + " leaves out every pixel"),
+            std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir_ / "out_none"));
+  // occ_segment wrote an empty segmentation, exiting 0 (so did occ_improve_live -simulate: the same check).
+  const std::string sample_pcd = (dir_ / "sample.pcd").string();
+  const occ_improve::sample::SampleFrame scene = occ_improve::sample::generate_scene();
+  pcl::io::savePCDFileBinary(sample_pcd, occ_improve::organized_cloud(scene.points(), scene.intrinsics.width,
+                                                                      scene.intrinsics.height));
+  r = run(OCC_SEGMENT_EXECUTABLE, sample_pcd + " -mask " + (dir_ / "none.png").string() + " -o " + (dir_ / "seg_none").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("leaves out every pixel"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir_ / "seg_none"));
 
   occ_improve::Image left{640, 480, 1, std::vector<std::uint8_t>(640 * 480, 0)};
   for (int v = 0; v < 480; ++v)

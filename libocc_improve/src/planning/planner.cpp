@@ -432,6 +432,12 @@ Shot decide_stop(Shot shot, const PlanRequest& request) {
   shot.stop = shot.ranked_rays == 0 || shot.stop_gain_per_ray < request.stop_gain_per_ray_below;
   const bool by_view = request.shape == ShotShape::coarse_to_fine && request.refine_by == RefineBy::triangles;
   std::ostringstream reason;
+  const bool no_candidate = !request.candidates.empty() &&
+                            std::none_of(request.candidates.begin(), request.candidates.end(), [](std::uint8_t f) { return f != 0; });
+  if (no_candidate) {
+    shot.reason = "no candidate ray: the candidate mask leaves none";
+    return shot;
+  }
   if (by_view)
     reason << "mean score of the best " << request.stop_view_share << " of the view's rays ";
   else
@@ -448,10 +454,20 @@ Shot plan_next_shot(const ImprovementMap& improvement, const ReturnRecord& retur
   if (request.shape == ShotShape::coarse_to_fine)
     throw InvalidParameter("shape coarse_to_fine needs the multi-scale pyramid: call plan_next_shot with the mapper "
                            "or with the pyramid and the sensor model");
-  const std::vector<float> score = shot_scores(improvement, returns, request.return_model);
+  std::vector<float> score = shot_scores(improvement, returns, request.return_model);
+  // The mask holds for every shape: a window or pattern gains nothing from rays outside it, nor takes them
+  // (the rays shape ranks candidates only). They took them, and counted them as rays of the shot.
+  const bool masked_block = !request.candidates.empty() && request.shape != ShotShape::rays;
+  if (masked_block)
+    for (std::size_t c = 0; c < score.size(); ++c)
+      if (!request.candidates[c]) score[c] = std::numeric_limits<float>::quiet_NaN();
   Shot shot = request.shape == ShotShape::rays     ? rays_shot(score, request)
               : request.shape == ShotShape::window ? window_shot(score, improvement.width, improvement.height, request)
                                                    : decimation_shot(score, improvement.width, improvement.height, request);
+  if (masked_block)
+    shot.columns.erase(std::remove_if(shot.columns.begin(), shot.columns.end(),
+                                      [&](ColumnIndex c) { return !request.candidates[c]; }),
+                       shot.columns.end());
   if (request.shape != ShotShape::rays) shot.ranked_rays = shot.columns.size();
   shot.stop_gain_per_ray = per_ray(shot.expected_gain, shot.ranked_rays);
   return decide_stop(std::move(shot), request);

@@ -5,24 +5,39 @@
 #include "occ_improve/pcl/conversion.hpp"
 
 #include <exception>
+#include <utility>
 
 namespace occ_improve {
+
+namespace {
+
+// A mask of no valid pixel leaves nothing to map, plan or segment: occ_segment wrote an empty segmentation
+// and -simulate stopped at once, both exiting 0.
+PixelMask with_some_pixel(PixelMask mask, const std::string& value) {
+  if (mask.valid_count() == 0) throw InvalidParameter("-mask " + value + " leaves out every pixel");
+  return mask;
+}
+
+}  // namespace
 
 std::optional<PixelMask> read_tool_mask(const CommandLine& command_line, const ToolFrame* first) {
   if (!command_line.declares("-mask") || !command_line.has("-mask")) return std::nullopt;
   const std::string value = *command_line.text("-mask");
   if (value != "finite") {
+    PixelMask mask;
     try {
-      return read_mask_png(value);
+      mask = read_mask_png(value);
     } catch (const std::exception& e) {
       throw InvalidParameter("-mask " + value + ": " + e.what());
     }
+    return with_some_pixel(std::move(mask), value);
   }
   if (!first) throw InvalidParameter("-mask finite needs an input frame (it is the first frame's valid pixels)");
   const auto& cloud = first->cloud;
   if (cloud.height <= 1)
     throw InvalidParameter("-mask finite: '" + first->name + "' is not organized, so its points name no pixel");
-  return finite_pixel_mask(span_of(cloud), static_cast<int>(cloud.width), static_cast<int>(cloud.height));
+  return with_some_pixel(finite_pixel_mask(span_of(cloud), static_cast<int>(cloud.width), static_cast<int>(cloud.height)),
+                         value);
 }
 
 namespace {

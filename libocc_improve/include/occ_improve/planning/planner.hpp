@@ -91,8 +91,9 @@ struct PlanRequest {
   /// the knee and 20 % shots within 8 %; over the best fifth, every budget within 10 % on the real scenes,
   /// docs/SELECTIVE.md). In (0, 1].
   double stop_view_share = 0.2;
-  /// rays shape: optional mask over the columns (row-major, 1 = the sensor may take the ray), e.g. the
-  /// observable columns. Empty: every column.
+  /// Optional mask over the columns (row-major, 1 = the sensor may take the ray), e.g. the observable
+  /// columns; empty: every column. Every shape keeps to it: the rays shapes rank candidates only, a window
+  /// or decimation pattern is chosen by its candidates' scores and leaves the others out of the shot.
   std::vector<std::uint8_t> candidates;
   ReturnModelParams return_model;
   /// coarse_to_fine: side of the coverage pass's blocks, 2, 4, 8 or 16 columns. 16 = the evaluation's
