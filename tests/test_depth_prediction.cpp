@@ -128,6 +128,29 @@ SensorModel kinect_noise() {
   return SensorModel(p);
 }
 
+// Millimetres given as metres (2000 m where a Kinect's sigma is 5.7 km) made every triangle continuous and
+// spread the values; a depth beyond the model's own sigma is refused, naming the pixel.
+TEST(DepthPrediction, SamplesDeeperThanTheirSigmaAreNotMetres) {
+  std::vector<float> depth(16 * 12, 0.0f);
+  depth[5] = 2.0f;
+  depth[40] = std::numeric_limits<float>::quiet_NaN();
+  depth[100] = 2.5f;
+  for (const auto rule : {DepthPredictionRule::nearest, DepthPredictionRule::linear}) {
+    DepthPredictionParams params;
+    params.rule = rule;
+    EXPECT_NO_THROW(predict_dense_depth(depth, 16, 12, kinect_noise(), params));
+    std::vector<float> millimetres = depth;
+    millimetres[5] = 2000.0f;
+    millimetres[100] = 2500.0f;
+    try {
+      predict_dense_depth(millimetres, 16, 12, kinect_noise(), params);
+      ADD_FAILURE() << "millimetres were taken as metres";
+    } catch (const InvalidInput& e) {
+      EXPECT_NE(std::string(e.what()).find("pixel (4, 6) holds depth 2500 m"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(DepthAgreement, CountsReferenceSamplesWithinTwoSigma) {
   SurfaceMap reference = unknown_surface(4, 1);
   for (int x = 0; x < 3; ++x) measure(reference, x, 0, 2.0f);  // column 3 unknown: not counted

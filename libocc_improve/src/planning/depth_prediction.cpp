@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <sstream>
 #include <type_traits>
 
 namespace occ_improve {
@@ -249,10 +250,31 @@ std::vector<float> sample_depth_image(const SurfaceMap& surface) {
   return image;
 }
 
+namespace {
+
+// A sample deeper than the sensor model's own sigma there is no depth this sensor measured in metres:
+// millimetres taken as metres (2000 m, sigma 5.7 km for a Kinect) made every triangle continuous and
+// spread the values over the image. NaN and 0 are no samples (checked before).
+void require_depths_in_metres(const std::vector<float>& depth, int width, const SensorModel& model) {
+  std::size_t c = 0;
+  for (std::size_t i = 1; i < depth.size(); ++i)
+    if (depth[i] > depth[c] || !(depth[c] == depth[c])) c = i;  // NaN (no sample) never stays the deepest
+  const float z = depth.empty() ? 0.0f : depth[c];
+  if (!(z > 0.0f) || model.sigma_depth_at(z) < z) return;
+  std::ostringstream m;
+  m << "sparse depth image: pixel (" << c % static_cast<std::size_t>(width) << ", " << c / static_cast<std::size_t>(width)
+    << ") holds depth " << z << " m, where the sensor's sigma is " << model.sigma_depth_at(z)
+    << " m: not a depth in metres (millimetres?)";
+  throw InvalidInput(m.str());
+}
+
+}  // namespace
+
 PredictedDepth predict_dense_depth(const std::vector<float>& sparse_depth_m, int width, int height,
                                    const SensorModel& model, const DepthPredictionParams& params) {
   params.validate();
   check_sparse_depth_image(sparse_depth_m, width, height);
+  require_depths_in_metres(sparse_depth_m, width, model);
   if (params.rule == DepthPredictionRule::nearest) return nearest_fill(sparse_depth_m, width, height, params.radius_columns);
   PredictedDepth out = distance_transform(sparse_depth_m, width, height, params.radius_columns);
   linear_fill(sparse_depth_m, model, params, out);

@@ -226,7 +226,7 @@ std::vector<FlagSpec> plan_and_octomap_flags() {
              "non-planarity, the best with -predicted_depth linear; or blocks by the predictor's residual,\n"
              "x the improvement, or the improvement alone)", "triangles"),
       value_flag("-window", K::text, "WxH", kPlan, "window shape in columns; its area <= the budget", "64x64"),
-      bounded(value_flag("-negative_share", K::number, "S", kPlan, "share of a shot re-acquiring negative rays", "0"), 0,
+      bounded(value_flag("-negative_share", K::number, "S", kPlan, "-shape rays: share of a shot re-acquiring negative rays", "0"), 0,
               1, false, true),
       bounded(value_flag("-stop_gain", K::number, "G", kPlan, "stop below G expected gain per ray", "0.1"), 0),
       bounded(value_flag("-stop_share", K::number, "S", kPlan,

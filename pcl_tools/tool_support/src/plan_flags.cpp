@@ -38,6 +38,9 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
   request.stop_view_share = *command_line.number("-stop_share");
   warn_if_ignored(command_line, "-window", "-shape window", request.shape == ShotShape::window);
   warn_if_ignored(command_line, "-refine", "-shape coarse_to_fine", request.shape == ShotShape::coarse_to_fine);
+  warn_if_ignored(command_line, "-negative_share", "-shape rays", request.shape == ShotShape::rays);
+  warn_if_ignored(command_line, "-stop_share", "-shape coarse_to_fine -refine triangles",
+                  request.shape == ShotShape::coarse_to_fine && request.refine_by == RefineBy::triangles);
   return request;
 }
 
