@@ -1,5 +1,6 @@
 #include "occ_improve/errors.hpp"
 
+#include <cmath>
 #include <csignal>
 #include <sstream>
 #include <string>
@@ -23,7 +24,13 @@ namespace occ_improve::detail {
 void require_parameter(bool ok, const char* name, double value, const char* requirement) {
   if (ok) return;
   std::ostringstream message;
-  message << name << " = " << value << " is invalid: must be " << requirement;
+  message << name << " = ";
+  // A whole number as written (budget_rays = 2147483647, not 2.14748e+09); others at 6 significant digits.
+  if (std::abs(value) < 1e15 && value == std::floor(value))
+    message << static_cast<long long>(value);
+  else
+    message << value;
+  message << " is invalid: must be " << requirement;
   throw InvalidParameter(message.str());
 }
 
