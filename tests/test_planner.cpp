@@ -204,6 +204,8 @@ TEST(Planner, BadRequestsThrowNamingTheValue) {
   EXPECT_NE(message(r).find("budget_rays = 0"), std::string::npos);
   r.budget_rays = 65;
   EXPECT_NE(message(r).find("budget_rays = 65"), std::string::npos);
+  r.budget_rays = 2147483647;  // a whole number as written (it read 2.14748e+09)
+  EXPECT_NE(message(r).find("budget_rays = 2147483647 is invalid"), std::string::npos) << message(r);
   r.budget_rays = 10;
   r.negative_share = 1.0;
   EXPECT_NE(message(r).find("negative_share = 1"), std::string::npos);
