@@ -19,6 +19,17 @@ namespace occ_improve {
 
 namespace {
 
+// The exit code, ending the process at once when a stop abandoned a PCL read (frame_io.hpp): its thread
+// runs on, and destroying the program's statics under it could crash the exit. Everything of ours is
+// done by then (the staged outputs were removed or committed while unwinding).
+int finish(int code) {
+  if (pcl_read_abandoned()) {
+    std::fflush(nullptr);
+    std::_Exit(code);
+  }
+  return code;
+}
+
 // One line on stderr: the message, and the input being worked on when the message does not name it. After
 // a stop signal the run ends as interrupted (128 + signal) whatever failed next: the user asked it to stop
 // (a long read that no poll interrupts, then the error the next step found).
@@ -26,7 +37,7 @@ int report_failure(const std::string& message) {
   std::fprintf(stderr, "%s\n", failure_line(message).c_str());
   if (const int signal = stop_requested()) {
     std::fprintf(stderr, "%s\n", Cancelled(signal).what());
-    return 128 + signal;
+    return finish(128 + signal);
   }
   return 1;
 }
@@ -58,16 +69,12 @@ int run_tool(int argc, char** argv, const ToolFlags& flags, int (*run)(const Com
     // as the README promises; the run had finished, so what it wrote is in place.
     if (const int signal = stop_requested()) {
       std::fprintf(stderr, "%s after the run had finished (its outputs are committed)\n", Cancelled(signal).what());
-      return 128 + signal;
+      return finish(128 + signal);
     }
-    return code;
+    return finish(code);
   } catch (const Cancelled& e) {
     std::fprintf(stderr, "%s\n", e.what());
-    if (pcl_read_abandoned()) {  // the staged outputs were removed while unwinding; the read runs on
-      std::fflush(nullptr);
-      std::_Exit(128 + e.reason());
-    }
-    return 128 + e.reason();
+    return finish(128 + e.reason());
   } catch (const std::bad_alloc&) {
     return report_failure("out of memory (std::bad_alloc)");
   } catch (const std::exception& e) {
