@@ -432,7 +432,7 @@ Shot decide_stop(Shot shot, const PlanRequest& request) {
   shot.stop = shot.ranked_rays == 0 || shot.stop_gain_per_ray < request.stop_gain_per_ray_below;
   const bool by_view = request.shape == ShotShape::coarse_to_fine && request.refine_by == RefineBy::triangles;
   std::ostringstream reason;
-  const bool no_candidate = !request.candidates.empty() &&
+  const bool no_candidate = shot.ranked_rays == 0 && !request.candidates.empty() &&  // a pass only for an empty shot
                             std::none_of(request.candidates.begin(), request.candidates.end(), [](std::uint8_t f) { return f != 0; });
   if (no_candidate) {
     shot.reason = "no candidate ray: the candidate mask leaves none";

@@ -87,11 +87,9 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     fused.colour = frame->colour;
   }
   try {  // the first frame's camera sizes the grid: a grid beyond the cap is refused naming the frame
-    prepare(frame);
+    prepare(frame);  // (the preset's cap check, preset_for_camera, says how to raise the cap)
   } catch (const ResourceLimit& e) {
-    const std::string hint = memory_cap_hint(true), what = e.what();  // the preset's own check gives it already
-    throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + what +
-                        (what.find(hint) == std::string::npos ? ";" + hint : ""));
+    throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what());
   }
   // Poses move every frame into the first one's view; without them, frames of other scenes go unnoticed.
   SceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose);
