@@ -11,6 +11,7 @@
 #include "occ_improve/tools/frame_fusion.hpp"
 #include "occ_improve/tools/input_scope.hpp"
 #include "occ_improve/tools/progress.hpp"
+#include "occ_improve/tools/signals.hpp"
 #include "occ_improve/tools/tool_frames.hpp"
 #include "occ_improve/tools/tool_main.hpp"
 #include "occ_improve/tools/tool_mask.hpp"
@@ -22,6 +23,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -189,6 +191,7 @@ int run(const CommandLine& command_line) {
     throw InvalidParameter("-mask applies to input frames; a saved map (-load) is exported as it is");
   auto start = SteadyClock::now();
   std::vector<Source> grids;
+  const LeftToExitOnStop<std::vector<Source>> grids_left_on_stop(grids);
   for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options));
   ProgressLine progress(command_line, "frame");
   if (load_paths.empty()) grids.push_back(build_from_frames(command_line, options, use_sample, progress));
@@ -205,7 +208,8 @@ int run(const CommandLine& command_line) {
   // -memory_cap bounds the tree too when given (the export's own default cap is 2 GiB).
   OctomapExportOptions export_options;
   if (command_line.has("-memory_cap")) export_options.memory_cap_bytes = options.grid.memory_cap_bytes;
-  const auto tree = make_octree(*grids.front().grid, resolution, export_options);
+  std::unique_ptr<octomap::OcTree> tree = make_octree(*grids.front().grid, resolution, export_options);
+  const LeftToExitOnStop<std::unique_ptr<octomap::OcTree>> tree_left_on_stop(tree);
   const OctomapExportReport report = export_grids(grids, poses, export_options, *tree);
   throw_if_stop_requested();  // before the output is written: an interrupted run leaves nothing behind
   start = SteadyClock::now();

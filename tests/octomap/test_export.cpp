@@ -3,6 +3,7 @@
 // OctoMap, a thin wall exports without holes, maps from two poses merge by the documented rule, writing
 // leaves the caller's tree alone, and bad input is refused with typed errors and no half-written file.
 #include "support/temp_folder.hpp"
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/octomap/export.hpp"
@@ -17,11 +18,13 @@
 #include <octomap/OcTree.h>
 
 #include <algorithm>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <random>
 #include <set>
 #include <sstream>
 #include <string>
@@ -273,6 +276,70 @@ TEST_F(OctomapExport, WritingLeavesTheCallersTreeUnchanged) {
   octomap::OcTree copy(*tree);
   copy.writeBinary(file("pruned.bt"));
   EXPECT_NE(digest(copy), before);
+}
+
+// Writes lazily (no inner update, no pruning) a block of leaves whose values come in runs, so that whole
+// octants are equal and prune, some mixed ones do not, and a few leaves sit in octants pruned before.
+void write_lazily(octomap::OcTree& tree, unsigned seed) {
+  std::mt19937 random(seed);
+  std::uniform_int_distribution<int> value(0, 7);
+  const octomap::key_type base = 32768 - 64;
+  for (unsigned x = 0; x < 128; ++x)
+    for (unsigned y = 0; y < 128; ++y)
+      for (unsigned z = 0; z < 16; ++z) {
+        const bool uniform_octant = ((x / 8 + y / 8 + z / 8 + seed) % 3) != 0;
+        const float log_odds = uniform_octant ? -2.0f + static_cast<float>((x / 8 + seed) % 2) : 0.5f * value(random);
+        const octomap::OcTreeKey key(static_cast<octomap::key_type>(base + x), static_cast<octomap::key_type>(base + y),
+                                     static_cast<octomap::key_type>(base + z));
+        tree.updateNode(key, log_odds, true);
+      }
+}
+
+void expect_same_trees(const octomap::OcTree& ours, const octomap::OcTree& octomaps, const char* round) {
+  EXPECT_TRUE(ours == octomaps) << round;
+  std::ostringstream a, b;
+  ASSERT_TRUE(ours.writeData(a).good() && octomaps.writeData(b).good());
+  EXPECT_TRUE(a.str() == b.str()) << round << ": " << a.str().size() << " bytes against " << b.str().size();
+  EXPECT_EQ(ours.size(), octomaps.size()) << round;
+}
+
+// update_inner_occupancy_and_prune is OctoMap's updateInnerOccupancy() + prune(), node for node: fresh
+// lazily written trees, and trees pruned before and written again (prune stops at the first level that
+// prunes nothing), written to the same bytes.
+TEST_F(OctomapExport, InnerUpdateAndPruningAreOctomapsOwn) {
+  octomap::OcTree ours(0.05), octomaps(0.05);
+  for (const unsigned round : {1u, 2u, 3u}) {
+    write_lazily(ours, round);
+    write_lazily(octomaps, round);
+    const std::size_t before = octomaps.size();
+    update_inner_occupancy_and_prune(ours);
+    octomaps.updateInnerOccupancy();
+    octomaps.prune();
+    // updateNode adds log-odds: later rounds move values, so fewer octants stay equal than in the first.
+    EXPECT_LT(octomaps.size(), round == 1 ? before / 2 : before) << "round " << round << ": nothing pruned";
+    expect_same_trees(ours, octomaps, round == 1 ? "fresh tree" : "tree pruned before");
+  }
+  // The export itself: its tree, finished again by OctoMap, is unchanged (already updated and pruned).
+  const auto exported = to_octree(sample_grid(UpdateMode::clamped), Eigen::Isometry3d::Identity(), 0.05);
+  octomap::OcTree again(*exported);
+  again.updateInnerOccupancy();
+  again.prune();
+  expect_same_trees(*exported, again, "export");
+}
+
+// A stop request is obeyed inside the pass (OctoMap's own calls poll nothing).
+TEST_F(OctomapExport, InnerUpdateAndPruningObeyAStopRequest) {
+  octomap::OcTree tree(0.05);
+  write_lazily(tree, 1);
+  ASSERT_GT(tree.size(), 65536u * 2);
+  struct Withdrawn {
+    ~Withdrawn() { clear_stop_request(); }  // whatever the test's outcome, for the tests after it
+  } withdrawn;
+  request_stop(SIGINT);
+  EXPECT_THROW(update_inner_occupancy_and_prune(tree), Cancelled);
+  clear_stop_request();
+  update_inner_occupancy_and_prune(tree);  // the same tree finishes once the request is withdrawn
+  EXPECT_GT(tree.getNumLeafNodes(), 0u);
 }
 
 // write_octree writes the headers itself (OctoMap's writer prints " done." to stderr): OctoMap's own bytes

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -575,6 +576,59 @@ void write_free_leaves(const octomap::OcTree& tree, const ColumnGrid& grid, cons
   }
 }
 
+// OccupancyOcTreeBase::updateInnerOccupancy and OcTreeBaseImpl::prune as OctoMap 1.9 does them (the same
+// recursions; prune's level by level from the deepest up, stopping at the first level that prunes
+// nothing), polling for a stop every 65536 nodes (update_inner_occupancy_and_prune; tests/octomap checks
+// the trees are the same as OctoMap's own calls make).
+class PollingTreeFinish {
+public:
+  explicit PollingTreeFinish(octomap::OcTree& tree) : tree_(tree) {}
+
+  void update_inner_occupancy() {
+    if (tree_.getRoot()) update_inner(tree_.getRoot(), 0);
+  }
+  void prune() {
+    if (!tree_.getRoot()) return;
+    for (unsigned depth = tree_.getTreeDepth() - 1; depth > 0; --depth) {
+      std::size_t pruned = 0;
+      prune_level(tree_.getRoot(), 0, depth, pruned);
+      if (pruned == 0) break;
+    }
+  }
+
+private:
+  // Every 65536 nodes: a poll, and one allocation of a few KB. glibc's malloc keeps freed small chunks (the
+  // pruned nodes) in fast bins until an allocation of that size merges them all at once: after pruning
+  // 10^7 nodes the next one, wherever it falls (the output's directory listing), took 0.5 s deaf to
+  // Ctrl-C. Asking here merges them a poll's worth at a time, for the same total.
+  void visit() {
+    if (++visited_ % (1 << 16) != 0) return;
+    throw_if_stop_requested();
+    void* volatile block = std::malloc(4096);  // volatile: a compiler may drop an unused allocation
+    std::free(block);
+  }
+  void update_inner(octomap::OcTreeNode* node, unsigned depth) {
+    if (!tree_.nodeHasChildren(node)) return;
+    visit();
+    if (depth < tree_.getTreeDepth())
+      for (unsigned i = 0; i < 8; ++i)
+        if (tree_.nodeChildExists(node, i)) update_inner(tree_.getNodeChild(node, i), depth + 1);
+    node->updateOccupancyChildren();
+  }
+  void prune_level(octomap::OcTreeNode* node, unsigned depth, unsigned max_depth, std::size_t& pruned) {
+    visit();
+    if (depth < max_depth) {
+      for (unsigned i = 0; i < 8; ++i)
+        if (tree_.nodeChildExists(node, i)) prune_level(tree_.getNodeChild(node, i), depth + 1, max_depth, pruned);
+    } else if (tree_.pruneNode(node)) {
+      ++pruned;
+    }
+  }
+
+  octomap::OcTree& tree_;
+  std::size_t visited_ = 0;
+};
+
 // The line by which a tree file says occ_improve wrote it (is_octomap_file), right after OctoMap's first
 // line: OctoMap's readers skip comment lines there, so every OctoMap reader still reads the file.
 constexpr const char* kWrittenByLine = "# written by occ_improve";
@@ -655,23 +709,30 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
   }
 
   const float band = static_cast<float>(logit(0.5 + options.unknown_band_probability));
-  const PatchCover cover(tree, world_from_sensor.translation(), key_lo, key_hi, kPieceFraction * resolution,
-                         curvature_pad_m(geometry, far_m));
-  const LeafMarks marks = LeafMarker(grid, world_from_sensor, band, cover).mark();
-
   OctomapExportReport report;
-  const auto write = [&](const octomap::OcTreeKey& key, float log_odds) {
-    const octomap::OcTreeNode* node = tree.updateNode(key, log_odds, true);
-    (tree.isNodeOccupied(node) ? report.occupied_written : report.free_written) += 1;
-  };
-  marks.for_each_occupied(write);
-  write_free_leaves(tree, grid, world_from_sensor, far_m, key_lo, key_hi, band, marks, write, report);
+  {  // The marks (~10^6 leaves at 6 mm) are freed before the pruning frees ~10^7 small nodes: a large block
+     // freed after those makes glibc's malloc consolidate them all first (0.5 s, deaf to Ctrl-C).
+    const PatchCover cover(tree, world_from_sensor.translation(), key_lo, key_hi, kPieceFraction * resolution,
+                           curvature_pad_m(geometry, far_m));
+    const LeafMarks marks = LeafMarker(grid, world_from_sensor, band, cover).mark();
+    const auto write = [&](const octomap::OcTreeKey& key, float log_odds) {
+      const octomap::OcTreeNode* node = tree.updateNode(key, log_odds, true);
+      (tree.isNodeOccupied(node) ? report.occupied_written : report.free_written) += 1;
+    };
+    marks.for_each_occupied(write);
+    write_free_leaves(tree, grid, world_from_sensor, far_m, key_lo, key_hi, band, marks, write, report);
+  }
   // Lazy insertion leaves inner nodes stale and every leaf expanded: refresh the inner nodes, then merge
   // children of equal value (uniform free space at the clamp) as OctoMap's own insertion does.
-  tree.updateInnerOccupancy();
-  tree.prune();
+  update_inner_occupancy_and_prune(tree);
   report.seconds = seconds_since(start);
   return report;
+}
+
+void update_inner_occupancy_and_prune(octomap::OcTree& tree) {
+  PollingTreeFinish finish(tree);
+  finish.update_inner_occupancy();
+  finish.prune();
 }
 
 std::unique_ptr<octomap::OcTree> to_octree(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,

@@ -1,10 +1,13 @@
 #include "occ_improve/tools/signals.hpp"
 
+#include <atomic>
 #include <csignal>
 
 namespace occ_improve {
 
 namespace {
+
+std::atomic<bool> g_ends_at_once{false};
 
 extern "C" void record_stop_signal(int signal) { request_stop(signal); }
 
@@ -24,5 +27,8 @@ int take_stop_request() {
   clear_stop_request();
   return signal;
 }
+
+void end_process_at_once() { g_ends_at_once = true; }
+bool process_ends_at_once() { return g_ends_at_once.load(); }
 
 }  // namespace occ_improve

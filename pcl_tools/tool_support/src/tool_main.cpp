@@ -19,11 +19,12 @@ namespace occ_improve {
 
 namespace {
 
-// The exit code, ending the process at once when a stop abandoned a PCL read (frame_io.hpp): its thread
-// runs on, and destroying the program's statics under it could crash the exit. Everything of ours is
-// done by then (the staged outputs were removed or committed while unwinding).
+// The exit code, ending the process at once when a stop abandoned a PCL read (frame_io.hpp: its thread
+// runs on, and destroying the program's statics under it could crash the exit) or left a large structure
+// to the process's end (signals.hpp). Everything of ours is done by then (the staged outputs were removed
+// or committed while unwinding).
 int finish(int code) {
-  if (pcl_read_abandoned()) {
+  if (pcl_read_abandoned() || process_ends_at_once()) {
     std::fflush(nullptr);
     std::_Exit(code);
   }

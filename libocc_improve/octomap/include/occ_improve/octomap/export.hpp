@@ -75,6 +75,12 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
                                   const Eigen::Isometry3d& world_from_sensor,
                                   const OctomapExportOptions& options = {});
 
+/// OctoMap's own `tree.updateInnerOccupancy(); tree.prune();`, node for node and with the same result,
+/// but obeying a stop request (cancel.hpp): on a tree of 10^7 leaves written lazily (updateNode with
+/// lazy_eval, as add_to_octree writes them) OctoMap's calls take about a second deaf to Ctrl-C. Throws
+/// Cancelled, leaving the tree partly updated, for the caller to discard. add_to_octree ends with it.
+void update_inner_occupancy_and_prune(octomap::OcTree& tree);
+
 /// make_octree + add_to_octree.
 std::unique_ptr<octomap::OcTree> to_octree(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
                                            double resolution_m, const OctomapExportOptions& options = {},

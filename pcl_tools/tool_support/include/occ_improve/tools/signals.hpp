@@ -6,6 +6,8 @@
 // second signal ends the process at once.
 #include "occ_improve/cancel.hpp"
 
+#include <utility>
+
 namespace occ_improve {
 
 /// Installs the SIGINT and SIGTERM handlers that request a stop (run_tool does, before the tool runs).
@@ -15,5 +17,30 @@ void install_stop_signals();
 /// and the request withdrawn so that the writing is not cancelled too; the tool then ends with
 /// throw Cancelled(signal). The frame or shot in flight when the signal came is left partly inserted.
 int take_stop_request();
+
+/// Asks run_tool to end the process at once (std::_Exit) when the run ends, after the staged outputs were
+/// removed or committed; whether it was asked.
+void end_process_at_once();
+bool process_ends_at_once();
+
+/// Leaves `owned` (moved into a heap object never freed) to the process's end when the scope is left
+/// after a stop request, and asks run_tool to end the process at once: freeing 10^7 nodes (an OcTree at
+/// a fine resolution) or a large block after them (glibc then consolidates every small chunk freed
+/// before: 0.5 s) takes longer than Ctrl-C may wait. Declare it after `owned`, so that it runs first.
+template <typename T>
+class LeftToExitOnStop {
+public:
+  explicit LeftToExitOnStop(T& owned) : owned_(owned) {}
+  LeftToExitOnStop(const LeftToExitOnStop&) = delete;
+  LeftToExitOnStop& operator=(const LeftToExitOnStop&) = delete;
+  ~LeftToExitOnStop() {
+    if (stop_requested() == 0) return;
+    new T(std::move(owned_));  // NOLINT: left to the process's end on purpose
+    end_process_at_once();
+  }
+
+private:
+  T& owned_;
+};
 
 }  // namespace occ_improve
