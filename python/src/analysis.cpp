@@ -143,6 +143,7 @@ void bind_segmentation_types(py::module_& m) {
                     int_field_setter(&SegmentationParams::plane_seed, "plane_seed"))
       .def_readwrite("split_concave_creases", &SegmentationParams::split_concave_creases)
       .def_readwrite("crease_arm_m", &SegmentationParams::crease_arm_m)
+      .def_readwrite("crease_arm_per_m2", &SegmentationParams::crease_arm_per_m2)
       .def_readwrite("crease_smoothing_share", &SegmentationParams::crease_smoothing_share)
       .def_readwrite("crease_min_bend_deg", &SegmentationParams::crease_min_bend_deg)
       .def_readwrite("crease_min_view_angle_deg", &SegmentationParams::crease_min_view_angle_deg)

@@ -29,6 +29,8 @@ void SegmentationParams::validate() const {
                     plane_ransac_iterations, "in [1, 100000]");
   require_parameter(std::isfinite(crease_arm_m) && crease_arm_m > 0 && crease_arm_m <= 1, "crease_arm_m", crease_arm_m,
                     "in (0, 1]");
+  require_parameter(std::isfinite(crease_arm_per_m2) && crease_arm_per_m2 >= 0 && crease_arm_per_m2 <= 1,
+                    "crease_arm_per_m2", crease_arm_per_m2, "in [0, 1]");
   require_parameter(std::isfinite(crease_smoothing_share) && crease_smoothing_share >= 0 && crease_smoothing_share <= 1,
                     "crease_smoothing_share", crease_smoothing_share, "in [0, 1]");
   require_parameter(std::isfinite(crease_min_bend_deg) && crease_min_bend_deg > 0 && crease_min_bend_deg < 180,
@@ -42,6 +44,10 @@ void SegmentationParams::validate() const {
   require_parameter(threads >= 0 && threads <= InsertionOptions::kMaxThreads, "threads", threads, thread_range.c_str());
 }
 
+// The crease arm of segmentation_defaults in sigmas of the range-dependent depth noise (only that term: a
+// constant sigma such as the paper's 4.7 cm is the model's allowance, not the data's noise).
+constexpr double kCreaseArmSigmas = 6.0;
+
 SegmentationParams segmentation_defaults(const SensorPreset& preset) {
   return segmentation_defaults(preset.geometry, preset.model);
 }
@@ -54,6 +60,7 @@ SegmentationParams segmentation_defaults(const GeometryParams& geometry, const S
   // 1-1.5 m: a 6 mm band keeps the objects' bottom rows out of the plane (mean F on mosd_learn 0.839 with
   // 6 mm against 0.818 with 10 mm; 0.83-0.84 anywhere in 4-7.5 mm: make segment-eval -plane_distance).
   if (geometry.angular_binning == AngularBinning::pinhole) params.plane_distance_m = 0.006;
+  params.crease_arm_per_m2 = kCreaseArmSigmas * model.sigma_depth_per_m2;
   return params;
 }
 
@@ -384,8 +391,8 @@ std::vector<ArmPixels> arm_table(const SegmentationParams& params) {
 int arm_length_px(double range_m, double pixel_rad, const SegmentationParams& params) {
   // Clamped, then rounded half up: std::lround of the unclamped value, since the bounds are whole and x + 0.5
   // is exact for x >= 2 (a libm call per ray was 2 % of the crease scan).
-  const double arm =
-      std::clamp(params.crease_arm_m / (range_m * pixel_rad), 2.0, static_cast<double>(params.crease_max_arm_px));
+  const double arm_m = std::max(params.crease_arm_m, params.crease_arm_per_m2 * range_m * range_m);
+  const double arm = std::clamp(arm_m / (range_m * pixel_rad), 2.0, static_cast<double>(params.crease_max_arm_px));
   return static_cast<int>(arm + 0.5);
 }
 
