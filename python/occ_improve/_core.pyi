@@ -306,6 +306,7 @@ class SegmentationParams:
     min_segment_columns: int
     remove_dominant_plane: bool
     plane_distance_m: float
+    plane_distance_per_m2: float
     plane_min_columns: int
     plane_ransac_iterations: int
     plane_seed: int
@@ -318,7 +319,8 @@ class SegmentationParams:
     crease_max_arm_px: int
     threads: int
     def __init__(self, *, contour_improvement_below: float = -0.02, min_segment_columns: int = 200,
-                 remove_dominant_plane: bool = True, plane_distance_m: float = 0.01, plane_min_columns: int = 3000,
+                 remove_dominant_plane: bool = True, plane_distance_m: float = 0.01, plane_distance_per_m2: float = 0.0,
+                 plane_min_columns: int = 3000,
                  plane_ransac_iterations: int = 200, plane_seed: int = 1, split_concave_creases: bool = True,
                  crease_arm_m: float = 0.02, crease_arm_per_m2: float = 0.0, crease_smoothing_share: float = 0.25,
                  crease_min_bend_deg: float = 30.0,

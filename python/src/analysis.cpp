@@ -135,6 +135,7 @@ void bind_segmentation_types(py::module_& m) {
                     int_field_setter(&SegmentationParams::min_segment_columns, "min_segment_columns"))
       .def_readwrite("remove_dominant_plane", &SegmentationParams::remove_dominant_plane)
       .def_readwrite("plane_distance_m", &SegmentationParams::plane_distance_m)
+      .def_readwrite("plane_distance_per_m2", &SegmentationParams::plane_distance_per_m2)
       .def_property("plane_min_columns", int_field_getter(&SegmentationParams::plane_min_columns),
                     int_field_setter(&SegmentationParams::plane_min_columns, "plane_min_columns"))
       .def_property("plane_ransac_iterations", int_field_getter(&SegmentationParams::plane_ransac_iterations),

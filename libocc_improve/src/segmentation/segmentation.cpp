@@ -24,6 +24,8 @@ void SegmentationParams::validate() const {
   require_parameter(min_segment_columns >= 1, "min_segment_columns", static_cast<double>(min_segment_columns), ">= 1");
   require_parameter(std::isfinite(plane_distance_m) && plane_distance_m > 0, "plane_distance_m", plane_distance_m,
                     "finite and > 0");
+  require_parameter(std::isfinite(plane_distance_per_m2) && plane_distance_per_m2 >= 0 && plane_distance_per_m2 <= 1,
+                    "plane_distance_per_m2", plane_distance_per_m2, "in [0, 1]");
   require_parameter(plane_min_columns >= 3, "plane_min_columns", static_cast<double>(plane_min_columns), ">= 3");
   require_parameter(plane_ransac_iterations >= 1 && plane_ransac_iterations <= 100000, "plane_ransac_iterations",
                     plane_ransac_iterations, "in [1, 100000]");
@@ -47,6 +49,9 @@ void SegmentationParams::validate() const {
 // The crease arm of segmentation_defaults in sigmas of the range-dependent depth noise (only that term: a
 // constant sigma such as the paper's 4.7 cm is the model's allowance, not the data's noise).
 constexpr double kCreaseArmSigmas = 6.0;
+// The plane's inlier band of segmentation_defaults, likewise: 2.5 sigma keeps 99 % of a Gaussian's points
+// (beyond 1.3 m for kinect_v1, where it passes the 6 mm band; make segment-eval's tables are nearer).
+constexpr double kPlaneBandSigmas = 2.5;
 
 SegmentationParams segmentation_defaults(const SensorPreset& preset) {
   return segmentation_defaults(preset.geometry, preset.model);
@@ -61,6 +66,7 @@ SegmentationParams segmentation_defaults(const GeometryParams& geometry, const S
   // 6 mm against 0.818 with 10 mm; 0.83-0.84 anywhere in 4-7.5 mm: make segment-eval -plane_distance).
   if (geometry.angular_binning == AngularBinning::pinhole) params.plane_distance_m = 0.006;
   params.crease_arm_per_m2 = kCreaseArmSigmas * model.sigma_depth_per_m2;
+  params.plane_distance_per_m2 = kPlaneBandSigmas * model.sigma_depth_per_m2;
   return params;
 }
 
@@ -125,22 +131,33 @@ std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const 
 
 // The RANSAC scoring subsample, one contiguous array per coordinate: it stays in cache over all iterations
 // and a plane scores it in vector instructions.
+// The plane's inlier band at a point: plane_distance_m, or wider where the depth noise is (plane_distance_per_m2).
+struct PlaneBand {
+  float floor_m, per_m2;
+  explicit PlaneBand(const SegmentationParams& params)
+      : floor_m(static_cast<float>(params.plane_distance_m)), per_m2(static_cast<float>(params.plane_distance_per_m2)) {}
+  float at(const Eigen::Vector3f& p) const { return std::max(floor_m, per_m2 * p.squaredNorm()); }
+  bool holds(const Eigen::Vector3f& normal, float offset, const Eigen::Vector3f& p) const {
+    return std::abs(normal.dot(p) + offset) < at(p);
+  }
+};
+
 struct ScoringSample {
-  Eigen::ArrayXf x, y, z;
+  Eigen::ArrayXf x, y, z, band;
   ScoringSample(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint32_t>& candidates,
-                std::size_t stride) {
+                std::size_t stride, const PlaneBand& plane_band) {
     const auto size = static_cast<Eigen::Index>((candidates.size() + stride - 1) / stride);
-    x.resize(size), y.resize(size), z.resize(size);
+    x.resize(size), y.resize(size), z.resize(size), band.resize(size);
     for (Eigen::Index i = 0; i < size; ++i) {
       const Eigen::Vector3f& p = points[candidates[static_cast<std::size_t>(i) * stride]];
-      x[i] = p.x(), y[i] = p.y(), z[i] = p.z();
+      x[i] = p.x(), y[i] = p.y(), z[i] = p.z(), band[i] = plane_band.at(p);
     }
   }
-  /// Points within `band` of the plane, or some count <= `to_beat` once the plane cannot have more than
+  /// Points within their band of the plane, or some count <= `to_beat` once the plane cannot have more than
   /// that (most hypotheses stop there: only a larger count changes the search). The distance is summed as
   /// Eigen's Vector3f::dot sums it, x + (y + z), so a point scores here exactly as normal.dot(p) + offset
   /// classifies it in the refinement.
-  std::size_t inliers(const Eigen::Vector3f& normal, float offset, float band, std::size_t to_beat) const {
+  std::size_t inliers(const Eigen::Vector3f& normal, float offset, std::size_t to_beat) const {
     constexpr Eigen::Index kBlock = 256;  // points between two checks of the bound
     const float nx = normal.x(), ny = normal.y(), nz = normal.z();
     const Eigen::Index size = x.size();
@@ -148,7 +165,7 @@ struct ScoringSample {
     for (Eigen::Index begin = 0; begin < size; begin += kBlock) {
       const Eigen::Index end = std::min(size, begin + kBlock);
       int in_block = 0;  // a plain counted loop over plain arrays: vector instructions
-      for (Eigen::Index i = begin; i < end; ++i) in_block += std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + offset) < band;
+      for (Eigen::Index i = begin; i < end; ++i) in_block += std::abs(nx * x[i] + (ny * y[i] + nz * z[i]) + offset) < band[i];
       count += static_cast<std::size_t>(in_block);
       if (count + static_cast<std::size_t>(size - end) <= to_beat) return count;
     }
@@ -156,16 +173,16 @@ struct ScoringSample {
   }
 };
 
-// The least-squares plane through the points within `band` of a plane: its normal is the inliers'
+// The least-squares plane through the points within their band of a plane: its normal is the inliers'
 // covariance's smallest eigenvector. Returns the inlier count (the plane is left as it was without inliers).
 std::size_t refine_plane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint32_t>& candidates,
-                         float band, Eigen::Vector3f& normal, float& offset) {
+                         const PlaneBand& band, Eigen::Vector3f& normal, float& offset) {
   // The sums of the coordinates and of their 6 distinct products (the second moment is symmetric), each
   // summed in candidate order.
   double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
   std::size_t inliers = 0;
   for (std::uint32_t c : candidates)
-    if (std::abs(normal.dot(points[c]) + offset) < band) {
+    if (band.holds(normal, offset, points[c])) {
       const double x = points[c].x(), y = points[c].y(), z = points[c].z();
       sx += x, sy += y, sz += z;
       sxx += x * x, sxy += x * y, sxz += x * z, syy += y * y, syz += y * z, szz += z * z;
@@ -199,7 +216,8 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
   }
   candidates.resize(kept);
   // A fixed stride keeps the scoring cost near 5,000 points whatever the image size.
-  const ScoringSample sample(points, candidates, std::max<std::size_t>(1, candidates.size() / 5000));
+  const PlaneBand band(params);
+  const ScoringSample sample(points, candidates, std::max<std::size_t>(1, candidates.size() / 5000), band);
   std::uint64_t state = 0x9E3779B97F4A7C15ull ^ params.plane_seed;
   auto next_index = [&]() {  // splitmix64: deterministic and good enough for sampling
     state += 0x9E3779B97F4A7C15ull;
@@ -208,7 +226,6 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     return candidates[(z ^ (z >> 31)) % candidates.size()];
   };
-  const float band = static_cast<float>(params.plane_distance_m);
   Eigen::Vector3f best_normal = Eigen::Vector3f::UnitZ();
   float best_offset = 0;
   std::size_t best_score = 0;
@@ -221,14 +238,14 @@ std::size_t find_dominant_plane(const std::vector<Eigen::Vector3f>& points, cons
     if (!(norm > 1e-9f)) continue;
     normal /= norm;
     const float offset = -normal.dot(p0);
-    const std::size_t score = sample.inliers(normal, offset, band, best_score);
+    const std::size_t score = sample.inliers(normal, offset, best_score);
     if (score > best_score) best_score = score, best_normal = normal, best_offset = offset;
   }
   if (best_score == 0) return 0;
   if (refine_plane(points, candidates, band, best_normal, best_offset) < params.plane_min_columns) return 0;
   std::size_t count = 0;
   for (std::uint32_t c : candidates)
-    if (std::abs(best_normal.dot(points[c]) + best_offset) < band) plane[c] = 1, ++count;
+    if (band.holds(best_normal, best_offset, points[c])) plane[c] = 1, ++count;
   return count >= params.plane_min_columns ? count : 0;
 }
 

@@ -39,6 +39,10 @@ struct SegmentationParams {
   /// every object standing on it, and without removal they merge into one segment (docs/SEGMENTATION.md).
   bool remove_dominant_plane = true;
   double plane_distance_m = 0.01;         ///< inlier band half-width around the plane
+  /// The band widens with range as the depth noise does: at least this x range^2 [1/m] (0: the same band
+  /// at every range). segmentation_defaults sets 2.5 x the model's sigma_depth_per_m2: a floor or wall at 5 m
+  /// (sigma 36 mm) fell out of a 6 mm band on most of its rays, a speckle of plane and non-plane rays.
+  double plane_distance_per_m2 = 0.0;
   std::size_t plane_min_columns = 3000;   ///< a smaller best plane is not removed
   int plane_ransac_iterations = 200;
   std::uint32_t plane_seed = 1;           ///< RANSAC is deterministic for a given seed
