@@ -68,6 +68,26 @@ def test_silent_rays_are_discounted_and_not_asked_again(pixel_mapper):
     np.testing.assert_allclose(oi.shot_scores(pixel_mapper, record), pixel_mapper.improvement() * p, rtol=1e-6)
 
 
+def test_rays_whose_returns_do_not_settle_them_are_discounted(pixel_mapper):
+    # Rays that returned but whose improvement stays >= 0.2 (near the no-data level) lose s / (s + R).
+    record = empty_record(pixel_mapper)
+    imp = pixel_mapper.improvement()
+    flat = imp.ravel()
+    unsettled = np.flatnonzero(flat >= 0.2)[:50].astype(np.uint32)
+    settled = np.flatnonzero((flat > 0) & (flat < 0.2))[:50].astype(np.uint32)
+    assert len(unsettled) == 50 and len(settled) == 50
+    for times in range(3):  # three returns each
+        record.record_shot(np.concatenate([unsettled, settled]), np.ones(100, dtype=bool))
+    p = oi.return_probability_map(record)
+    returned = record.returned.astype(np.float32)
+    s = oi.ReturnModelParams().prior_strength_shots
+    expected = imp * p * np.where((returned > 0) & (imp >= 0.2), s / (s + returned), 1.0)
+    np.testing.assert_allclose(oi.shot_scores(pixel_mapper, record), expected, rtol=1e-6)
+    scores = oi.shot_scores(pixel_mapper, record).ravel()
+    np.testing.assert_allclose(scores[unsettled], flat[unsettled] * 0.4, rtol=1e-6)  # 2 / (2 + 3)
+    np.testing.assert_allclose(scores[settled], flat[settled], rtol=1e-6)
+
+
 def test_return_probability_is_the_beta_bernoulli_mean():
     rng = np.random.default_rng(3)
     w, h = 13, 9

@@ -3,7 +3,9 @@
 // whether acquiring more is still worth it (docs/SELECTIVE.md).
 //
 // A ray's score is its improvement (eqs. 3-4, the ImprovementMap) times its return probability
-// (return_model.hpp; an empty record gives 1: no discount). Columns the sensor cannot observe hold NaN
+// (return_model.hpp; an empty record gives 1: no discount), times s / (s + R) for a ray whose R returns
+// left its improvement >= 0.2 (near the no-data level 0.324: a depth edge's foreground ray, whose peak its
+// neighbours' free space carves away, or a return beyond the grid; docs/SELECTIVE.md "Return model"). Columns the sensor cannot observe hold NaN
 // improvement (improvement.hpp): a rays shot never takes them, and they add nothing to a window's or a
 // pattern's sum. A shot's expected gain is the sum of the
 // scores of the rays it takes by rank. That sum assumes the rays' gains add up; rays closer than the
@@ -148,7 +150,8 @@ struct PlanMemory {
 /// triangulation does not depend on the order its samples came in), sooner.
 Shot plan_next_shot(const Mapper& mapper, const ReturnRecord& returns, const PlanRequest& request, PlanMemory& memory);
 
-/// score = improvement x return probability (the ranking plan_next_shot uses).
+/// score = improvement x return probability, discounted for rays whose returns did not settle them (the
+/// ranking plan_next_shot uses; the header's first paragraph).
 std::vector<float> shot_scores(const ImprovementMap& improvement, const ReturnRecord& returns,
                                const ReturnModelParams& params = {});
 
