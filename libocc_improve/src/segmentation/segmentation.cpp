@@ -129,8 +129,6 @@ std::vector<Eigen::Vector3f> surface_points(const GridGeometry& geometry, const 
   return points;
 }
 
-// The RANSAC scoring subsample, one contiguous array per coordinate: it stays in cache over all iterations
-// and a plane scores it in vector instructions.
 // The plane's inlier band at a point: plane_distance_m, or wider where the depth noise is (plane_distance_per_m2).
 struct PlaneBand {
   float floor_m, per_m2;
@@ -142,6 +140,8 @@ struct PlaneBand {
   }
 };
 
+// The RANSAC scoring subsample, one contiguous array per coordinate and its points' bands: it stays in
+// cache over all iterations and a plane scores it in vector instructions.
 struct ScoringSample {
   Eigen::ArrayXf x, y, z, band;
   ScoringSample(const std::vector<Eigen::Vector3f>& points, const std::vector<std::uint32_t>& candidates,
