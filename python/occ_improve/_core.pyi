@@ -316,6 +316,7 @@ class SegmentationParams:
     crease_smoothing_share: float
     crease_min_bend_deg: float
     crease_min_view_angle_deg: float
+    crease_view_angle_range_m: float
     crease_max_arm_px: int
     threads: int
     def __init__(self, *, contour_improvement_below: float = -0.02, min_segment_columns: int = 200,
@@ -324,7 +325,8 @@ class SegmentationParams:
                  plane_ransac_iterations: int = 200, plane_seed: int = 1, split_concave_creases: bool = True,
                  crease_arm_m: float = 0.02, crease_arm_per_m2: float = 0.0, crease_smoothing_share: float = 0.25,
                  crease_min_bend_deg: float = 30.0,
-                 crease_min_view_angle_deg: float = 20.0, crease_max_arm_px: int = 24, threads: int = 0) -> None:
+                 crease_min_view_angle_deg: float = 20.0, crease_view_angle_range_m: float = 0.0,
+                 crease_max_arm_px: int = 24, threads: int = 0) -> None:
         """Generic defaults; segmentation_defaults(preset) scales them to a preset's noise model."""
     def validate(self) -> None: ...
     def __copy__(self) -> SegmentationParams: ...

@@ -148,6 +148,7 @@ void bind_segmentation_types(py::module_& m) {
       .def_readwrite("crease_smoothing_share", &SegmentationParams::crease_smoothing_share)
       .def_readwrite("crease_min_bend_deg", &SegmentationParams::crease_min_bend_deg)
       .def_readwrite("crease_min_view_angle_deg", &SegmentationParams::crease_min_view_angle_deg)
+      .def_readwrite("crease_view_angle_range_m", &SegmentationParams::crease_view_angle_range_m)
       .def_property("crease_max_arm_px", int_field_getter(&SegmentationParams::crease_max_arm_px),
                     int_field_setter(&SegmentationParams::crease_max_arm_px, "crease_max_arm_px"))
       .def_property("threads", int_field_getter(&SegmentationParams::threads),

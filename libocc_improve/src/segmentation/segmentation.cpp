@@ -40,6 +40,8 @@ void SegmentationParams::validate() const {
   require_parameter(std::isfinite(crease_min_view_angle_deg) && crease_min_view_angle_deg >= 0 &&
                         crease_min_view_angle_deg < 90,
                     "crease_min_view_angle_deg", crease_min_view_angle_deg, "in [0, 90)");
+  require_parameter(std::isfinite(crease_view_angle_range_m) && crease_view_angle_range_m >= 0,
+                    "crease_view_angle_range_m", crease_view_angle_range_m, "finite and >= 0");
   require_parameter(crease_max_arm_px >= 2 && crease_max_arm_px <= 256, "crease_max_arm_px", crease_max_arm_px,
                     "in [2, 256]");
   static const std::string thread_range = "in [0, " + std::to_string(InsertionOptions::kMaxThreads) + "] (0: all cores)";
@@ -52,6 +54,8 @@ constexpr double kCreaseArmSigmas = 6.0;
 // The plane's inlier band of segmentation_defaults, likewise: 2.5 sigma keeps 99 % of a Gaussian's points
 // (beyond 1.3 m for kinect_v1, where it passes the 6 mm band; make segment-eval's tables are nearer).
 constexpr double kPlaneBandSigmas = 2.5;
+// Beyond this range the crease's minimum view angle shrinks as 1 / range (segmentation.hpp).
+constexpr double kCreaseViewAngleRangeM = 1.5;
 
 SegmentationParams segmentation_defaults(const SensorPreset& preset) {
   return segmentation_defaults(preset.geometry, preset.model);
@@ -67,6 +71,7 @@ SegmentationParams segmentation_defaults(const GeometryParams& geometry, const S
   if (geometry.angular_binning == AngularBinning::pinhole) params.plane_distance_m = 0.006;
   params.crease_arm_per_m2 = kCreaseArmSigmas * model.sigma_depth_per_m2;
   params.plane_distance_per_m2 = kPlaneBandSigmas * model.sigma_depth_per_m2;
+  params.crease_view_angle_range_m = kCreaseViewAngleRangeM;
   return params;
 }
 
@@ -413,6 +418,31 @@ int arm_length_px(double range_m, double pixel_rad, const SegmentationParams& pa
   return static_cast<int>(arm + 0.5);
 }
 
+// The cosine of the minimum view angle at a range: crease_min_view_angle_deg, shrinking as
+// crease_view_angle_range_m / range beyond that range; from a table of 1 cm steps (a cosine per ray was a
+// libm call on each of the ~250 000).
+class ViewAngleCosines {
+public:
+  explicit ViewAngleCosines(const SegmentationParams& params) {
+    const double angle_rad = params.crease_min_view_angle_deg * M_PI / 180.0, from_m = params.crease_view_angle_range_m;
+    cosine_.resize(kSteps + 1);
+    for (int i = 0; i <= kSteps; ++i) {
+      const double range_m = (i + 0.5) * kStepM;
+      cosine_[static_cast<std::size_t>(i)] =
+          static_cast<float>(std::cos(from_m > 0 && range_m > from_m ? angle_rad * from_m / range_m : angle_rad));
+    }
+  }
+  float at(float range_m) const {
+    const float step = range_m / static_cast<float>(kStepM);
+    return cosine_[step < kSteps ? static_cast<std::size_t>(step) : kSteps];
+  }
+
+private:
+  static constexpr double kStepM = 0.01;
+  static constexpr int kSteps = 2000;  // 20 m; beyond, the last step's
+  std::vector<float> cosine_;
+};
+
 // A section bends wherever one arm reaches across the crease, so crease rays form a band up to an arm wide
 // on either side of it: wide enough to close around a box where a thin ridge breaks up in the noise (a
 // ridge-only crease, tried, leaves gaps through which the boxes join again). The attachment by depth then
@@ -438,7 +468,7 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
   const int reach = arms.back().arm + arms.back().radius + 1;
   const double pixel_rad = column_angle_rad(geometry);
   const float max_cosine = static_cast<float>(std::cos(M_PI - params.crease_min_bend_deg * M_PI / 180.0));
-  const float step_cosine = static_cast<float>(std::cos(params.crease_min_view_angle_deg * M_PI / 180.0));
+  const ViewAngleCosines step_cosine(params);
   constexpr std::array<std::array<int, 2>, 4> kDirections{{{1, 0}, {0, 1}, {1, 1}, {-1, 1}}};
   auto ray = [&](int a, int e) { return static_cast<std::size_t>(e) * width + a; };
   // Every ray of the section passable: it crosses no hole and not the plane. Checked last, on folds only.
@@ -464,8 +494,9 @@ std::vector<std::uint8_t> concave_creases(const GridGeometry& geometry, const st
       // Flat: the arms point in opposite directions (cosine -1); the bend is 180 deg minus their angle.
       if (before.dot(after) <= max_cosine * before_norm * after_norm) continue;
       if ((before + after).dot(centre) >= 0) continue;  // convex: the chord's midpoint lies behind the point
-      if (std::abs(before.dot(centre)) > step_cosine * before_norm * centre_range ||
-          std::abs(after.dot(centre)) > step_cosine * after_norm * centre_range)
+      const float cosine = step_cosine.at(centre_range);
+      if (std::abs(before.dot(centre)) > cosine * before_norm * centre_range ||
+          std::abs(after.dot(centre)) > cosine * after_norm * centre_range)
         continue;  // an arm along the line of sight: a depth step
       if (passable_section(a0, e0, du, dv, 2 * steps)) return true;
     }

@@ -72,6 +72,11 @@ struct SegmentationParams {
   /// (the near surface occludes the far one), not two faces meeting: skipped. A structured-light sensor
   /// returns little from faces seen within ~20 deg of grazing, so arms on faces it does see make more.
   double crease_min_view_angle_deg = 20.0;
+  /// Beyond this range [m] the minimum view angle shrinks as crease_view_angle_range_m / range (0: the
+  /// same angle at every range). A floor or wall seen from a fixed height turns grazing as 1 / range (from
+  /// 1.2 m up, a floor beyond 3.3 m is seen within 20 deg), and there depth noise tips arms under a fixed
+  /// angle, so a box on a floor at 3 m joined it. segmentation_defaults sets 1.5 m (docs/SEGMENTATION.md).
+  double crease_view_angle_range_m = 0.0;
   int crease_max_arm_px = 24;  ///< cap on the arm in pixels (near surfaces), bounding the cost per ray
   /// Threads for the back-projection and the crease scan, as InsertionOptions::threads: 0 = every
   /// hardware thread, 1 = the calling thread only; in [0, 1024]. Any value gives the same segmentation.
