@@ -162,6 +162,13 @@ OctomapExportReport export_grids(const std::vector<Source>& grids, const std::ve
   return report;
 }
 
+// "84.1 MB", or "45.2 kB" below a megabyte (a 45 kB tree read "0.0 MB").
+std::string size_text(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, bytes < 1e6 ? "%.1f kB" : "%.1f MB", bytes < 1e6 ? bytes / 1e3 : bytes / 1e6);
+  return text;
+}
+
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   const std::string output = command_line.text("-o").value_or("");
@@ -228,10 +235,10 @@ int run(const CommandLine& command_line) {
     if (source.insertion.points_received) std::printf("%s\n", describe_points(source.insertion).c_str());
   }
   if (save.requested()) std::printf("saved map %s\n", save.path().c_str());
-  std::printf("OcTree at %.4g m: %zu occupied and %zu free leaf updates, %zu left unknown; %zu leaves, %.1f MB\n",
+  std::printf("OcTree at %.4g m: %zu occupied and %zu free leaf updates, %zu left unknown; %zu leaves, %s\n",
               resolution, report.occupied_written, report.free_written, report.left_unknown,
-              tree->getNumLeafNodes(), static_cast<double>(tree->memoryUsage()) / 1e6);
-  std::printf("wrote %s (%.1f MB)\n", output.c_str(), static_cast<double>(std::filesystem::file_size(output)) / 1e6);
+              tree->getNumLeafNodes(), size_text(static_cast<double>(tree->memoryUsage())).c_str());
+  std::printf("wrote %s (%s)\n", output.c_str(), size_text(static_cast<double>(std::filesystem::file_size(output))).c_str());
   std::printf("time [s]: read %.3f, save %.3f, export %.3f, write %.3f\n", read_seconds, save_seconds,
               report.seconds, write_seconds);
   return 0;

@@ -295,6 +295,15 @@ TEST_F(Tools, OctomapExportIsInAZUpWorldFrameUnlessAskedForTheOpticalOne) {
   EXPECT_NEAR(z_up.z(), -optical.y(), 0.05);
 }
 
+// The file's size as printed, in kB below a megabyte (a 45 kB tree read "0.0 MB", a held-out trial).
+TEST_F(Tools, OctomapExportPrintsTheFilesSize) {
+  const ToolRun r = run(OCC_TO_OCTOMAP_EXECUTABLE, "-sample -resolution 0.2 -o small.bt");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "small.bt (%.1f kB)", static_cast<double>(fs::file_size(file("small.bt"))) / 1e3);
+  EXPECT_NE(r.out.find(expected), std::string::npos) << r.out << "\nexpected: " << expected;
+}
+
 // -memory_cap bounds the tree as well as the grid (the export kept its own 2 GiB, so a user could neither
 // raise nor lower it): at 5 mm the sample's tree (about 2.7 GiB) is refused under 1 GiB, naming the flag,
 // where the grid of 256 bins fits; at 5 cm it is built.
