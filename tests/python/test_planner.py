@@ -69,7 +69,8 @@ def test_silent_rays_are_discounted_and_not_asked_again(pixel_mapper):
 
 
 def test_rays_whose_returns_do_not_settle_them_are_discounted(pixel_mapper):
-    # Rays that returned but whose improvement stays >= 0.2 (near the no-data level) lose s / (s + R).
+    # Rays that returned twice or more but whose improvement stays >= 0.2 (near the no-data level) lose
+    # s / (s + R).
     record = empty_record(pixel_mapper)
     imp = pixel_mapper.improvement()
     flat = imp.ravel()
@@ -81,7 +82,7 @@ def test_rays_whose_returns_do_not_settle_them_are_discounted(pixel_mapper):
     p = oi.return_probability_map(record)
     returned = record.returned.astype(np.float32)
     s = oi.ReturnModelParams().prior_strength_shots
-    expected = imp * p * np.where((returned > 0) & (imp >= 0.2), s / (s + returned), 1.0)
+    expected = imp * p * np.where((returned >= 2) & (imp >= 0.2), s / (s + returned), 1.0)
     np.testing.assert_allclose(oi.shot_scores(pixel_mapper, record), expected, rtol=1e-6)
     scores = oi.shot_scores(pixel_mapper, record).ravel()
     np.testing.assert_allclose(scores[unsettled], flat[unsettled] * 0.4, rtol=1e-6)  # 2 / (2 + 3)

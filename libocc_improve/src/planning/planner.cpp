@@ -333,12 +333,13 @@ double good_ray_gain(const std::vector<ColumnIndex>& shot, std::size_t first_cen
 double per_ray(double gain, std::size_t rays) { return rays ? gain / static_cast<double>(rays) : 0.0; }
 
 // Score = improvement x return probability, but for rays whose returns did not settle them: improvement
-// still at or above kUnsettledImprovement (no data is 0.324, a ray seen once ~0.14, twice ~0.07) after R
-// returns of their own. Their returns are evidence that the next will not settle them either: a depth
-// edge's foreground ray, whose own peak its background neighbours' free space carves away at every
-// insertion, or a return beyond the grid's range, which leaves only free space. Each unsettling return
-// counts against the ray as a silence does in the return model, s / (s + R) (s: prior_strength_shots):
-// without it, capture0004's 37 edge rays were asked in every shot of the second pass (24 times each).
+// still at or above kUnsettledImprovement after R >= 2 returns of their own (no data is 0.324; a ray seen
+// once ~0.14 with kinect_v1 and ~0.19 with a VLP-16's rings, twice 0.07-0.14). Their returns are evidence
+// that the next will not settle them either: a depth edge's foreground ray, whose own peak its background
+// neighbours' free space carves away at every insertion, or a return beyond the grid's range, which leaves
+// only free space. Each unsettling return counts against the ray as a silence does in the return model,
+// s / (s + R) (s: prior_strength_shots): without it, capture0004's 37 edge rays were asked in every shot
+// of the second pass (24 times each).
 constexpr float kUnsettledImprovement = 0.2f;
 std::vector<float> scores_of(const ImprovementMap& improvement, const std::vector<float>& probability,
                              const ReturnRecord& returns, const ReturnModelParams& params) {
@@ -348,7 +349,7 @@ std::vector<float> scores_of(const ImprovementMap& improvement, const std::vecto
   const auto s = static_cast<float>(params.prior_strength_shots);
   const std::uint32_t* returned = returns.returned().data();
   for (std::size_t c = 0; c < score.size(); ++c)
-    if (returned[c] > 0 && improvement.value[c] >= kUnsettledImprovement)
+    if (returned[c] >= 2 && improvement.value[c] >= kUnsettledImprovement)
       score[c] *= s / (s + static_cast<float>(returned[c]));
   return score;
 }

@@ -128,7 +128,7 @@ SensorPreset lidar_rings(const LidarRingsOptions& o, const std::string& name) {
   require_parameter(std::isfinite(o.sigma_azimuth_rad) && o.sigma_azimuth_rad >= 0, "sigma_azimuth_rad",
                     o.sigma_azimuth_rad, "finite and >= 0 (0: one azimuth step's quantisation)");
   require_parameter(std::isfinite(o.sigma_elevation_rad) && o.sigma_elevation_rad >= 0, "sigma_elevation_rad",
-                    o.sigma_elevation_rad, "finite and >= 0 (0: the narrowest row's quantisation)");
+                    o.sigma_elevation_rad, "finite and >= 0 (0: the narrowest row's quantisation; default: the beam's divergence)");
   p.model.sigma_azimuth_rad = o.sigma_azimuth_rad > 0 ? o.sigma_azimuth_rad : geometry.azimuth().width() / std::sqrt(12.0);
   p.model.sigma_elevation_rad = o.sigma_elevation_rad > 0 ? o.sigma_elevation_rad : narrowest_gap / std::sqrt(12.0);
   p.model.sigma_depth_m = o.sigma_range_m;

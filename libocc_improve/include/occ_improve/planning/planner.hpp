@@ -3,8 +3,8 @@
 // whether acquiring more is still worth it (docs/SELECTIVE.md).
 //
 // A ray's score is its improvement (eqs. 3-4, the ImprovementMap) times its return probability
-// (return_model.hpp; an empty record gives 1: no discount), times s / (s + R) for a ray whose R returns
-// left its improvement >= 0.2 (near the no-data level 0.324: a depth edge's foreground ray, whose peak its
+// (return_model.hpp; an empty record gives 1: no discount), times s / (s + R) for a ray whose R >= 2
+// returns left its improvement >= 0.2 (near the no-data level 0.324: a depth edge's foreground ray, whose peak its
 // neighbours' free space carves away, or a return beyond the grid; docs/SELECTIVE.md "Return model"). Columns the sensor cannot observe hold NaN
 // improvement (improvement.hpp): a rays shot never takes them, and they add nothing to a window's or a
 // pattern's sum. A shot's expected gain is the sum of the
