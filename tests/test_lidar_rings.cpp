@@ -125,8 +125,15 @@ TEST(LidarRings, BadRingTablesAreRefusedNamingTheField) {
   EXPECT_NE(parameter_error(o).find("ring_elevations_deg[2]"), std::string::npos) << parameter_error(o);
   o.ring_elevations_deg = {2};
   EXPECT_NE(parameter_error(o).find("ring_elevations_deg size"), std::string::npos) << parameter_error(o);
-  o.ring_elevations_deg = {15, 0, -89.5};  // the lowest row would reach past straight down
-  EXPECT_NE(parameter_error(o).find("row_elevations_rad"), std::string::npos) << parameter_error(o);
+  // The lowest row would reach past straight down: named as given (it read "row_elevations_rad (last) =
+  // 1.65806", another field, in radians, with the optical frame's sign).
+  o.ring_elevations_deg = {15, 0, -89.5};
+  EXPECT_NE(parameter_error(o).find("ring_elevations_deg[2] = -89.5"), std::string::npos) << parameter_error(o);
+  o.ring_elevations_deg = {0, 45, 95};
+  EXPECT_NE(parameter_error(o).find("ring_elevations_deg[2] = 95 is invalid: must be in (-90, 90) deg"), std::string::npos)
+      << parameter_error(o);
+  o.ring_elevations_deg = {0, std::nan(""), 3};
+  EXPECT_NE(parameter_error(o).find("ring_elevations_deg[1]"), std::string::npos) << parameter_error(o);
   o = LidarRingsOptions{};
   o.sigma_elevation_rad = -1e-3;
   EXPECT_NE(parameter_error(o).find("sigma_elevation_rad"), std::string::npos) << parameter_error(o);

@@ -93,12 +93,21 @@ namespace {
 // Datasheet ring angles (degrees, up) -> row elevations phi (radians, y down), rows top to bottom.
 std::vector<double> row_elevations(const std::vector<double>& rings_deg) {
   require_parameter(rings_deg.size() >= 2, "ring_elevations_deg size", static_cast<double>(rings_deg.size()), ">= 2");
+  const auto name_of = [](std::size_t i) { return "ring_elevations_deg[" + std::to_string(i) + "]"; };
+  for (std::size_t i = 0; i < rings_deg.size(); ++i)
+    require_parameter(std::isfinite(rings_deg[i]) && std::abs(rings_deg[i]) < 90, name_of(i).c_str(), rings_deg[i],
+                      "in (-90, 90) deg (the datasheet's convention: positive up)");
   const bool ascending = rings_deg[1] > rings_deg[0];
-  for (std::size_t i = 1; i < rings_deg.size(); ++i) {
-    const std::string name = "ring_elevations_deg[" + std::to_string(i) + "]";
-    require_parameter(ascending ? rings_deg[i] > rings_deg[i - 1] : rings_deg[i] < rings_deg[i - 1], name.c_str(),
-                      rings_deg[i], "strictly monotonic like the rings before it (no repeats, one direction)");
-  }
+  for (std::size_t i = 1; i < rings_deg.size(); ++i)
+    require_parameter(ascending ? rings_deg[i] > rings_deg[i - 1] : rings_deg[i] < rings_deg[i - 1],
+                      name_of(i).c_str(), rings_deg[i],
+                      "strictly monotonic like the rings before it (no repeats, one direction)");
+  // The outer rows reach half a gap beyond the outer rings, and must stay short of straight up or down.
+  const std::size_t n = rings_deg.size();
+  require_parameter(std::abs(rings_deg[0] - (rings_deg[1] - rings_deg[0]) / 2) < 90, name_of(0).c_str(), rings_deg[0],
+                    "such that its row (half the gap to the next ring beyond it) stays within (-90, 90) deg");
+  require_parameter(std::abs(rings_deg[n - 1] + (rings_deg[n - 1] - rings_deg[n - 2]) / 2) < 90, name_of(n - 1).c_str(),
+                    rings_deg[n - 1], "such that its row (half the gap to the ring before, beyond it) stays within (-90, 90) deg");
   std::vector<double> phi;
   for (double deg : rings_deg) phi.push_back(-deg * M_PI / 180.0);
   if (!ascending) return phi;  // descending up-angles are ascending phi
