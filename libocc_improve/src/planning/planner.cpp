@@ -344,13 +344,17 @@ constexpr float kUnsettledImprovement = 0.2f;
 std::vector<float> scores_of(const ImprovementMap& improvement, const std::vector<float>& probability,
                              const ReturnRecord& returns, const ReturnModelParams& params) {
   std::vector<float> score(probability.size());
-  for (std::size_t c = 0; c < score.size(); ++c) score[c] = probability[c] * improvement.value[c];
-  if (returns.empty()) return score;
+  if (returns.empty()) {
+    for (std::size_t c = 0; c < score.size(); ++c) score[c] = probability[c] * improvement.value[c];
+    return score;
+  }
   const auto s = static_cast<float>(params.prior_strength_shots);
   const std::uint32_t* returned = returns.returned().data();
-  for (std::size_t c = 0; c < score.size(); ++c)
-    if (returned[c] >= 2 && improvement.value[c] >= kUnsettledImprovement)
+  for (std::size_t c = 0; c < score.size(); ++c) {
+    score[c] = probability[c] * improvement.value[c];
+    if (returned[c] >= 2 && improvement.value[c] >= kUnsettledImprovement)  // rare: a branch, not a division per ray
       score[c] *= s / (s + static_cast<float>(returned[c]));
+  }
   return score;
 }
 
