@@ -596,6 +596,62 @@ std::size_t attach_to_closest_in_depth(const std::vector<std::uint8_t>& valid, c
   return attached;
 }
 
+// Valid rays no segment reached through 4-neighbours (islands between holes), in islands of fewer than
+// min_segment_columns rays, join the segment of the nearest labelled ray within kIslandReachColumns whose
+// surface lies within the plane band of theirs: one surface seen through holes. A wall crossing the grid's
+// far end, whose rays fall in and out of the depth range with the noise, broke into hundreds of segments of
+// 1-45 rays (a held-out trial: 829 on a slanted wall from 4.6 to 8.6 m). An island takes the label its
+// rays find closest in depth; larger islands, and those with no such neighbour (a far wall seen through a
+// gap in a near object), stay segments of their own. Returns the number of rays attached.
+constexpr int kIslandReachColumns = 4;
+std::size_t attach_small_islands_once(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width,
+                                 int height, const SegmentationParams& params, std::vector<std::uint32_t>& label) {
+  std::vector<std::uint8_t> unassigned(label.size());
+  std::transform(label.begin(), label.end(), unassigned.begin(),
+                 [](std::uint32_t l) -> std::uint8_t { return l == kUnassigned; });
+  std::vector<std::uint32_t> island(label.size(), kUnassigned);
+  const std::vector<std::size_t> sizes = connected_components(unassigned, width, height, island);
+  struct Nearest {
+    float jump = std::numeric_limits<float>::infinity();
+    std::uint32_t label = kUnassigned;
+  };
+  std::vector<Nearest> nearest(sizes.size() + 1);
+  const PlaneBand band(params);
+  const auto small = [&](std::size_t c) { return unassigned[c] && sizes[island[c] - 1] < params.min_segment_columns; };
+  for (int e = 0; e < height; ++e)
+    for (int a = 0; a < width; ++a) {
+      const std::size_t c = static_cast<std::size_t>(e) * width + a;
+      if (!small(c)) continue;
+      Nearest& best = nearest[island[c]];
+      const float tolerance = band.at(points[c]);
+      for (int v = std::max(0, e - kIslandReachColumns); v <= std::min(height - 1, e + kIslandReachColumns); ++v)
+        for (int u = std::max(0, a - kIslandReachColumns); u <= std::min(width - 1, a + kIslandReachColumns); ++u) {
+          const std::size_t n = static_cast<std::size_t>(v) * width + u;
+          if (label[n] == kNone || label[n] == kUnassigned) continue;
+          const float jump = std::abs(surface.depth_m[n] - surface.depth_m[c]);
+          if (jump < tolerance && jump < best.jump) best = {jump, label[n]};
+        }
+    }
+  std::size_t attached = 0;
+  for (std::size_t c = 0; c < label.size(); ++c)
+    if (small(c) && nearest[island[c]].label != kUnassigned) label[c] = nearest[island[c]].label, ++attached;
+  return attached;
+}
+
+// In rounds, so that a chain of islands (the far end's band of rays flickering in and out of range is
+// tens of columns wide) joins from the segment inwards; each round attaches only islands next to a
+// labelled ray, so the result does not depend on scan order.
+std::size_t attach_small_islands(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width,
+                                 int height, const SegmentationParams& params, std::vector<std::uint32_t>& label) {
+  std::size_t attached = 0;
+  for (;;) {
+    throw_if_stop_requested();
+    const std::size_t now = attach_small_islands_once(points, surface, width, height, params, label);
+    if (now == 0) return attached;
+    attached += now;
+  }
+}
+
 // Labels the 4-connected regions of kUnassigned rays segments + 1, segments + 2, ...; returns their number.
 std::uint32_t label_islands(int width, int height, std::uint32_t segments, std::vector<std::uint32_t>& label) {
   std::vector<std::uint8_t> islands(label.size());
@@ -664,9 +720,12 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
     else if (label[c] != kNone && label[c] != kUnassigned) label[c] = kept[label[c]];
   }
   out.attached_columns = attach_to_closest_in_depth(valid, surface, width, height, label);
-  // Valid regions no segment reached (islands between holes) become segments of their own.
-  if (std::find(label.begin(), label.end(), kUnassigned) != label.end())
+  // Valid regions no segment reached (islands between holes): the small ones of a surface seen through
+  // holes join it, the others become segments of their own.
+  if (std::find(label.begin(), label.end(), kUnassigned) != label.end()) {
+    out.attached_columns += attach_small_islands(points, surface, width, height, params, label);
     segments += label_islands(width, height, segments, label);
+  }
 
   // Statistics, then labels renumbered by size (largest first) so label 1 is the largest segment.
   std::vector<Segment> stats(segments);

@@ -14,8 +14,10 @@
 //  4. 4-connected regions of the remaining valid, non-contour, non-crease rays are segments; contours,
 //     creases and no-data holes separate them;
 //  5. contour and crease rays and regions smaller than `min_segment_columns` are attached, wave by wave from the
-//     segments outwards, to the 4-neighbouring segment closest in depth, so every valid ray is labelled
-//     (a leftover region with no segment around it becomes a segment of its own).
+//     segments outwards, to the 4-neighbouring segment closest in depth, so every valid ray is labelled;
+//     a leftover region smaller than that (an island between holes) joins the nearest segment within 4
+//     columns across the holes whose depth lies within the plane band of its own, else it becomes a
+//     segment of its own (docs/SEGMENTATION.md).
 #include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/maps/image.hpp"
 #include "occ_improve/maps/improvement.hpp"
