@@ -63,8 +63,8 @@ TEST(LidarRings, RowsAreTheRingsTopToBottomAndColumnsTheAzimuthSteps) {
 
 // A VLP-16 1.73 m above flat ground (a street scan's ground rings, 6.7-33 m away), one return per column
 // at the column's centre with 2 cm of range noise. Each ring's surface must be at its own range. With the
-// rows' quantisation as the elevation sigma (the default before: 0.58 deg, whose 2 sigma reaches the next
-// ring) each return's free space carved its neighbouring rings, and 89-100 % of the ground columns put
+// rows' quantisation as the elevation sigma (the default before: 0.58 deg, whose 2 sigma reaches into the
+// next ring's row) each return's free space carved its neighbouring rings, and 89-100 % of the ground columns put
 // their surface at the next ring's range (a held-out trial); the beam's divergence keeps each to its ring.
 TEST(LidarRings, GroundRingsKeepTheirOwnRange) {
   const auto wrong_share = [](const SensorPreset& p) {

@@ -102,6 +102,7 @@ void write_mask(const std::string& path, const GridGeometry& geometry, const Sho
 void write_rays(const std::string& path, const Mapper& mapper, const ReturnRecord& returns, const Shot& shot,
                 const ReturnModelParams& model) {
   const std::vector<float> p = return_probability_map(returns, model);
+  const std::vector<float> score = shot_scores(mapper.improvement(), returns, model);  // what the plan ranked by
   std::ofstream out(path);
   out << "rank,column,azimuth_bin,elevation_bin,improvement,return_probability,score,depth_m,reacquisition\n";
   const GridGeometry& g = mapper.geometry();
@@ -109,7 +110,7 @@ void write_rays(const std::string& path, const Mapper& mapper, const ReturnRecor
     const ColumnIndex c = shot.columns[i];
     const float imp = mapper.improvement().value[c];
     out << i + 1 << ',' << c << ',' << g.azimuth_bin_of(c) << ',' << g.elevation_bin_of(c) << ',' << imp << ',' << p[c]
-        << ',' << imp * p[c] << ',' << mapper.surface().depth_m[c] << ',' << (i >= shot.ranked_rays ? 1 : 0) << '\n';
+        << ',' << score[c] << ',' << mapper.surface().depth_m[c] << ',' << (i >= shot.ranked_rays ? 1 : 0) << '\n';
   }
   if (!out.flush()) throw IoError("cannot write '" + path + "'");
 }

@@ -165,7 +165,8 @@ OctomapExportReport export_grids(const std::vector<Source>& grids, const std::ve
 // "84.1 MB", or "45.2 kB" below a megabyte (a 45 kB tree read "0.0 MB").
 std::string size_text(double bytes) {
   char text[32];
-  std::snprintf(text, sizeof text, bytes < 1e6 ? "%.1f kB" : "%.1f MB", bytes < 1e6 ? bytes / 1e3 : bytes / 1e6);
+  const bool kilobytes = bytes < 999.95e3;  // what rounds to 1000.0 kB reads 1.0 MB
+  std::snprintf(text, sizeof text, kilobytes ? "%.1f kB" : "%.1f MB", kilobytes ? bytes / 1e3 : bytes / 1e6);
   return text;
 }
 

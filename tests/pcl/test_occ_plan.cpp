@@ -1,15 +1,18 @@
 // occ_plan end to end: the next shot from the sample and from a saved map with its return record, and
 // bad requests giving a one-line error naming the value and a non-zero exit.
 #include "occ_improve/planning/depth_prediction.hpp"
+#include "occ_improve/planning/planner.hpp"
 #include "occ_improve/io/map_io.hpp"
 #include "occ_improve/mapper.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/sample_scene.hpp"
 
+#include "support/csv_table.hpp"
 #include "support/tool_run.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <random>
@@ -117,6 +120,35 @@ TEST_F(OccPlanTool, SavedMapBringsItsReturnRecord) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("3 rays asked, 1 returned"), std::string::npos) << r.output;
   EXPECT_EQ(lines(dir_ / "out" / "shot_rays.csv"), 33u);
+}
+
+// shot_rays.csv's score is what the plan ranked by (shot_scores: improvement x return probability, with
+// the discount for rays whose returns did not settle them), not improvement x return probability alone.
+TEST_F(OccPlanTool, ScoreColumnIsThePlansScore) {
+  occ_improve::Mapper mapper(occ_improve::kinect_v1());
+  const auto points = occ_improve::sample::generate_scene().points();
+  mapper.insert(occ_improve::PointSpan::from(points));
+  auto returns = occ_improve::ReturnRecord::for_grid(640, 480);
+  std::vector<occ_improve::ColumnIndex> unsettled;  // rays with no data in the map, recorded as returned 3 times
+  for (occ_improve::ColumnIndex c = 0; c < 640 * 480 && unsettled.size() < 100; c += 97)
+    if (mapper.improvement().value[c] >= 0.3f) unsettled.push_back(c);
+  ASSERT_EQ(unsettled.size(), 100u);
+  for (int shot = 0; shot < 3; ++shot) returns.record_shot(unsettled, std::vector<std::uint8_t>(unsettled.size(), 1));
+  occ_improve::save_map((dir_ / "map.occmap").string(), mapper.grid(), mapper.model().params(), returns);
+  const ToolRun r = run("-load " + (dir_ / "map.occmap").string() + " -budget 307200 -o " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const occ_improve::test::CsvTable rays = occ_improve::test::read_csv(dir_ / "out" / "shot_rays.csv");
+  ASSERT_EQ(rays.rows.size(), 307200u);
+  const std::vector<float> expected = occ_improve::shot_scores(mapper.improvement(), returns, occ_improve::ReturnModelParams{});
+  const std::vector<double> column = rays.column("column"), score = rays.column("score"),
+                            improvement = rays.column("improvement"), p = rays.column("return_probability");
+  std::size_t discounted = 0;
+  for (std::size_t i = 0; i < column.size(); ++i) {
+    const double e = expected[static_cast<std::size_t>(column[i])];
+    ASSERT_NEAR(score[i], e, 1e-5 * std::max(1.0, std::abs(e))) << "column " << column[i];
+    discounted += improvement[i] > 0 && score[i] < 0.5 * improvement[i] * p[i] ? 1 : 0;  // 2 / (2 + 3) of it
+  }
+  EXPECT_EQ(discounted, unsettled.size());
 }
 
 // -predicted_depth RULE writes the map's dense predicted depth as 16-bit millimetres: read back, every

@@ -337,7 +337,8 @@ double per_ray(double gain, std::size_t rays) { return rays ? gain / static_cast
 // once ~0.14 with kinect_v1 and ~0.19 with a VLP-16's rings, twice 0.07-0.14). Their returns are evidence
 // that the next will not settle them either: a depth edge's foreground ray, whose own peak its background
 // neighbours' free space carves away at every insertion, or a return beyond the grid's range, which leaves
-// only free space. Each unsettling return counts against the ray as a silence does in the return model,
+// only free space; with the paper preset's uniform bins, also the moire's rays (about half of those seen
+// 2-3 times stay at 0.2-0.32 whatever their returns: CONVENTIONS 7). Each unsettling return counts against the ray as a silence does in the return model,
 // s / (s + R) (s: prior_strength_shots): without it, capture0004's 37 edge rays were asked in every shot
 // of the second pass (24 times each).
 constexpr float kUnsettledImprovement = 0.2f;
@@ -352,7 +353,7 @@ std::vector<float> scores_of(const ImprovementMap& improvement, const std::vecto
   const std::uint32_t* returned = returns.returned().data();
   for (std::size_t c = 0; c < score.size(); ++c) {
     score[c] = probability[c] * improvement.value[c];
-    if (returned[c] >= 2 && improvement.value[c] >= kUnsettledImprovement)  // rare: a branch, not a division per ray
+    if (returned[c] >= 2 && improvement.value[c] >= kUnsettledImprovement)  // a branch: no division per ray
       score[c] *= s / (s + static_cast<float>(returned[c]));
   }
   return score;

@@ -260,7 +260,7 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
                   "keep the dominant plane (table, floor); by default it is taken out first, as PCL does"),
       switch_flag("-no_crease", kSegmentation,
                   "cut along the improvement contours only, not along concave creases of the surface"),
-      bounded(value_flag("-plane_distance", K::number, "D", kSegmentation, "plane inlier band [m]", "",
+      bounded(value_flag("-plane_distance", K::number, "D", kSegmentation, "plane inlier band [m]; it widens with range as the depth noise (2.5 sigma)", "",
                          "0.006 pixel-native, 0.01 spherical"),
               0, kInf, true),
       bounded(value_flag("-pcl_min_inliers", K::integer, "N", kPcl, "OrganizedMultiPlaneSegmentation min inliers", "3000"),

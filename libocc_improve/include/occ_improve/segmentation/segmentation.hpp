@@ -55,8 +55,8 @@ struct SegmentationParams {
   /// long against the Kinect's 1-3 mm depth noise and its quantisation steps at 1-1.5 m, short against the
   /// faces of table-top objects. Converted to pixels per ray from its depth.
   double crease_arm_m = 0.02;
-  /// The arm grows with range as the depth noise does: it is at least this x range^2 [1/m], and
-  /// crease_arm_m at every range where 0. segmentation_defaults sets 6 x the model's sigma_depth_per_m2:
+  /// The arm grows with range as the depth noise does: it is at least this x range^2 [1/m] (up to
+  /// crease_max_arm_px: beyond ~5 m for kinect_v1 the cap holds it), and crease_arm_m at every range where 0. segmentation_defaults sets 6 x the model's sigma_depth_per_m2:
   /// six sigma, about three of the Kinect's quantisation steps (2.9e-3 x range^2), as 2 cm is up to
   /// 1.5 m. A shorter arm on a far face measures the noise: at 3.5-4 m (sigma 17-23 mm, steps 3.5-4.6 cm)
   /// the 2 cm arm marked 54 % of person.pcd's back wall as crease (docs/SEGMENTATION.md).

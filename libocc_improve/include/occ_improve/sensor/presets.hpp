@@ -66,11 +66,12 @@ struct LidarRingsOptions {
   /// Azimuth sigma; 0 takes the quantisation of one column (azimuth step / sqrt 12), as the camera presets
   /// take one pixel's: a return's azimuth is where in its step the laser fired.
   double sigma_azimuth_rad = 0.0;
-  /// Elevation sigma: the beam's vertical divergence (Velodyne's manuals: 1.5 mrad). A ring is a beam at
-  /// its own elevation, not a pixel: what lies between two rings is never measured. (0 takes the narrowest
-  /// row's quantisation, its width / sqrt 12, as for a pixel; on a VLP-16 that is 0.58 deg, 2 sigma reaches
-  /// the next ring, and each return's free space carved the ground rings beside it: 89-100 % of the ground
-  /// columns put their surface at the next ring's range, a held-out trial's street scan.)
+  /// Elevation sigma: the beam's vertical divergence (Velodyne's manuals: 1.5 mrad, a full angle taken as
+  /// sigma, so on the generous side). A ring is a beam at its own elevation, not a pixel: what lies between
+  /// two rings is never measured. (0 takes the narrowest row's quantisation, its width / sqrt 12, as for a
+  /// pixel; on a VLP-16 that is 0.58 deg, whose 2 sigma reaches into the next ring's row, and each return's
+  /// free space carved the ground rings beside it: 89-100 % of the ground columns put their surface at the
+  /// next ring's range, a held-out trial's street scan.)
   double sigma_elevation_rad = 1.5e-3;
   double support_k = 2.0;
 
