@@ -600,28 +600,37 @@ std::size_t attach_to_closest_in_depth(const std::vector<std::uint8_t>& valid, c
 // min_segment_columns rays, join the segment of the nearest labelled ray within kIslandReachColumns whose
 // surface lies within the plane band of theirs: one surface seen through holes. A wall crossing the grid's
 // far end, whose rays fall in and out of the depth range with the noise, broke into hundreds of segments of
-// 1-25 rays (a held-out trial: 829 on a slanted wall from 4.6 to 8.6 m; 1-45 rays without quantisation). An island takes the label its
-// rays find closest in depth; larger islands, and those with no such neighbour (a far wall seen through a
+// 1-25 rays (a held-out trial: 829 on a slanted wall from 4.6 to 8.6 m; 1-45 rays without quantisation).
+// An island takes the label its rays find closest in depth; larger islands, and those with no such neighbour (a far wall seen through a
 // gap in a near object), stay segments of their own. Returns the number of rays attached.
 constexpr int kIslandReachColumns = 4;
-std::size_t attach_small_islands_once(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width,
+// Called once the islands of at least min_segment_columns rays are labelled: every region left is small.
+// In rounds, so that a chain of islands (the far end's band of rays flickering in and out of range is
+// tens of columns wide) joins from the segment inwards; each round attaches only islands next to a
+// labelled ray, so the result does not depend on scan order. The islands are found once; a round scans
+// their rays alone.
+std::size_t attach_small_islands(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width,
                                  int height, const SegmentationParams& params, std::vector<std::uint32_t>& label) {
   std::vector<std::uint8_t> unassigned(label.size());
   std::transform(label.begin(), label.end(), unassigned.begin(),
                  [](std::uint32_t l) -> std::uint8_t { return l == kUnassigned; });
   std::vector<std::uint32_t> island(label.size(), kUnassigned);
-  const std::vector<std::size_t> sizes = connected_components(unassigned, width, height, island);
+  const std::size_t islands = connected_components(unassigned, width, height, island).size();
+  std::vector<std::uint32_t> rays;  // the islands' rays, row by row
+  for (std::size_t c = 0; c < label.size(); ++c)
+    if (unassigned[c]) rays.push_back(static_cast<std::uint32_t>(c));
   struct Nearest {
     float jump = std::numeric_limits<float>::infinity();
     std::uint32_t label = kUnassigned;
   };
-  std::vector<Nearest> nearest(sizes.size() + 1);
   const PlaneBand band(params);
-  const auto small = [&](std::size_t c) { return unassigned[c] && sizes[island[c] - 1] < params.min_segment_columns; };
-  for (int e = 0; e < height; ++e)
-    for (int a = 0; a < width; ++a) {
-      const std::size_t c = static_cast<std::size_t>(e) * width + a;
-      if (!small(c)) continue;
+  std::size_t attached = 0;
+  for (;;) {
+    throw_if_stop_requested();
+    std::vector<Nearest> nearest(islands + 1);
+    for (const std::uint32_t c : rays) {
+      if (label[c] != kUnassigned) continue;
+      const int a = static_cast<int>(c % static_cast<std::uint32_t>(width)), e = static_cast<int>(c / static_cast<std::uint32_t>(width));
       Nearest& best = nearest[island[c]];
       const float tolerance = band.at(points[c]);
       for (int v = std::max(0, e - kIslandReachColumns); v <= std::min(height - 1, e + kIslandReachColumns); ++v)
@@ -632,21 +641,9 @@ std::size_t attach_small_islands_once(const std::vector<Eigen::Vector3f>& points
           if (jump < tolerance && jump < best.jump) best = {jump, label[n]};
         }
     }
-  std::size_t attached = 0;
-  for (std::size_t c = 0; c < label.size(); ++c)
-    if (small(c) && nearest[island[c]].label != kUnassigned) label[c] = nearest[island[c]].label, ++attached;
-  return attached;
-}
-
-// In rounds, so that a chain of islands (the far end's band of rays flickering in and out of range is
-// tens of columns wide) joins from the segment inwards; each round attaches only islands next to a
-// labelled ray, so the result does not depend on scan order.
-std::size_t attach_small_islands(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width,
-                                 int height, const SegmentationParams& params, std::vector<std::uint32_t>& label) {
-  std::size_t attached = 0;
-  for (;;) {
-    throw_if_stop_requested();
-    const std::size_t now = attach_small_islands_once(points, surface, width, height, params, label);
+    std::size_t now = 0;
+    for (const std::uint32_t c : rays)
+      if (label[c] == kUnassigned && nearest[island[c]].label != kUnassigned) label[c] = nearest[island[c]].label, ++now;
     if (now == 0) return attached;
     attached += now;
   }
