@@ -27,6 +27,7 @@
 #include <fstream>
 #include <initializer_list>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace occ_improve {
@@ -361,47 +362,47 @@ TEST(ToolOptions, AGridAboveTheMemoryCapIsRefusedBeforeAnyGridForTheInputsCamera
 namespace occ_improve {
 namespace {
 
+// run_tool on a quiet test tool whose run is `body`, the stop request cleared before and after: its exit
+// code and what it wrote to stderr.
+std::pair<int, std::string> run_test_tool(const std::string& description, int (*body)(const CommandLine&)) {
+  const ToolFlags flags{"occ_test", {"[options]"}, description, {"-q"}, {}, {}, ""};
+  char name[] = "occ_test", quiet[] = "-q";
+  char* argv[] = {name, quiet, nullptr};
+  clear_stop_request();
+  testing::internal::CaptureStderr();
+  const int code = run_tool(2, argv, flags, body);
+  const std::string err = testing::internal::GetCapturedStderr();
+  clear_stop_request();
+  return {code, err};
+}
+
 // A signal that landed after the tool's last poll (during the final renames) was swallowed and the run
 // exited 0, though the README promises 130/143: run_tool now ends in 128 + the signal whenever one came,
 // saying the outputs were committed. The run here is the end of a tool: its outputs are in place when the
 // signal arrives.
 TEST(RunTool, ASignalAfterTheLastPollStillEndsIn128PlusTheSignal) {
-  const ToolFlags flags{"occ_test", {"[options]"}, "A tool that finishes while a signal arrives.\n", {"-q"}, {}, {}, ""};
-  char name[] = "occ_test", quiet[] = "-q";
-  char* argv[] = {name, quiet, nullptr};
-  clear_stop_request();
-  testing::internal::CaptureStderr();
-  const int code = run_tool(2, argv, flags, [](const CommandLine&) {
+  const auto [code, err] = run_test_tool("A tool that finishes while a signal arrives.\n", [](const CommandLine&) {
     std::raise(SIGTERM);  // the handler only records it: the run goes on to its end
     return 0;
   });
-  const std::string err = testing::internal::GetCapturedStderr();
-  clear_stop_request();
   EXPECT_EQ(code, 128 + SIGTERM);
   EXPECT_NE(err.find("interrupted by SIGTERM after the run had finished (its outputs are committed)"), std::string::npos)
       << err;
   // Without a signal the run's own exit code is kept.
-  EXPECT_EQ(run_tool(2, argv, flags, [](const CommandLine&) { return 0; }), 0);
+  EXPECT_EQ(run_test_tool("A tool that finishes.\n", [](const CommandLine&) { return 0; }).first, 0);
 }
 
 // A signal during a step no poll interrupts (PCL reading a large ASCII PLY), then an error from the next
 // step (a cap the file exceeds): the run was interrupted, not failed; it exited 1 with the error before.
 TEST(RunTool, AnErrorAfterASignalEndsAsInterrupted) {
-  const ToolFlags flags{"occ_test", {"[options]"}, "A tool that fails after a signal.\n", {"-q"}, {}, {}, ""};
-  char name[] = "occ_test", quiet[] = "-q";
-  char* argv[] = {name, quiet, nullptr};
-  clear_stop_request();
-  testing::internal::CaptureStderr();
-  const int code = run_tool(2, argv, flags, [](const CommandLine&) -> int {
+  const auto [code, err] = run_test_tool("A tool that fails after a signal.\n", [](const CommandLine&) -> int {
     std::raise(SIGINT);
     throw ResourceLimit("grid above the memory cap");
   });
-  const std::string err = testing::internal::GetCapturedStderr();
-  clear_stop_request();
   EXPECT_EQ(code, 128 + SIGINT);
   EXPECT_NE(err.find("grid above the memory cap"), std::string::npos) << err;
   EXPECT_NE(err.find("interrupted by SIGINT"), std::string::npos) << err;
-  EXPECT_EQ(run_tool(2, argv, flags, [](const CommandLine&) -> int { throw ResourceLimit("cap"); }), 1);
+  EXPECT_EQ(run_test_tool("A tool that fails.\n", [](const CommandLine&) -> int { throw ResourceLimit("cap"); }).first, 1);
 }
 
 }  // namespace
