@@ -112,6 +112,55 @@ TEST(Mask, RefusesAnotherSizeAndAGridWithoutCamera) {
   EXPECT_THROW(mapper.set_mask(broken), InvalidInput);
 }
 
+// A grid without a camera (a VLP-16's rings) takes its mask per column: a rear sector (a vehicle's own body)
+// masked, its returns are left out and counted, its improvement is NaN, and no plan asks for it. A mask of
+// another size is refused naming both sizes.
+TEST(Mask, AGridWithoutCameraTakesAMaskPerColumn) {
+  Mapper mapper(lidar_rings());
+  const GridGeometry& g = mapper.geometry();
+  const auto rear = [&](int a) { return a < g.width() / 8; };  // an eighth of the turn
+  std::vector<std::uint8_t> valid(g.column_count(), 7);  // any nonzero byte is inside
+  for (int e = 0; e < g.height(); ++e)
+    for (int a = 0; a < g.width(); ++a)
+      if (rear(a)) valid[g.column(a, e)] = 0;
+  mapper.set_column_mask(valid);
+  // One return per column on a 10 m cylinder around the sensor.
+  std::vector<Eigen::Vector3f> points;
+  std::size_t rear_points = 0;
+  for (int e = 0; e < g.height(); ++e)
+    for (int a = 0; a < g.width(); ++a) {
+      const Eigen::Vector3d d = g.direction_at(g.azimuth().centre(a), g.elevation().centre(e));
+      points.push_back((d * (10.0 / std::hypot(d.x(), d.z()))).cast<float>());
+      rear_points += rear(a);
+    }
+  const MapperReport report = mapper.insert(PointSpan::from(points));
+  EXPECT_EQ(report.points_masked, rear_points);
+  EXPECT_EQ(report.insertion.points_inserted + report.points_masked, points.size());
+  std::size_t unknown_inside = 0;
+  for (int e = 0; e < g.height(); ++e)
+    for (int a = 0; a < g.width(); ++a) {
+      const ColumnIndex c = g.column(a, e);
+      EXPECT_EQ(mapper.column_mask()[c], rear(a) ? 0 : 1);
+      EXPECT_EQ(std::isnan(mapper.improvement().value[c]), rear(a)) << "column " << a << ", " << e;
+      unknown_inside += !rear(a) && mapper.surface().unknown[c];
+    }
+  EXPECT_EQ(unknown_inside, 0u);
+  PlanRequest request;
+  request.budget_rays = 4096;
+  const Shot shot = plan_next_shot(mapper.improvement(), ReturnRecord::for_grid(g.width(), g.height()), request);
+  ASSERT_FALSE(shot.columns.empty());
+  for (const ColumnIndex c : shot.columns) EXPECT_FALSE(rear(g.azimuth_bin_of(c)));
+  valid.pop_back();
+  try {
+    mapper.set_column_mask(valid);
+    FAIL() << "a mask one byte short was taken";
+  } catch (const InvalidInput& e) {
+    EXPECT_NE(std::string(e.what()).find("column mask"), std::string::npos) << e.what();
+  }
+  // A camera's pixel mask names pixels this grid does not have.
+  EXPECT_THROW(mapper.set_mask(left_half(kinect_v1_intrinsics())), InvalidParameter);
+}
+
 TEST(Mask, SphericalGridsMaskTheColumnsWhoseDirectionFallsInAMaskedPixel) {
   const sample::SampleFrame frame = sample::generate_scene();
   Mapper mapper(kinect_v1_spherical(frame.intrinsics));

@@ -68,8 +68,13 @@ MapperReport Mapper::insert(PointSpan points, const InsertionOptions& options, c
   return insert(points, options);
 }
 
-void Mapper::set_mask(const PixelMask& mask) {
-  std::vector<std::uint8_t> columns = mask_columns(grid_.geometry(), mask);
+void Mapper::set_mask(const PixelMask& mask) { use_column_mask(mask_columns(grid_.geometry(), mask)); }
+
+void Mapper::set_column_mask(const std::vector<std::uint8_t>& valid) {
+  use_column_mask(column_mask_of(grid_.geometry(), valid));
+}
+
+void Mapper::use_column_mask(std::vector<std::uint8_t> columns) {
   updating([&] {
     const bool widened = !column_mask_.empty() && columns != column_mask_;
     column_mask_ = std::move(columns);

@@ -227,7 +227,16 @@ void bind_mapper_mask(py::class_<PyMapper>& c) {
         "A validity / region-of-interest mask over the camera's pixels (H x W, nonzero = valid) for every later "
         "insert: points outside are left out and counted (MapperReport.points_masked), the improvement there is "
         "NaN (never ranked, in a region or planned). Raises InvalidInput for another size than the camera's, "
-        "InvalidParameter for a preset without a camera.");
+        "InvalidParameter for a preset without a camera (set_column_mask takes one flag per column).");
+  c.def("set_column_mask", [](PyMapper& self, const py::object& mask) {
+    const PixelMask m = pixel_mask_from(mask);
+    const GridGeometry& g = self.mapper.geometry();
+    require_shape("column mask", m.shape(), "the grid", ColumnShape::of_grid(g.width(), g.height()));
+    with_mapper(self, [&](Mapper& mp) { mp.set_column_mask(m.valid); });
+  }, py::arg("mask"),
+        "The same mask given per column of the grid (H x W = elevation bins x azimuth bins, nonzero = inside), for "
+        "any preset, those without a camera too (the paper preset, lidar_rings: a vehicle's own body, a blind "
+        "sector). Raises InvalidInput for another shape than the grid's.");
   c.def("clear_mask", [](PyMapper& self) { with_mapper(self, [](Mapper& mp) { mp.clear_mask(); }); },
         "Removes the mask: every column is observable again.");
   c.def_property_readonly("column_mask", [](PyMapper& self) -> py::object {

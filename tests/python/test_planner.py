@@ -346,6 +346,33 @@ def test_mask_leaves_rays_out_of_insertion_ranking_and_plan(sample):
     assert np.all(np.isfinite(mapper.improvement()[:, mapper.width // 2:]))
 
 
+def test_a_grid_without_camera_takes_a_mask_per_column():
+    """A LiDAR's rear sector (its vehicle) masked by column: its returns left out and counted, NaN there, never planned."""
+    mapper = oi.Mapper(oi.lidar_rings())
+    mask = np.ones((mapper.height, mapper.width), dtype=np.uint8)
+    mask[:, : mapper.width // 8] = 0
+    with pytest.raises(oi.InvalidParameter, match="set_column_mask"):
+        mapper.set_mask(mask)
+    with pytest.raises(oi.InvalidInput, match="column mask"):
+        mapper.set_column_mask(mask.T)
+    mapper.set_column_mask(mask)
+    assert np.array_equal(mapper.column_mask, mask.astype(bool))
+    # One return per column, 10 m away horizontally, in the optical frame (z forward, y down).
+    az = np.linspace(-np.pi, np.pi, mapper.width, endpoint=False) + np.pi / mapper.width
+    el = np.radians(np.linspace(15, -15, mapper.height))
+    a, e = np.meshgrid(az, el)
+    points = np.stack([10 * np.sin(a), -10 * np.tan(e), 10 * np.cos(a)], axis=-1).astype(np.float32)
+    report = mapper.insert(points.reshape(-1, 3))
+    masked = oi.Mapper(oi.lidar_rings())
+    columns = masked.insert(points.reshape(-1, 3)).insertion.points_inserted
+    assert 0 < report.points_masked < columns
+    assert report.insertion.points_inserted + report.points_masked == columns
+    improvement = mapper.improvement()
+    assert np.all(np.isnan(improvement[mask == 0])) and np.all(np.isfinite(improvement[mask != 0]))
+    shot = oi.plan_next_shot(mapper, empty_record(mapper), oi.PlanRequest(budget_rays=2000))
+    assert np.all(mask.reshape(-1)[shot.columns] != 0)
+
+
 def test_insert_takes_the_mask_as_a_keyword(sample):
     """insert_depth(..., mask=) is set_mask then insert_depth: the same maps and counts."""
     depth, intrinsics = sample

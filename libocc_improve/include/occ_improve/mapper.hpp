@@ -40,6 +40,9 @@ public:
   /// observable: never ranked, in a region, planned or counted by the stop signal; grey in pictures).
   /// Replaces an earlier mask. Throws as mask_columns (no camera, another size).
   void set_mask(const PixelMask& mask);
+  /// The same mask given per column (column_mask_of: one byte per column, row by row, nonzero = inside), for
+  /// any grid, the grids without a camera too (the paper preset, lidar_rings). Throws as column_mask_of.
+  void set_column_mask(const std::vector<std::uint8_t>& valid);
   /// Every column observable again (the improvement is recomputed).
   void clear_mask();
   /// One byte per column, 1 = inside the mask; empty without a mask.
@@ -66,6 +69,8 @@ private:
   /// Recomputes the surface, improvement and pyramid from the grid when a call threw part-way.
   void refresh_if_stale() const;
   MapperReport insert_now(PointSpan points, const InsertionOptions& options);
+  /// Makes `columns` (0 / 1 bytes, one per column) the mask: the improvement masked, recomputed where it widened.
+  void use_column_mask(std::vector<std::uint8_t> columns);
 
   ColumnGrid grid_;
   SensorModel model_;

@@ -27,8 +27,8 @@ std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const Pixel
   mask.validate();
   const std::optional<PinholeIntrinsics>& camera = geometry.params().camera;
   if (!camera)
-    throw InvalidParameter("a mask names camera pixels, and this grid has no camera (use a camera-based preset "
-                           "such as kinect_v1)");
+    throw InvalidParameter("a mask names camera pixels, and this grid has no camera (give one byte per column "
+                           "instead: Mapper::set_column_mask, or a camera-based preset such as kinect_v1)");
   require_shape("mask", mask.shape(), "the camera", ColumnShape::of_grid(camera->width, camera->height));
   std::vector<std::uint8_t> columns(geometry.column_count(), 0);
   if (geometry.binning().columns_are_camera_pixels()) {
@@ -44,6 +44,14 @@ std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const Pixel
       if (u < 0 || v < 0 || u >= mask.width || v >= mask.height) continue;
       columns[geometry.column(a, e)] = mask.valid[static_cast<std::size_t>(v) * mask.width + u] != 0;
     }
+  return columns;
+}
+
+std::vector<std::uint8_t> column_mask_of(const GridGeometry& geometry, const std::vector<std::uint8_t>& valid) {
+  require_shape("column mask", ColumnShape::of_arrays(geometry.width(), geometry.height(), {valid.size()}), "the grid",
+                ColumnShape::of_grid(geometry.width(), geometry.height()));
+  std::vector<std::uint8_t> columns(valid.size());
+  std::transform(valid.begin(), valid.end(), columns.begin(), [](std::uint8_t b) { return b != 0; });
   return columns;
 }
 

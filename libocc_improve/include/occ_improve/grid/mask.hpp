@@ -31,9 +31,16 @@ struct PixelMask {
 
 /// One byte per column of `geometry` (1 = inside the mask). Pixel-native grids: the pixel itself; spherical
 /// grids with a camera: the pixel the column's centre direction falls in (columns outside the image: 0).
-/// Throws InvalidParameter when the geometry has no camera (the paper preset: a mask names camera pixels),
+/// Throws InvalidParameter when the geometry has no camera (the paper preset, lidar_rings: a mask names camera
+/// pixels; column_mask_of takes one per column),
 /// InvalidInput when the mask's size is not the camera's ("mask is W x H, the camera W x H").
 std::vector<std::uint8_t> mask_columns(const GridGeometry& geometry, const PixelMask& mask);
+
+/// A column mask given per column rather than per pixel, for any grid, with or without a camera (the paper
+/// preset, lidar_rings: a vehicle's own body, a blind sector): `valid` holds one byte per column of
+/// `geometry`, row by row (elevation bin), nonzero = inside. Returns the 0 / 1 bytes mask_columns would.
+/// Throws InvalidInput when `valid` does not hold one byte per column.
+std::vector<std::uint8_t> column_mask_of(const GridGeometry& geometry, const std::vector<std::uint8_t>& valid);
 
 /// The valid points of `points` whose column is outside `columns` (mask_columns) left out, the others
 /// copied to `kept` (x y z floats) in order; invalid and out-of-field points are kept, so that the
