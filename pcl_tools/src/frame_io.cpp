@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -148,8 +149,19 @@ Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
   if (!in) throw IoError("cannot open pose file '" + path + "'");
   Eigen::Matrix4d m;
   for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c)
-      if (!(in >> m(r, c))) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix");
+    for (int c = 0; c < 4; ++c) {
+      // Token by token, so that a "nan" or a word is named as what it is, not as a missing entry.
+      std::string token;
+      if (!(in >> token)) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix (it ends after " +
+                                            std::to_string(4 * r + c) + " values)");
+      const std::string where = "row " + std::to_string(r + 1) + ", column " + std::to_string(c + 1);
+      char* end = nullptr;
+      m(r, c) = std::strtod(token.c_str(), &end);
+      if (end != token.c_str() + token.size())
+        throw FormatError("pose file '" + path + "' holds '" + token + "' at " + where + ": not a number");
+      if (!std::isfinite(m(r, c)))
+        throw FormatError("pose file '" + path + "' holds a non-finite value at " + where + " ('" + token + "')");
+    }
   if (!(in >> std::ws).eof()) throw FormatError("pose file '" + path + "' holds more than a 4x4 matrix");
   if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
     throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");

@@ -92,6 +92,7 @@ void FileSequenceGrabber::run() {
                  " skipped: " + e.what());
       continue;
     }
+    emitting_ = i;
     if (frame_signal_->num_slots() > 0) (*frame_signal_)(cloud);
     ++emitted_;
   }

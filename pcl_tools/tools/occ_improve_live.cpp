@@ -11,6 +11,7 @@
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/tools/live_view.hpp"
 #include "occ_improve/tools/tool_frame_grabber.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
 #include "occ_improve/tools/input_scope.hpp"
 #include "occ_improve/tools/plan_flags.hpp"
 #include "occ_improve/tools/progress.hpp"
@@ -55,7 +56,9 @@ const ToolFlags kFlags{
     "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
     "shot against rays asked), and with -predicted_depth nearest|linear predicted_depth.png (the map's dense\n"
     "depth from its samples, 16-bit mm, 0 = none within -radius). -view shows the improvement map and the\n"
-    "top regions as frames arrive. Ctrl-C stops cleanly and still writes the maps.\n",
+    "top regions as frames arrive. Ctrl-C stops cleanly and still writes the maps. A file source's frame\n"
+    "that cannot be used (unreadable, of another size, empty) is named and skipped: the maps of the others\n"
+    "are written, and the tool exits 1.\n",
     joined({output_folder_flag_names(),
             {"-q", "-device", "-oni", "-pcd_dir", "-depth_dir", "-fps", "-drop", "-keep", "-max_frames", "-save_every",
              "-stop_on_signal", "-simulate", "-budget", "-shape", "-refine", "-window",
@@ -177,6 +180,7 @@ struct StreamSource {
   SensorPreset preset;
   std::optional<PinholeIntrinsics> frames_camera;  ///< the frames' camera, where known (a -load map must fit it)
   std::string text, camera;  ///< for the summary
+  bool poses_applied = false;  ///< the frames are moved into the first one's view
 };
 
 std::string poses_text(bool applied) { return applied ? "poses applied: map in the first frame's view" : "no poses"; }
@@ -211,6 +215,7 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
            poses_text(grabber->posesApplied()) +
            (grabber->unposedFrames() > 0 ? "; " + std::to_string(grabber->unposedFrames()) + " without a pose skipped" : "") +
            ")";
+  s.poses_applied = grabber->posesApplied();
   s.file_source = grabber.get();
   s.grabber = grabber;
   return s;
@@ -238,6 +243,7 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
   s.camera = describe_camera({first});
   s.text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(grabber->frameCount()) + " frames, " +
            poses_text(first.pose && options.use_poses) + ")";
+  s.poses_applied = first.pose && options.use_poses;
   s.file_source = grabber.get();
   s.grabber = grabber;
   return s;
@@ -443,6 +449,7 @@ int run(const CommandLine& command_line) {
 
   std::mutex report_mutex;
   std::optional<FrameResult> last, fired;
+  InsertionReport points;  // every processed frame's, for the summary's points line
   StopWake stop_wake;
   std::atomic<int> maps_written{0};
   std::uint64_t frames_seen = 0;  // only touched by the worker
@@ -450,6 +457,7 @@ int run(const CommandLine& command_line) {
     {
       std::lock_guard<std::mutex> lock(report_mutex);
       last = r;
+      points += r.report.insertion;
       if (r.stop.stop && !fired) fired = r;
     }
     if (r.stop.stop) stop_wake.fire();
@@ -468,6 +476,16 @@ int run(const CommandLine& command_line) {
   if (source.file_source)
     source.file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
   pipeline.attach(*source.grabber);
+  // Files without poses: frames of other scenes or viewpoints would be fused as one view unnoticed (the other
+  // tools warn the same way). On the grabber's thread, before the frame reaches the pipeline.
+  UnposedSceneCheck scenes(source.preset.model, source.poses_applied || !source.file_source,
+                           "Give their poses (a dataset's pose files, a PCD's VIEWPOINT), or map them one by one "
+                           "(occ_improve_map -input_dir DIR -output_dir OUTDIR)");
+  std::function<void(const Pipeline::Cloud::ConstPtr&)> check_scene = [&](const Pipeline::Cloud::ConstPtr& cloud) {
+    scenes.add(source.file_source->emittingFrameName(), *cloud);
+  };
+  const boost::signals2::scoped_connection scene_connection =
+      source.file_source ? source.grabber->registerCallback(check_scene) : boost::signals2::connection();
 
   const GeometryParams& g = source.preset.geometry;
   pcl::console::print_info("%s\n", source.camera.c_str());
@@ -480,6 +498,7 @@ int run(const CommandLine& command_line) {
       follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_wake, progress, view.get());
   pipeline.stop();
   progress.finish();
+  if (const std::string warning = scenes.warning(); !warning.empty()) pcl::console::print_warn("%s\n", warning.c_str());
   const int signal = take_stop_request();  // the maps so far are still written below
   if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !signal)
     throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +
@@ -488,11 +507,21 @@ int run(const CommandLine& command_line) {
   const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
   if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
   if (view) finish_view(*view, screenshot.get(), pipeline.mapper(), last, pipeline.statistics().processed);
-  print_stream_summary(pipeline.statistics(), pipeline_options.keep_fraction < 1.0, stop_reason, fired, last);
+  const PipelineStatistics statistics = pipeline.statistics();
+  print_stream_summary(statistics, pipeline_options.keep_fraction < 1.0, stop_reason, fired, last);
+  if (pipeline_options.keep_fraction >= 1.0) pcl::console::print_info("%s\n", describe_points(points).c_str());
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),
                            maps_written.load());
   // The maps so far are written above: a stream is normally ended by Ctrl-C, and its maps are valid.
   if (signal) throw Cancelled(signal);
+  // Files are the user's input, not a live sensor's passing glitch: a frame that could not be used fails the
+  // run (as the other tools refuse it), after the maps of the others are written and the warnings above
+  // named each one.
+  if (const std::uint64_t unused = statistics.rejected + statistics.grabber_errors; source.file_source && unused > 0)
+    throw InvalidInput(std::to_string(unused) + " frame(s) of " + source.text + " could not be used (" +
+                       std::to_string(statistics.rejected) + " rejected, " + std::to_string(statistics.grabber_errors) +
+                       " skipped by the source: each named above); the maps written hold the other " +
+                       std::to_string(statistics.processed));
   return 0;
 }
 

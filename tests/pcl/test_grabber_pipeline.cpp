@@ -543,6 +543,22 @@ TEST(SequenceSources, ErrorsNameTheProblem) {
   EXPECT_THROW(PcdSequenceGrabber(std::vector<std::string>{"a.pcd"}, -1.0f), InvalidParameter);
   std::ofstream(empty.path / "bad.pose.txt") << "1 0 0\n";
   EXPECT_THROW(read_pose_matrix_file((empty.path / "bad.pose.txt").string()), FormatError);
+  // Each entry is named as what it is: a NaN (a failed pose estimate) as non-finite, a word as not a number.
+  const auto message = [&](const std::string& text) {
+    std::ofstream(empty.path / "pose.txt") << text;
+    try {
+      read_pose_matrix_file((empty.path / "pose.txt").string());
+    } catch (const FormatError& e) {
+      return std::string(e.what());
+    }
+    return std::string("accepted");
+  };
+  EXPECT_NE(message("1 0 0 0\nnan 1 0 0\n0 0 1 0\n0 0 0 1\n").find("non-finite value at row 2, column 1 ('nan')"),
+            std::string::npos);
+  EXPECT_NE(message("1 0 0 0\n0 1 0 x\n0 0 1 0\n0 0 0 1\n").find("holds 'x' at row 2, column 4: not a number"),
+            std::string::npos);
+  EXPECT_NE(message("1 0 0 0\n0 1 0 0\n").find("it ends after 8 values"), std::string::npos);
+  EXPECT_EQ(message("1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"), "accepted");
 }
 
 }  // namespace

@@ -480,7 +480,8 @@ TEST_F(Tools, FusingDifferentScenesWithoutPosesWarnsInOneLine) {
   ASSERT_EQ(same.exit_code, 0) << same.err;
   EXPECT_EQ(same.err.find("warning"), std::string::npos) << same.err;
   // A wall at 2 m and one at 3 m: every common pixel disagrees.
-  for (const std::string& tool : {std::string(OCC_IMPROVE_MAP_EXECUTABLE), std::string(OCC_PLAN_EXECUTABLE)}) {
+  for (const std::string& tool : {std::string(OCC_IMPROVE_MAP_EXECUTABLE), std::string(OCC_PLAN_EXECUTABLE),
+                                   std::string(OCC_IMPROVE_LIVE_EXECUTABLE)}) {
     const ToolRun r = run(tool, wall("a.png", 2000, 0) + " " + wall("c.png", 3000, 0) + " " + wall("d.png", 2000, 0) +
                                     (tool == OCC_PLAN_EXECUTABLE ? " -budget 100" : "") + camera + "different_" +
                                     fs::path(tool).filename().string());
@@ -492,6 +493,27 @@ TEST_F(Tools, FusingDifferentScenesWithoutPosesWarnsInOneLine) {
     EXPECT_NE(r.err.find("up to 100% of their common valid pixels"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("c.png"), std::string::npos) << r.err;
   }
+}
+
+// occ_improve_live exited 0 after skipping a frame it could not use, where the other tools refuse the input:
+// a script checking the exit code took a map of fewer frames than it gave. The frame is named, the maps of
+// the others are written, and the exit code is 1.
+TEST_F(Tools, LiveFailsARunWithAnUnusableFrameAfterWritingTheOthers) {
+  fs::create_directory(folder_ / "frames");
+  for (int i = 0; i < 3; ++i) fs::copy_file(write_cloud("wall.pcd", 2.0f), folder_ / "frames" / ("f" + std::to_string(i) + ".pcd"));
+  std::ofstream(folder_ / "frames" / "f1.pcd", std::ios::trunc) << "not a point cloud\n";
+  const ToolRun r = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -o out");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("f1.pcd"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: 1 frame(s) of frames"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("the maps written hold the other 2"), std::string::npos) << r.err;
+  EXPECT_NE(r.out.find("Frames: 2 received, 2 processed"), std::string::npos) << r.out;
+  // The maps of the usable frames are written: the wall at 2 m.
+  const test::CsvTable rays = test::read_csv(folder_ / "out" / "rays.csv");
+  ASSERT_FALSE(rays.rows.empty());
+  std::size_t on_wall = 0;
+  for (std::size_t i = 0; i < rays.rows.size(); ++i) on_wall += std::abs(rays.value(i, "depth_m") - 2.0) < 0.05;
+  EXPECT_GT(on_wall, 0u);
 }
 
 // Ctrl-C on occ_improve_live left an empty staging folder and lost the summary.

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 namespace occ_improve {
 
@@ -25,42 +26,34 @@ FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& 
   return a;
 }
 
+UnposedSceneCheck::UnposedSceneCheck(const SensorModelParams& model, bool poses_applied, std::string advice)
+    : model_(model), active_(!poses_applied), advice_(std::move(advice)) {}
+
+void UnposedSceneCheck::add(const std::string& name, const pcl::PointCloud<pcl::PointXYZ>& cloud) {
+  if (!active_ || cloud.height <= 1) return;
+  if (!first_) {
+    first_ = cloud;
+    first_name_ = name;
+    return;
+  }
+  const FrameDepthAgreement a = frame_depth_agreement(*first_, cloud, model_);
+  if (a.co_valid < 1000 || a.disagreeing_share() <= kDifferentSceneShare) return;
+  names_.push_back(name);
+  worst_share_ = std::max(worst_share_, a.disagreeing_share());
+}
+
+std::string UnposedSceneCheck::warning() const {
+  if (names_.empty()) return "";
+  char line[1024];
+  std::snprintf(line, sizeof line,
+                "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to %.0f%% "
+                "of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes or "
+                "viewpoints? %s",
+                names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str(), advice_.c_str());
+  return line;
+}
+
 namespace {
-
-// Collects the frames that disagree with the first one (frame_depth_agreement) when no poses place them, and
-// warns once at the end: fusing different scenes as one view makes a map of neither.
-class SceneCheck {
-public:
-  SceneCheck(const SensorModelParams& model, bool poses_applied) : model_(model), active_(!poses_applied) {}
-  void add(const ToolFrame& frame) {
-    if (!active_ || frame.cloud.height <= 1) return;
-    if (!first_) {
-      first_ = frame.cloud;
-      first_name_ = frame.name;
-      return;
-    }
-    const FrameDepthAgreement a = frame_depth_agreement(*first_, frame.cloud, model_);
-    if (a.co_valid < 1000 || a.disagreeing_share() <= kDifferentSceneShare) return;
-    names_.push_back(frame.name);
-    worst_share_ = std::max(worst_share_, a.disagreeing_share());
-  }
-  void warn_if_needed() const {
-    if (names_.empty()) return;
-    std::fprintf(stderr,
-                 "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to "
-                 "%.0f%% of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes "
-                 "or viewpoints? Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)\n",
-                 names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str());
-  }
-
-private:
-  SensorModelParams model_;
-  bool active_;
-  std::optional<pcl::PointCloud<pcl::PointXYZ>> first_;
-  std::string first_name_;
-  std::vector<std::string> names_;
-  double worst_share_ = 0;
-};
 
 // Why no point of the frames was inserted, naming them: the mask, or the field of view.
 std::string nothing_inserted(const FusedFrames& fused) {
@@ -92,12 +85,13 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what());
   }
   // Poses move every frame into the first one's view; without them, frames of other scenes go unnoticed.
-  SceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose);
+  UnposedSceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose,
+                           "Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)");
   try {
     for (; frame; frame = frames.next()) {
       throw_if_stop_requested();
       const InputScope scope(frame->name);
-      scenes.add(*frame);
+      scenes.add(frame->name, frame->cloud);
       fused.insertion += insert(*frame);
       fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
       if (fused.frames == 0) fused.first_name = frame->name;
@@ -111,7 +105,7 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw;
   }
   progress.finish();
-  scenes.warn_if_needed();
+  if (const std::string warning = scenes.warning(); !warning.empty()) std::fprintf(stderr, "%s\n", warning.c_str());
   fused.first_pose = frames.first_pose();
   fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
   if (fused.frames > 0 && fused.insertion.points_inserted == 0) throw InvalidInput(nothing_inserted(fused));

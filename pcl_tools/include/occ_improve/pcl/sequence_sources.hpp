@@ -66,12 +66,16 @@ public:
   std::size_t errors() const { return errors_; }
   /// Called from the reading thread for each file that cannot be read.
   void setErrorCallback(ErrorCallback callback);
+  /// Inside a frame's callback (on the reading thread): the file the frame was read from.
+  std::string emittingFrameName() const { return frameName(emitting_); }
 
 protected:
   /// fps = 0: as fast as possible; fps < 0 throws InvalidParameter.
   FileSequenceGrabber(std::size_t frame_count, float fps);
   /// The i-th frame (may throw any occ_improve::Error; the frame is then skipped and counted).
   virtual Cloud::Ptr loadFrame(std::size_t index) = 0;
+  /// The i-th frame's file.
+  virtual std::string frameName(std::size_t index) const = 0;
 
 private:
   void run();
@@ -86,6 +90,7 @@ private:
   bool stop_requested_ = false;
   std::atomic<bool> running_{false};
   std::atomic<std::size_t> emitted_{0}, errors_{0};
+  std::size_t emitting_ = 0;  ///< the frame being emitted (reading thread only)
 };
 
 /// The .pcd files of a folder in name order (non-.pcd files are ignored), or an explicit list.
@@ -100,6 +105,7 @@ public:
 
 protected:
   Cloud::Ptr loadFrame(std::size_t index) override;
+  std::string frameName(std::size_t index) const override { return files_[index]; }
 
 private:
   std::vector<std::string> files_;
@@ -154,6 +160,7 @@ public:
 
 protected:
   Cloud::Ptr loadFrame(std::size_t index) override;
+  std::string frameName(std::size_t index) const override { return sequence_.frames[index].depth_path; }
 
 private:
   DepthSequence sequence_;

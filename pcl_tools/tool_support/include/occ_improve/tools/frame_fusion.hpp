@@ -34,6 +34,26 @@ FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& 
 /// Above this share of disagreeing co-valid pixels (over at least 1000 of them) fuse_tool_frames warns.
 inline constexpr double kDifferentSceneShare = 0.5;
 
+/// Frames fused without poses, each compared with the first (frame_depth_agreement): warning() is one line
+/// naming those that disagree on more than kDifferentSceneShare of at least 1000 co-valid pixels (different
+/// scenes or viewpoints fused as one view make a map of neither), empty when none do. With poses applied it
+/// checks nothing. `advice` ends the warning (what the tool's user can do).
+class UnposedSceneCheck {
+public:
+  UnposedSceneCheck(const SensorModelParams& model, bool poses_applied, std::string advice);
+  void add(const std::string& name, const pcl::PointCloud<pcl::PointXYZ>& cloud);
+  std::string warning() const;
+
+private:
+  SensorModelParams model_;
+  bool active_;
+  std::string advice_;
+  std::optional<pcl::PointCloud<pcl::PointXYZ>> first_;
+  std::string first_name_;
+  std::vector<std::string> names_;
+  double worst_share_ = 0;
+};
+
 /// What fuse_tool_frames did, for a tool's summary.
 struct FusedFrames {
   InsertionReport insertion;

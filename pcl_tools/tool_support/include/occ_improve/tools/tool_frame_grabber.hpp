@@ -5,6 +5,7 @@
 #include "occ_improve/pcl/sequence_sources.hpp"
 #include "occ_improve/tools/tool_frames.hpp"
 
+#include <string>
 #include <vector>
 
 namespace occ_improve {
@@ -20,6 +21,7 @@ public:
 
 protected:
   Cloud::Ptr loadFrame(std::size_t index) override;
+  std::string frameName(std::size_t index) const override { return sources_[index].path; }
 
 private:
   const ToolOptions& options_;
