@@ -37,8 +37,9 @@ const ToolFlags kFlags{
     {"-load MAP.occmap [-pose P] [-load MAP2 -pose P2 ...] [options] -o OUT.bt|OUT.ot",
      "[options] INPUT... -o OUT.bt|OUT.ot", "-sample [options] -o OUT.bt|OUT.ot"},
     "Writes the occupancy grid as an OctoMap OcTree: a leaf is occupied when any occupied grid voxel\n"
-    "reaches into it (it takes their largest log-odds), free when it lies wholly in free space (it takes\n"
-    "the log-odds at its centre), unknown otherwise.\n"
+    "reaches into it (it takes their largest log-odds), free when free space crosses it as OctoMap marks\n"
+    "free a leaf a ray crosses (-free crossed: its centre or a corner lies in free space, and no return's\n"
+    "surface; -free wholly: all of it), unknown otherwise.\n"
     ".bt = maximum likelihood, .ot = full log-odds (both with OctoMap's own writers). The tree is in a\n"
     "world frame: -pose, else the first frame's pose when the inputs have poses (a 7-Scenes folder),\n"
     "else -frame.\n"
@@ -46,7 +47,7 @@ const ToolFlags kFlags{
     "file gets OctoMap's defaults) nor the sensor model; keep the .occmap (-save) for those.\n"
     "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
     "are added, then clamped.\n",
-    joined({{"-o", "-overwrite", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame"}, sensor_flag_names(),
+    joined({{"-o", "-overwrite", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame", "-free"}, sensor_flag_names(),
             camera_flag_names(), {"-no_poses", "-mask"}}),
     {},
     {"-load", "-pose"},
@@ -216,6 +217,7 @@ int run(const CommandLine& command_line) {
   // -memory_cap bounds the tree too when given (the export's own default cap is 2 GiB).
   OctomapExportOptions export_options;
   if (command_line.has("-memory_cap")) export_options.memory_cap_bytes = options.grid.memory_cap_bytes;
+  export_options.free_leaves = *command_line.text("-free") == "wholly" ? FreeLeafRule::wholly_free : FreeLeafRule::crossed;
   std::unique_ptr<octomap::OcTree> tree = make_octree(*grids.front().grid, resolution, export_options);
   const LeftToExitOnStop<std::unique_ptr<octomap::OcTree>> tree_left_on_stop(tree);
   const OctomapExportReport report = export_grids(grids, poses, export_options, *tree);

@@ -93,6 +93,6 @@ from .frames import (  # noqa: F401
 from .pcd import PcdCloud, read_pcd  # noqa: F401
 
 if HAS_OCTOMAP:
-    from ._core import OctomapExportOptions, OctomapExportReport  # noqa: F401
+    from ._core import FreeLeafRule, OctomapExportOptions, OctomapExportReport  # noqa: F401
 
 __version__ = "0.1.0"

@@ -130,10 +130,16 @@ Eigen::Isometry3d pose_from(const std::optional<PoseArray>& world_from_sensor) {
 }
 
 void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
-  py::class_<OctomapExportOptions> o(m, "OctomapExportOptions", "Occupancy threshold, unknown band, memory cap.");
+  py::enum_<FreeLeafRule>(m, "FreeLeafRule", "Which OcTree leaves the export writes free.")
+      .value("crossed", FreeLeafRule::crossed,
+             "free space crosses the leaf (its centre or a corner), as OctoMap frees a leaf a ray crosses (default)")
+      .value("wholly_free", FreeLeafRule::wholly_free, "the leaf lies wholly in free space: unknown space stays unknown");
+  py::class_<OctomapExportOptions> o(m, "OctomapExportOptions",
+                                     "Occupancy threshold, unknown band, free-leaf rule, memory cap.");
   def_value_struct<OctomapExportOptions>(o);
   o.def_readwrite("occupancy_threshold", &OctomapExportOptions::occupancy_threshold)
       .def_readwrite("unknown_band_probability", &OctomapExportOptions::unknown_band_probability)
+      .def_readwrite("free_leaves", &OctomapExportOptions::free_leaves)
       .def_property("memory_cap_bytes", int_field_getter(&OctomapExportOptions::memory_cap_bytes),
                     int_field_setter(&OctomapExportOptions::memory_cap_bytes, "memory_cap_bytes"))
       .def("validate", &OctomapExportOptions::validate);

@@ -49,10 +49,31 @@ inline Occupancy octree_occupancy(const octomap::OcTree& tree, const Eigen::Vect
   return tree.isNodeOccupied(node) ? Occupancy::occupied : Occupancy::free;
 }
 
+/// FreeLeafRule::crossed's free samples of the finest leaf centred at `centre` (size `size`): the log-odds of
+/// the voxel holding its centre when that is free, else the largest of the free voxels holding its 8 corners
+/// (a hair inside the leaf, as the export takes them); nullopt when none of them is free.
+inline std::optional<float> crossed_free_log_odds(const ColumnGrid& grid, const Eigen::Isometry3d& pose,
+                                                  const Eigen::Vector3d& centre, double size,
+                                                  const OctomapExportOptions& options) {
+  const double half = 0.5 * size * (1.0 - 1e-6);
+  std::optional<float> best;
+  for (int c = -1; c < 8; ++c) {
+    const Eigen::Vector3d w = c < 0 ? centre
+                                    : centre + Eigen::Vector3d(c & 1 ? half : -half, c & 2 ? half : -half, c & 4 ? half : -half);
+    const auto l = spherical_log_odds(grid, pose, w, options);
+    if (c < 0 && l && *l < 0) return l;
+    if (l && *l < 0 && (!best || *l > *best)) best = l;
+  }
+  return best;
+}
+
 /// The export's rule for the finest leaf centred at `centre`, estimated on n x n x n points spread over the
-/// leaf (its faces included, pulled in by 0.1 %): occupied when any point's voxel is occupied, free when
-/// every point's is free, unknown otherwise. A lattice can miss a feature thinner than its spacing, so the
+/// leaf (its faces included, pulled in by 0.1 %): occupied when any point's voxel is occupied; free, under
+/// FreeLeafRule::wholly_free when every point's is free, under crossed when the centre's or a corner's is
+/// (crossed_free_log_odds); unknown otherwise. A lattice can miss a feature thinner than its spacing, so the
 /// estimate errs only towards free (missed occupied or unknown space) and towards unknown (missed occupied).
+/// Under crossed the export also leaves unknown a leaf a carved surface reaches (export.hpp), which the
+/// estimate calls free.
 struct LeafEstimate {
   Occupancy occupancy = Occupancy::unknown;
   float largest_occupied = -std::numeric_limits<float>::infinity();  ///< largest occupied log-odds seen
@@ -72,7 +93,10 @@ inline LeafEstimate estimate_leaf(const ColumnGrid& grid, const Eigen::Isometry3
         all_free = all_free && l && *l < 0;
         if (l && *l > 0) e.largest_occupied = std::max(e.largest_occupied, *l);
       }
-  e.occupancy = e.largest_occupied > 0 ? Occupancy::occupied : (all_free ? Occupancy::free : Occupancy::unknown);
+  const bool free = options.free_leaves == FreeLeafRule::wholly_free
+                        ? all_free
+                        : crossed_free_log_odds(grid, pose, centre, size, options).has_value();
+  e.occupancy = e.largest_occupied > 0 ? Occupancy::occupied : (free ? Occupancy::free : Occupancy::unknown);
   return e;
 }
 

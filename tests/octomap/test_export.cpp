@@ -130,8 +130,36 @@ TEST_F(OctomapExport, PixelNativeGridAgreesToo) {
   const SensorPreset preset = kinect_v1(sample::generate_scene().intrinsics);
   ColumnGrid grid(GridGeometry(preset.geometry));
   insert_points(grid, SensorModel(preset.model), PointSpan::from(sample::generate_scene().points()));
-  const OctomapExportOptions options;
-  expect_agreement(test::compare_leaves(grid, some_pose(), *exported(grid, options), options, 5000), kMinAgreement);
+  for (FreeLeafRule rule : {FreeLeafRule::crossed, FreeLeafRule::wholly_free}) {
+    OctomapExportOptions options;
+    options.free_leaves = rule;
+    expect_agreement(test::compare_leaves(grid, some_pose(), *exported(grid, options), options, 5000), kMinAgreement);
+  }
+}
+
+// The two free rules on one grid: crossed writes free every leaf wholly_free does and more (the leaves a
+// free-space boundary passes whose centre or a corner is free), never one wholly_free calls occupied.
+TEST_F(OctomapExport, CrossedWritesFreeWhatWhollyFreeDoesAndTheLeavesFreeSpaceCrosses) {
+  const ColumnGrid& grid = sample_grid(UpdateMode::clamped);
+  OctomapExportOptions wholly;
+  wholly.free_leaves = FreeLeafRule::wholly_free;
+  const auto crossed_tree = to_octree(grid, some_pose(), 0.1, {});
+  const auto wholly_tree = to_octree(grid, some_pose(), 0.1, wholly);
+  std::size_t wholly_free = 0, crossed_free = 0, lost = 0;
+  for (auto it = wholly_tree->begin_leafs(), end = wholly_tree->end_leafs(); it != end; ++it) {
+    const octomap::OcTreeNode* other = crossed_tree->search(it.getKey(), static_cast<unsigned>(it.getDepth()));
+    if (wholly_tree->isNodeOccupied(*it)) {
+      EXPECT_TRUE(other && crossed_tree->isNodeOccupied(other));
+    } else {
+      ++wholly_free;
+      lost += other && !crossed_tree->isNodeOccupied(other) ? 0 : 1;
+    }
+  }
+  for (auto it = crossed_tree->begin_leafs(), end = crossed_tree->end_leafs(); it != end; ++it)
+    crossed_free += crossed_tree->isNodeOccupied(*it) ? 0 : 1;
+  std::printf("10 cm leaves written free: crossed %zu, wholly_free %zu\n", crossed_free, wholly_free);
+  EXPECT_EQ(lost, 0u);
+  EXPECT_GT(crossed_free, wholly_free + wholly_free / 4);
 }
 
 // A spinning LiDAR's range image (lidar_rings: uneven rings, range along each ring's ray). The rule's
@@ -189,8 +217,10 @@ TEST_F(OctomapExport, AThinWallExportsWithoutHoles) {
   }
 }
 
-// Free leaves carry the log-odds of the voxel at their centre; occupied ones the largest of the occupied
-// voxels reaching them, so at least the largest a lattice inside them finds.
+// Free leaves carry the log-odds of the voxel at their centre, or where that is not free the largest of their
+// free corners' (FreeLeafRule::crossed);
+// occupied ones the largest of the occupied voxels reaching them, so at least the largest a lattice inside
+// them finds.
 TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBounds) {
   for (UpdateMode mode : {UpdateMode::clamped, UpdateMode::exact}) {
     const ColumnGrid& grid = sample_grid(mode);
@@ -203,8 +233,8 @@ TEST_F(OctomapExport, LogOddsAreCarriedOverAndExactModeIsNotClampedAtTheGridsBou
       lowest = std::min(lowest, it->getLogOdds());
       if (++leaf % 7 != 0) continue;  // every 7th leaf keeps the test short
       const Eigen::Vector3d centre = finest_centre(it, kResolution);
-      if (it->getLogOdds() < 0) {
-        const auto expected = test::spherical_log_odds(grid, pose, centre, options);
+      if (it->getLogOdds() < 0) {  // crossed (the default): the centre's, else the largest free corner's
+        const auto expected = test::crossed_free_log_odds(grid, pose, centre, kResolution, options);
         ++free_checked;
         free_equal += expected && std::abs(*expected - it->getLogOdds()) <= 1e-6f ? 1 : 0;
       } else {

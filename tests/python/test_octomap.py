@@ -31,6 +31,18 @@ def test_bt_and_ot_files_are_written_with_occupied_and_free_space(tmp_path):
     assert moved.occupied_written == pytest.approx(report.occupied_written, rel=0.2)
 
 
+def test_free_leaves_rule_is_an_option(tmp_path):
+    """crossed (the default) frees the leaves free space crosses, as OctoMap does; wholly_free fewer, no others."""
+    mapper = small_mapper()
+    crossed = mapper.export_octomap(tmp_path / "crossed.bt", 0.1)
+    wholly = mapper.export_octomap(tmp_path / "wholly.bt", 0.1,
+                                   options=oi.OctomapExportOptions(free_leaves=oi.FreeLeafRule.wholly_free))
+    assert oi.OctomapExportOptions().free_leaves == oi.FreeLeafRule.crossed
+    assert crossed.occupied_written == wholly.occupied_written
+    assert crossed.free_written > 1.2 * wholly.free_written
+    assert crossed.left_unknown < wholly.left_unknown
+
+
 def test_export_prints_nothing(tmp_path, capfd):
     # liboctomap's own copy of writeBinaryData prints "Writing N nodes..." to stderr (its debug output).
     small_mapper().export_octomap(tmp_path / "map.bt", 0.05)

@@ -3,6 +3,7 @@
 #include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "occ_improve/maps/surface.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 #include "occ_improve/timing.hpp"
 
@@ -14,6 +15,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <ostream>
 #include <sstream>
 #include <utility>
@@ -132,8 +134,12 @@ VoxelClass classify(float log_odds, float band) {
 struct LeafMark {
   float occupied_log_odds = -std::numeric_limits<float>::infinity();  ///< max over occupied voxels reaching it
   bool free_boundary = false;  ///< a face between free and not-free space reaches it
+  /// A column's surface voxel (its return, as far as the grid knows) that is not occupied reaches it:
+  /// neighbouring rays' free space carved it (depth edges). FreeLeafRule::crossed never writes such a leaf
+  /// free, as OctoMap never frees a leaf holding an endpoint.
+  bool carved_surface = false;
   bool occupied() const { return occupied_log_odds > -std::numeric_limits<float>::infinity(); }
-  bool marked() const { return free_boundary || occupied(); }
+  bool marked() const { return free_boundary || carved_surface || occupied(); }
 };
 
 // The marks of the leaves in the key box [lo, hi], in blocks of 8 x 8 x 8 leaves allocated on first touch:
@@ -279,8 +285,9 @@ struct BinRun {
 // gathered into patches no wider than the cover's step: far fewer boxes, no looser than the step.
 class LeafMarker {
 public:
-  LeafMarker(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor, float band, const PatchCover& cover)
-      : grid_(grid), g_(grid.geometry()), band_(band), cover_(cover), marks_(cover.key_lo(), cover.key_hi()),
+  LeafMarker(const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor, float band, FreeLeafRule rule,
+             const PatchCover& cover)
+      : grid_(grid), g_(grid.geometry()), band_(band), rule_(rule), cover_(cover), marks_(cover.key_lo(), cover.key_hi()),
         corners_(static_cast<std::size_t>(g_.width() + 1) * (g_.height() + 1)) {
     const Eigen::Matrix3d rotation = world_from_sensor.linear();
     for (int v = 0; v <= g_.height(); ++v)
@@ -344,6 +351,7 @@ private:
   void scan_column(int h, int v, const ColumnData& column) {
     const int end = std::min(column.window_end(), g_.depth().bins());
     Patch patch = column_patch(h, v);
+    if (rule_ == FreeLeafRule::crossed) mark_carved_surface(patch, column);
     const double ray_length = patch.q_lo.cwiseAbs().cwiseMax(patch.q_hi.cwiseAbs()).norm();
     VoxelClass previous = VoxelClass::unknown;
     int free_first = 0, group_first = -1, group_end = 0;
@@ -378,6 +386,16 @@ private:
       block(b, b + 1, classify(value, band_), value);
     }
     block(end, end, VoxelClass::unknown, 0.0f);  // the unknown tail (or the grid's far end)
+  }
+
+  // The column's surface voxel when it is not occupied (LeafMark::carved_surface).
+  void mark_carved_surface(Patch patch, const ColumnData& column) {
+    const SurfaceVoxel surface = column_surface(column.contents(), grid_);
+    if (surface.unknown || surface.bin < 0 || surface.bin >= g_.depth().bins()) return;  // none, or free to the end
+    if (classify(column.value(surface.bin), band_) == VoxelClass::occupied) return;  // marked as occupied
+    patch.near = depth_at(surface.bin);
+    patch.far = depth_at(surface.bin + 1);
+    cover_.for_each_leaf(patch, [&](const octomap::OcTreeKey& key) { marks_.at(key).carved_surface = true; });
   }
 
   // A cap at `bin` of column (h, v): joins the row's open cap at that bin when that ended at column h - 1
@@ -494,6 +512,7 @@ private:
   const ColumnGrid& grid_;
   const GridGeometry& g_;
   float band_;
+  FreeLeafRule rule_;
   const PatchCover& cover_;
   LeafMarks marks_;
   std::vector<Eigen::Vector3d> corners_;  ///< (width + 1) x (height + 1) column-corner directions, world frame
@@ -518,16 +537,71 @@ double curvature_pad_m(const GridGeometry& g, double far_m) {
   return 1e-9 + far_m * alpha * alpha / 2;
 }
 
-// Leaves wholly in free space: the voxel holding the centre is free and no free-space boundary reaches the
-// leaf (a leaf holding free and non-free space is crossed by one). They take the log-odds of the voxel
-// holding their centre. Leaves whose centre is in the field of view and that are neither free nor occupied
-// count as unknown.
+// The free leaves (export.hpp's rule). A leaf no free-space boundary reaches holds one class of space: it is
+// free when the voxel holding its centre is, and takes that voxel's log-odds. A leaf a boundary reaches
+// (and no occupied voxel, no carved surface) is free under FreeLeafRule::crossed when its centre or one of
+// its corners lies in a free voxel: it takes the centre's log-odds, else the largest of the free corners'.
+// Leaves whose
+// centre is in the field of view and that are neither free nor occupied count as unknown.
+class FreeLeafWriter {
+public:
+  FreeLeafWriter(const octomap::OcTree& tree, const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
+                 double far_m, float band, FreeLeafRule rule)
+      : g_(grid.geometry()), accessor_(grid), far_m_(far_m), band_(band), rule_(rule),
+        near2_(g_.params().depth_min_m * g_.params().depth_min_m) {
+    // Corners a hair inside the leaf: a corner on a face would belong to the next leaf as much as to this one.
+    const double half = 0.5 * tree.getResolution() * (1.0 - 1e-6);
+    const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
+    for (int c = 0; c < 8; ++c)
+      corners_[c] = sensor_from_world * Eigen::Vector3d(c & 1 ? half : -half, c & 2 ? half : -half, c & 4 ? half : -half);
+  }
+
+  /// The log-odds to write for the leaf centred at sensor-frame `p` with `mark` (nullptr: unmarked), or
+  /// nothing; `in_view` tells whether its centre lies in the known field of view.
+  std::optional<float> free_value(const Eigen::Vector3d& p, const LeafMark* mark, bool& in_view) {
+    std::optional<float> centre = sample(p, in_view);
+    if (!mark) return centre;
+    if (mark->occupied() || mark->carved_surface || rule_ == FreeLeafRule::wholly_free) return std::nullopt;
+    if (centre) return centre;
+    std::optional<float> best;
+    for (const Eigen::Vector3d& corner : corners_) {
+      bool corner_in_view;
+      const std::optional<float> value = sample(p + corner, corner_in_view);
+      if (value && (!best || *value > *best)) best = value;
+    }
+    return best;
+  }
+
+private:
+  // The log-odds of the free voxel holding sensor-frame point q, or nothing (not free, not in the grid).
+  std::optional<float> sample(const Eigen::Vector3d& q, bool& in_view) {
+    in_view = false;
+    // The depth coordinate (range or z) is at most the range: points nearer than the grid start are out.
+    const double rho2 = q.squaredNorm();
+    if (rho2 < near2_ || rho2 == 0.0) return std::nullopt;
+    RayPosition ray;
+    if (!g_.project(q.x(), q.y(), q.z(), ray) || ray.depth >= far_m_) return std::nullopt;
+    const int bin = g_.depth().bin(ray.depth);
+    if (bin < 0 || bin >= g_.depth().bins()) return std::nullopt;
+    in_view = true;
+    const float value = accessor_.log_odds(g_.column(ray.horizontal_bin, ray.vertical_bin), bin);
+    if (classify(value, band_) != VoxelClass::free) return std::nullopt;
+    return value;
+  }
+
+  const GridGeometry& g_;
+  GridAccessor accessor_;
+  const double far_m_;
+  const float band_;
+  const FreeLeafRule rule_;
+  const double near2_;
+  Eigen::Vector3d corners_[8];
+};
+
 template <typename Write>
 void write_free_leaves(const octomap::OcTree& tree, const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,
                        double far_m, const octomap::OcTreeKey& key_lo, const octomap::OcTreeKey& key_hi, float band,
-                       const LeafMarks& marks, Write&& write, OctomapExportReport& report) {
-  const GridGeometry& geometry = grid.geometry();
-  const double near2 = geometry.params().depth_min_m * geometry.params().depth_min_m;
+                       FreeLeafRule rule, const LeafMarks& marks, Write&& write, OctomapExportReport& report) {
   const Eigen::Matrix3d sensor_from_world = world_from_sensor.linear().transpose();
   const Eigen::Vector3d origin = world_from_sensor.translation();
   // Loop order: innermost along the world axis nearest the sensor's x (neighbouring columns of one row lie
@@ -541,7 +615,7 @@ void write_free_leaves(const octomap::OcTree& tree, const ColumnGrid& grid, cons
   const int outer = 3 - inner - middle;
   // Sensor-frame position of a leaf centre: p = R^T (c - t), stepped along the inner axis.
   const Eigen::Vector3d step = sensor_from_world.col(inner) * tree.getResolution();
-  GridAccessor accessor(grid);
+  FreeLeafWriter writer(tree, grid, world_from_sensor, far_m, band, rule);
   octomap::OcTreeKey key;
   for (unsigned ko = key_lo[outer]; ko <= key_hi[outer]; ++ko) {
     key[outer] = static_cast<octomap::key_type>(ko);
@@ -553,22 +627,13 @@ void write_free_leaves(const octomap::OcTree& tree, const ColumnGrid& grid, cons
       Eigen::Vector3d p = sensor_from_world * (first - origin);
       for (unsigned ki = key_lo[inner]; ki <= key_hi[inner]; ++ki, p += step) {
         ++report.leaves_examined;
-        // The depth coordinate (range or z) is at most the range: leaves nearer than the grid start are out.
-        const double rho2 = p.squaredNorm();
-        if (rho2 < near2 || rho2 == 0.0) continue;
-        RayPosition ray;
-        if (!geometry.project(p.x(), p.y(), p.z(), ray) || ray.depth >= far_m) continue;
-        const int bin = geometry.depth().bin(ray.depth);
-        if (bin < 0 || bin >= geometry.depth().bins()) continue;
         key[inner] = static_cast<octomap::key_type>(ki);
-        if (const LeafMark* mark = marks.find(key)) {
-          report.left_unknown += mark->occupied() ? 0 : 1;  // occupied leaves are already written
-          continue;
-        }
-        const float value = accessor.log_odds(geometry.column(ray.horizontal_bin, ray.vertical_bin), bin);
-        if (classify(value, band) == VoxelClass::free) {
-          write(key, value);
-        } else {
+        const LeafMark* mark = marks.find(key);
+        if (mark && mark->occupied()) continue;  // written already
+        bool in_view;
+        if (const std::optional<float> value = writer.free_value(p, mark, in_view)) {
+          write(key, *value);
+        } else if (in_view) {
           ++report.left_unknown;
         }
       }
@@ -714,13 +779,14 @@ OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
      // freed after those makes glibc's malloc consolidate them all first (0.5 s, deaf to Ctrl-C).
     const PatchCover cover(tree, world_from_sensor.translation(), key_lo, key_hi, kPieceFraction * resolution,
                            curvature_pad_m(geometry, far_m));
-    const LeafMarks marks = LeafMarker(grid, world_from_sensor, band, cover).mark();
+    const LeafMarks marks = LeafMarker(grid, world_from_sensor, band, options.free_leaves, cover).mark();
     const auto write = [&](const octomap::OcTreeKey& key, float log_odds) {
       const octomap::OcTreeNode* node = tree.updateNode(key, log_odds, true);
       (tree.isNodeOccupied(node) ? report.occupied_written : report.free_written) += 1;
     };
     marks.for_each_occupied(write);
-    write_free_leaves(tree, grid, world_from_sensor, far_m, key_lo, key_hi, band, marks, write, report);
+    write_free_leaves(tree, grid, world_from_sensor, far_m, key_lo, key_hi, band, options.free_leaves, marks, write,
+                      report);
   }
   // Lazy insertion leaves inner nodes stale and every leaf expanded: refresh the inner nodes, then merge
   // children of equal value (uniform free space at the clamp) as OctoMap's own insertion does.

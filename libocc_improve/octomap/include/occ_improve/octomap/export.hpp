@@ -8,16 +8,23 @@
 //  - occupied: an occupied voxel reaches into the leaf. The leaf takes the largest log-odds of the occupied
 //    voxels reaching it. So a surface thinner than the leaf (the kinect_v1 presets' occupied shell is a few
 //    millimetres deep) leaves no hole, at any resolution.
-//  - free: the leaf lies wholly in free space. It takes the log-odds of the voxel holding its centre.
-//  - unknown (absent from the tree) otherwise: the leaf holds unknown space and no occupied voxel.
+//  - free (FreeLeafRule::crossed, the default): free space crosses the leaf, as OctoMap calls a leaf free
+//    that a ray crosses. A leaf no free-space boundary reaches is free when the voxel holding its centre is;
+//    one that a boundary reaches, when its centre or one of its 8 corners lies in a free voxel and no
+//    column's surface voxel (its return) reaches it, as OctoMap never frees a leaf holding an endpoint. It
+//    takes the log-odds of the voxel holding its centre, or where that is not free the largest (least
+//    certain) of its free corners'.
+//    (FreeLeafRule::wholly_free: the leaf lies wholly in free space; it takes the log-odds of its centre.)
+//  - unknown (absent from the tree) otherwise: no free space found in the leaf, and no occupied voxel.
 // The test is conservative, with a bound: each run of occupied voxels, and each face between free and
 // non-free space (where a column's free run starts or ends, or two neighbouring columns differ), is cut
 // into pieces no longer than a quarter leaf (or one column wide where a column is wider), and a leaf
 // counts as reached when it meets a piece's axis-aligned bounding box. A pinhole voxel is the convex hull
 // of its corners; a spherical voxel's curved faces are covered by padding the box. So no leaf holding
-// occupied space is missed, and no leaf holding anything but free space is written free; a leaf is
-// called occupied, or not wholly free, when such a voxel or face passes within that piece size of it but
-// not through it. Compared with OctoMap's own insertPointCloud of the same frame, nearly every leaf it
+// occupied space is missed, and under wholly_free no leaf holding anything but free space is written
+// free; a leaf is called occupied, or not wholly free, when such a voxel or face passes within that piece
+// size of it but not through it. Under crossed a leaf a boundary passes is sampled at its centre and
+// corners: free space crossing it between those points (a sliver) leaves it unknown. Compared with OctoMap's own insertPointCloud of the same frame, nearly every leaf it
 // calls occupied is occupied in the export (tests/octomap/test_export_real.cpp); the export has more
 // occupied leaves where the sensor model's occupied shell is deeper than a leaf (far range).
 //
@@ -38,6 +45,12 @@
 
 namespace occ_improve {
 
+/// Which leaves the export writes free (the conversion rule above).
+enum class FreeLeafRule {
+  crossed,     ///< free space crosses the leaf (centre or a corner in a free voxel): OctoMap's own rule
+  wholly_free  ///< the leaf lies wholly in free space: no unknown space is ever written free
+};
+
 struct OctomapExportOptions {
   /// P at or above which OctoMap calls a voxel occupied (OcTree::setOccupancyThres). 0.5: a voxel is
   /// occupied when the evidence leans that way at all, as the grid's own P does.
@@ -45,6 +58,9 @@ struct OctomapExportOptions {
   /// Voxels with |P - 0.5| below this are left unknown: the OPDF decays to exactly 1/2 behind a
   /// measurement, and a voxel with P = 0.5 + 1e-4 carries no information worth turning into "occupied".
   double unknown_band_probability = 0.01;
+  /// crossed: as OctoMap's insertPointCloud marks free every leaf a ray crosses (at 10 cm, wholly_free
+  /// leaves 60-90 % of that free space unknown). wholly_free: a leaf with some unknown space stays unknown.
+  FreeLeafRule free_leaves = FreeLeafRule::crossed;
   /// Refuse an export whose estimated OcTree would need more memory than this (ResourceLimit).
   std::size_t memory_cap_bytes = std::size_t{2} << 30;
 
