@@ -283,6 +283,25 @@ TEST_F(OutputFileTest, OnlyItsOwnKindOfFileIsReplacedUnlessOverwrite) {
   EXPECT_EQ(entry_count(), 2u);  // no staged file left
 }
 
+// A map occ_improve wrote, then made read-only by its owner, was replaced by the rename (as root too): a
+// file without any write bit is refused, -overwrite or not, and stays as it was.
+TEST_F(OutputFileTest, AReadOnlyFileIsNeverReplaced) {
+  save(file("m.map"), false, "MAP kept");
+  fs::permissions(file("m.map"), fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+  for (bool overwrite : {false, true}) {
+    try {
+      save(file("m.map"), overwrite, "MAP new");
+      FAIL() << "a read-only file was replaced, overwrite " << overwrite;
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find("'" + file("m.map") + "' is read-only"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_EQ(contents(file("m.map")), "MAP kept");
+  fs::permissions(file("m.map"), fs::perms::owner_write, fs::perm_options::add);
+  save(file("m.map"), false, "MAP new");
+  EXPECT_EQ(contents(file("m.map")), "MAP new");
+}
+
 TEST_F(OutputFileTest, FoldersMissingParentsAndUncommittedWritesLeaveNothing) {
   fs::create_directories(file("dir"));
   EXPECT_THROW(save(file("dir"), true, "MAP"), IoError);

@@ -265,6 +265,15 @@ TEST_F(Tools, MapAndLiveWriteTheSameFilesAndCreateTheParentsOfTheOutput) {
       EXPECT_NEAR(it.getX(), 2.0, 0.04);
     }
   EXPECT_GE(occupied, 32u * 24u) << "a 64 x 48 cm wall covers at least 32 x 24 leaves of 2 cm";
+  // A parent that cannot be created (a file in the way) is named with the reason, not as "does not exist".
+  std::ofstream(folder_ / "in_the_way") << "a file";
+  for (const auto& [tool, output] : {std::pair<std::string, std::string>{OCC_TO_OCTOMAP_EXECUTABLE, "in_the_way/sub/x.bt"},
+                                     {OCC_IMPROVE_MAP_EXECUTABLE, "in_the_way/sub/out"}}) {
+    const ToolRun r = run(tool, wall + " -o " + output);
+    EXPECT_EQ(r.exit_code, 1) << tool;
+    EXPECT_NE(r.err.find("cannot create its folder"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("Not a directory"), std::string::npos) << r.err;
+  }
 }
 
 // The mean centre of a tree's occupied leaves.

@@ -233,6 +233,12 @@ OutputFile::OutputFile(const std::string& target, const std::string& flag, bool 
   if (fs::exists(resolved, ec) && !overwrite && !is_own(resolved.string()))
     throw IoError(flag + " '" + target + "' exists and is not " + kind +
                   " written by occ_improve: choose another name, or give -overwrite to replace it");
+  // A file nobody may write is one its owner protected: the rename that replaces a file would ignore that
+  // (as root too), so it is refused, -overwrite or not, as a read-only output folder is.
+  constexpr fs::perms kWriteBits = fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write;
+  if (fs::exists(resolved, ec) && (fs::status(resolved, ec).permissions() & kWriteBits) == fs::perms::none)
+    throw IoError(flag + " '" + target + "' is read-only: make it writable (chmod u+w) to replace it, or choose "
+                  "another name");
   remove_stale_leftovers(resolved.parent_path().string(), "." + resolved.filename().string() + ".staged-");
   target_ = resolved.string();
   staged_ = staged_name(resolved).string();

@@ -104,7 +104,7 @@ int run_batch(const CommandLine& c, int (*run)(const CommandLine& command_line))
   const std::vector<std::string> folders = output_folders(files.frames, output_dir);
   // Every per-file folder is checked before any work (a folder the tool did not write, without
   // -overwrite), so a batch is not refused half-way; the check stages nothing that outlives it.
-  create_parent_folders((fs::path(output_dir) / "x").string());
+  create_parent_folders((fs::path(output_dir) / "x").string(), "-output_dir");
   for (std::size_t i = 0; i < files.frames.size(); ++i) {
     try {
       const OutputFolder check(folders[i], c.tool().tool, c.has("-overwrite"), {files.frames[i]});

@@ -41,7 +41,7 @@ std::unique_ptr<OutputFile> open_output_file(const CommandLine& command_line, co
                                              const std::string& kind) {
   const std::string path = *command_line.text(flag);
   require_not_an_input(command_line, path, flag);
-  create_parent_folders(path);
+  create_parent_folders(path, flag);
   return std::make_unique<OutputFile>(path, flag, command_line.has("-overwrite"), is_own, kind);
 }
 
@@ -75,16 +75,20 @@ void MapSaveTarget::commit() {
   if (file_) file_->commit();
 }
 
-void create_parent_folders(const std::string& path) {
+void create_parent_folders(const std::string& path, const std::string& flag) {
   const std::filesystem::path parent = std::filesystem::path(path).lexically_normal().parent_path();
   std::error_code ec;
-  if (!parent.empty() && !std::filesystem::exists(parent, ec)) std::filesystem::create_directories(parent, ec);
+  if (parent.empty() || std::filesystem::exists(parent, ec)) return;
+  std::filesystem::create_directories(parent, ec);
+  // Named here: the writability check that follows could only say the folder does not exist.
+  if (ec) throw IoError("cannot write " + flag + " '" + path + "': cannot create its folder '" + parent.string() + "': " +
+                        ec.message());
 }
 
 OutputFolder open_output_folder(const CommandLine& c) {
   const auto folder = c.text("-o");
   if (!folder) throw InvalidParameter("-o OUTDIR is required (see -h)");
-  create_parent_folders(*folder);  // the folder itself is staged and moved into place
+  create_parent_folders(*folder, "-o");  // the folder itself is staged and moved into place
   return OutputFolder(*folder, c.tool().tool, c.has("-overwrite"), run_inputs(c));
 }
 

@@ -54,7 +54,9 @@ void remove_stale_leftovers(const std::string& folder, const std::string& prefix
 /// two steps, so that a run that fails anywhere leaves the previous file as it was:
 ///  - the constructor refuses (IoError/InvalidParameter naming `flag`): a folder, a missing or unwritable
 ///    parent, and an existing file that `is_own` does not recognise as one this project wrote (checked by
-///    its magic) unless `overwrite`; a symbolic link is written through (the link stays, its target changes);
+///    its magic) unless `overwrite`, and an existing file without any write permission bit (its owner
+///    protected it: refused with `overwrite` too); a symbolic link is written through (the link stays, its
+///    target changes);
 ///  - staged() is where the content is written (a temporary beside the target);
 ///  - commit() renames it over the target (it may be written and committed again: a tool that saves as it
 ///    goes); the destructor removes a staged file never committed.

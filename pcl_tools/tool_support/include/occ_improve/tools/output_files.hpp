@@ -31,9 +31,9 @@ std::vector<std::string> run_inputs(const CommandLine& command_line);
 void require_distinct_outputs(const std::string& path_a, const std::string& flag_a, const std::string& path_b,
                               const std::string& flag_b);
 
-/// Creates the missing folders above `path` (like mkdir -p of its parent); an output file or folder whose
-/// parent cannot be created then fails to write with the writer's own message naming it.
-void create_parent_folders(const std::string& path);
+/// Creates the missing folders above `path` (like mkdir -p of its parent); IoError naming `flag`, the path and
+/// the reason (permission denied, a file in the way) when they cannot be created.
+void create_parent_folders(const std::string& path, const std::string& flag);
 
 /// The output folder named by -o (or the tool's default for it; InvalidParameter when it has none), its
 /// missing parents created; refused when it already holds files the tool did not write unless -overwrite
