@@ -698,20 +698,125 @@ private:
 // line: OctoMap's readers skip comment lines there, so every OctoMap reader still reads the file.
 constexpr const char* kWrittenByLine = "# written by occ_improve";
 
-// OcTree::writeBinaryConst / AbstractOcTree::write, whose headers are written here: with our line, and
-// because Debian's liboctomap prints " done." to stderr after every binary write (issue 18: before a tool's
-// error line). The headers are OctoMap's, byte for byte, but for that line; the data is OctoMap's own.
+// The data OctoMap's own writeBinary() writes (toMaxLikelihood(), prune(), then writeBinaryData), computed
+// without changing the tree: every node in its maximum-likelihood state (occupied or free), and the children
+// that prune() would merge written as one leaf. prune() works level by level from the deepest up and stops
+// at the first level where nothing merges, so a first pass counts, per depth, the nodes that would merge
+// (all 8 children leaves of one state once the levels below are merged); merging happens from the
+// deepest level up to the one above the first without any. The second pass writes each node's two bytes
+// of child codes (OccupancyOcTreeBase::writeBinaryNode's: 01 occupied, 10 free, 11 inner, 00 absent) and
+// its children after them, dropping the bytes of a child that merges. Both poll for a stop.
+class MaxLikelihoodBinary {
+public:
+  explicit MaxLikelihoodBinary(const octomap::OcTree& tree) : tree_(tree), merging_(tree.getTreeDepth(), 0) {
+    if (!tree.getRoot()) return;
+    count_merging(tree.getRoot(), 0);
+    merge_from_ = 1;  // prune() never merges the root
+    for (unsigned depth = tree.getTreeDepth() - 1; depth > 0; --depth)
+      if (merging_[depth] == 0) {
+        merge_from_ = depth + 1;
+        break;
+      }
+    nodes_ = 1 + encode(tree.getRoot(), 0).nodes;
+  }
+  std::size_t size() const { return nodes_; }  ///< nodes of the pruned tree (the header's "size")
+  void write(std::ostream& out) const { out.write(bytes_.data(), static_cast<std::streamsize>(bytes_.size())); }
+
+private:
+  enum class State { free, occupied, mixed };
+  struct Encoded {
+    State state;        ///< the node's, were it merged: its children's common leaf state, or mixed
+    std::size_t nodes;  ///< nodes written below it
+  };
+
+  State leaf_state(const octomap::OcTreeNode* node) const {
+    return tree_.isNodeOccupied(node) ? State::occupied : State::free;
+  }
+  void visit() {
+    if (++visited_ % (1 << 16) == 0) throw_if_stop_requested();
+  }
+  // The node's state once every level below is merged; counts the inner nodes that merge, per depth.
+  State count_merging(const octomap::OcTreeNode* node, unsigned depth) {
+    visit();
+    if (!tree_.nodeHasChildren(node)) return leaf_state(node);
+    State common = State::mixed;
+    bool all = true;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (!tree_.nodeChildExists(node, i)) {
+        all = false;
+        continue;
+      }
+      const State child = count_merging(tree_.getNodeChild(node, i), depth + 1);
+      if (i == 0) common = child;
+      all = all && child != State::mixed && child == common;
+    }
+    if (!all) return State::mixed;
+    ++merging_[depth];
+    return common;
+  }
+  Encoded encode(const octomap::OcTreeNode* node, unsigned depth) {
+    visit();
+    const std::size_t at = bytes_.size();
+    bytes_.resize(at + 2);
+    unsigned codes = 0;  // 2 bits per child, child 0 in the lowest: OctoMap's two bitsets
+    std::size_t nodes = 0;
+    State common = State::mixed;
+    bool all_leaves = true;
+    for (unsigned i = 0; i < 8; ++i) {
+      if (!tree_.nodeChildExists(node, i)) {
+        all_leaves = false;
+        continue;
+      }
+      const octomap::OcTreeNode* child = tree_.getNodeChild(node, i);
+      State leaf = State::mixed;
+      nodes += 1;
+      if (!tree_.nodeHasChildren(child)) {
+        leaf = leaf_state(child);
+      } else {
+        const std::size_t child_at = bytes_.size();
+        const Encoded below = encode(child, depth + 1);
+        if (depth + 1 >= merge_from_ && below.state != State::mixed) {
+          bytes_.resize(child_at);  // merged into a leaf: its children are not written
+          leaf = below.state;
+        } else {
+          nodes += below.nodes;
+        }
+      }
+      const unsigned code = leaf == State::occupied ? 2u : leaf == State::free ? 1u : 3u;  // bit 2i first
+      codes |= code << (2 * i);
+      if (i == 0) common = leaf;
+      all_leaves = all_leaves && leaf != State::mixed && leaf == common;
+    }
+    bytes_[at] = static_cast<char>(codes & 0xff);
+    bytes_[at + 1] = static_cast<char>(codes >> 8);
+    return {all_leaves ? common : State::mixed, nodes};
+  }
+
+  const octomap::OcTree& tree_;
+  std::vector<std::size_t> merging_;  ///< per depth, the inner nodes that merge
+  unsigned merge_from_ = 1;           ///< the shallowest depth that merges
+  std::vector<char> bytes_;
+  std::size_t nodes_ = 0;
+  std::size_t visited_ = 0;
+};
+
+// OctoMap's file headers, written here: with our line, and because Debian's liboctomap prints " done." to
+// stderr after every binary write (issue 18: before a tool's error line). The headers are OctoMap's, byte for
+// byte, but for that line. .bt: the data of OctoMap's writeBinary() (MaxLikelihoodBinary); .ot: its own
+// writeData.
 bool write_tree(const octomap::OcTree& tree, bool full, std::ostream& out) {
+  std::optional<MaxLikelihoodBinary> binary;
+  if (!full) binary.emplace(tree);
   out << (full ? "# Octomap OcTree file" : "# Octomap OcTree binary file") << "\n" << kWrittenByLine
       << "\n# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
   out << "id " << tree.getTreeType() << std::endl;
-  out << "size " << tree.size() << std::endl;
+  out << "size " << (full ? tree.size() : binary->size()) << std::endl;
   out << "res " << tree.getResolution() << std::endl;
   out << "data" << std::endl;
   if (full)
     tree.writeData(out);
-  else  // qualified: a virtual call reaches liboctomap's own copy, which prints "Writing N nodes" to stderr
-    tree.octomap::OccupancyOcTreeBase<octomap::OcTreeNode>::writeBinaryData(out);
+  else
+    binary->write(out);
   return out.good();
 }
 

@@ -102,9 +102,9 @@ std::unique_ptr<octomap::OcTree> to_octree(const ColumnGrid& grid, const Eigen::
                                            double resolution_m, const OctomapExportOptions& options = {},
                                            OctomapExportReport* report = nullptr);
 
-/// Writes `tree` with OctoMap's own writers, chosen by extension: ".bt" (maximum likelihood,
-/// writeBinaryConst) or ".ot" (full log-odds, write). The tree is not modified (no pruning, no
-/// thresholding). The file is written beside `path` and renamed into place: a failed write leaves no
+/// Writes `tree` as OctoMap's own writers do, chosen by extension: ".bt" (maximum likelihood: the bytes of
+/// writeBinary(), whose leaves are each occupied or free and whose children of one state are merged) or
+/// ".ot" (full log-odds, write()). The tree is not modified (writeBinary() would threshold and prune it). The file is written beside `path` and renamed into place: a failed write leaves no
 /// half-written file. Throws InvalidParameter for another extension, IoError when it cannot write.
 void write_octree(const octomap::OcTree& tree, const std::string& path);
 
