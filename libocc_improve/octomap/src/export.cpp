@@ -729,6 +729,19 @@ private:
     std::size_t nodes;  ///< nodes written below it
   };
 
+  // The state 8 children share once merged (each a leaf of that state), or mixed: what their parent
+  // merges into (a missing child keeps it from merging).
+  struct SharedState {
+    State state = State::mixed;
+    bool shared = true;
+    void absent() { shared = false; }
+    void add(unsigned child, State s) {
+      if (child == 0) state = s;
+      shared = shared && s != State::mixed && s == state;
+    }
+    State result() const { return shared ? state : State::mixed; }
+  };
+
   State leaf_state(const octomap::OcTreeNode* node) const {
     return tree_.isNodeOccupied(node) ? State::occupied : State::free;
   }
@@ -739,20 +752,15 @@ private:
   State count_merging(const octomap::OcTreeNode* node, unsigned depth) {
     visit();
     if (!tree_.nodeHasChildren(node)) return leaf_state(node);
-    State common = State::mixed;
-    bool all = true;
+    SharedState children;
     for (unsigned i = 0; i < 8; ++i) {
-      if (!tree_.nodeChildExists(node, i)) {
-        all = false;
-        continue;
-      }
-      const State child = count_merging(tree_.getNodeChild(node, i), depth + 1);
-      if (i == 0) common = child;
-      all = all && child != State::mixed && child == common;
+      if (tree_.nodeChildExists(node, i))
+        children.add(i, count_merging(tree_.getNodeChild(node, i), depth + 1));
+      else
+        children.absent();
     }
-    if (!all) return State::mixed;
-    ++merging_[depth];
-    return common;
+    if (children.result() != State::mixed) ++merging_[depth];
+    return children.result();
   }
   Encoded encode(const octomap::OcTreeNode* node, unsigned depth) {
     visit();
@@ -760,11 +768,10 @@ private:
     bytes_.resize(at + 2);
     unsigned codes = 0;  // 2 bits per child, child 0 in the lowest: OctoMap's two bitsets
     std::size_t nodes = 0;
-    State common = State::mixed;
-    bool all_leaves = true;
+    SharedState children;
     for (unsigned i = 0; i < 8; ++i) {
       if (!tree_.nodeChildExists(node, i)) {
-        all_leaves = false;
+        children.absent();
         continue;
       }
       const octomap::OcTreeNode* child = tree_.getNodeChild(node, i);
@@ -784,12 +791,11 @@ private:
       }
       const unsigned code = leaf == State::occupied ? 2u : leaf == State::free ? 1u : 3u;  // bit 2i first
       codes |= code << (2 * i);
-      if (i == 0) common = leaf;
-      all_leaves = all_leaves && leaf != State::mixed && leaf == common;
+      children.add(i, leaf);
     }
     bytes_[at] = static_cast<char>(codes & 0xff);
     bytes_[at + 1] = static_cast<char>(codes >> 8);
-    return {all_leaves ? common : State::mixed, nodes};
+    return {children.result(), nodes};
   }
 
   const octomap::OcTree& tree_;
