@@ -477,15 +477,17 @@ int run(const CommandLine& command_line) {
     source.file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
   pipeline.attach(*source.grabber);
   // Files without poses: frames of other scenes or viewpoints would be fused as one view unnoticed (the other
-  // tools warn the same way). On the grabber's thread, before the frame reaches the pipeline.
-  UnposedSceneCheck scenes(source.preset.model, source.poses_applied || !source.file_source,
+  // tools warn the same way). On the grabber's thread, as each frame is delivered.
+  const bool check_scenes =
+      source.file_source && !source.poses_applied && source.file_source->frameCount() > 1;
+  UnposedSceneCheck scenes(source.preset.model, check_scenes,
                            "Give their poses (a dataset's pose files, a PCD's VIEWPOINT), or map them one by one "
                            "(occ_improve_map -input_dir DIR -output_dir OUTDIR)");
   std::function<void(const Pipeline::Cloud::ConstPtr&)> check_scene = [&](const Pipeline::Cloud::ConstPtr& cloud) {
     scenes.add(source.file_source->emittingFrameName(), *cloud);
   };
   const boost::signals2::scoped_connection scene_connection =
-      source.file_source ? source.grabber->registerCallback(check_scene) : boost::signals2::connection();
+      check_scenes ? source.grabber->registerCallback(check_scene) : boost::signals2::connection();
 
   const GeometryParams& g = source.preset.geometry;
   pcl::console::print_info("%s\n", source.camera.c_str());

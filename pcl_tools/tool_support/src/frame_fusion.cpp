@@ -26,8 +26,8 @@ FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& 
   return a;
 }
 
-UnposedSceneCheck::UnposedSceneCheck(const SensorModelParams& model, bool poses_applied, std::string advice)
-    : model_(model), active_(!poses_applied), advice_(std::move(advice)) {}
+UnposedSceneCheck::UnposedSceneCheck(const SensorModelParams& model, bool active, std::string advice)
+    : model_(model), active_(active), advice_(std::move(advice)) {}
 
 void UnposedSceneCheck::add(const std::string& name, const pcl::PointCloud<pcl::PointXYZ>& cloud) {
   if (!active_ || cloud.height <= 1) return;
@@ -85,7 +85,8 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw ResourceLimit("'" + (frame ? frame->name : std::string("sample")) + "': " + e.what());
   }
   // Poses move every frame into the first one's view; without them, frames of other scenes go unnoticed.
-  UnposedSceneCheck scenes(frames.options().preset.model, frames.options().use_poses && frame && frame->pose,
+  const bool poses_applied = frames.options().use_poses && frame && frame->pose;
+  UnposedSceneCheck scenes(frames.options().preset.model, !poses_applied && frames.count() > 1,
                            "Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)");
   try {
     for (; frame; frame = frames.next()) {

@@ -36,11 +36,12 @@ inline constexpr double kDifferentSceneShare = 0.5;
 
 /// Frames fused without poses, each compared with the first (frame_depth_agreement): warning() is one line
 /// naming those that disagree on more than kDifferentSceneShare of at least 1000 co-valid pixels (different
-/// scenes or viewpoints fused as one view make a map of neither), empty when none do. With poses applied it
-/// checks nothing. `advice` ends the warning (what the tool's user can do).
+/// scenes or viewpoints fused as one view make a map of neither), empty when none do. Inactive (with poses
+/// applied, or a single frame) it checks nothing and keeps no copy of the first frame. `advice` ends the
+/// warning (what the tool's user can do).
 class UnposedSceneCheck {
 public:
-  UnposedSceneCheck(const SensorModelParams& model, bool poses_applied, std::string advice);
+  UnposedSceneCheck(const SensorModelParams& model, bool active, std::string advice);
   void add(const std::string& name, const pcl::PointCloud<pcl::PointXYZ>& cloud);
   std::string warning() const;
 
