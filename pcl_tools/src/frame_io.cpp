@@ -7,6 +7,7 @@
 #include "occ_improve/pcl/pcd_header.hpp"
 #include "occ_improve/pcl/ply_header.hpp"
 #include "occ_improve/io/tiff.hpp"
+#include "header_text.hpp"
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
@@ -20,6 +21,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <sstream>
@@ -144,26 +146,39 @@ LoadedFrame load_frame(const std::string& path, const std::optional<PinholeIntri
   throw FormatError("'" + path + "': unsupported input type '." + ext + "' (expected .pcd, .ply, .png, .pgm, .tif or .tiff)");
 }
 
-Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
+namespace {
+
+// The white-space separated numbers of a small text file (a pose, intrinsics), each read whole: a word, "1.5x"
+// or a NaN is named with its place (`place_of(i)` for the i-th value) instead of ending the list early and
+// being reported as a short one.
+std::vector<double> numbers_of_file(const std::string& path, const std::string& what,
+                                    const std::function<std::string(std::size_t)>& place_of) {
   std::ifstream in(path);
-  if (!in) throw IoError("cannot open pose file '" + path + "'");
-  Eigen::Matrix4d m;
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) {
-      // Token by token, so that a "nan" or a word is named as what it is, not as a missing entry.
-      std::string token;
-      if (!(in >> token)) throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix (it ends after " +
-                                            std::to_string(4 * r + c) + " values)");
-      const std::string where = "row " + std::to_string(r + 1) + ", column " + std::to_string(c + 1);
-      char* end = nullptr;
-      m(r, c) = std::strtod(token.c_str(), &end);
-      if (end != token.c_str() + token.size())
-        throw FormatError("pose file '" + path + "' holds '" + token + "' at " + where + ": not a number");
-      if (!std::isfinite(m(r, c)))
-        throw FormatError("pose file '" + path + "' holds a non-finite value at " + where + " ('" + token + "')");
-    }
-  if (!(in >> std::ws).eof()) throw FormatError("pose file '" + path + "' holds more than a 4x4 matrix");
-  if (!m.allFinite() || (m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
+  if (!in) throw IoError("cannot open " + what + " '" + path + "'");
+  std::vector<double> values;
+  std::string token;
+  while (in >> token) {
+    if (!detail::is_number(detail::Word{token.data(), token.data() + token.size()}))
+      throw FormatError(what + " '" + path + "' holds '" + token + "' at " + place_of(values.size()) + ": not a number");
+    values.push_back(std::strtod(token.c_str(), nullptr));
+    if (!std::isfinite(values.back()))
+      throw FormatError(what + " '" + path + "' holds a non-finite value at " + place_of(values.size() - 1) + " ('" +
+                        token + "')");
+  }
+  return values;
+}
+
+}  // namespace
+
+Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
+  const std::vector<double> v = numbers_of_file(path, "pose file", [](std::size_t i) {
+    return "row " + std::to_string(i / 4 + 1) + ", column " + std::to_string(i % 4 + 1);
+  });
+  if (v.size() != 16)
+    throw FormatError("pose file '" + path + "' does not hold a 4x4 matrix (it holds " + std::to_string(v.size()) +
+                      " values)");
+  const Eigen::Matrix4d m = Eigen::Map<const Eigen::Matrix<double, 4, 4, Eigen::RowMajor>>(v.data());
+  if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
     throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
   // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
   // inverse() transposes it, so project it onto the nearest rotation (SVD) to keep T^-1 T = I.
@@ -188,12 +203,8 @@ namespace {
 // read_intrinsics_file; size_given tells whether the file held a width and height.
 PinholeIntrinsics intrinsics_from_file(const std::string& path, bool& size_given) {
   throw_if_folder(path, "intrinsics file");
-  std::ifstream in(path);
-  if (!in) throw IoError("cannot open intrinsics file '" + path + "'");
-  std::vector<double> v;
-  double x;
-  while (in >> x) v.push_back(x);
-  if (!in.eof()) throw FormatError("intrinsics file '" + path + "' holds something that is not a number");
+  const std::vector<double> v =
+      numbers_of_file(path, "intrinsics file", [](std::size_t i) { return "position " + std::to_string(i + 1); });
   PinholeIntrinsics k;
   if (v.size() == 9) {  // 3x3 matrix, row-major
     k.fx = v[0];

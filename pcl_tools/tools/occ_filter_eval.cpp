@@ -5,6 +5,7 @@
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/eval/filter_eval.hpp"
+#include "occ_improve/tools/input_scope.hpp"
 #include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/tools/tool_main.hpp"
 #include "occ_improve/tools/tool_options.hpp"
@@ -81,6 +82,7 @@ int run(const CommandLine& command_line) {
   OutputFolder out = open_output_folder(command_line);
 
   const EvalSetup s = setup(options);
+  const InputScope scope(s.folder);  // an error (no poses, an unreadable frame) names the folder given
   const Frames frames = read_posed_frames(s.sequence, s.intrinsics, Mapper(s.preset).geometry(),
                                           static_cast<std::size_t>(max_frames));
   const Mapper reference = map_of_all_points(frames, s.preset);

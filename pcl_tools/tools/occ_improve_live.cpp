@@ -181,6 +181,9 @@ struct StreamSource {
   std::optional<PinholeIntrinsics> frames_camera;  ///< the frames' camera, where known (a -load map must fit it)
   std::string text, camera;  ///< for the summary
   bool poses_applied = false;  ///< the frames are moved into the first one's view
+  /// Frames the source skips by design and announces in `text` (a TUM sequence's frames before its ground
+  /// truth starts): counted among its errors, but not a failure of the run.
+  std::size_t announced_skips = 0;
 };
 
 std::string poses_text(bool applied) { return applied ? "poses applied: map in the first frame's view" : "no poses"; }
@@ -216,6 +219,7 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
            (grabber->unposedFrames() > 0 ? "; " + std::to_string(grabber->unposedFrames()) + " without a pose skipped" : "") +
            ")";
   s.poses_applied = grabber->posesApplied();
+  s.announced_skips = grabber->unposedFrames();
   s.file_source = grabber.get();
   s.grabber = grabber;
   return s;
@@ -445,6 +449,12 @@ int run(const CommandLine& command_line) {
   const std::shared_ptr<Mapper> mapper = make_mapper(load_path, options, source);
   // A stream has no first frame yet: -mask finite is refused here, a PNG mask applies to every frame.
   const std::string mask_line = apply_tool_mask(command_line, *mapper, nullptr);
+  // Before the pipeline, whose end stops the grabber thread that calls it.
+  const bool check_scenes = source.file_source && !source.poses_applied && source.file_source->frameCount() > 1;
+  UnposedSceneCheck scenes(source.preset.model, check_scenes,
+                           "Give their poses (a dataset's pose files, a PCD's VIEWPOINT), or map them one by one "
+                           "(occ_improve_map -input_dir DIR -output_dir OUTDIR)");
+  std::atomic<bool> check_scene_failed{false};
   Pipeline pipeline(mapper, with_camera(pipeline_options, source.preset));
 
   std::mutex report_mutex;
@@ -477,14 +487,15 @@ int run(const CommandLine& command_line) {
     source.file_source->setErrorCallback([&](const std::string& message) { pipeline.reportSourceError(message); });
   pipeline.attach(*source.grabber);
   // Files without poses: frames of other scenes or viewpoints would be fused as one view unnoticed (the other
-  // tools warn the same way). On the grabber's thread, as each frame is delivered.
-  const bool check_scenes =
-      source.file_source && !source.poses_applied && source.file_source->frameCount() > 1;
-  UnposedSceneCheck scenes(source.preset.model, check_scenes,
-                           "Give their poses (a dataset's pose files, a PCD's VIEWPOINT), or map them one by one "
-                           "(occ_improve_map -input_dir DIR -output_dir OUTDIR)");
+  // tools warn the same way). On the grabber's thread, as each frame is delivered; an advisory check, so one
+  // that cannot run (out of memory) stops checking rather than ending the reading thread.
   std::function<void(const Pipeline::Cloud::ConstPtr&)> check_scene = [&](const Pipeline::Cloud::ConstPtr& cloud) {
-    scenes.add(source.file_source->emittingFrameName(), *cloud);
+    if (check_scene_failed) return;
+    try {
+      scenes.add(source.file_source->emittingFrameName(), *cloud);
+    } catch (const std::exception&) {
+      check_scene_failed = true;
+    }
   };
   const boost::signals2::scoped_connection scene_connection =
       check_scenes ? source.grabber->registerCallback(check_scene) : boost::signals2::connection();
@@ -519,9 +530,10 @@ int run(const CommandLine& command_line) {
   // Files are the user's input, not a live sensor's passing glitch: a frame that could not be used fails the
   // run (as the other tools refuse it), after the maps of the others are written and the warnings above
   // named each one.
-  if (const std::uint64_t unused = statistics.rejected + statistics.grabber_errors; source.file_source && unused > 0)
+  const std::uint64_t unreadable = statistics.grabber_errors - std::min<std::uint64_t>(statistics.grabber_errors, source.announced_skips);
+  if (const std::uint64_t unused = statistics.rejected + unreadable; source.file_source && unused > 0)
     throw InvalidInput(std::to_string(unused) + " frame(s) of " + source.text + " could not be used (" +
-                       std::to_string(statistics.rejected) + " rejected, " + std::to_string(statistics.grabber_errors) +
+                       std::to_string(statistics.rejected) + " rejected, " + std::to_string(unreadable) +
                        " skipped by the source: each named above); the maps written hold the other " +
                        std::to_string(statistics.processed));
   return 0;

@@ -152,6 +152,16 @@ TEST_F(FrameIoFiles, EmptyAndGarbageFilesAreFormatErrors) {
   EXPECT_THROW(read_intrinsics_file(write("k.txt", "525 525 abc 239.5")), FormatError);
   EXPECT_THROW(read_intrinsics_file(write("k5.txt", "525 525 319.5 239.5 640")), FormatError);
   EXPECT_THROW(read_intrinsics_file(write("kneg.txt", "-525 525 319.5 239.5")), FormatError);
+  // A word or a NaN is named with its place (">>" stopped at it and reported "not a number" or a short list).
+  for (const auto& [text, named] : {std::pair<const char*, const char*>{"525 525 abc 239.5", "holds 'abc' at position 3"},
+                                    {"525 525 nan 239.5", "a non-finite value at position 3 ('nan')"}}) {
+    try {
+      read_intrinsics_file(write("kbad.txt", text));
+      ADD_FAILURE() << text << " was read";
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST_F(FrameIoFiles, PcdWithoutXyzIsAFormatError) {

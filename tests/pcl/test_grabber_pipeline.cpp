@@ -557,7 +557,8 @@ TEST(SequenceSources, ErrorsNameTheProblem) {
             std::string::npos);
   EXPECT_NE(message("1 0 0 0\n0 1 0 x\n0 0 1 0\n0 0 0 1\n").find("holds 'x' at row 2, column 4: not a number"),
             std::string::npos);
-  EXPECT_NE(message("1 0 0 0\n0 1 0 0\n").find("it ends after 8 values"), std::string::npos);
+  EXPECT_NE(message("1 0 0 0\n0 1 0 0\n").find("does not hold a 4x4 matrix (it holds 8 values)"), std::string::npos);
+  EXPECT_NE(message("1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n5\n").find("(it holds 17 values)"), std::string::npos);
   EXPECT_EQ(message("1 0 0 0.5\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"), "accepted");
 }
 

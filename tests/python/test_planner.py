@@ -363,8 +363,8 @@ def test_a_grid_without_camera_takes_a_mask_per_column():
     a, e = np.meshgrid(az, el)
     points = np.stack([10 * np.sin(a), -10 * np.tan(e), 10 * np.cos(a)], axis=-1).astype(np.float32)
     report = mapper.insert(points.reshape(-1, 3))
-    masked = oi.Mapper(oi.lidar_rings())
-    columns = masked.insert(points.reshape(-1, 3)).insertion.points_inserted
+    unmasked = oi.Mapper(oi.lidar_rings())
+    columns = unmasked.insert(points.reshape(-1, 3)).insertion.points_inserted
     assert 0 < report.points_masked < columns
     assert report.insertion.points_inserted + report.points_masked == columns
     improvement = mapper.improvement()

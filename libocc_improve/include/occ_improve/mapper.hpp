@@ -3,14 +3,14 @@
 // improvement map kept up to date together. No logic of its own: insert() is insert_points (keeping the
 // surface current) + update_improvement + the multi-scale pyramid's update (multiscale.hpp), once
 // pyramid() was asked.
-#include "occ_improve/grid.hpp"
-#include "occ_improve/improvement.hpp"
-#include "occ_improve/integrate.hpp"
-#include "occ_improve/mask.hpp"
-#include "occ_improve/multiscale.hpp"
-#include "occ_improve/presets.hpp"
-#include "occ_improve/sensor_model.hpp"
-#include "occ_improve/surface.hpp"
+#include "occ_improve/grid/grid.hpp"
+#include "occ_improve/grid/mask.hpp"
+#include "occ_improve/integrate/integrate.hpp"
+#include "occ_improve/maps/improvement.hpp"
+#include "occ_improve/maps/multiscale.hpp"
+#include "occ_improve/maps/surface.hpp"
+#include "occ_improve/sensor/presets.hpp"
+#include "occ_improve/sensor/sensor_model.hpp"
 
 #include <cstddef>
 #include <optional>

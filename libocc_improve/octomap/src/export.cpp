@@ -135,8 +135,9 @@ struct LeafMark {
   float occupied_log_odds = -std::numeric_limits<float>::infinity();  ///< max over occupied voxels reaching it
   bool free_boundary = false;  ///< a face between free and not-free space reaches it
   /// A column's surface voxel (its return, as far as the grid knows) that is not occupied reaches it:
-  /// neighbouring rays' free space carved it (depth edges). FreeLeafRule::crossed never writes such a leaf
-  /// free, as OctoMap never frees a leaf holding an endpoint.
+  /// neighbouring rays' free space carved it (depth edges). Where a free-space boundary also reaches the
+  /// leaf, FreeLeafRule::crossed does not write it free from a free corner, as OctoMap never frees a leaf
+  /// holding an endpoint (a leaf no boundary reaches is one class of space: free when its centre is).
   bool carved_surface = false;
   bool occupied() const { return occupied_log_odds > -std::numeric_limits<float>::infinity(); }
   bool marked() const { return free_boundary || carved_surface || occupied(); }
@@ -561,7 +562,9 @@ public:
   std::optional<float> free_value(const Eigen::Vector3d& p, const LeafMark* mark, bool& in_view) {
     std::optional<float> centre = sample(p, in_view);
     if (!mark) return centre;
-    if (mark->occupied() || mark->carved_surface || rule_ == FreeLeafRule::wholly_free) return std::nullopt;
+    if (mark->occupied()) return std::nullopt;
+    if (!mark->free_boundary) return centre;  // one class of space throughout, a carved surface in it or not
+    if (rule_ == FreeLeafRule::wholly_free || mark->carved_surface) return std::nullopt;
     if (centre) return centre;
     std::optional<float> best;
     for (const Eigen::Vector3d& corner : corners_) {

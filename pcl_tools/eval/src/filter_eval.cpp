@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <filesystem>
 #include <mutex>
 #include <random>
 #include <string>
@@ -45,13 +44,10 @@ FrameCloud::Ptr points_with_a_column(const FrameCloud& cloud, const GridGeometry
 Frames read_posed_frames(DepthSequence sequence, const PinholeIntrinsics& intrinsics, const GridGeometry& geometry,
                          std::size_t max_frames) {
   if (max_frames > 0 && sequence.frames.size() > max_frames) sequence.frames.resize(max_frames);
-  const std::string folder =
-      sequence.frames.empty() ? std::string("the sequence")
-                              : "'" + std::filesystem::path(sequence.frames.front().depth_path).parent_path().string() + "'";
   DepthSequenceGrabber grabber(std::move(sequence), intrinsics);
   if (!grabber.posesApplied())
-    throw InvalidInput(folder + " has frames without a pose (a *.pose.txt beside each): its frames cannot be put "
-                       "in one view");
+    throw InvalidInput("the sequence has no poses (7-Scenes' *.pose.txt, TUM's groundtruth.txt): its frames cannot be "
+                       "put in one view");
   Frames frames;
   std::string failure;
   std::mutex mutex;  // the callbacks run on the grabber's thread

@@ -26,18 +26,26 @@ FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& 
   return a;
 }
 
+namespace {
+// Fewer pixels valid in both frames say nothing about whether they show one scene.
+constexpr std::size_t kMinCoValid = 1000;
+}  // namespace
+
 UnposedSceneCheck::UnposedSceneCheck(const SensorModelParams& model, bool active, std::string advice)
     : model_(model), active_(active), advice_(std::move(advice)) {}
 
 void UnposedSceneCheck::add(const std::string& name, const pcl::PointCloud<pcl::PointXYZ>& cloud) {
   if (!active_ || cloud.height <= 1) return;
   if (!first_) {
+    // A first frame without returns (all NaN: a frame the insertion refuses) would leave nothing to compare.
+    const auto valid = std::count_if(cloud.begin(), cloud.end(), [](const pcl::PointXYZ& p) { return is_valid_point(p.x, p.y, p.z); });
+    if (valid < static_cast<std::ptrdiff_t>(kMinCoValid)) return;
     first_ = cloud;
     first_name_ = name;
     return;
   }
   const FrameDepthAgreement a = frame_depth_agreement(*first_, cloud, model_);
-  if (a.co_valid < 1000 || a.disagreeing_share() <= kDifferentSceneShare) return;
+  if (a.co_valid < kMinCoValid || a.disagreeing_share() <= kDifferentSceneShare) return;
   names_.push_back(name);
   worst_share_ = std::max(worst_share_, a.disagreeing_share());
 }

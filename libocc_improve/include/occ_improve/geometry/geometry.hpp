@@ -136,7 +136,7 @@ public:
   std::size_t observable_count() const;
   int width() const { return azimuth().bins(); }    ///< columns per elevation row (image width)
   int height() const { return elevation().bins(); }  ///< elevation rows (image height)
-  std::size_t column_count() const { return static_cast<std::size_t>(width()) * height(); }
+  std::size_t column_count() const { return static_cast<std::size_t>(width()) * static_cast<std::size_t>(height()); }
   ColumnIndex column(int azimuth_bin, int elevation_bin) const {
     return static_cast<ColumnIndex>(elevation_bin) * static_cast<ColumnIndex>(width()) +
            static_cast<ColumnIndex>(azimuth_bin);

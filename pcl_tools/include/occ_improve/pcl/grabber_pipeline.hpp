@@ -90,8 +90,8 @@ struct PipelineStatistics {
   /// Summed milliseconds over processed frames, per stage (insert_ms includes the surface update).
   double convert_ms = 0, keep_ms = 0, insert_ms = 0, improvement_ms = 0, regions_ms = 0, callback_ms = 0;
   double wall_seconds = 0;      ///< from start() to stop() (or to now while running)
-  double processed_per_second() const { return wall_seconds > 0 ? processed / wall_seconds : 0.0; }
-  double mean_ms(double total_ms) const { return processed > 0 ? total_ms / processed : 0.0; }
+  double processed_per_second() const { return wall_seconds > 0 ? static_cast<double>(processed) / wall_seconds : 0.0; }
+  double mean_ms(double total_ms) const { return processed > 0 ? total_ms / static_cast<double>(processed) : 0.0; }
 };
 
 namespace detail {

@@ -7,6 +7,13 @@
 
 namespace occ_improve {
 
+// PCL_ADD_POINT4D expands to an anonymous union of anonymous structs, which clang's -Wpedantic flags in the
+// header that expands it (ours), whatever -isystem says of PCL's: silenced here, for users' -Werror builds.
+#if defined(__clang__)
+#pragma clang diagnostic push
+#pragma clang diagnostic ignored "-Wgnu-anonymous-struct"
+#pragma clang diagnostic ignored "-Wnested-anon-types"
+#endif
 struct EIGEN_ALIGN16 PointImprovement {
   PCL_ADD_POINT4D;
   float surface_depth;
@@ -14,6 +21,9 @@ struct EIGEN_ALIGN16 PointImprovement {
   float improvement;
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
+#if defined(__clang__)
+#pragma clang diagnostic pop
+#endif
 
 }  // namespace occ_improve
 
