@@ -460,6 +460,8 @@ int run(const CommandLine& command_line) {
   std::mutex report_mutex;
   std::optional<FrameResult> last, fired;
   InsertionReport points;  // every processed frame's, for the summary's points line
+  OutOfViewCheck out_of_view("Map each view by itself (occ_improve_map -save) and merge the maps: occ_to_octomap "
+                             "-load MAP -pose P per map");
   StopWake stop_wake;
   std::atomic<int> maps_written{0};
   std::uint64_t frames_seen = 0;  // only touched by the worker
@@ -468,6 +470,7 @@ int run(const CommandLine& command_line) {
       std::lock_guard<std::mutex> lock(report_mutex);
       last = r;
       points += r.report.insertion;
+      out_of_view.add("frame " + std::to_string(r.frame_index + 1), r.report.insertion);
       if (r.stop.stop && !fired) fired = r;
     }
     if (r.stop.stop) stop_wake.fire();
@@ -511,7 +514,8 @@ int run(const CommandLine& command_line) {
       follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_wake, progress, view.get());
   pipeline.stop();
   progress.finish();
-  if (const std::string warning = scenes.warning(); !warning.empty()) pcl::console::print_warn("%s\n", warning.c_str());
+  for (const std::string& warning : {scenes.warning(), out_of_view.warning()})
+    if (!warning.empty()) pcl::console::print_warn("%s\n", warning.c_str());
   const int signal = take_stop_request();  // the maps so far are still written below
   if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !signal)
     throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +

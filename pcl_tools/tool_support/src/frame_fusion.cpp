@@ -61,6 +61,28 @@ std::string UnposedSceneCheck::warning() const {
   return line;
 }
 
+void OutOfViewCheck::add(const std::string& name, const InsertionReport& report) {
+  const std::size_t valid = report.points_received - report.skipped_invalid;
+  if (valid == 0) return;
+  const double share = static_cast<double>(report.skipped_outside_fov) / static_cast<double>(valid);
+  if (share <= kMostlyOutOfViewShare) return;
+  ++frames_;
+  if (share > worst_share_) {
+    worst_share_ = share;
+    worst_name_ = name;
+  }
+}
+
+std::string OutOfViewCheck::warning() const {
+  if (frames_ == 0) return "";
+  char line[1024];
+  std::snprintf(line, sizeof line,
+                "warning: %zu frame(s) have up to %.0f%% of their valid points outside the grid's field of view, the "
+                "first frame's (the most: '%s'); they were skipped and counted: other viewpoints? %s",
+                frames_, 100.0 * worst_share_, worst_name_.c_str(), advice_.c_str());
+  return line;
+}
+
 namespace {
 
 // Why no point of the frames was inserted, naming them: the mask, or the field of view.
@@ -96,12 +118,16 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
   const bool poses_applied = frames.options().use_poses && frame && frame->pose;
   UnposedSceneCheck scenes(frames.options().preset.model, !poses_applied && frames.count() > 1,
                            "Give their poses, or map them one by one (-input_dir DIR -output_dir OUTDIR)");
+  OutOfViewCheck out_of_view("Map each view by itself (-save) and merge the maps: occ_to_octomap -load MAP -pose P "
+                             "per map");
   try {
     for (; frame; frame = frames.next()) {
       throw_if_stop_requested();
       const InputScope scope(frame->name);
       scenes.add(frame->name, frame->cloud);
-      fused.insertion += insert(*frame);
+      const InsertionReport inserted = insert(*frame);
+      out_of_view.add(frame->name, inserted);
+      fused.insertion += inserted;
       fused.frame_lines.push_back("read " + frame->name + ": " + std::to_string(frame->cloud.size()) + " points");
       if (fused.frames == 0) fused.first_name = frame->name;
       progress.update(++fused.frames, frames.count(), fused.insertion.points_received);
@@ -114,7 +140,8 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
     throw;
   }
   progress.finish();
-  if (const std::string warning = scenes.warning(); !warning.empty()) std::fprintf(stderr, "%s\n", warning.c_str());
+  for (const std::string& warning : {scenes.warning(), out_of_view.warning()})
+    if (!warning.empty()) std::fprintf(stderr, "%s\n", warning.c_str());
   fused.first_pose = frames.first_pose();
   fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
   if (fused.frames > 0 && fused.insertion.points_inserted == 0) throw InvalidInput(nothing_inserted(fused));

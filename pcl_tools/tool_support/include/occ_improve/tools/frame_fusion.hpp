@@ -55,6 +55,25 @@ private:
   double worst_share_ = 0;
 };
 
+/// Frames whose valid points fall largely outside the grid's field of view: the grid has the first frame's
+/// viewpoint, so a frame placed by its pose far from it (another view of the scene) is mostly skipped, each
+/// point counted. warning() is one line naming the worst such frame (over kMostlyOutOfViewShare of its
+/// valid points outside), empty when none is.
+class OutOfViewCheck {
+public:
+  explicit OutOfViewCheck(std::string advice) : advice_(std::move(advice)) {}
+  void add(const std::string& name, const InsertionReport& report);
+  std::string warning() const;
+
+private:
+  std::string advice_;
+  std::size_t frames_ = 0;
+  std::string worst_name_;
+  double worst_share_ = 0;
+};
+/// Above this share of a frame's valid points outside the view OutOfViewCheck warns.
+inline constexpr double kMostlyOutOfViewShare = 0.25;
+
 /// What fuse_tool_frames did, for a tool's summary.
 struct FusedFrames {
   InsertionReport insertion;
