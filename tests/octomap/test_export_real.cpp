@@ -192,7 +192,9 @@ TEST_P(ExportAgainstInsertPointCloud, OccupiedLeavesAgree) {
   EXPECT_LE(free_share, rule == FreeLeafRule::crossed ? 0.0125 : 0.01) << "see the line above";
   // OctoMap's free space in the grid's depth range: crossed keeps most of it at every resolution (measured
   // 93-99 %), wholly_free loses much of it at 5-10 cm (13-60 %).
-  if (rule == FreeLeafRule::crossed) EXPECT_GE(free_recall_share, 0.7) << "see the line above";
+  if (rule == FreeLeafRule::crossed) {
+    EXPECT_GE(free_recall_share, 0.7) << "see the line above";
+  }
   EXPECT_GT(points_in_occupied_voxels, 10000u);
   EXPECT_EQ(points_in_holes, 0u) << "see the line above";
 }
