@@ -422,7 +422,9 @@ TEST_F(OctomapExport, TreeFilesHoldOctomapsOwnBytesAndSayWhoWroteThem) {
     std::ostringstream expected;
     octomap::OcTree copy(*tree);
     ASSERT_TRUE(full ? tree->write(expected) : copy.writeBinary(expected));
-    if (!full) EXPECT_LT(copy.size(), nodes * 3 / 4) << "maximum likelihood merges more than equal log-odds do";
+    if (!full) {
+      EXPECT_LT(copy.size(), nodes * 3 / 4) << "maximum likelihood merges more than equal log-odds do";
+    }
     std::string octomaps = expected.str();
     octomaps.insert(octomaps.find('\n') + 1, "# written by occ_improve\n");
     std::ifstream in(path, std::ios::binary);
