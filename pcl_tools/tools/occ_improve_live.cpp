@@ -267,6 +267,9 @@ std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOpti
 }
 
 constexpr const char* kStopSignalReason = "stop signal";
+// How long a first Ctrl-C lets the frames in flight finish (a Kinect frame takes 40-100 ms on two cores): the
+// follow loop's 200 ms poll plus this keeps the stop within a second.
+constexpr std::chrono::milliseconds kFinishInFlight{500};
 
 // ---- -view: the window is opened (its display checked) before any work, and refreshed by follow_stream.
 
@@ -347,7 +350,7 @@ const char* follow_stream(Pipeline& pipeline, const StreamSource& source, const 
                   static_cast<unsigned long long>(s.dropped), static_cast<unsigned long long>(s.rejected),
                   s.processed_per_second());
     progress.show(line);
-    if (stop_requested()) return "interrupted";
+    if (stop_requested() || soft_stop_signal()) return "interrupted";
     if (limits.stop_on_signal && stop_wake.fired) return kStopSignalReason;
     if (limits.max_frames > 0 && s.processed >= static_cast<std::uint64_t>(limits.max_frames)) return "-max_frames reached";
     if (source.file_source && !source.file_source->isRunning() && s.in_flight == 0) return "source finished";
@@ -509,14 +512,21 @@ int run(const CommandLine& command_line) {
   pcl::console::print_info("Source: %s\nPreset: %s (%dx%d rays, %d depth bins, %.2f-%.2f m)\n", source.text.c_str(),
                            source.preset.name.c_str(), g.azimuth_bins, g.elevation_bins, g.depth_bins, g.depth_min_m,
                            g.depth_max_m);
+  // A first Ctrl-C lets the frame in flight (and one waiting) finish, so that the map holds whole frames;
+  // past kFinishInFlight the stop cancels it (counted as cut short), and a second Ctrl-C at once.
+  defer_first_stop_signal();
   pipeline.start();
   const char* stop_reason =
       follow_stream(pipeline, source, {command_line.has("-stop_on_signal"), max_frames}, stop_wake, progress, view.get());
-  pipeline.stop();
+  {
+    const CancelAfter cancel_if_slow(soft_stop_signal(), kFinishInFlight);
+    pipeline.stop();
+  }
   progress.finish();
   for (const std::string& warning : {scenes.warning(), out_of_view.warning()})
     if (!warning.empty()) pcl::console::print_warn("%s\n", warning.c_str());
-  const int signal = take_stop_request();  // the maps so far are still written below
+  const int cancelled = take_stop_request();  // the maps so far are still written below
+  const int signal = cancelled ? cancelled : soft_stop_signal();
   if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !signal)
     throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +

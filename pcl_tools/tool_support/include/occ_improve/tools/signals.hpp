@@ -6,6 +6,10 @@
 // second signal ends the process at once.
 #include "occ_improve/cancel.hpp"
 
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <thread>
 #include <utility>
 
 namespace occ_improve {
@@ -17,6 +21,30 @@ void install_stop_signals();
 /// and the request withdrawn so that the writing is not cancelled too; the tool then ends with
 /// throw Cancelled(signal). The frame or shot in flight when the signal came is left partly inserted.
 int take_stop_request();
+
+/// For a tool that finishes the work in flight on a first signal (occ_improve_live's frame, so that its map
+/// holds whole frames): from now on a first SIGINT/SIGTERM is only recorded (soft_stop_signal()), and the
+/// handlers become install_stop_signals' own, so that a second signal cancels the work in flight and a
+/// third kills. The tool bounds the wait itself (CancelAfter).
+void defer_first_stop_signal();
+/// The signal a deferred first stop recorded, or 0.
+int soft_stop_signal();
+
+/// While it lives, after `timeout` requests a stop with `signal` (when non-zero), cancelling the work in
+/// flight: the bound on what a first, deferred signal lets finish.
+class CancelAfter {
+public:
+  CancelAfter(int signal, std::chrono::milliseconds timeout);
+  CancelAfter(const CancelAfter&) = delete;
+  CancelAfter& operator=(const CancelAfter&) = delete;
+  ~CancelAfter();
+
+private:
+  std::mutex mutex_;
+  std::condition_variable done_;
+  bool finished_ = false;
+  std::thread watchdog_;
+};
 
 /// Asks run_tool to end the process at once (std::_Exit) when the run ends, after the staged outputs were
 /// removed or committed; whether it was asked.
