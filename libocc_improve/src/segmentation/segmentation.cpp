@@ -602,23 +602,16 @@ std::size_t attach_to_closest_in_depth(const std::vector<std::uint8_t>& valid, c
 // far end, whose rays fall in and out of the depth range with the noise, broke into hundreds of segments of
 // 1-25 rays (a held-out trial: 829 on a slanted wall from 4.6 to 8.6 m; 1-45 rays without quantisation).
 // An island takes the label its rays find closest in depth; larger islands, and those with no such neighbour (a far wall seen through a
-// gap in a near object), stay segments of their own. Returns the number of rays attached.
+// gap in a near object), stay segments of their own.
 constexpr int kIslandReachColumns = 4;
-// Called once the islands of at least min_segment_columns rays are labelled: every region left is small.
-// In rounds, so that a chain of islands (the far end's band of rays flickering in and out of range is
-// tens of columns wide) joins from the segment inwards; each round attaches only islands next to a
-// labelled ray, so the result does not depend on scan order. The islands are found once; a round scans
-// their rays alone.
+// `rays` (row by row) are the small islands' (`island` of each, `islands` of them), called once the larger
+// islands are labelled. In rounds, so that a chain of islands (the far end's band of rays flickering in and
+// out of range is tens of columns wide) joins from the segment inwards; each round attaches only islands
+// next to a labelled ray, so the result does not depend on scan order. Returns the number of rays attached.
 std::size_t attach_small_islands(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width,
-                                 int height, const SegmentationParams& params, std::vector<std::uint32_t>& label) {
-  std::vector<std::uint8_t> unassigned(label.size());
-  std::transform(label.begin(), label.end(), unassigned.begin(),
-                 [](std::uint32_t l) -> std::uint8_t { return l == kUnassigned; });
-  std::vector<std::uint32_t> island(label.size(), kUnassigned);
-  const std::size_t islands = connected_components(unassigned, width, height, island).size();
-  std::vector<std::uint32_t> rays;  // the islands' rays, row by row
-  for (std::size_t c = 0; c < label.size(); ++c)
-    if (unassigned[c]) rays.push_back(static_cast<std::uint32_t>(c));
+                                 int height, const SegmentationParams& params, const std::vector<std::uint32_t>& rays,
+                                 const std::vector<std::uint32_t>& island, std::size_t islands,
+                                 std::vector<std::uint32_t>& label) {
   struct Nearest {
     float jump = std::numeric_limits<float>::infinity();
     std::uint32_t label = kUnassigned;
@@ -649,21 +642,36 @@ std::size_t attach_small_islands(const std::vector<Eigen::Vector3f>& points, con
   }
 }
 
-// Labels the 4-connected regions of kUnassigned rays of at least min_size rays segments + 1, segments + 2,
-// ...; returns their number (smaller regions stay kUnassigned).
-std::uint32_t label_islands(int width, int height, std::uint32_t segments, std::size_t min_size,
-                            std::vector<std::uint32_t>& label) {
-  std::vector<std::uint8_t> islands(label.size());
-  std::transform(label.begin(), label.end(), islands.begin(),
+// Valid regions no segment reached (islands between holes), found once: those of at least
+// min_segment_columns rays become segments + 1, segments + 2, ... (in scan order), the small ones of a
+// surface seen through holes join it (attach_small_islands: the larger islands, labelled first, may take
+// them), and the small ones left become segments after those. Returns the number of new segments; adds the
+// rays attached to `attached`.
+std::uint32_t label_islands(const std::vector<Eigen::Vector3f>& points, const SurfaceMap& surface, int width, int height,
+                            const SegmentationParams& params, std::uint32_t segments, std::vector<std::uint32_t>& label,
+                            std::size_t& attached) {
+  std::vector<std::uint8_t> unassigned(label.size());
+  std::transform(label.begin(), label.end(), unassigned.begin(),
                  [](std::uint32_t l) -> std::uint8_t { return l == kUnassigned; });
-  std::vector<std::uint32_t> island_label(label.size(), kUnassigned);
-  const std::vector<std::size_t> island_sizes = connected_components(islands, width, height, island_label);
-  std::vector<std::uint32_t> kept(island_sizes.size() + 1, kUnassigned);
+  std::vector<std::uint32_t> island(label.size(), kUnassigned);
+  const std::vector<std::size_t> sizes = connected_components(unassigned, width, height, island);
+  std::vector<std::uint32_t> segment_of(sizes.size() + 1, kUnassigned);  // per island
   std::uint32_t labelled = 0;
-  for (std::size_t k = 0; k < island_sizes.size(); ++k)
-    if (island_sizes[k] >= min_size) kept[k + 1] = segments + ++labelled;
-  for (std::size_t c = 0; c < label.size(); ++c)
-    if (islands[c]) label[c] = kept[island_label[c]];
+  for (std::size_t k = 0; k < sizes.size(); ++k)
+    if (sizes[k] >= params.min_segment_columns) segment_of[k + 1] = segments + ++labelled;
+  std::vector<std::uint32_t> small_rays;  // row by row
+  for (std::size_t c = 0; c < label.size(); ++c) {
+    if (!unassigned[c]) continue;
+    label[c] = segment_of[island[c]];
+    if (label[c] == kUnassigned) small_rays.push_back(static_cast<std::uint32_t>(c));
+  }
+  attached += attach_small_islands(points, surface, width, height, params, small_rays, island, sizes.size(), label);
+  // The small islands left, numbered in the order of their first ray, as scanning them afresh would.
+  for (const std::uint32_t c : small_rays) {
+    if (label[c] != kUnassigned) continue;
+    if (segment_of[island[c]] == kUnassigned) segment_of[island[c]] = segments + ++labelled;
+    label[c] = segment_of[island[c]];
+  }
   return labelled;
 }
 
@@ -725,11 +733,8 @@ Segmentation segment_improvement(const GridGeometry& geometry, const SurfaceMap&
   out.attached_columns = attach_to_closest_in_depth(valid, surface, width, height, label);
   // Valid regions no segment reached (islands between holes): the small ones of a surface seen through
   // holes join it, the others become segments of their own.
-  if (std::find(label.begin(), label.end(), kUnassigned) != label.end()) {
-    segments += label_islands(width, height, segments, params.min_segment_columns, label);  // small ones may join them
-    out.attached_columns += attach_small_islands(points, surface, width, height, params, label);
-    segments += label_islands(width, height, segments, 0, label);
-  }
+  if (std::find(label.begin(), label.end(), kUnassigned) != label.end())
+    segments += label_islands(points, surface, width, height, params, segments, label, out.attached_columns);
 
   // Statistics, then labels renumbered by size (largest first) so label 1 is the largest segment.
   std::vector<Segment> stats(segments);
