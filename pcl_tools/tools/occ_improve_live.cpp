@@ -527,14 +527,14 @@ int run(const CommandLine& command_line) {
     if (!warning.empty()) pcl::console::print_warn("%s\n", warning.c_str());
   const int cancelled = take_stop_request();  // the maps so far are still written below
   const int signal = cancelled ? cancelled : soft_stop_signal();
-  if (const PipelineStatistics s = pipeline.statistics(); s.processed == 0 && !signal)
-    throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(s.rejected) +
+  const PipelineStatistics statistics = pipeline.statistics();  // final: the pipeline is stopped
+  if (statistics.processed == 0 && !signal)
+    throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(statistics.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +
-                       std::to_string(s.grabber_errors) + " unreadable)");
+                       std::to_string(statistics.grabber_errors) + " unreadable)");
   const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
   if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
-  if (view) finish_view(*view, screenshot.get(), pipeline.mapper(), last, pipeline.statistics().processed);
-  const PipelineStatistics statistics = pipeline.statistics();
+  if (view) finish_view(*view, screenshot.get(), pipeline.mapper(), last, statistics.processed);
   print_stream_summary(statistics, pipeline_options.keep_fraction < 1.0, stop_reason, fired, last);
   if (pipeline_options.keep_fraction >= 1.0) pcl::console::print_info("%s\n", describe_points(points).c_str());
   pcl::console::print_info("Wrote %s/: %s (%d intermediate writes)\n", out.path().c_str(), join_names(written).c_str(),

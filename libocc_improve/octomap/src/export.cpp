@@ -542,8 +542,7 @@ double curvature_pad_m(const GridGeometry& g, double far_m) {
 // free when the voxel holding its centre is, and takes that voxel's log-odds. A leaf a boundary reaches
 // (and no occupied voxel, no carved surface) is free under FreeLeafRule::crossed when its centre or one of
 // its corners lies in a free voxel: it takes the centre's log-odds, else the largest of the free corners'.
-// Leaves whose
-// centre is in the field of view and that are neither free nor occupied count as unknown.
+// Leaves whose centre is in the field of view and that are neither free nor occupied count as unknown.
 class FreeLeafWriter {
 public:
   FreeLeafWriter(const octomap::OcTree& tree, const ColumnGrid& grid, const Eigen::Isometry3d& world_from_sensor,

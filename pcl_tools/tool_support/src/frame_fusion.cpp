@@ -31,6 +31,11 @@ namespace {
 constexpr std::size_t kMinCoValid = 1000;
 }  // namespace
 
+void FlaggedFrames::add(const std::string& name, double share) {
+  if (count++ == 0) first = name;
+  worst_share = std::max(worst_share, share);
+}
+
 UnposedSceneCheck::UnposedSceneCheck(const SensorModelParams& model, bool active, std::string advice)
     : model_(model), active_(active), advice_(std::move(advice)) {}
 
@@ -46,18 +51,17 @@ void UnposedSceneCheck::add(const std::string& name, const pcl::PointCloud<pcl::
   }
   const FrameDepthAgreement a = frame_depth_agreement(*first_, cloud, model_);
   if (a.co_valid < kMinCoValid || a.disagreeing_share() <= kDifferentSceneShare) return;
-  names_.push_back(name);
-  worst_share_ = std::max(worst_share_, a.disagreeing_share());
+  flagged_.add(name, a.disagreeing_share());
 }
 
 std::string UnposedSceneCheck::warning() const {
-  if (names_.empty()) return "";
+  if (flagged_.count == 0) return "";
   char line[1024];
   std::snprintf(line, sizeof line,
                 "warning: %zu frame(s) fused without poses disagree in depth with the first frame '%s' on up to %.0f%% "
                 "of their common valid pixels (beyond 3 sigma; the first such frame: '%s'): different scenes or "
                 "viewpoints? %s",
-                names_.size(), first_name_.c_str(), 100.0 * worst_share_, names_.front().c_str(), advice_.c_str());
+                flagged_.count, first_name_.c_str(), 100.0 * flagged_.worst_share, flagged_.first.c_str(), advice_.c_str());
   return line;
 }
 
@@ -65,21 +69,16 @@ void OutOfViewCheck::add(const std::string& name, const InsertionReport& report)
   const std::size_t valid = report.points_received - report.skipped_invalid;
   if (valid == 0) return;
   const double share = static_cast<double>(report.skipped_outside_fov) / static_cast<double>(valid);
-  if (share <= kMostlyOutOfViewShare) return;
-  ++frames_;
-  if (share > worst_share_) {
-    worst_share_ = share;
-    worst_name_ = name;
-  }
+  if (share > kMostlyOutOfViewShare) flagged_.add(name, share);
 }
 
 std::string OutOfViewCheck::warning() const {
-  if (frames_ == 0) return "";
+  if (flagged_.count == 0) return "";
   char line[1024];
   std::snprintf(line, sizeof line,
                 "warning: %zu frame(s) have up to %.0f%% of their valid points outside the grid's field of view, the "
-                "first frame's (the most: '%s'); they were skipped and counted: other viewpoints? %s",
-                frames_, 100.0 * worst_share_, worst_name_.c_str(), advice_.c_str());
+                "first frame's (the first such frame: '%s'); they were skipped and counted: other viewpoints? %s",
+                flagged_.count, 100.0 * flagged_.worst_share, flagged_.first.c_str(), advice_.c_str());
   return line;
 }
 

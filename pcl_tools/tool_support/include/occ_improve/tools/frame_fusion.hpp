@@ -34,6 +34,15 @@ FrameDepthAgreement frame_depth_agreement(const pcl::PointCloud<pcl::PointXYZ>& 
 /// Above this share of disagreeing co-valid pixels (over at least 1000 of them) fuse_tool_frames warns.
 inline constexpr double kDifferentSceneShare = 0.5;
 
+/// The frames a check flags: how many, the first of them, and the largest share (of pixels or points)
+/// that flagged one.
+struct FlaggedFrames {
+  std::size_t count = 0;
+  std::string first;
+  double worst_share = 0;
+  void add(const std::string& name, double share);
+};
+
 /// Frames fused without poses, each compared with the first (frame_depth_agreement): warning() is one line
 /// naming those that disagree on more than kDifferentSceneShare of at least 1000 co-valid pixels (different
 /// scenes or viewpoints fused as one view make a map of neither), empty when none do. Inactive (with poses
@@ -51,13 +60,12 @@ private:
   std::string advice_;
   std::optional<pcl::PointCloud<pcl::PointXYZ>> first_;
   std::string first_name_;
-  std::vector<std::string> names_;
-  double worst_share_ = 0;
+  FlaggedFrames flagged_;
 };
 
 /// Frames whose valid points fall largely outside the grid's field of view: the grid has the first frame's
 /// viewpoint, so a frame placed by its pose far from it (another view of the scene) is mostly skipped, each
-/// point counted. warning() is one line naming the worst such frame (over kMostlyOutOfViewShare of its
+/// point counted. warning() is one line naming the first such frame (over kMostlyOutOfViewShare of its
 /// valid points outside), empty when none is.
 class OutOfViewCheck {
 public:
@@ -67,9 +75,7 @@ public:
 
 private:
   std::string advice_;
-  std::size_t frames_ = 0;
-  std::string worst_name_;
-  double worst_share_ = 0;
+  FlaggedFrames flagged_;
 };
 /// Above this share of a frame's valid points outside the view OutOfViewCheck warns.
 inline constexpr double kMostlyOutOfViewShare = 0.25;
