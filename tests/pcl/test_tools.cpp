@@ -559,18 +559,10 @@ TEST_F(Tools, LiveFailsARunWithAnUnusableFrameAfterWritingTheOthers) {
 TEST_F(Tools, SigtermStopsCleanlyWithTheSummaryAndAnExitCodeOfTheSignal) {
   fs::create_directory(folder_ / "frames");
   for (int i = 0; i < 40; ++i) fs::copy_file(write_cloud("wall.pcd", 2.0f), folder_ / "frames" / ("f" + std::to_string(100 + i) + ".pcd"));
-  // A shell in the background runs the tool and records its exit code once it ends.
-  const std::string command = std::string("cd ") + folder_.string() + " && (" + OCC_IMPROVE_LIVE_EXECUTABLE +
-                              " -pcd_dir frames -fps 4 -o out > stdout.log 2> stderr.log & echo $! > pid; wait $!;"
-                              " echo $? > rc.tmp; mv rc.tmp rc) > /dev/null 2>&1 &";
-  ASSERT_EQ(std::system(command.c_str()), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(2500));
-  const pid_t pid = static_cast<pid_t>(std::stol(file_contents(folder_ / "pid")));
-  ASSERT_EQ(::kill(pid, SIGTERM), 0);
-  for (int i = 0; i < 100 && !fs::exists(folder_ / "rc"); ++i) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-  ASSERT_TRUE(fs::exists(folder_ / "rc")) << "still running 10 s after SIGTERM";
-  EXPECT_EQ(std::stoi(file_contents(folder_ / "rc")), 128 + SIGTERM);
-  const std::string out = file_contents(folder_ / "stdout.log") + file_contents(folder_ / "stderr.log");
+  const SignalledRun r = run_and_signal(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -fps 4 -o out", 2500, SIGTERM);
+  ASSERT_NE(r.exit_code, -1) << "still running 10 s after SIGTERM";
+  EXPECT_EQ(r.exit_code, 128 + SIGTERM);
+  const std::string& out = r.out;
   EXPECT_NE(out.find("Stopped: interrupted"), std::string::npos) << out;
   EXPECT_NE(out.find("interrupted by SIGTERM"), std::string::npos) << out;
   EXPECT_NE(out.find("Frames: "), std::string::npos) << "the summary so far: " << out;
@@ -590,24 +582,13 @@ TEST_F(Tools, LiveFinishesTheFrameInFlightOnAFirstCtrlC) {
     for (int u = 0; u < 640; ++u) wall.at(u, v) = pcl::PointXYZ((u - 319.5f) / 525.0f * 2.0f, (v - 239.5f) / 525.0f * 2.0f, 2.0f);
   ASSERT_EQ(pcl::io::savePCDFileBinary((folder_ / "big" / "f100.pcd").string(), wall), 0);
   for (int i = 1; i < 200; ++i) fs::create_symlink("f100.pcd", folder_ / "big" / ("f" + std::to_string(100 + i) + ".pcd"));
-  const std::string command = std::string("cd ") + folder_.string() + " && (" + OCC_IMPROVE_LIVE_EXECUTABLE +
-                              " -pcd_dir big -o out > stdout.log 2> stderr.log & echo $! > pid; wait $!;"
-                              " echo $? > rc.tmp; mv rc.tmp rc) > /dev/null 2>&1 &";
-  ASSERT_EQ(std::system(command.c_str()), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(2000));
-  const pid_t pid = static_cast<pid_t>(std::stol(file_contents(folder_ / "pid")));
-  ASSERT_FALSE(fs::exists(folder_ / "rc")) << "finished before the signal: " << file_contents(folder_ / "stderr.log");
-  const auto signalled = std::chrono::steady_clock::now();
-  ASSERT_EQ(::kill(pid, SIGINT), 0);
-  while (!fs::exists(folder_ / "rc") && std::chrono::steady_clock::now() - signalled < std::chrono::seconds(10))
-    std::this_thread::sleep_for(std::chrono::milliseconds(20));
-  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
-  ASSERT_TRUE(fs::exists(folder_ / "rc")) << "still running 10 s after SIGINT";
-  EXPECT_EQ(std::stoi(file_contents(folder_ / "rc")), 128 + SIGINT);
-  const std::string out = file_contents(folder_ / "stdout.log") + file_contents(folder_ / "stderr.log");
+  const SignalledRun r = run_and_signal(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir big -o out", 2000, SIGINT);
+  ASSERT_NE(r.exit_code, -1) << "still running 10 s after SIGINT";
+  EXPECT_EQ(r.exit_code, 128 + SIGINT);
+  const std::string& out = r.out;
   EXPECT_NE(out.find("Stopped: interrupted"), std::string::npos) << out;
   EXPECT_NE(out.find(" 0 cut short by the stop"), std::string::npos) << out;
-  EXPECT_LT(seconds, 3.0) << "the run, its maps written, ended that long after the signal";
+  EXPECT_LT(r.seconds_to_exit, 3.0) << "the run, its maps written, ended that long after the signal";
   EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / "depth_mm.png"));
 }
 
