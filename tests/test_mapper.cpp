@@ -83,6 +83,9 @@ TEST(Mapper, AnInterruptedInsertionLeavesMapsThatFollowTheGrid) {
   });
   InsertionOptions two;
   two.threads = 2;
+  // Python's copy=False views read these buffers in place for the Mapper's life.
+  const float* depth_buffer = mapper.surface().depth_m.data();
+  const float* improvement_buffer = mapper.improvement().value.data();
   bool cancelled = false;
   try {
     mapper.insert(PointSpan::from(many), two);
@@ -93,6 +96,8 @@ TEST(Mapper, AnInterruptedInsertionLeavesMapsThatFollowTheGrid) {
   clear_stop_request();
   EXPECT_TRUE(cancelled) << "the insertion finished within 250 ms: the stop tested nothing";
   expect_equal_to_full_recomputation(mapper);
+  EXPECT_EQ(mapper.surface().depth_m.data(), depth_buffer) << "the recomputed surface moved to another buffer";
+  EXPECT_EQ(mapper.improvement().value.data(), improvement_buffer) << "the recomputed improvement moved";
   mapper.insert(PointSpan::from(first));  // and the next insertion carries on from there
   expect_equal_to_full_recomputation(mapper);
 }

@@ -66,8 +66,11 @@ TEST(Mask, ColumnsOutsideAreNotObservableAndTheirPointsAreLeftOut) {
   ASSERT_FALSE(shot.columns.empty());
   for (const ColumnIndex c : shot.columns) EXPECT_LT(static_cast<int>(c % static_cast<ColumnIndex>(w)), w / 2);
 
-  // Clearing the mask brings the values back (the right half, never inserted, is unknown: the no-data level).
+  // Clearing the mask brings the values back (the right half, never inserted, is unknown: the no-data level),
+  // in the same buffer (Python's copy=False views read it in place: a new one crashed a view).
+  const float* buffer = masked.improvement().value.data();
   masked.clear_mask();
+  EXPECT_EQ(masked.improvement().value.data(), buffer);
   for (const float v : masked.improvement().value) ASSERT_FALSE(std::isnan(v));
   EXPECT_GT(masked.improvement().value[static_cast<std::size_t>(240) * w + 600], 0.3f);
 }

@@ -2,6 +2,9 @@
 
 #include "occ_improve/timing.hpp"
 
+#include <algorithm>
+#include <vector>
+
 namespace occ_improve {
 namespace {
 // The cap is checked before the geometry allocates its depth axis (a huge depth_bins would allocate first).
@@ -9,6 +12,21 @@ const GeometryParams& within_cap(const GeometryParams& geometry, const GridOptio
   require_within_memory_cap(geometry, options.memory_cap_bytes);
   return geometry;
 }
+
+// The maps' buffers keep their addresses for the Mapper's life (Python's copy=False views read them in
+// place): a recomputed map is copied into them, never moved over them (a move freed the buffers a view
+// still read: a crash after clear_mask()). The shapes are the grid's, so the sizes match.
+template <typename T>
+void copy_into(std::vector<T>& kept, const std::vector<T>& fresh) {
+  std::copy(fresh.begin(), fresh.end(), kept.begin());
+}
+void copy_into(SurfaceMap& kept, const SurfaceMap& fresh) {
+  copy_into(kept.depth_m, fresh.depth_m);
+  copy_into(kept.probability, fresh.probability);
+  copy_into(kept.bin, fresh.bin);
+  copy_into(kept.unknown, fresh.unknown);
+}
+void copy_into(ImprovementMap& kept, const ImprovementMap& fresh) { copy_into(kept.value, fresh.value); }
 }  // namespace
 
 Mapper::Mapper(const SensorPreset& preset, const GridOptions& options)
@@ -41,8 +59,8 @@ void Mapper::refresh_if_stale() const {
   SurfaceMap surface = compute_surface(grid_);
   ImprovementMap improvement = compute_improvement(grid_.geometry(), model_, surface);
   mask_improvement(column_mask_, improvement);
-  surface_ = std::move(surface);
-  improvement_ = std::move(improvement);
+  copy_into(surface_, surface);
+  copy_into(improvement_, improvement);
   pyramid_.reset();
   stale_ = false;
 }
@@ -79,7 +97,7 @@ void Mapper::use_column_mask(std::vector<std::uint8_t> columns) {
     const bool widened = !column_mask_.empty() && columns != column_mask_;
     column_mask_ = std::move(columns);
     // Columns the old mask hid may now be inside: their values come back only from a full computation.
-    if (widened) improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+    if (widened) copy_into(improvement_, compute_improvement(grid_.geometry(), model_, surface_));
     mask_improvement(column_mask_, improvement_);
     pyramid_.reset();  // every block may have changed: rebuilt when next asked
   });
@@ -89,7 +107,7 @@ void Mapper::clear_mask() {
   if (column_mask_.empty()) return;
   updating([&] {
     column_mask_.clear();
-    improvement_ = compute_improvement(grid_.geometry(), model_, surface_);
+    copy_into(improvement_, compute_improvement(grid_.geometry(), model_, surface_));
     pyramid_.reset();
   });
 }

@@ -145,6 +145,22 @@ def test_views_are_read_only_live_and_keep_the_mapper_alive(sample):
     np.testing.assert_array_equal(depth_view, expected)  # still valid: the view owns the Mapper
 
 
+def test_views_stay_valid_when_the_maps_are_recomputed(sample):
+    """clear_mask() and the recomputation after an interrupted call replaced the buffers a copy=False view
+    read: the view read freed memory (a crash, or values of 1e38)."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mask = np.zeros(depth.shape, bool)
+    mask[:, : depth.shape[1] // 2] = True
+    mapper.set_mask(mask)
+    mapper.insert_depth(depth, intrinsics)
+    view = mapper.improvement(copy=False)
+    assert np.isnan(view[:, -1]).all()  # masked
+    mapper.clear_mask()
+    np.testing.assert_array_equal(view, mapper.improvement())
+    assert not np.isnan(view).any()
+
+
 def test_insertion_releases_the_gil(sample):
     """A Python thread keeps ticking while another inserts: gaps far shorter than the insertion."""
     depth, intrinsics = sample
