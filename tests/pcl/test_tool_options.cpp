@@ -342,7 +342,10 @@ TEST(ToolOptions, AGridAboveTheMemoryCapIsRefusedBeforeAnyGridForTheInputsCamera
             std::string::npos);
   EXPECT_NE(cap_error([] { parse({"-depth_bins", "100000000", "-preset", "kinect_v1_paper"}); }).find("-depth_bins"),
             std::string::npos);
-  const ToolOptions pending = parse({"-depth_bins", "100000000"});
+  // Without a camera the depth axis alone is checked first (1e8 bins: ~50 GB of tables; building them
+  // before the check exhausted the machine), the whole grid once the inputs give the camera.
+  EXPECT_NE(cap_error([] { parse({"-depth_bins", "100000000"}); }).find("the depth axis alone"), std::string::npos);
+  const ToolOptions pending = parse({"-depth_bins", "1000000"});  // ~0.5 GB alone, ~300 GB with 320 x 240 columns
   EXPECT_NE(cap_error([&] { pending.preset_for_camera(PinholeIntrinsics{262.5, 262.5, 159.5, 119.5, 320, 240}); })
                 .find("-depth_bins"), std::string::npos);
   EXPECT_NO_THROW(parse({"-depth_bins", "4096"}));

@@ -146,6 +146,19 @@ void require_tool_grid_within_cap(const SensorPreset& preset, const GridOptions&
   }
 }
 
+// Before the inputs give the camera (and so the columns), the depth axis alone: one column's worst case, a
+// lower bound of the grid's, against the cap, before anything is built per depth bin (-depth_bins 1e9
+// without -intrinsics took 24 GB before the cap's error, until the kernel killed the tool).
+void require_depth_axis_within_cap(const SensorPreset& preset, const GridOptions& grid, const std::string& preset_name) {
+  SensorPreset one_column = preset;
+  one_column.geometry.azimuth_bins = one_column.geometry.elevation_bins = 1;
+  try {
+    require_tool_grid_within_cap(one_column, grid, preset_name);
+  } catch (const ResourceLimit& e) {
+    throw ResourceLimit("the depth axis alone (one column of the grid, whose camera the inputs give): " + std::string(e.what()));
+  }
+}
+
 }  // namespace
 
 SensorPreset ToolOptions::preset_for_camera(const std::optional<PinholeIntrinsics>& camera) const {
@@ -201,7 +214,10 @@ ToolOptions parse_tool_options(const CommandLine& c) {
 
   if (const auto gib = declared_number(c, "-memory_cap"))
     t.grid.memory_cap_bytes = static_cast<std::size_t>(std::min(*gib * double(1 << 30), 1e18));
-  if (camera_known) require_tool_grid_within_cap(t.preset, t.grid, t.preset_name);
+  if (camera_known)
+    require_tool_grid_within_cap(t.preset, t.grid, t.preset_name);
+  else
+    require_depth_axis_within_cap(t.preset, t.grid, t.preset_name);
   // A loaded map brings its own bins and model: the preset of the flags is not the grid then.
   if (!(c.declares("-load") && c.has("-load"))) warn_if_depth_bins_wider_than_sigma(t.preset);
   if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);
