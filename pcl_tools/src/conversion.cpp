@@ -1,8 +1,11 @@
 #include "occ_improve/pcl/conversion.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/integrate/point_units.hpp"
 
 #include <cmath>
+#include <optional>
+#include <sstream>
 #include <string>
 
 namespace occ_improve {
@@ -21,6 +24,16 @@ void require_valid_points(PointSpan points, const std::string& name) {
   if (valid_point_count(points) == 0)
     throw InvalidInput("'" + name + "' holds no valid point (" + std::to_string(points.count) +
                        " points, all NaN, infinite or at the origin)");
+}
+
+void require_points_in_metres(PointSpan points, const std::string& name, const GeometryParams& grid,
+                              const std::string& what, const std::string& hint) {
+  const std::optional<UnitMistake> mistake = point_unit_mistake(points, grid);
+  if (!mistake) return;
+  std::ostringstream m;
+  m << "'" << name << "': the points' median range is " << mistake->outside(grid) << ": the " << what << " looks like "
+    << mistake->likely.name << " (times " << mistake->likely.scale << " gives metres)" << hint;
+  throw InvalidInput(m.str());
 }
 
 pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f>& points, int width, int height) {

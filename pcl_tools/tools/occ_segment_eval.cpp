@@ -102,6 +102,8 @@ void evaluate_cloud(const std::string& path, const std::string& preset_name, con
   const std::string name = path.substr(path.find_last_of('/') + 1);
   const auto cloud = load_labelled_cloud(path);
   require_valid_points(span_of(cloud), path);
+  require_points_in_metres(span_of(cloud), path, preset_by_name(preset_name).geometry, "cloud",
+                           ": the tools read clouds in metres");
   std::vector<std::uint32_t> truth(cloud.size());
   for (std::size_t i = 0; i < cloud.size(); ++i) truth[i] = cloud[i].label;
   // A cloud without a ground-truth object scored F = 0 and weighed in the means as a failure of both methods.

@@ -5,6 +5,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/grid/mask.hpp"
+#include "occ_improve/integrate/point_units.hpp"
 #include "occ_improve/planning/point_selection.hpp"
 
 #include <pybind11/eigen.h>
@@ -62,49 +63,6 @@ PixelMask pixel_mask_from(const py::handle& mask) {
   return out;
 }
 
-/// The depth units a scale can convert from, in the order their suggestion is tried.
-struct DepthUnit {
-  double scale;
-  const char* name;
-};
-constexpr DepthUnit kDepthUnits[] = {{1e-3, "millimetres"}, {1.0, "metres"}};
-// Nearer than this no depth camera measures; a median below it is a unit mistake, as one beyond the grid.
-constexpr double kNearestPlausibleDepthM = 0.05;
-// Fewer returns than this say nothing about the unit (the tools' unit guess needs as many).
-constexpr std::size_t kReturnsToJudgeUnit = 100;
-
-/// A unit mistake: the median of some depths or ranges, in metres under the scale given, and the usual
-/// unit that would put it inside the grid's plausible depth range [nearest_m, depth_max_m].
-struct UnitMistake {
-  double median_m, nearest_m;
-  DepthUnit likely;
-  /// "<median> m, outside the grid's plausible depth range [a, b] m"
-  std::string outside(const GeometryParams& g) const {
-    std::ostringstream m;
-    m << median_m << " m, outside the grid's plausible depth range [" << nearest_m << ", " << g.depth_max_m << "] m";
-    return m.str();
-  }
-};
-
-/// The mistake, when `scale` puts the median of `values` (0, NaN: none) outside the grid's plausible depth
-/// range and one of the usual units would put it inside: every return would otherwise be inserted beyond
-/// the range (the map then says free to its end) or crammed near the sensor, without a word. Nothing for
-/// anything else, and for fewer than kReturnsToJudgeUnit values.
-std::optional<UnitMistake> unit_mistake(std::vector<float> values, double scale, const GeometryParams& g) {
-  values.erase(std::remove_if(values.begin(), values.end(), [](float v) { return !(v > 0.0f && std::isfinite(v)); }),
-               values.end());
-  if (values.size() < kReturnsToJudgeUnit) return std::nullopt;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  const double median = *middle;
-  const double nearest_m = std::max(g.depth_min_m, kNearestPlausibleDepthM);
-  const auto plausible = [&](double s) { return median * s >= nearest_m && median * s <= g.depth_max_m; };
-  if (plausible(scale)) return std::nullopt;
-  for (const DepthUnit& unit : kDepthUnits)
-    if (unit.scale != scale && plausible(unit.scale)) return UnitMistake{median * scale, nearest_m, unit};
-  return std::nullopt;
-}
-
 /// insert_depth: refuses a scale under which the image's median depth is a unit mistake.
 void require_plausible_scale(const float* raw, std::size_t pixels, double scale, const GeometryParams& g) {
   const std::optional<UnitMistake> mistake = unit_mistake(std::vector<float>(raw, raw + pixels), scale, g);
@@ -118,12 +76,7 @@ void require_plausible_scale(const float* raw, std::size_t pixels, double scale,
 /// insert: refuses points whose median range is a unit mistake (points are in metres; a cloud in
 /// millimetres took 100 times as long to insert, every point beyond the range, and left the map free).
 void require_plausible_ranges(PointSpan points, const GeometryParams& g) {
-  std::vector<float> ranges(points.count);
-  for (std::size_t i = 0; i < points.count; ++i) {
-    const float* p = points.xyz + i * points.stride_floats;
-    ranges[i] = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-  }
-  const std::optional<UnitMistake> mistake = unit_mistake(std::move(ranges), 1.0, g);
+  const std::optional<UnitMistake> mistake = point_unit_mistake(points, g);
   if (!mistake) return;
   std::ostringstream m;
   m << "the points' median range is " << mistake->outside(g) << ": the points look like " << mistake->likely.name

@@ -1,5 +1,6 @@
 #pragma once
 // PCL clouds -> core point spans, without copying; organized clouds <-> depth images and intrinsics.
+#include "occ_improve/geometry/geometry.hpp"
 #include "occ_improve/integrate/integrate.hpp"
 #include "occ_improve/sensor/intrinsics_fit.hpp"
 
@@ -27,6 +28,13 @@ std::size_t valid_point_count(PointSpan points);
 /// Throws InvalidInput "'<name>' holds no valid point (...)" when valid_point_count(points) is 0. This
 /// is the one rule by which every tool refuses an empty, all-NaN or all-zero frame (docs: README, Errors).
 void require_valid_points(PointSpan points, const std::string& name);
+
+/// Throws InvalidInput "'<name>': the points' median range is ... m, outside the grid's plausible depth range
+/// [a, b] m: the <what> looks like millimetres (times 0.001 gives metres)<hint>" when another usual unit
+/// would put the points inside `grid`'s range (point_unit_mistake, integrate/point_units.hpp). `what`:
+/// "cloud" or "image"; `hint`: what to do (": the tools read clouds in metres").
+void require_points_in_metres(PointSpan points, const std::string& name, const GeometryParams& grid,
+                              const std::string& what, const std::string& hint);
 
 /// An organized width x height cloud from per-pixel points in row-major order, NaN where there is no
 /// return (sample::SampleFrame::points(), depth_image_to_points()). Throws InvalidInput on a size mismatch.
