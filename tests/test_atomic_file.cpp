@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -300,6 +301,32 @@ TEST_F(OutputFileTest, AReadOnlyFileIsNeverReplaced) {
   fs::permissions(file("m.map"), fs::perms::owner_write, fs::perm_options::add);
   save(file("m.map"), false, "MAP new");
   EXPECT_EQ(contents(file("m.map")), "MAP new");
+}
+
+// The check of an existing file's magic opened a named pipe for reading, which blocks until a writer comes
+// (a Python save() hung, Ctrl-C or not): a pipe is refused before anything reads it, -overwrite or not.
+TEST_F(OutputFileTest, APipeIsRefusedWithoutReadingIt) {
+  ASSERT_EQ(::mkfifo(file("pipe.map").c_str(), 0644), 0);
+  for (bool overwrite : {false, true}) {
+    try {
+      save(file("pipe.map"), overwrite, "MAP");
+      FAIL() << "a pipe was taken, overwrite " << overwrite;
+    } catch (const IoError& e) {
+      EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_TRUE(fs::is_fifo(file("pipe.map")));
+}
+
+// The message says how to replace a foreign file in the caller's terms (Python: overwrite=True).
+TEST_F(OutputFileTest, TheOverwriteHintIsTheCallers) {
+  put("notes.txt", "mine");
+  try {
+    OutputFile out(file("notes.txt"), "save", false, starts_with_map, "a map", "pass overwrite=True");
+    FAIL() << "a foreign file was taken";
+  } catch (const IoError& e) {
+    EXPECT_NE(std::string(e.what()).find("or pass overwrite=True to replace it"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(OutputFileTest, FoldersMissingParentsAndUncommittedWritesLeaveNothing) {

@@ -2,6 +2,7 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/io/map_io.hpp"
 
 #include <pybind11/numpy.h>
@@ -10,7 +11,6 @@
 #include <Eigen/Geometry>
 
 #include <cstring>
-#include <filesystem>
 #include <string>
 
 #ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
@@ -73,21 +73,23 @@ std::string lzf_decompress(const std::string& in, std::size_t expected_bytes) {
   return out;
 }
 
-/// As the tools' -save and occ_to_octomap -o: an existing file is replaced only when occ_improve wrote it
-/// (`is_own`, by its magic) or with overwrite=True. (A folder is left to the writer's own error.)
-void require_replaceable(const std::string& path, bool overwrite, bool (*is_own)(const std::string&), const char* kind) {
-  std::error_code ec;
-  if (overwrite || !std::filesystem::exists(path, ec) || std::filesystem::is_directory(path, ec) || is_own(path)) return;
-  throw IoError("'" + path + "' exists and is not " + kind +
-                " written by occ_improve: choose another path, or pass overwrite=True to replace it");
+/// As the tools' -save and occ_to_octomap -o (OutputFile): an existing file is replaced only when occ_improve
+/// wrote it (`is_own`, by its magic) or with overwrite=True, never when it has no write permission bit; a
+/// symbolic link is written through; a folder, pipe or device is refused.
+OutputFile output_file(const std::string& path, const char* flag, bool overwrite, bool (*is_own)(const std::string&),
+                       const char* kind) {
+  return OutputFile(path, flag, overwrite, is_own, kind, "pass overwrite=True");
 }
 
 void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
   m.attr("MAP_FORMAT_VERSION") = kMapFormatVersion;
   c.def("save", [](PyMapper& self, const py::object& path, bool overwrite, const ReturnRecord* returns) {
     const std::string p = path_string(path);
-    require_replaceable(p, overwrite, &is_map_file, "a map");
-    with_mapper(self, [&](Mapper& mp) { save_map(p, mp.grid(), mp.model().params(), returns ? *returns : ReturnRecord()); });
+    OutputFile out = output_file(p, "save", overwrite, &is_map_file, "a map");
+    with_mapper(self, [&](Mapper& mp) {
+      save_map(out.staged(), mp.grid(), mp.model().params(), returns ? *returns : ReturnRecord());
+    });
+    out.commit();
   }, py::arg("path"), py::arg("overwrite") = false, py::arg("returns") = py::none(),
         "Writes the grid and its sensor model (atomically: temp file + rename), with the planner's "
         "ReturnRecord when given (InvalidInput when it is of another grid). An existing file is replaced "
@@ -155,14 +157,16 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
                              bool overwrite) {
     const std::string p = path_string(path);
     require_octomap_output_path(p);  // before any work, as the tools do
-    require_replaceable(p, overwrite, &is_octomap_file, "an OctoMap file");
+    OutputFile out = output_file(p, "export_octomap", overwrite, &is_octomap_file, "an OctoMap file");
     const Eigen::Isometry3d pose = pose_from(world_from_sensor);
-    return with_mapper(self, [&](Mapper& mp) {
+    const OctomapExportReport written = with_mapper(self, [&](Mapper& mp) {
       OctomapExportReport report;
       const auto tree = to_octree(mp.grid(), pose, resolution_m, options, &report);
-      write_octree(*tree, p);
+      write_octree(*tree, out.staged());
       return report;
     });
+    out.commit();
+    return written;
   }, py::arg("path"), py::arg("resolution_m"), py::arg("world_from_sensor") = py::none(),
         py::arg("options") = OctomapExportOptions{}, py::arg("overwrite") = false,
         "Writes the grid as an OctoMap .bt (maximum likelihood) or .ot (log-odds) file at resolution_m, "

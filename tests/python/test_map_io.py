@@ -95,6 +95,29 @@ def test_save_replaces_its_own_map_but_not_a_users_file(tmp_path, paper_mapper):
     assert oi.load_map(notes).width == paper_mapper.width
 
 
+def test_save_keeps_read_only_files_pipes_and_links_as_the_tools_do(tmp_path, paper_mapper):
+    """save() renamed over a read-only map (as root too) and blocked forever on a named pipe while reading
+    its magic; the tools' -save refused both. A symbolic link is written through, as by the tools."""
+    own = tmp_path / "kept.occmap"
+    paper_mapper.save(own)
+    before = own.read_bytes()
+    own.chmod(0o444)
+    for overwrite in (False, True):
+        with pytest.raises(oi.IoError, match="read-only"):
+            paper_mapper.save(own, overwrite=overwrite)
+    assert own.read_bytes() == before and (own.stat().st_mode & 0o777) == 0o444
+    fifo = tmp_path / "pipe.occmap"
+    os.mkfifo(fifo)
+    with pytest.raises(oi.IoError, match="not a regular file"):
+        paper_mapper.save(fifo, overwrite=True)
+    target = tmp_path / "target.occmap"
+    paper_mapper.save(target)
+    link = tmp_path / "link.occmap"
+    link.symlink_to(target)
+    paper_mapper.save(link)
+    assert link.is_symlink() and oi.load_map(link).width == paper_mapper.width
+
+
 def test_a_return_record_saved_with_the_map_comes_back(tmp_path, sample):
     """The planner's record of asks and returns can be kept with the map (C++ save_map always could):
     a closed loop continues where it stopped."""

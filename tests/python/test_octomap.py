@@ -81,3 +81,8 @@ def test_export_replaces_its_own_tree_but_not_a_users_file(tmp_path):
     assert mapper.export_octomap(own, 0.05).occupied_written > 0  # its own tree is replaced
     mapper.export_octomap(theirs, 0.05, overwrite=True)
     assert theirs.read_bytes().startswith(b"# Octomap OcTree binary file")
+    theirs.chmod(0o444)  # a protected file stays, overwrite=True or not (it was renamed over)
+    before = theirs.read_bytes()
+    with pytest.raises(oi.IoError, match="read-only"):
+        mapper.export_octomap(theirs, 0.05, overwrite=True)
+    assert theirs.read_bytes() == before

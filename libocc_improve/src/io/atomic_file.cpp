@@ -222,17 +222,21 @@ void write_text_file(const std::string& path, const std::string& what, const std
 }
 
 OutputFile::OutputFile(const std::string& target, const std::string& flag, bool overwrite,
-                       const std::function<bool(const std::string&)>& is_own, const std::string& kind)
+                       const std::function<bool(const std::string&)>& is_own, const std::string& kind,
+                       const std::string& how_to_overwrite)
     : shown_(target) {
   const fs::path resolved = resolved_target(target, flag);
   const std::string what = flag + " file";
   std::error_code ec;
   if (fs::is_directory(resolved, ec))
     throw IoError("cannot write " + what + " '" + target + "': it is a folder; name a file");
+  // is_own reads the file's magic: a pipe would block it (forever, Ctrl-C or not), a device give it bytes.
+  if (fs::exists(resolved, ec) && !fs::is_regular_file(resolved, ec))
+    throw IoError("cannot write " + what + " '" + target + "': it is not a regular file (a pipe, socket or device); name a file");
   require_writable_folder(resolved.parent_path(), what, target);
   if (fs::exists(resolved, ec) && !overwrite && !is_own(resolved.string()))
-    throw IoError(flag + " '" + target + "' exists and is not " + kind +
-                  " written by occ_improve: choose another name, or give -overwrite to replace it");
+    throw IoError(flag + " '" + target + "' exists and is not " + kind + " written by occ_improve: choose another name, or " +
+                  how_to_overwrite + " to replace it");
   // A file nobody may write is one its owner protected: the rename that replaces a file would ignore that
   // (as root too), so it is refused, -overwrite or not, as a read-only output folder is.
   constexpr fs::perms kWriteBits = fs::perms::owner_write | fs::perms::group_write | fs::perms::others_write;

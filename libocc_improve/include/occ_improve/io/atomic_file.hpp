@@ -52,18 +52,20 @@ void remove_stale_leftovers(const std::string& folder, const std::string& prefix
 
 /// One output file of a tool (-save MAP, occ_to_octomap's -o TREE), checked before any work and written in
 /// two steps, so that a run that fails anywhere leaves the previous file as it was:
-///  - the constructor refuses (IoError/InvalidParameter naming `flag`): a folder, a missing or unwritable
-///    parent, and an existing file that `is_own` does not recognise as one this project wrote (checked by
-///    its magic) unless `overwrite`, and an existing file without any write permission bit (its owner
-///    protected it: refused with `overwrite` too); a symbolic link is written through (the link stays, its
-///    target changes);
+///  - the constructor refuses (IoError/InvalidParameter naming `flag`): a folder, a pipe, socket or device
+///    (whose magic cannot be read without blocking or consuming it), a missing or unwritable parent, and an
+///    existing file that `is_own` does not recognise as one this project wrote (checked by its magic) unless
+///    `overwrite` (the message tells how: `how_to_overwrite`, a tool's "give -overwrite"), and an existing
+///    file without any write permission bit (its owner protected it: refused with `overwrite` too); a
+///    symbolic link is written through (the link stays, its target changes);
 ///  - staged() is where the content is written (a temporary beside the target);
 ///  - commit() renames it over the target (it may be written and committed again: a tool that saves as it
 ///    goes); the destructor removes a staged file never committed.
 class OutputFile {
 public:
   OutputFile(const std::string& target, const std::string& flag, bool overwrite,
-             const std::function<bool(const std::string& existing)>& is_own, const std::string& kind);
+             const std::function<bool(const std::string& existing)>& is_own, const std::string& kind,
+             const std::string& how_to_overwrite = "give -overwrite");
   OutputFile(const OutputFile&) = delete;
   OutputFile& operator=(const OutputFile&) = delete;
   ~OutputFile();
