@@ -151,13 +151,15 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 }
 
 
-/// "timestamp value..." lines, comments (#) skipped.
+/// "timestamp value..." lines, comments (#) and blank lines skipped, trailing white space (a Windows line
+/// end's '\r' kept the file names "1.png\r": "unsupported depth image type '.png'") dropped.
 std::vector<std::pair<double, std::string>> timestamped_lines(const fs::path& path) {
   std::ifstream in(path);
   if (!in) throw IoError("cannot open '" + path.string() + "'");
   std::vector<std::pair<double, std::string>> lines;
   std::string line;
   while (std::getline(in, line)) {
+    line.erase(line.find_last_not_of(" \t\r") + 1);  // npos + 1 = 0: a blank line becomes empty
     if (line.empty() || line[0] == '#') continue;
     std::istringstream fields(line);
     double t = 0;

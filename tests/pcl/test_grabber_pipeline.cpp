@@ -460,6 +460,23 @@ TEST(SequenceSources, TumLayoutAssociatesPosesByTimestamp) {
   EXPECT_FALSE(sequence.frames[2].camera_to_world.has_value());  // no pose within 20 ms
 }
 
+// A depth.txt with Windows line ends (and trailing blanks, a blank line) names the same files: the '\r' stayed
+// in every name, and every frame failed as "unsupported depth image type '.png'".
+TEST(SequenceSources, TumListsWithWindowsLineEndsNameTheSameFiles) {
+  TempDir dir("occ_improve_tum_crlf");
+  std::ofstream(dir.path / "depth.txt", std::ios::binary) << "# depth maps\r\n"
+                                                           << "1305031102.160407 depth/1305031102.160407.png\r\n"
+                                                           << "\r\n"
+                                                           << "1305031102.194330 depth/1305031102.194330.png \t\r\n";
+  std::ofstream(dir.path / "groundtruth.txt", std::ios::binary) << "1305031102.1600 1 2 3 0 0 0 1\r\n";
+  const DepthSequence sequence = scan_depth_sequence(dir.path.string());
+  ASSERT_EQ(sequence.frames.size(), 2u);
+  EXPECT_EQ(sequence.frames[0].depth_path, (dir.path / "depth/1305031102.160407.png").string());
+  EXPECT_EQ(sequence.frames[1].depth_path, (dir.path / "depth/1305031102.194330.png").string());
+  ASSERT_TRUE(sequence.frames[0].camera_to_world.has_value());
+  EXPECT_NEAR(sequence.frames[0].camera_to_world->translation().z(), 3.0, 1e-12);
+}
+
 // Partly posed (TUM's ground truth often starts late): the posed frames are moved into the first posed
 // frame's view, and the frame without a pose is skipped and counted, naming it. Poses were dropped for
 // the whole sequence without a word, fusing a moving camera's frames as one view.
