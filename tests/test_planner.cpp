@@ -373,6 +373,33 @@ TEST(CoarseToFine, AtMostOneRayPerBlockPerShot) {
   }
 }
 
+// With a candidate mask the refinement level counts the blocks that hold a candidate, not the view's (a
+// tester's 32 x 32 mask on a 640 x 480 view: 9-64 of its 1024 rays, one per block of 16, 8 or 4 it
+// overlapped). An empty map, an 8 x 8 mask, 10 rays: the coverage ray (its block of 16 holds no sample),
+// then 9 refinement rays, which need 36 blocks: the mask holds 1 block of 8, 4 of 4 and 16 of 2, so blocks
+// of 2. Counted over the view (48 blocks of 8) it took blocks of 8, whose one with candidates holds the
+// coverage ray: a shot of 1 ray, with 63 candidates at the no-data score left.
+TEST(CoarseToFine, WithACandidateMaskTheLevelCountsBlocksHoldingACandidate) {
+  const Mapper mapper(kinect_v1(small_camera()));
+  const ReturnRecord none = ReturnRecord::for_grid(64, 48);
+  PlanRequest r = coarse_to_fine(10, RefineBy::improvement);
+  r.candidates.assign(64 * 48, 0);
+  for (int v = 16; v < 24; ++v)
+    for (int u = 16; u < 24; ++u) r.candidates[static_cast<std::size_t>(v * 64 + u)] = 1;
+  const Shot s = plan_next_shot(mapper, none, r);
+  ASSERT_EQ(s.columns.size(), 10u);
+  EXPECT_FALSE(s.stop);
+  std::set<int> blocks;
+  for (ColumnIndex c : s.columns) {
+    EXPECT_EQ(r.candidates[c], 1) << "column " << c;
+    const int u = static_cast<int>(c % 64), v = static_cast<int>(c / 64);
+    blocks.insert((v / 2) * 32 + u / 2);
+  }
+  EXPECT_EQ(blocks.size(), 10u);  // one ray per block of 2
+  EXPECT_NEAR(s.expected_gain, 10 * 0.324, 0.05);
+  EXPECT_EQ(plan_next_shot(mapper, none, r).columns, s.columns);  // deterministic
+}
+
 // A wall at 2 m, with a box at 1 m in front of its right part (columns 40-63), seen at every_fourth_ray.
 Mapper wall_seen_sparsely(bool with_box) {
   std::vector<float> depth(64 * 48, 2.0f);

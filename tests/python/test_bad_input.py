@@ -288,3 +288,16 @@ def test_a_thread_count_beyond_a_c_int_is_invalid_parameter_naming_threads(mappe
     with pytest.raises(TypeError, match="threads takes an int"):
         mapper.insert_depth(depth, intrinsics, threads=1.5)
     assert mapper.touched_columns() == 0
+
+
+@pytest.mark.parametrize("make, field", [
+    (lambda: oi.GridOptions(mode=oi.UpdateMode(7)), "mode"),
+    (lambda: oi.PlanRequest(shape=oi.ShotShape(9)), "shape"),
+    (lambda: oi.PlanRequest(refine_by=oi.RefineBy(9)), "refine_by"),
+    (lambda: oi.PlanRequest(local_model=oi.LocalModel(9)), "local_model"),
+] + ([(lambda: oi.OctomapExportOptions(free_leaves=oi.FreeLeafRule(9)), "free_leaves")] if oi.HAS_OCTOMAP else []))
+def test_enums_made_from_numbers_outside_their_values_are_invalid_parameter(make, field):
+    """UpdateMode(7) ran as exact (and was saved so), ShotShape(9) planned as decimation: validate() passed."""
+    options = make()
+    with pytest.raises(oi.InvalidParameter, match=field):
+        options.validate(*((640, 480) if isinstance(options, oi.PlanRequest) else ()))

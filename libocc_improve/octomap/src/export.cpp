@@ -836,6 +836,8 @@ void OctomapExportOptions::validate() const {
   require_parameter(unknown_band_probability >= 0 && unknown_band_probability < 0.5, "unknown_band_probability",
                     unknown_band_probability, "in [0, 0.5)");
   require_parameter(memory_cap_bytes > 0, "memory_cap_bytes", static_cast<double>(memory_cap_bytes), "> 0");
+  require_parameter(free_leaves == FreeLeafRule::crossed || free_leaves == FreeLeafRule::wholly_free, "free_leaves",
+                    static_cast<double>(free_leaves), "crossed (0) or wholly_free (1)");
 }
 
 std::unique_ptr<octomap::OcTree> make_octree(const ColumnGrid& grid, double resolution_m,

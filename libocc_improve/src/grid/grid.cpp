@@ -22,6 +22,9 @@ void GridOptions::validate() const {
   require_parameter(probability_min > 0 && probability_min < 0.5, "probability_min", probability_min, "in (0, 0.5)");
   require_parameter(probability_max > 0.5 && probability_max < 1, "probability_max", probability_max, "in (0.5, 1)");
   require_parameter(memory_cap_bytes > 0, "memory_cap_bytes", static_cast<double>(memory_cap_bytes), "> 0");
+  // An enum set from a number (Python's UpdateMode(7)) ran as exact and was saved as exact.
+  require_parameter(mode == UpdateMode::clamped || mode == UpdateMode::exact, "mode", static_cast<double>(mode),
+                    "clamped (0) or exact (1)");
 }
 
 GridOptions GridOptions::octomap_clamping() {

@@ -8,6 +8,7 @@
 #include "occ_improve/planning/sample_triangulation.hpp"
 
 #include <algorithm>
+#include <iterator>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -162,6 +163,31 @@ double block_priority(const ImprovementPyramid& pyramid, int level, std::size_t 
   return request.refine_by == RefineBy::both ? geometric * improvement : geometric;
 }
 
+// With a candidate mask: the eligible observable rays, and per level the blocks holding one. A block
+// without one can take no ray, so these, not the level's blocks, are what the refinement chooses among.
+struct EligibleBlocks {
+  std::size_t rays = 0;
+  std::size_t blocks[ImprovementPyramid::kLevels] = {};
+};
+EligibleBlocks eligible_blocks(const ImprovementPyramid& pyramid, const std::vector<float>& score,
+                               const std::vector<std::uint8_t>& eligible) {
+  EligibleBlocks out;
+  std::vector<std::uint8_t> holds[ImprovementPyramid::kLevels];
+  for (int l = 0; l < ImprovementPyramid::kLevels; ++l) holds[l].assign(pyramid.block_count(l), 0);
+  const auto w = static_cast<std::size_t>(pyramid.width());
+  for (std::size_t c = 0; c < score.size(); ++c) {
+    if (!eligible[c] || std::isnan(score[c])) continue;
+    ++out.rays;
+    const std::size_t u = c % w / 2, v = c / w / 2;  // its block of 2; the block of level l is (u, v) >> l
+    for (int l = 0; l < ImprovementPyramid::kLevels; ++l) {
+      std::uint8_t& h = holds[l][(v >> l) * static_cast<std::size_t>(pyramid.blocks_x(l)) + (u >> l)];
+      out.blocks[l] += h == 0 ? 1u : 0u;
+      h = 1;
+    }
+  }
+  return out;
+}
+
 // Refinement by blocks (improvement, residual, both): one ray per block of the level that leaves the
 // priority room to choose, blocks holding a ray of this shot (`taken`) left out.
 std::vector<ColumnIndex> refine_by_blocks(const ImprovementPyramid& pyramid, const SensorModel& model,
@@ -169,9 +195,19 @@ std::vector<ColumnIndex> refine_by_blocks(const ImprovementPyramid& pyramid, con
                                           const std::vector<std::uint8_t>& eligible,
                                           const std::vector<ColumnIndex>& taken, const ReturnRecord& returns,
                                           const PlanRequest& request, std::size_t left) {
+  // The level: with a candidate mask, of its blocks holding a candidate, for the rays the mask still
+  // offers (counting the view's blocks, a 32 x 32 mask's shot took 9-64 of its 1024 rays: one per block
+  // of 16, 8 or 4 it overlaps).
+  std::size_t rays_left = left, usable[ImprovementPyramid::kLevels];
+  for (int l = 0; l < ImprovementPyramid::kLevels; ++l) usable[l] = pyramid.block_count(l);
+  if (!request.candidates.empty()) {
+    const EligibleBlocks with_candidates = eligible_blocks(pyramid, score, eligible);
+    rays_left = std::min(left, with_candidates.rays);
+    std::copy(std::begin(with_candidates.blocks), std::end(with_candidates.blocks), usable);
+  }
   int level = 0;
   for (int l = ImprovementPyramid::kLevels - 1; l >= 0; --l)
-    if (pyramid.block_count(l) >= kBlocksPerRay * left) {
+    if (usable[l] >= kBlocksPerRay * rays_left) {
       level = l;
       break;
     }
@@ -427,6 +463,16 @@ void PlanRequest::validate(int grid_width, int grid_height) const {
                             "stop_gain_per_ray_below", stop_gain_per_ray_below, "finite and >= 0");
   detail::require_parameter(stop_view_share > 0 && stop_view_share <= 1, "stop_view_share", stop_view_share, "in (0, 1]");
   return_model.validate();
+  // Enums set from numbers (Python's ShotShape(9) planned as decimation): only the named values.
+  detail::require_parameter(shape == ShotShape::rays || shape == ShotShape::window || shape == ShotShape::decimation ||
+                                shape == ShotShape::coarse_to_fine,
+                            "shape", static_cast<double>(shape), "rays (0), window (1), decimation (2) or coarse_to_fine (3)");
+  detail::require_parameter(refine_by == RefineBy::improvement || refine_by == RefineBy::residual ||
+                                refine_by == RefineBy::both || refine_by == RefineBy::triangles,
+                            "refine_by", static_cast<double>(refine_by),
+                            "improvement (0), residual (1), both (2) or triangles (3)");
+  detail::require_parameter(local_model == LocalModel::constant || local_model == LocalModel::plane, "local_model",
+                            static_cast<double>(local_model), "constant (0) or plane (1)");
   if (shape == ShotShape::coarse_to_fine) {
     ImprovementPyramid::level_of_block_size(coverage_block_columns);  // InvalidParameter naming the value
     detail::require_parameter(std::isfinite(residual_cap_sigmas) && residual_cap_sigmas > 0, "residual_cap_sigmas",

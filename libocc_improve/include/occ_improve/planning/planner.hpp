@@ -29,7 +29,8 @@
 //     (below) is >= kCoverageMinReturn (0.5: one unanswered ask in a block halves its return rate);
 //  2. refinement with the rays left, R: at the coarsest level of the pyramid (multiscale.hpp) with at
 //     least kBlocksPerRay (4) x R blocks (else blocks of 2), so that a shot takes at most a quarter of the
-//     blocks and their priority, not the tiling, decides which; one ray per block (its best-scoring ray,
+//     blocks and their priority, not the tiling, decides which (with a candidate mask: blocks holding a
+//     candidate, R at most the candidates left); one ray per block (its best-scoring ray,
 //     blocks with a coverage ray of this shot left out), blocks by priority:
 //       improvement: |the block's mean improvement| x p (no data 0.324 high, settled low, a depth transition
 //                    negative, hence re-acquired: the paper's "regions of negative improvement")
