@@ -47,16 +47,17 @@ protected:
   ToolRun run(const std::string& executable, const std::string& arguments) {
     return test::run_tool_in(folder_, executable, arguments);
   }
-  // An organized 64 x 48 labelled cloud whose every point is `value` (NaN, 0, or a wall at 2 m when 0 < value).
-  std::string write_cloud(const std::string& name, float value) {
+  // An organized 64 x 48 labelled cloud whose every point is `value` (NaN, 0, or a wall at `value` m when
+  // 0 < value), its coordinates written in `unit`s of a metre (0.001: millimetres).
+  std::string write_cloud(const std::string& name, float value, float unit = 1.0f) {
     pcl::PointCloud<pcl::PointXYZRGBL> cloud(64, 48);
     for (int v = 0; v < 48; ++v)
       for (int u = 0; u < 64; ++u) {
         auto& p = cloud.at(u, v);
         const bool wall = value > 0;
-        p.x = wall ? (u - 32) * 0.01f : value;
-        p.y = wall ? (v - 24) * 0.01f : value;
-        p.z = value;
+        p.x = wall ? (u - 32) * 0.01f / unit : value;
+        p.y = wall ? (v - 24) * 0.01f / unit : value;
+        p.z = wall ? value / unit : value;
         p.label = 1;
       }
     const std::string path = file(name);
@@ -150,6 +151,33 @@ TEST_F(Tools, EveryToolRefusesAFrameWithoutAValidPoint) {
   // The same frame with valid points passes every tool but the evaluation's ground-truth check.
   const std::string wall = write_cloud("wall.pcd", 2.0f);
   EXPECT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -o out").exit_code, 0);
+}
+
+// A cloud saved in millimetres was mapped as metres "beyond the depth range" (exit 0, the map free to its
+// end; from ~340 m on, the returns' sigma made a phantom wall at the grid's end): every tool refuses it in
+// one line naming the file and the unit, and writes nothing.
+TEST_F(Tools, EveryToolRefusesACloudInMillimetres) {
+  const std::string path = write_cloud("mm.pcd", 2.0f, 0.001f);
+  for (const auto& [tool, args] : tools_on(path)) {
+    const ToolRun r = run(tool, args);
+    expect_one_error_line_naming(r, "mm.pcd", tool, tool != OCC_IMPROVE_LIVE_EXECUTABLE);
+    EXPECT_NE(r.err.find("looks like millimetres (times 0.001 gives metres)"), std::string::npos) << tool << ": " << r.err;
+    EXPECT_FALSE(fs::exists(folder_ / "out")) << tool;
+    EXPECT_FALSE(fs::exists(folder_ / "out.bt")) << tool;
+  }
+}
+
+// Without -intrinsics the camera, and so the grid's columns, come from the inputs, and -depth_bins was
+// checked against the cap only then: the depth axis was built first (-depth_bins 1e9: 24 GB, then the
+// kernel killed the tool; 2e7: 1.7 GB before the error). The depth axis alone is checked first.
+TEST_F(Tools, HugeDepthBinsAreRefusedBeforeTheCameraIsKnown) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -depth_bins 1e9 -o out");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("error: the depth axis alone"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("1000000000 bins"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("-memory_cap"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(folder_ / "out"));
 }
 
 // occ_segment_eval crashed (SIGSEGV) on an empty or random .pcd and aborted on a header claiming 2^31-1 points.
