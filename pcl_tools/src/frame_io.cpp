@@ -207,6 +207,13 @@ PinholeIntrinsics intrinsics_from_file(const std::string& path, bool& size_given
       numbers_of_file(path, "intrinsics file", [](std::size_t i) { return "position " + std::to_string(i + 1); });
   PinholeIntrinsics k;
   if (v.size() == 9) {  // 3x3 matrix, row-major
+    // K = [fx 0 cx; 0 fy cy; 0 0 1], as Python's intrinsics_from_matrix takes it: a transposed K (MATLAB's
+    // convention) read as cx = cy = 0, and a skew or another last row were taken silently.
+    if (v[1] != 0 || v[3] != 0 || v[6] != 0 || v[7] != 0 || v[8] != 1) {
+      const bool transposed = v[2] == 0 && v[5] == 0 && v[6] != 0 && v[7] != 0;
+      throw FormatError("intrinsics file '" + path + "': a 3x3 matrix must be 'fx 0 cx  0 fy cy  0 0 1' (no skew)" +
+                        (transposed ? "; this one looks transposed (cx, cy in the last row): write K row by row" : ""));
+    }
     k.fx = v[0];
     k.cx = v[2];
     k.fy = v[4];

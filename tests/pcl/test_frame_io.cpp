@@ -164,6 +164,27 @@ TEST_F(FrameIoFiles, EmptyAndGarbageFilesAreFormatErrors) {
   }
 }
 
+// A 3x3 matrix is K row by row, as Python's intrinsics_from_matrix takes it: a transposed K (MATLAB's
+// convention) was read as cx = cy = 0 and a skew or another last row were taken without a word.
+TEST_F(FrameIoFiles, AThreeByThreeMatrixMustBeAPinholeKRowByRow) {
+  const PinholeIntrinsics k = read_intrinsics_file(write("k.txt", "585 0 320\n0 585 240\n0 0 1\n"));
+  EXPECT_EQ(k.fx, 585);
+  EXPECT_EQ(k.fy, 585);
+  EXPECT_EQ(k.cx, 320);
+  EXPECT_EQ(k.cy, 240);
+  for (const auto& [text, named] : {std::pair<const char*, const char*>{"585 0 0 0 585 0 320 240 1", "looks transposed"},
+                                    {"585 3 320 0 585 240 0 0 1", "(no skew)"},
+                                    {"585 0 320 0 585 240 0 0 2", "(no skew)"},
+                                    {"585 0 320 0 585 240 1 1 1", "(no skew)"}}) {
+    try {
+      read_intrinsics_file(write("kbad.txt", text));
+      ADD_FAILURE() << text << " was read";
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST_F(FrameIoFiles, PcdWithoutXyzIsAFormatError) {
   const std::string pcd =
       "# .PCD v0.7\nVERSION 0.7\nFIELDS intensity\nSIZE 4\nTYPE F\nCOUNT 1\nWIDTH 2\nHEIGHT 1\n"
@@ -190,6 +211,24 @@ TEST_F(FrameIoFiles, AllZeroDepthImageLoadsAsAFrameWithNoValidPoint) {
   const LoadedFrame f = load_frame(write("zeros.pgm", pgm), k, DepthEncoding::millimetres);
   EXPECT_EQ(f.cloud.size(), 12u);
   EXPECT_EQ(stats_of(f.cloud).valid_fraction, 0.0);
+}
+
+// A PGM header may hold comments ('#' to the end of the line: GIMP and ImageMagick write one after the
+// magic); a commented 16-bit PGM was refused as "not a 16-bit binary PGM (P5)".
+TEST_F(FrameIoFiles, PgmHeaderCommentsAreSkipped) {
+  std::string pgm = "P5\n# written by GIMP\n2 1 # width height\n65535\n";
+  pgm += std::string("\x05\xdc\x07\xd0", 4);  // 1500 and 2000 mm, big-endian
+  PinholeIntrinsics k;
+  k.width = 2;
+  k.height = 1;
+  k.cx = 0.5;
+  k.cy = 0;
+  const LoadedFrame f = load_frame(write("commented.pgm", pgm), k, DepthEncoding::millimetres);
+  ASSERT_EQ(f.cloud.size(), 2u);
+  EXPECT_FLOAT_EQ(f.cloud[0].z, 1.5f);
+  EXPECT_FLOAT_EQ(f.cloud[1].z, 2.0f);
+  EXPECT_THROW(load_frame(write("signed.pgm", "P5 -2 1 65535\n" + std::string(4, '\0')), k, DepthEncoding::millimetres),
+               FormatError);
 }
 
 // A 3x3 camera-intrinsics.txt (7-Scenes, 3DMatch) carries no image size: a folder's camera takes its

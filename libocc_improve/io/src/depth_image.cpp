@@ -8,6 +8,7 @@
 #include <cctype>
 #include <fstream>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace occ_improve {
@@ -26,12 +27,35 @@ void detail::require_image_size(const std::string& kind, const std::string& path
 
 namespace {
 
+// The next token of a PGM header: white space and comments ('#' to the end of the line, which GIMP and
+// ImageMagick write after the magic; a commented 16-bit PGM was refused as "not a 16-bit binary PGM") skipped.
+std::string pgm_token(std::istream& in) {
+  for (int c = in.peek(); c != std::char_traits<char>::eof(); c = in.peek()) {
+    if (c == '#') {
+      in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
+    } else if (std::isspace(c)) {
+      in.get();
+    } else {
+      break;
+    }
+  }
+  std::string token;
+  in >> token;
+  return token;
+}
+
+// A header number of at most 9 digits (no sign, nothing else), or -1.
+int pgm_number(std::istream& in) {
+  const std::string token = pgm_token(in);
+  if (token.empty() || token.size() > 9 || token.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::stoi(token);
+}
+
 DepthImage16 read_pgm16(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open depth image '" + path + "'");
-  std::string magic;
-  int width = 0, height = 0, max_value = 0;
-  in >> magic >> width >> height >> max_value;
+  const std::string magic = pgm_token(in);
+  const int width = pgm_number(in), height = pgm_number(in), max_value = pgm_number(in);
   if (magic != "P5" || !in || width <= 0 || height <= 0 || max_value < 256 || max_value > 65535)
     throw FormatError("'" + path + "' is not a 16-bit binary PGM (P5)");
   in.get();  // the single whitespace after the header
