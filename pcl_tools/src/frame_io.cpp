@@ -81,16 +81,52 @@ std::optional<Eigen::Isometry3d> viewpoint_of(const Eigen::Vector4f& origin, con
   return pose;
 }
 
-// A cloud PCL read (PCD or PLY) as a frame: x y z required as float, colour kept where it is organized.
+// Whether x y z are one float64 each (Open3D writes PLY clouds so by default), which PCL's conversion
+// leaves at 0: they are converted here. Otherwise they must be one float32 each (require_pcd_field).
+bool xyz_in_doubles(const pcl::PCLPointCloud2& blob) {
+  std::size_t doubles = 0;
+  for (const auto& f : blob.fields)
+    if ((f.name == "x" || f.name == "y" || f.name == "z") && f.datatype == pcl::PCLPointField::FLOAT64 && f.count == 1)
+      ++doubles;
+  return doubles == 3;
+}
+
+// The blob's float64 x y z as float, organized as the blob.
+void read_double_xyz(const pcl::PCLPointCloud2& blob, pcl::PointCloud<pcl::PointXYZ>& cloud) {
+  std::uint32_t offset[3] = {};
+  for (const auto& f : blob.fields)
+    for (int axis = 0; axis < 3; ++axis)
+      if (f.name == std::string(1, static_cast<char>('x' + axis))) offset[axis] = f.offset;
+  cloud.width = blob.width;
+  cloud.height = blob.height;
+  cloud.is_dense = false;
+  cloud.resize(std::size_t{blob.width} * blob.height);
+  for (std::uint32_t v = 0; v < blob.height; ++v)
+    for (std::uint32_t u = 0; u < blob.width; ++u) {
+      const std::uint8_t* point = blob.data.data() + std::size_t{v} * blob.row_step + std::size_t{u} * blob.point_step;
+      double xyz[3];
+      for (int axis = 0; axis < 3; ++axis) std::memcpy(&xyz[axis], point + offset[axis], sizeof(double));
+      cloud[std::size_t{v} * blob.width + u] =
+          pcl::PointXYZ(static_cast<float>(xyz[0]), static_cast<float>(xyz[1]), static_cast<float>(xyz[2]));
+    }
+}
+
+// A cloud PCL read (PCD or PLY) as a frame: x y z as float (or double, converted), colour kept where it is
+// organized.
 LoadedFrame frame_of_blob(const pcl::PCLPointCloud2& blob, const std::string& path) {
-  for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
+  const bool doubles = xyz_in_doubles(blob);
+  if (!doubles)
+    for (const char* axis : {"x", "y", "z"}) require_pcd_field(blob, path, axis, pcl::PCLPointField::FLOAT32);
   bool has_colour = false;
   for (const auto& f : blob.fields) has_colour |= f.name == "rgb" || f.name == "rgba";
   LoadedFrame frame;
   frame.path = path;
   // PCL's conversion takes &cloud[0] of the cloud it fills, undefined for one of no points (UBSan).
   if (std::uint64_t{blob.width} * blob.height == 0) return frame;
-  pcl::fromPCLPointCloud2(blob, frame.cloud);
+  if (doubles)
+    read_double_xyz(blob, frame.cloud);
+  else
+    pcl::fromPCLPointCloud2(blob, frame.cloud);
   if (has_colour && blob.height > 1) frame.colour = colour_image(blob);
   return frame;
 }

@@ -185,6 +185,28 @@ TEST_F(FrameIoFiles, AThreeByThreeMatrixMustBeAPinholeKRowByRow) {
   }
 }
 
+// Open3D writes PLY clouds with double x y z by default (a PCD may hold F 8 too): they were refused ("field 'x'
+// is 1 x F 8 (TYPE SIZE), expected one F 4"), PCL's own conversion leaving them at 0. Converted to float.
+TEST_F(FrameIoFiles, DoublePrecisionCoordinatesAreRead) {
+  const std::string ply = "ply\nformat ascii 1.0\nelement vertex 2\nproperty double x\nproperty double y\n"
+                          "property double z\nend_header\n0.1 0.2 1.5\n-0.1 0.3 2.25\n";
+  const std::string pcd = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\n"
+                          "HEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n0.1 0.2 1.5\n-0.1 0.3 2.25\n";
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"doubles.ply", ply}, {"doubles.pcd", pcd}}) {
+    const LoadedFrame f = load_frame(write(name, text), std::nullopt);
+    ASSERT_EQ(f.cloud.size(), 2u) << name;
+    EXPECT_FLOAT_EQ(f.cloud[0].x, 0.1f) << name;
+    EXPECT_FLOAT_EQ(f.cloud[0].y, 0.2f) << name;
+    EXPECT_FLOAT_EQ(f.cloud[0].z, 1.5f) << name;
+    EXPECT_FLOAT_EQ(f.cloud[1].x, -0.1f) << name;
+    EXPECT_FLOAT_EQ(f.cloud[1].z, 2.25f) << name;
+  }
+  // Mixed precision is still refused, naming the field.
+  const std::string mixed = "ply\nformat ascii 1.0\nelement vertex 1\nproperty double x\nproperty float y\n"
+                            "property float z\nend_header\n0.1 0.2 1.5\n";
+  EXPECT_THROW(load_frame(write("mixed.ply", mixed), std::nullopt), FormatError);
+}
+
 TEST_F(FrameIoFiles, PcdWithoutXyzIsAFormatError) {
   const std::string pcd =
       "# .PCD v0.7\nVERSION 0.7\nFIELDS intensity\nSIZE 4\nTYPE F\nCOUNT 1\nWIDTH 2\nHEIGHT 1\n"

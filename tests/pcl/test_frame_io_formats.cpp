@@ -223,7 +223,6 @@ TEST_F(FrameIoPlyFiles, MalformedPlyIsAFormatErrorNamingTheFile) {
       {"viewport_resize", ply("ascii", std::string("element vertex 2\n") + kXyz +
                                            "element camera 1\nproperty int viewportx\nproperty int viewporty\n",
                               "1 2 3\n4 5 6\n1000 1000\n")},
-      {"double_xyz", ply("ascii", "element vertex 1\nproperty double x\nproperty double y\nproperty double z\n", "1 2 3\n")},
       // Passes the header's size check (a list may be empty), so PCL's parser is the one to refuse it.
       {"truncated_face_list", ply("binary_little_endian", std::string("element vertex 1\n") + kXyz +
                                                         "element face 2\nproperty list uchar int vertex_indices\n",
