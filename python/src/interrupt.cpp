@@ -1,9 +1,12 @@
 #include "interrupt.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <csignal>
 #include <mutex>
+#include <thread>
 
+#include <pthread.h>
 #include <pythread.h>
 
 namespace occ_improve::python {
@@ -33,7 +36,37 @@ bool python_default_handler() {
   return getsignal(static_cast<int>(SIGINT)).is(default_handler);
 }
 
+int calls_without_gil = 0;  // CallWithoutGil objects alive; guarded by the GIL
+bool exiting = false;       // the exit wait began: later calls keep the GIL; guarded by the GIL
+
+// A forked child holds none of its parent's threads, so none of their calls.
+extern "C" void forget_calls_in_child() { calls_without_gil = 0; }
+
+// atexit: the GIL held, finalization not begun (non-daemon threads were joined before). Calls still
+// running (daemon threads, a thread whose interrupted join() marked it stopped) are asked to stop and
+// waited for until each has the GIL back; they then end as Python code, which finalization handles.
+void wait_for_calls_at_exit() {
+  exiting = true;
+  if (calls_without_gil == 0) return;
+  request_stop(-1);  // "cancelled (stop requested, reason -1)"; a pending SIGINT's reason is kept
+  while (calls_without_gil > 0) {
+    py::gil_scoped_release release;  // the calls take the GIL to end
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  clear_stop_request();  // calls in atexit callbacks that run after this one (keeping the GIL) run to their end
+}
+
 }  // namespace
+
+CallWithoutGil::CallWithoutGil() { ++calls_without_gil; }
+CallWithoutGil::~CallWithoutGil() { --calls_without_gil; }
+
+bool interpreter_exiting() { return exiting; }
+
+void register_exit_wait() {
+  pthread_atfork(nullptr, nullptr, &forget_calls_in_child);
+  py::module_::import("atexit").attr("register")(py::cpp_function(&wait_for_calls_at_exit));
+}
 
 SigintStopsLibrary::SigintStopsLibrary() {
   const bool join = python_default_handler();

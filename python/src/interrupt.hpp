@@ -31,12 +31,35 @@ public:
 /// Whether the calling thread is Python's main thread (the GIL held).
 bool in_main_thread();
 
+/// A call running without the GIL, counted for the interpreter's exit (construct and destroy with the GIL
+/// held). A thread that takes the GIL back once Python's finalization began is ended by CPython 3.11 with
+/// pthread_exit, whose unwinding cannot leave a C++ destructor (gil_scoped_release's): std::terminate,
+/// "terminate called without an active exception". Python does not wait at exit for daemon threads, nor
+/// (CPython 3.11) for a thread whose join() a KeyboardInterrupt interrupted: it is marked as stopped. So
+/// at exit (an atexit callback, before finalization) calls still running are asked to stop and waited for
+/// until they have the GIL back; calls made after that keep the GIL (interpreter_exiting).
+class CallWithoutGil {
+public:
+  CallWithoutGil();
+  ~CallWithoutGil();
+  CallWithoutGil(const CallWithoutGil&) = delete;
+  CallWithoutGil& operator=(const CallWithoutGil&) = delete;
+};
+
+/// Whether the interpreter's exit began waiting for the calls (the GIL held): later calls keep the GIL.
+bool interpreter_exiting();
+
+/// Registers the wait for running calls with atexit (at import).
+void register_exit_wait();
+
 /// f() with the GIL released and SIGINT stopping the library. When Ctrl-C stopped it: in Python's main
 /// thread the KeyboardInterrupt of Python's handler; in another thread oi.Cancelled (the main thread gets
 /// its KeyboardInterrupt from Python, as for any signal). Take the GIL before calling (f must not touch
 /// Python objects).
 template <class F>
 auto run_interruptible(F&& f) -> decltype(f()) {
+  if (interpreter_exiting()) return f();  // the GIL kept: no thread may take it back during finalization
+  const CallWithoutGil call;  // first in, last out: counted until the GIL is back and Cancelled handled
   SigintStopsLibrary sigint;
   try {
     py::gil_scoped_release release;

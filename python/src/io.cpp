@@ -188,11 +188,7 @@ void bind_io(py::module_& m) {
 #endif
   m.def("_lzf_decompress", [](const py::bytes& data, std::size_t expected_bytes) {
     std::string in = data;
-    std::string out;
-    {
-      py::gil_scoped_release release;
-      out = lzf_decompress(in, expected_bytes);
-    }
+    const std::string out = run_interruptible([&] { return lzf_decompress(in, expected_bytes); });
     return py::bytes(out);
   }, py::arg("data"), py::arg("expected_bytes"),
         "LZF-decompresses exactly expected_bytes (the reader of binary_compressed PCD files); FormatError otherwise.");

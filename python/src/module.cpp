@@ -5,6 +5,7 @@ PYBIND11_MODULE(_core, m) {
   using namespace occ_improve::python;
   m.doc() = "occ_improve: spherical occupancy grids and the improvement map (C++ core, pybind11).";
   bind_errors(m);  // first: every later binding may throw them
+  register_exit_wait();
   bind_presets(m);
   bind_mapper(m);
   bind_analysis(m);

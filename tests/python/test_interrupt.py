@@ -109,3 +109,69 @@ def test_ctrl_c_cancels_a_call_in_another_thread_and_interrupts_the_main_thread(
     result = subprocess.run([sys.executable, "-c", THREADED], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.split("\n")[:2] == ["main interrupted", "worker cancelled"], result.stdout
+
+
+AT_EXIT = r"""
+import os, signal, sys, threading, time
+import numpy as np
+import occ_improve as oi
+mapper = oi.Mapper(oi.kinect_v1_paper())
+points = np.random.default_rng(0).uniform([-2, -2, 0.5], [2, 2, 7], (6_000_000, 3)).astype(np.float32)
+go = threading.Event()
+outcome = []
+def work():
+    go.wait()
+    try:
+        mapper.insert(points, threads=1)
+        outcome.append("completed")
+    except oi.Cancelled:
+        outcome.append("cancelled")
+worker = threading.Thread(target=work, daemon={daemon})
+worker.start()
+# Ctrl-C while the main thread waits in join(): CPython 3.11 then marks the worker as stopped, so the exit
+# does not wait for it (as for a daemon thread).
+timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+timer.daemon = True
+timer.start()
+try:
+    worker.join()
+except KeyboardInterrupt:
+    pass
+go.set()
+time.sleep(0.3)  # the worker starts its insert, without the GIL
+# A second Ctrl-C stops the insert. From here the main thread keeps the GIL (no switch for 30 s, no
+# blocking call), so the worker can take it back before the exit only if the exit waits for its call;
+# else in the flush below, which finalization calls with the GIL released.
+sys.setswitchinterval(30)
+try:
+    os.kill(os.getpid(), signal.SIGINT)
+    while True:
+        pass
+except KeyboardInterrupt:
+    pass
+until = time.monotonic() + 0.5
+while time.monotonic() < until:  # the insert is cancelled meanwhile, and waits for the GIL
+    pass
+class FlushedAtFinalization:
+    def write(self, text):
+        return sys.__stdout__.write(text)
+    def flush(self, sleep=time.sleep, out=sys.__stdout__, finalizing=sys.is_finalizing):
+        if finalizing():  # not the flush after the script: finalization's
+            sleep(0.5)
+            out.write(f"worker {{' '.join(outcome) or 'still running'}}\n")
+            out.flush()
+sys.stdout = FlushedAtFinalization()
+"""
+
+
+@pytest.mark.parametrize("daemon", [False, True], ids=["joined", "daemon"])
+def test_a_call_still_running_at_exit_is_cancelled_before_finalization(daemon):
+    # Ctrl-C in join() (the main thread's KeyboardInterrupt ends the program) with a worker inside a call:
+    # the call ended while the interpreter finalized, its thread taking the GIL back was ended with
+    # pthread_exit, which cannot unwind through the binding's C++ frames: "terminate called without an
+    # active exception", status 134. The exit now cancels the call and waits for it first.
+    result = subprocess.run([sys.executable, "-c", AT_EXIT.format(daemon=daemon)], capture_output=True, text=True,
+                            timeout=120)
+    assert "terminate called" not in result.stderr, result.stderr
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.split("\n")[0] == "worker cancelled", result.stdout
