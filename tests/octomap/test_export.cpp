@@ -507,6 +507,18 @@ TEST_F(OctomapExport, BadResolutionPoseAndPathsAreRefused) {
   Eigen::Isometry3d reflected = identity;
   reflected.linear()(0, 0) = -1.0;
   EXPECT_THROW(add_to_octree(*tree, grid, reflected), InvalidParameter);
+  // A rotation written with 4 decimals (7-Scenes' pose files: |R^T R - I| = 1.5e-4, refused before) is taken
+  // as the nearest rotation, as the tools read pose files.
+  Eigen::Isometry3d exact = identity;
+  exact.linear() = Eigen::AngleAxisd(0.5, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  Eigen::Isometry3d rounded = exact;
+  rounded.linear() = (exact.linear() * 1e4).array().round().matrix() / 1e4;
+  ASSERT_GT((rounded.linear().transpose() * rounded.linear() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff(), 1e-5);
+  OctomapExportReport from_exact, from_rounded;
+  to_octree(grid, exact, 0.05, {}, &from_exact);
+  EXPECT_NO_THROW(to_octree(grid, rounded, 0.05, {}, &from_rounded));
+  EXPECT_NEAR(static_cast<double>(from_rounded.occupied_written), static_cast<double>(from_exact.occupied_written),
+              0.01 * static_cast<double>(from_exact.occupied_written));
   Eigen::Isometry3d not_finite = identity;
   not_finite.translation().x() = std::nan("");
   EXPECT_THROW(add_to_octree(*tree, grid, not_finite), InvalidParameter);

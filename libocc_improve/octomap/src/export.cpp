@@ -7,6 +7,8 @@
 #include "occ_improve/sensor/sensor_model.hpp"
 #include "occ_improve/timing.hpp"
 
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -30,19 +32,31 @@ using detail::require_parameter;
 // 8-pointer child array (8 bytes), plus ~1/7 for the inner levels above. Used only for the cap estimate.
 constexpr double kBytesPerLeaf = 28.0;
 
-void require_rigid(const Eigen::Isometry3d& pose) {
+// The pose as a rigid transform: a rotation within kRotationTolerance (Frobenius) of one is taken as the
+// nearest rotation (SVD), as the tools read pose files: poses written with 7-8 significant digits, such as
+// 7-Scenes', are that far from orthonormal (|R^T R - I| = 1.5e-4) and were refused. Scaling, shear and
+// reflections are refused.
+constexpr double kRotationTolerance = 1e-3;
+Eigen::Isometry3d rigid_pose(const Eigen::Isometry3d& pose) {
   const Eigen::Matrix4d& m = pose.matrix();
   if (!m.allFinite()) throw InvalidParameter("pose (world <- sensor) has non-finite entries");
   if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
     throw InvalidParameter("pose (world <- sensor) is not an affine transform: last row must be 0 0 0 1");
   const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
-  const double orthogonality = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
-  if (orthogonality > 1e-6 || std::abs(r.determinant() - 1.0) > 1e-6) {
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
+  const double distance = (rotation - r).norm();
+  if (rotation.determinant() < 0 || !(distance <= kRotationTolerance)) {
     std::ostringstream msg;
-    msg << "pose (world <- sensor) is not a rigid transform: |R^T R - I| = " << orthogonality
-        << ", det R = " << r.determinant() << " (scaling, shear or reflection)";
+    msg << "pose (world <- sensor) is not a rigid transform: its 3x3 part lies " << distance
+        << " from the nearest rotation (at most " << kRotationTolerance << "), det R = " << r.determinant()
+        << " (scaling, shear or reflection)";
     throw InvalidParameter(msg.str());
   }
+  Eigen::Isometry3d rigid = Eigen::Isometry3d::Identity();
+  rigid.linear() = rotation;
+  rigid.translation() = m.topRightCorner<3, 1>();
+  return rigid;
 }
 
 // The far end of everything the grid knows: beyond the last touched bin of every column all voxels are
@@ -859,10 +873,10 @@ std::unique_ptr<octomap::OcTree> make_octree(const ColumnGrid& grid, double reso
 }
 
 OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
-                                  const Eigen::Isometry3d& world_from_sensor, const OctomapExportOptions& options) {
+                                  const Eigen::Isometry3d& pose_given, const OctomapExportOptions& options) {
   const auto start = SteadyClock::now();
   options.validate();
-  require_rigid(world_from_sensor);
+  const Eigen::Isometry3d world_from_sensor = rigid_pose(pose_given);
   const GridGeometry& geometry = grid.geometry();
   const double resolution = tree.getResolution();
 

@@ -83,8 +83,9 @@ std::unique_ptr<octomap::OcTree> make_octree(const ColumnGrid& grid, double reso
 
 /// Adds `grid`, observed from `world_from_sensor`, to `tree` by the merge rule above, at the tree's
 /// resolution; inner nodes are updated and equal children pruned before returning (as insertPointCloud
-/// leaves its tree). Throws InvalidParameter for a pose that is
-/// not a finite rigid transform or a frustum outside the tree's addressable range, ResourceLimit when the
+/// leaves its tree). A pose whose 3x3 part lies within 1e-3 (Frobenius) of a rotation (poses written with
+/// 7-8 digits) is taken as that rotation. Throws InvalidParameter for a pose that is not a finite rigid
+/// transform so (scaling, shear, reflection) or a frustum outside the tree's addressable range, ResourceLimit when the
 /// estimated memory exceeds options.memory_cap_bytes. The tree is unchanged when it throws,
 /// except for Cancelled (cancel.hpp): a stop request leaves it partly updated, for the caller to discard.
 OctomapExportReport add_to_octree(octomap::OcTree& tree, const ColumnGrid& grid,
