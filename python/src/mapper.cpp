@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <vector>
@@ -287,11 +288,18 @@ void require_bins(const GridGeometry& g, int azimuth_bin, int elevation_bin) {
 
 void bind_mapper_rays(py::class_<PyMapper>& c) {
   c.def("ray_improvement", [](PyMapper& s, int azimuth_bin, int elevation_bin) {
+    require_bins(s.mapper.geometry(), azimuth_bin, elevation_bin);
     return with_mapper(s, [&](Mapper& mp) {
+      // A ray the map holds no value for (masked, or outside the sensor's view) has none here either: it
+      // gave eq. 4's value (0.324, -1.18) where improvement() holds NaN.
+      const std::size_t c = static_cast<std::size_t>(elevation_bin) * static_cast<std::size_t>(mp.geometry().width()) +
+                            static_cast<std::size_t>(azimuth_bin);
+      if (std::isnan(mp.improvement().value[c])) return std::numeric_limits<double>::quiet_NaN();
       return ray_improvement(mp.geometry(), mp.model(), mp.surface(), azimuth_bin, elevation_bin);
     });
   }, py::arg("azimuth_bin"), py::arg("elevation_bin"),
-        "Eqs. 3-4 for one ray, recomputed from the surface (double precision; the map holds the float value).");
+        "Eqs. 3-4 for one ray, recomputed from the surface (double precision; the map holds the float value); "
+        "NaN where the map holds NaN (a masked ray, or one outside the sensor's view).");
   c.def("direction", [](PyMapper& s, int azimuth_bin, int elevation_bin) {
     require_bins(s.mapper.geometry(), azimuth_bin, elevation_bin);
     return Eigen::Vector3d(s.mapper.geometry().direction(azimuth_bin, elevation_bin));

@@ -65,6 +65,18 @@ def test_one_ray_improvement_agrees_with_the_map(paper_mapper):
         paper_mapper.ray_improvement(640, 0)
 
 
+def test_one_ray_improvement_is_nan_where_the_map_is(sample):
+    """A masked ray gave eq. 4's value (0.324 unseen, -1.18) where improvement() holds NaN."""
+    depth, intrinsics = sample
+    mapper = oi.Mapper(oi.kinect_v1(intrinsics))
+    mask = np.ones(depth.shape, bool)
+    mask[:, 600:] = False
+    mapper.insert_depth(depth, intrinsics, mask=mask)
+    improvement = mapper.improvement()
+    assert np.isnan(improvement[240, 620]) and np.isnan(mapper.ray_improvement(620, 240))
+    assert mapper.ray_improvement(300, 240) == pytest.approx(float(improvement[240, 300]), abs=1e-5)
+
+
 def test_depth_image_and_points_give_the_same_maps(sample, sample_points):
     depth, intrinsics = sample
     from_depth, from_points = oi.Mapper(oi.kinect_v1_paper()), oi.Mapper(oi.kinect_v1_paper())
