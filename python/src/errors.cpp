@@ -5,6 +5,8 @@
 
 #include "occ_improve/errors.hpp"
 
+#include <cstring>
+
 namespace occ_improve::python {
 namespace {
 
@@ -16,6 +18,15 @@ py::handle new_exception(py::module_& m, const char* name, py::tuple bases, cons
   if (!type) throw py::error_already_set();
   m.attr(name) = py::handle(type);
   return py::handle(type);
+}
+
+// Raises `type` with `message`, whose bytes may not be UTF-8 (a path the file system named in other bytes:
+// PyErr_SetString failed to decode it and the exception came without a message): such bytes read "\xff".
+void set_error(py::handle type, const char* message) {
+  PyObject* text = PyUnicode_DecodeUTF8(message, static_cast<Py_ssize_t>(std::strlen(message)), "backslashreplace");
+  if (!text) return;  // the decoding's own error (memory) is set
+  PyErr_SetObject(type.ptr(), text);
+  Py_DECREF(text);
 }
 
 }  // namespace
@@ -43,19 +54,19 @@ void bind_errors(py::module_& m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InvalidParameter& e) {
-      PyErr_SetString(invalid_parameter.ptr(), e.what());
+      set_error(invalid_parameter, e.what());
     } catch (const InvalidInput& e) {
-      PyErr_SetString(invalid_input.ptr(), e.what());
+      set_error(invalid_input, e.what());
     } catch (const IoError& e) {
-      PyErr_SetString(io_error.ptr(), e.what());
+      set_error(io_error, e.what());
     } catch (const FormatError& e) {
-      PyErr_SetString(format_error.ptr(), e.what());
+      set_error(format_error, e.what());
     } catch (const ResourceLimit& e) {
-      PyErr_SetString(resource_limit.ptr(), e.what());
+      set_error(resource_limit, e.what());
     } catch (const Cancelled& e) {
-      PyErr_SetString(cancelled.ptr(), e.what());
+      set_error(cancelled, e.what());
     } catch (const Error& e) {
-      PyErr_SetString(error.ptr(), e.what());
+      set_error(error, e.what());
     }
   });
 }

@@ -22,8 +22,10 @@ namespace {
 
 /// Accepts str and os.PathLike (pathlib.Path), as Python's own file functions do.
 std::string path_string(const py::object& path) {
-  // os.fsdecode: str, bytes and os.PathLike, as open() takes them (str() of bytes would be "b'...'").
-  const std::string p = py::str(py::module_::import("os").attr("fsdecode")(path));
+  // os.fsencode: str, bytes and os.PathLike, as open() takes them (str() of bytes would be "b'...'"), as the
+  // file system's bytes: a name that is not UTF-8 (b'\xff.occmap', or a str holding its surrogate escapes)
+  // raised UnicodeEncodeError through fsdecode and a UTF-8 str.
+  const std::string p = py::bytes(py::module_::import("os").attr("fsencode")(path));
   if (p.find('\0') != std::string::npos)  // C++ would stop at it: another file than the one named
     throw InvalidParameter("path " + std::string(py::repr(path)) + " holds a NUL character");
   return p;

@@ -118,6 +118,18 @@ def test_save_keeps_read_only_files_pipes_and_links_as_the_tools_do(tmp_path, pa
     assert link.is_symlink() and oi.load_map(link).width == paper_mapper.width
 
 
+def test_paths_whose_bytes_are_not_utf8_are_saved_loaded_and_named(tmp_path, paper_mapper):
+    """open() takes b'\\xff.occmap'; save() raised UnicodeEncodeError, and an error naming such a path came
+    without a message."""
+    path = os.fsencode(tmp_path) + b"/\xff.occmap"
+    paper_mapper.save(path)
+    assert os.listdir(os.fsencode(tmp_path)) == [b"\xff.occmap"]
+    assert oi.load_map(path).width == paper_mapper.width
+    assert oi.load_map(os.fsdecode(path)).width == paper_mapper.width  # the same name as str (surrogates)
+    with pytest.raises(oi.IoError, match=r"\\xfe-missing\.occmap"):
+        oi.load_map(os.fsencode(tmp_path) + b"/\xfe-missing.occmap")
+
+
 def test_a_return_record_saved_with_the_map_comes_back(tmp_path, sample):
     """The planner's record of asks and returns can be kept with the map (C++ save_map always could):
     a closed loop continues where it stopped."""
