@@ -6,6 +6,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include <algorithm>
@@ -126,6 +127,19 @@ void def_value_struct(Class& cls) {
   cls.def(py::pickle([](const py::object& self) { return fields_of(self); },
                      [](const py::dict& state) { return struct_from_fields<T>(state); }));
   cls.def("__repr__", [](const py::object& self) { return fields_repr(self, struct_fields(py::type::of(self))); });
+  // Equal when every field is (arrays by value), as dataclasses compare: PinholeIntrinsics() ==
+  // PinholeIntrinsics() was False. Mutable, so unhashable, as a dataclass with eq (pybind11 drops __hash__).
+  cls.def("__eq__", [](const py::object& self, const py::object& other) -> py::object {
+    if (!py::type::of(other).is(py::type::of(self))) return py::reinterpret_borrow<py::object>(Py_NotImplemented);
+    const py::dict mine = fields_of(self), theirs = fields_of(other);
+    const py::object array_equal = py::module_::import("numpy").attr("array_equal");
+    for (const auto& [name, value] : mine) {
+      const py::object a = py::reinterpret_borrow<py::object>(value), b = theirs[name];
+      const bool arrays = py::isinstance<py::array>(a) || py::isinstance<py::array>(b);
+      if (!(arrays ? array_equal(a, b).cast<bool>() : a.equal(b))) return py::bool_(false);
+    }
+    return py::bool_(true);
+  });
 }
 
 /// A member's value from its pickled state; specialised where pybind11's own caster does not suit.

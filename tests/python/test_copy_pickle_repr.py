@@ -215,3 +215,17 @@ def test_reprs_name_the_fields_the_trial_missed():
     for field in ("azimuth_min_rad", "azimuth_max_rad", "elevation_min_rad", "elevation_max_rad", "camera",
                   "row_elevations_rad"):
         assert field + "=" in text
+
+
+@pytest.mark.parametrize("name", sorted(PARAMETER_STRUCTS))
+def test_parameter_structs_compare_by_value_as_dataclasses_do(name):
+    """PinholeIntrinsics() == PinholeIntrinsics() was False (identity), for every value struct."""
+    cls = getattr(_core, name)
+    assert cls() == cls() and not (cls() != cls())
+    original = non_default(name)
+    assert original != cls()
+    for how, back in round_trips(original):
+        assert back == original, how
+    assert (cls() == 1) is False
+    with pytest.raises(TypeError):
+        hash(cls())  # mutable: unhashable, as a dataclass with eq
