@@ -13,6 +13,7 @@
 #include "occ_improve/tools/tool_main.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <map>
@@ -100,8 +101,13 @@ std::vector<SelectSummaryRow> evaluate_scene(const SelectScene& scene, const Sel
 SelectEvalOptions parse_options(const CommandLine& command_line) {
   SelectEvalOptions o;
   o.budgets = parse_number_list("-budgets", *command_line.text("-budgets"));
-  for (double b : o.budgets)
+  for (std::size_t i = 0; i < o.budgets.size(); ++i) {
+    const double b = o.budgets[i];
     if (!(b > 0 && b <= 1)) throw InvalidParameter("-budgets " + *command_line.text("-budgets") + " is invalid: every share must be in (0, 1]");
+    // A repeated share ran the same runs twice, their rows repeated in the CSVs.
+    if (std::find(o.budgets.begin(), o.budgets.begin() + static_cast<std::ptrdiff_t>(i), b) != o.budgets.begin() + static_cast<std::ptrdiff_t>(i))
+      throw InvalidParameter("-budgets " + *command_line.text("-budgets") + " is invalid: a share is repeated");
+  }
   o.frames = *command_line.number("-frames");
   o.share = *command_line.number("-negative_share");
   o.radius = *command_line.integer("-radius");

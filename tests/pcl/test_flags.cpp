@@ -163,6 +163,13 @@ TEST(NumberLists, NameTheFlagAndTheItem) {
   }
   EXPECT_THROW(parse_number_list("-fov", ""), InvalidParameter);
   EXPECT_THROW(parse_number_list("-fov", "0x39,43"), InvalidParameter);
+  // A trailing comma was read away ("585,585,320,240," as four numbers).
+  try {
+    parse_number_list("-intrinsics", "585,585,320,240,");
+    FAIL();
+  } catch (const InvalidParameter& e) {
+    EXPECT_NE(std::string(e.what()).find("ends with a comma"), std::string::npos) << e.what();
+  }
 }
 
 }  // namespace

@@ -720,6 +720,14 @@ TEST_F(Tools, SelectEvalStopsWithinASecondOfSigintAndLeavesNothing) {
 
 // Two scenes of one file name (or one named like the summary) wrote one CSV, the first's rows lost without
 // a word (found by a bad-input trial): refused before any scene runs, naming both inputs.
+// A repeated budget ran the same runs twice, their rows repeated in the CSVs.
+TEST_F(Tools, SelectEvalRefusesARepeatedBudget) {
+  const ToolRun r = run(OCC_SELECT_EVAL_EXECUTABLE, "sample -o out -budgets 0.05,0.05");
+  expect_one_error_line_naming(r, "-budgets 0.05,0.05", "a repeated budget", true);
+  EXPECT_NE(r.err.find("a share is repeated"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(folder_ / "out"));
+}
+
 TEST_F(Tools, SelectEvalRefusesScenesThatWouldWriteOneCsv) {
   const sample::SampleFrame scene = sample::generate_scene();
   const auto cloud = organized_cloud(scene.points(), scene.intrinsics.width, scene.intrinsics.height);

@@ -115,6 +115,8 @@ std::vector<double> parse_number_list(const std::string& flag, const std::string
     values.push_back(v);
   }
   if (values.empty()) throw InvalidParameter(flag + " " + text + " is invalid: no number in it");
+  // getline drops a trailing empty item: "585,585,320,240," read as four numbers.
+  if (text.back() == ',') throw InvalidParameter(flag + " " + text + " is invalid: it ends with a comma");
   return values;
 }
 
