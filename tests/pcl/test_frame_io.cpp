@@ -14,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <string>
 #include <vector>
@@ -66,6 +67,17 @@ protected:
     return path;
   }
   static std::string read_bytes(const std::string& path) { return test::read_bytes(path); }
+  // Each intrinsics file text is refused with a FormatError whose message holds its `named` part.
+  void expect_intrinsics_refused(std::initializer_list<std::pair<const char*, const char*>> texts_and_named) {
+    for (const auto& [text, named] : texts_and_named) {
+      try {
+        read_intrinsics_file(write("kbad.txt", text));
+        ADD_FAILURE() << text << " was read";
+      } catch (const FormatError& e) {
+        EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+      }
+    }
+  }
   fs::path dir_;
 };
 
@@ -153,15 +165,8 @@ TEST_F(FrameIoFiles, EmptyAndGarbageFilesAreFormatErrors) {
   EXPECT_THROW(read_intrinsics_file(write("k5.txt", "525 525 319.5 239.5 640")), FormatError);
   EXPECT_THROW(read_intrinsics_file(write("kneg.txt", "-525 525 319.5 239.5")), FormatError);
   // A word or a NaN is named with its place (">>" stopped at it and reported "not a number" or a short list).
-  for (const auto& [text, named] : {std::pair<const char*, const char*>{"525 525 abc 239.5", "holds 'abc' at position 3"},
-                                    {"525 525 nan 239.5", "a non-finite value at position 3 ('nan')"}}) {
-    try {
-      read_intrinsics_file(write("kbad.txt", text));
-      ADD_FAILURE() << text << " was read";
-    } catch (const FormatError& e) {
-      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
-    }
-  }
+  expect_intrinsics_refused({{"525 525 abc 239.5", "holds 'abc' at position 3"},
+                             {"525 525 nan 239.5", "a non-finite value at position 3 ('nan')"}});
 }
 
 // A 3x3 matrix is K row by row, as Python's intrinsics_from_matrix takes it: a transposed K (MATLAB's
@@ -172,17 +177,10 @@ TEST_F(FrameIoFiles, AThreeByThreeMatrixMustBeAPinholeKRowByRow) {
   EXPECT_EQ(k.fy, 585);
   EXPECT_EQ(k.cx, 320);
   EXPECT_EQ(k.cy, 240);
-  for (const auto& [text, named] : {std::pair<const char*, const char*>{"585 0 0 0 585 0 320 240 1", "looks transposed"},
-                                    {"585 3 320 0 585 240 0 0 1", "(no skew)"},
-                                    {"585 0 320 0 585 240 0 0 2", "(no skew)"},
-                                    {"585 0 320 0 585 240 1 1 1", "(no skew)"}}) {
-    try {
-      read_intrinsics_file(write("kbad.txt", text));
-      ADD_FAILURE() << text << " was read";
-    } catch (const FormatError& e) {
-      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
-    }
-  }
+  expect_intrinsics_refused({{"585 0 0 0 585 0 320 240 1", "looks transposed"},
+                             {"585 3 320 0 585 240 0 0 1", "(no skew)"},
+                             {"585 0 320 0 585 240 0 0 2", "(no skew)"},
+                             {"585 0 320 0 585 240 1 1 1", "(no skew)"}});
 }
 
 // Open3D writes PLY clouds with double x y z by default (a PCD may hold F 8 too): they were refused ("field 'x'
