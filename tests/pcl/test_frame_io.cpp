@@ -78,6 +78,15 @@ protected:
       }
     }
   }
+  // A w x h camera (fx = fy = 1) whose principal point is the image's centre.
+  static PinholeIntrinsics centred_camera(int w, int h) {
+    PinholeIntrinsics k;
+    k.width = w;
+    k.height = h;
+    k.cx = (w - 1) / 2.0;
+    k.cy = (h - 1) / 2.0;
+    return k;
+  }
   fs::path dir_;
 };
 
@@ -223,11 +232,7 @@ TEST_F(FrameIoFiles, TruncatedRealPcdIsAFormatError) {
 TEST_F(FrameIoFiles, AllZeroDepthImageLoadsAsAFrameWithNoValidPoint) {
   std::string pgm = "P5 4 3 65535\n";
   pgm.append(4 * 3 * 2, '\0');
-  PinholeIntrinsics k;
-  k.width = 4;
-  k.height = 3;
-  k.cx = 1.5;
-  k.cy = 1;
+  const PinholeIntrinsics k = centred_camera(4, 3);
   const LoadedFrame f = load_frame(write("zeros.pgm", pgm), k, DepthEncoding::millimetres);
   EXPECT_EQ(f.cloud.size(), 12u);
   EXPECT_EQ(stats_of(f.cloud).valid_fraction, 0.0);
@@ -238,11 +243,7 @@ TEST_F(FrameIoFiles, AllZeroDepthImageLoadsAsAFrameWithNoValidPoint) {
 TEST_F(FrameIoFiles, PgmHeaderCommentsAreSkipped) {
   std::string pgm = "P5\n# written by GIMP\n2 1 # width height\n65535\n";
   pgm += std::string("\x05\xdc\x07\xd0", 4);  // 1500 and 2000 mm, big-endian
-  PinholeIntrinsics k;
-  k.width = 2;
-  k.height = 1;
-  k.cx = 0.5;
-  k.cy = 0;
+  const PinholeIntrinsics k = centred_camera(2, 1);
   const LoadedFrame f = load_frame(write("commented.pgm", pgm), k, DepthEncoding::millimetres);
   ASSERT_EQ(f.cloud.size(), 2u);
   EXPECT_FLOAT_EQ(f.cloud[0].z, 1.5f);
