@@ -51,6 +51,19 @@ TEST_F(AtomicFile, FailedWriterKeepsThePreviousFile) {
   EXPECT_EQ(entry_count(), 1u) << "the temporary must be removed";
 }
 
+// A writer that throws (a stop request while a map is saved) left its temporary behind.
+TEST_F(AtomicFile, AThrowingWriterLeavesNothingAndKeepsThePreviousFile) {
+  write_file_atomically(file("a.txt"), "test file", [](std::ostream& out) { return static_cast<bool>(out << "kept"); });
+  EXPECT_THROW(write_file_atomically(file("a.txt"), "test file",
+                                     [](std::ostream& out) -> bool {
+                                       out << "half";
+                                       throw Cancelled(2);
+                                     }),
+               Cancelled);
+  EXPECT_EQ(contents(file("a.txt")), "kept");
+  EXPECT_EQ(entry_count(), 1u) << "the temporary must be removed";
+}
+
 TEST_F(AtomicFile, UnwritablePlacesAreIoErrors) {
   auto writer = [](std::ostream& out) { return static_cast<bool>(out << "x"); };
   EXPECT_THROW(write_file_atomically(file("missing/a.txt"), "test file", writer), IoError);

@@ -1,5 +1,6 @@
 // Saving and loading maps (map_io.hpp): exact round trips on generated scenes, atomic saves, and every
 // kind of bad file refused with a typed error.
+#include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
 #include "occ_improve/maps/improvement.hpp"
 #include "occ_improve/integrate/integrate.hpp"
@@ -192,6 +193,22 @@ TEST_F(MapIo, ResavingOverAnExistingMapReplacesIt) {
   ASSERT_GT(full.touched_column_count(), 0u);
   save_map(file("map.occmap"), full, preset.model);
   test::expect_identical(full, load_map(file("map.occmap")).grid);
+  EXPECT_EQ(entries().size(), 1u);
+}
+
+// save_map polled no stop: a 1.7 GB exact-mode map was written whole, and a Ctrl-C was seen 1-8 s later. A stop
+// requested before the save cancels it, leaving the previous map as it was and no temporary.
+TEST_F(MapIo, AStopRequestCancelsASaveAndKeepsThePreviousMap) {
+  SensorPreset preset = kinect_v1_paper();
+  preset.geometry.azimuth_bins = 64;
+  preset.geometry.elevation_bins = 48;
+  const ColumnGrid empty{GridGeometry(preset.geometry)};
+  save_map(file("map.occmap"), empty, preset.model);
+  const ColumnGrid full = sample_grid(preset, {});
+  request_stop(2);
+  EXPECT_THROW(save_map(file("map.occmap"), full, preset.model), Cancelled);
+  clear_stop_request();
+  test::expect_identical(empty, load_map(file("map.occmap")).grid);
   EXPECT_EQ(entries().size(), 1u);
 }
 

@@ -132,7 +132,14 @@ void write_file_atomically(const std::string& path, const std::string& what,
     if (!out)
       throw IoError("cannot write " + what + " '" + path + "': cannot create '" + temporary +
                     "': " + describe_write_failure(temporary));
-    written = write(out);
+    try {
+      written = write(out);
+    } catch (...) {  // a stop request (Cancelled) or the writer's own error: nothing left behind
+      out.close();
+      std::error_code ignored;
+      fs::remove(temporary, ignored);
+      throw;
+    }
     out.close();
     written = written && static_cast<bool>(out);
     if (!written) failure = describe_write_failure(temporary);

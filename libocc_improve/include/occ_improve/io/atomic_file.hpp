@@ -16,7 +16,8 @@ namespace occ_improve {
 /// Calls `write` on a binary stream to a temporary file beside `path`, then renames it to `path`.
 /// `write` returns false when it failed. Throws IoError naming `what` and `path` when the temporary
 /// cannot be created, `write` fails, the stream fails or the rename fails; the temporary is removed and
-/// an existing file at `path` is left as it was.
+/// an existing file at `path` is left as it was, also when `write` throws (Cancelled: it may poll for a
+/// stop), which propagates.
 void write_file_atomically(const std::string& path, const std::string& what,
                            const std::function<bool(std::ostream&)>& write);
 
