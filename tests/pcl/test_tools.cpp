@@ -452,6 +452,17 @@ TEST_F(Tools, APcdViewpointIsTheSensorPose) {
 }
 
 // Repeated -load/-pose (the one flag pair a tool lets repeat) merges saved maps into one tree.
+// With -load the map's grid and model are used: -depth_bins or -mode given too were ignored without a word.
+TEST_F(Tools, FlagsALoadedMapOverridesAreNamed) {
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, "-sample -save m.occmap -o first").exit_code, 0);
+  const ToolRun r = run(OCC_PLAN_EXECUTABLE, "-load m.occmap -depth_bins 512 -mode exact -o plan");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: -load uses the map's own grid and sensor model: -depth_bins, -mode ignored"),
+            std::string::npos) << r.err;
+  const ToolRun plain = run(OCC_PLAN_EXECUTABLE, "-load m.occmap -o plan2");
+  EXPECT_EQ(plain.err.find("ignored"), std::string::npos) << plain.err;
+}
+
 TEST_F(Tools, OctomapMergesSavedMapsOnePosePerMap) {
   const std::string wall = write_cloud("wall.pcd", 2.0f);
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -save wall.occmap -o map").exit_code, 0);

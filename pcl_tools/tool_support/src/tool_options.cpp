@@ -44,6 +44,18 @@ void warn_if_depth_bins_wider_than_sigma(const SensorPreset& preset) {
                widest, 1000.0 * axis.width_at(at_m), at_m, 1000.0 * model.sigma_depth_at(at_m));
 }
 
+// With -load the map's own grid and sensor model are used: the flags that would shape another (given by
+// habit, or to change the map) were ignored without a word. (-preset and the camera flags may still serve
+// to read frames added to the map; -memory_cap bounds the load.)
+void warn_of_flags_a_loaded_map_overrides(const CommandLine& c) {
+  std::string ignored;
+  for (const char* flag : {"-sigma_depth", "-sigma_depth_quadratic", "-sigma_angle", "-support_k", "-depth_bins",
+                           "-depth_max", "-fov", "-mode", "-clamp"})
+    if (c.declares(flag) && c.has(flag)) ignored += (ignored.empty() ? "" : ", ") + std::string(flag);
+  if (!ignored.empty())
+    std::fprintf(stderr, "warning: -load uses the map's own grid and sensor model: %s ignored\n", ignored.c_str());
+}
+
 PinholeIntrinsics intrinsics_from_list(const std::string& text) {
   const std::vector<double> v = parse_number_list("-intrinsics", text);
   if (v.size() != 4 && v.size() != 6) bad_flag("-intrinsics", text, "fx,fy,cx,cy or fx,fy,cx,cy,width,height");
@@ -219,7 +231,10 @@ ToolOptions parse_tool_options(const CommandLine& c) {
   else
     require_depth_axis_within_cap(t.preset, t.grid, t.preset_name);
   // A loaded map brings its own bins and model: the preset of the flags is not the grid then.
-  if (!(c.declares("-load") && c.has("-load"))) warn_if_depth_bins_wider_than_sigma(t.preset);
+  if (!(c.declares("-load") && c.has("-load")))
+    warn_if_depth_bins_wider_than_sigma(t.preset);
+  else
+    warn_of_flags_a_loaded_map_overrides(c);
   if (const auto k = declared_number(c, "-k")) t.top_k = static_cast<int>(*k);
   t.use_poses = !(c.declares("-no_poses") && c.has("-no_poses"));
   return t;
