@@ -45,13 +45,24 @@ extern "C" void forget_calls_in_child() { calls_without_gil = 0; }
 // atexit: the GIL held, finalization not begun (non-daemon threads were joined before). Calls still
 // running (daemon threads, a thread whose interrupted join() marked it stopped) are asked to stop and
 // waited for until each has the GIL back; they then end as Python code, which finalization handles.
+// A call that polls no stop (blocked in the system) is not waited for past this, nor after a further
+// Ctrl-C: the exit must not hang for good (it then risks the abort this wait avoids, as before it).
+constexpr auto kLongestExitWait = std::chrono::seconds(10);
+
 void wait_for_calls_at_exit() {
   exiting = true;
   if (calls_without_gil == 0) return;
   request_stop(-1);  // "cancelled (stop requested, reason -1)"; a pending SIGINT's reason is kept
-  while (calls_without_gil > 0) {
-    py::gil_scoped_release release;  // the calls take the GIL to end
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  const auto give_up = std::chrono::steady_clock::now() + kLongestExitWait;
+  while (calls_without_gil > 0 && std::chrono::steady_clock::now() < give_up) {
+    {
+      py::gil_scoped_release release;  // the calls take the GIL to end
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    if (PyErr_CheckSignals() != 0) {  // Ctrl-C again: stop waiting
+      PyErr_Clear();
+      break;
+    }
   }
   clear_stop_request();  // calls in atexit callbacks that run after this one (keeping the GIL) run to their end
 }

@@ -161,7 +161,8 @@ TEST_F(Tools, EveryToolRefusesACloudInMillimetres) {
   for (const auto& [tool, args] : tools_on(path)) {
     const ToolRun r = run(tool, args);
     expect_one_error_line_naming(r, "mm.pcd", tool, tool != OCC_IMPROVE_LIVE_EXECUTABLE);
-    EXPECT_NE(r.err.find("looks like millimetres (times 0.001 gives metres)"), std::string::npos) << tool << ": " << r.err;
+    EXPECT_NE(r.err.find("they look like millimetres (times 0.001 gives metres) (the cloud)"), std::string::npos)
+        << tool << ": " << r.err;
     EXPECT_FALSE(fs::exists(folder_ / "out")) << tool;
     EXPECT_FALSE(fs::exists(folder_ / "out.bt")) << tool;
   }
@@ -449,6 +450,17 @@ TEST_F(Tools, APcdViewpointIsTheSensorPose) {
   };
   EXPECT_GE(regions("a").size(), 3u);
   EXPECT_EQ(regions("a"), regions("b"));
+  // 100 m from the cloud's origin (a world frame): the unit check judges ranges from the sensor, not from
+  // that origin (it refused the cloud as millimetres).
+  Eigen::Isometry3f far_viewpoint = Eigen::Translation3f(100.0f, 0.0f, 0.0f) * viewpoint;
+  pcl::PointCloud<pcl::PointXYZ> far_world;
+  pcl::transformPointCloud(sensor, far_world, far_viewpoint.matrix());
+  far_world.sensor_origin_ << far_viewpoint.translation(), 0.0f;
+  far_world.sensor_orientation_ = Eigen::Quaternionf(far_viewpoint.rotation());
+  ASSERT_EQ(pcl::io::savePCDFileBinary(file("far.pcd"), far_world), 0);
+  const ToolRun c = run(OCC_IMPROVE_MAP_EXECUTABLE, "far.pcd -o c");
+  ASSERT_EQ(c.exit_code, 0) << c.err;
+  EXPECT_GE(regions("c").size(), 3u);
 }
 
 // Repeated -load/-pose (the one flag pair a tool lets repeat) merges saved maps into one tree.

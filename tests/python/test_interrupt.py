@@ -117,11 +117,12 @@ import numpy as np
 import occ_improve as oi
 mapper = oi.Mapper(oi.kinect_v1_paper())
 points = np.random.default_rng(0).uniform([-2, -2, 0.5], [2, 2, 7], (6_000_000, 3)).astype(np.float32)
-go = threading.Event()
+go, inserting = threading.Event(), threading.Event()
 outcome = []
 def work():
     go.wait()
     try:
+        inserting.set()
         mapper.insert(points, threads=1)
         outcome.append("completed")
     except oi.Cancelled:
@@ -138,7 +139,8 @@ try:
 except KeyboardInterrupt:
     pass
 go.set()
-time.sleep(0.3)  # the worker starts its insert, without the GIL
+inserting.wait()
+time.sleep(0.3)  # the worker is inside its insert, without the GIL
 # A second Ctrl-C stops the insert. From here the main thread keeps the GIL (no switch for 30 s, no
 # blocking call), so the worker can take it back before the exit only if the exit waits for its call;
 # else in the flush below, which finalization calls with the GIL released.

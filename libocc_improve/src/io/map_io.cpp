@@ -103,6 +103,11 @@ private:
 
 std::vector<char> read_file(const std::string& path, std::size_t memory_cap_bytes) {
   throw_if_folder(path, "map");
+  // A map is read by its size, which a pipe, socket or device has not; opening a pipe without a writer
+  // would block for good (a Python thread loading one kept the interpreter from exiting).
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+    throw IoError("cannot read map '" + path + "': it is not a regular file (a pipe, socket or device)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open map '" + path + "' for reading");
   in.seekg(0, std::ios::end);

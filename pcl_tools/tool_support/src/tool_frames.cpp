@@ -68,14 +68,9 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
     }
   }();
   require_valid_points(span_of(loaded.cloud), source.path);
-  if (loaded.encoding && !options.depth_encoding)  // a guessed encoding: its own warning
+  const bool encoding_guessed = loaded.encoding && !options.depth_encoding;
+  if (encoding_guessed)  // its own warning
     warn_if_mostly_beyond_range(loaded, source.path, options.preset.geometry.depth_max_m);
-  else
-    // A cloud saved in millimetres was mapped "beyond the depth range" without a word (and from ~340 m on,
-    // the returns' sigma reached back into the grid as a phantom wall at its end).
-    require_points_in_metres(span_of(loaded.cloud), source.path, options.preset.geometry,
-                             loaded.encoding ? "image" : "cloud",
-                             loaded.encoding ? ": give the right -depth_encoding" : ": the tools read clouds in metres");
   require_camera_fits(loaded.cloud, camera, source.path, frame.camera_source);
   if (loaded.viewpoint && options.use_poses) {
     // PCL's VIEWPOINT: the points are in the cloud's frame, the sensor at the viewpoint; the grid is the
@@ -88,6 +83,13 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
     frame.pose = source.pose;
     frame.pose_source = source.pose_source;
   }
+  // A cloud saved in millimetres was mapped "beyond the depth range" without a word (and from ~340 m on,
+  // the returns' sigma reached back into the grid as a phantom wall at its end). Judged in the sensor frame:
+  // a VIEWPOINT cloud's points lie far from its own origin.
+  if (!encoding_guessed)
+    require_points_in_metres(span_of(loaded.cloud), source.path, options.preset.geometry,
+                             loaded.encoding ? "image" : "cloud",
+                             loaded.encoding ? ": give the right -depth_encoding" : ": the tools read clouds in metres");
   frame.name = source.path;
   if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
   if (!camera && options.preset_needs_camera() && loaded.cloud.height <= 1) {
