@@ -3,6 +3,8 @@
 #include "occ_improve/timing.hpp"
 
 #include <algorithm>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace occ_improve {
@@ -18,6 +20,9 @@ const GeometryParams& within_cap(const GeometryParams& geometry, const GridOptio
 // still read: a crash after clear_mask()). The shapes are the grid's, so the sizes match.
 template <typename T>
 void copy_into(std::vector<T>& kept, const std::vector<T>& fresh) {
+  if (kept.size() != fresh.size())  // never: both are the grid's shape
+    throw std::logic_error("Mapper: a recomputed map of " + std::to_string(fresh.size()) + " values for " +
+                           std::to_string(kept.size()));
   std::copy(fresh.begin(), fresh.end(), kept.begin());
 }
 void copy_into(SurfaceMap& kept, const SurfaceMap& fresh) {

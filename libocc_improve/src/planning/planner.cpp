@@ -174,13 +174,11 @@ EligibleBlocks eligible_blocks(const ImprovementPyramid& pyramid, const std::vec
   EligibleBlocks out;
   std::vector<std::uint8_t> holds[ImprovementPyramid::kLevels];
   for (int l = 0; l < ImprovementPyramid::kLevels; ++l) holds[l].assign(pyramid.block_count(l), 0);
-  const auto w = static_cast<std::size_t>(pyramid.width());
   for (std::size_t c = 0; c < score.size(); ++c) {
     if (!eligible[c] || std::isnan(score[c])) continue;
     ++out.rays;
-    const std::size_t u = c % w / 2, v = c / w / 2;  // its block of 2; the block of level l is (u, v) >> l
     for (int l = 0; l < ImprovementPyramid::kLevels; ++l) {
-      std::uint8_t& h = holds[l][(v >> l) * static_cast<std::size_t>(pyramid.blocks_x(l)) + (u >> l)];
+      std::uint8_t& h = holds[l][pyramid.block_of_column(l, static_cast<ColumnIndex>(c))];
       out.blocks[l] += h == 0 ? 1u : 0u;
       h = 1;
     }
