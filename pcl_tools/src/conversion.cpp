@@ -5,7 +5,6 @@
 
 #include <cmath>
 #include <optional>
-#include <sstream>
 #include <string>
 
 namespace occ_improve {
@@ -30,10 +29,7 @@ void require_points_in_metres(PointSpan points, const std::string& name, const G
                               const std::string& what, const std::string& hint) {
   const std::optional<UnitMistake> mistake = point_unit_mistake(points, grid);
   if (!mistake) return;
-  std::ostringstream m;
-  m << "'" << name << "': the points' median range is " << mistake->outside(grid) << ": the " << what << " looks like "
-    << mistake->likely.name << " (times " << mistake->likely.scale << " gives metres)" << hint;
-  throw InvalidInput(m.str());
+  throw InvalidInput("'" + name + "': " + mistake->about_points(grid) + " (the " + what + ")" + hint);
 }
 
 pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f>& points, int width, int height) {

@@ -1,6 +1,8 @@
 #include "occ_improve/pcl/frame_io.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/geometry/camera_matrix.hpp"
+#include "occ_improve/geometry/rotation.hpp"
 #include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/integrate/integrate.hpp"
@@ -12,8 +14,6 @@
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/conversions.h>
 
-#include <Eigen/SVD>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -24,6 +24,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -217,13 +218,11 @@ Eigen::Isometry3d read_pose_matrix_file(const std::string& path) {
   if ((m.row(3) - Eigen::RowVector4d(0, 0, 0, 1)).norm() > 1e-6)
     throw FormatError("pose file '" + path + "' is not a rigid 4x4 transform (last row must be 0 0 0 1)");
   // Files carry 7-8 significant digits, so the rotation is only nearly orthonormal; Isometry3d's
-  // inverse() transposes it, so project it onto the nearest rotation (SVD) to keep T^-1 T = I.
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(m.topLeftCorner<3, 3>(), Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
-  if (rotation.determinant() < 0 || (rotation - m.topLeftCorner<3, 3>()).norm() > 1e-3)
-    throw FormatError("pose file '" + path + "' does not hold a rotation (not orthonormal)");
+  // inverse() transposes it, so it is projected onto the nearest rotation to keep T^-1 T = I.
+  const std::optional<Eigen::Matrix3d> rotation = nearest_rotation(m.topLeftCorner<3, 3>());
+  if (!rotation) throw FormatError("pose file '" + path + "' does not hold a rotation (not orthonormal)");
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = rotation;
+  pose.linear() = *rotation;
   pose.translation() = m.topRightCorner<3, 1>();
   return pose;
 }
@@ -242,18 +241,12 @@ PinholeIntrinsics intrinsics_from_file(const std::string& path, bool& size_given
   const std::vector<double> v =
       numbers_of_file(path, "intrinsics file", [](std::size_t i) { return "position " + std::to_string(i + 1); });
   PinholeIntrinsics k;
-  if (v.size() == 9) {  // 3x3 matrix, row-major
-    // K = [fx 0 cx; 0 fy cy; 0 0 1], as Python's intrinsics_from_matrix takes it: a transposed K (MATLAB's
-    // convention) read as cx = cy = 0, and a skew or another last row were taken silently.
-    if (v[1] != 0 || v[3] != 0 || v[6] != 0 || v[7] != 0 || v[8] != 1) {
-      const bool transposed = v[2] == 0 && v[5] == 0 && v[6] != 0 && v[7] != 0;
-      throw FormatError("intrinsics file '" + path + "': a 3x3 matrix must be 'fx 0 cx  0 fy cy  0 0 1' (no skew)" +
-                        (transposed ? "; this one looks transposed (cx, cy in the last row): write K row by row" : ""));
+  if (v.size() == 9) {  // K, row by row (a transposed K read as cx = cy = 0; a skew was taken silently)
+    try {
+      k = intrinsics_from_matrix({v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8]}, k.width, k.height);
+    } catch (const Error& e) {
+      throw FormatError("intrinsics file '" + path + "': " + e.what());
     }
-    k.fx = v[0];
-    k.cx = v[2];
-    k.fy = v[4];
-    k.cy = v[5];
   } else if (v.size() == 4 || v.size() == 6) {
     k.fx = v[0];
     k.fy = v[1];

@@ -13,7 +13,7 @@ import numpy as np
 
 import math
 
-from ._core import InvalidInput, InvalidParameter, IoError, PinholeIntrinsics
+from ._core import InvalidInput, InvalidParameter, IoError, PinholeIntrinsics, _intrinsics_from_matrix
 
 PathLike = Union[str, "os.PathLike[str]"]
 
@@ -95,16 +95,13 @@ def intrinsics_from_matrix(k, width: int, height: int) -> PinholeIntrinsics:
     The image size is not in K, so it is asked for. Raises InvalidInput for another shape, a skew or a
     last row other than (0, 0, 1) (the library's pinhole has neither), InvalidParameter for bad values.
     """
+    if np.iscomplexobj(k):  # float64 would drop the imaginary parts with a warning only
+        raise TypeError("K must be real, got a complex array")
     k = np.asarray(k, dtype=np.float64)
     if k.shape != (3, 3):
         raise InvalidInput(f"K must be a 3 x 3 matrix, got shape {k.shape}")
-    if k[0, 1] != 0 or k[1, 0] != 0 or not np.array_equal(k[2], [0.0, 0.0, 1.0]):
-        raise InvalidInput(f"K must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew), got {k.tolist()}")
     width, height = _image_size("K", width, height)
-    intrinsics = PinholeIntrinsics(fx=float(k[0, 0]), fy=float(k[1, 1]), cx=float(k[0, 2]), cy=float(k[1, 2]),
-                                   width=width, height=height)
-    intrinsics.validate()
-    return intrinsics
+    return _intrinsics_from_matrix(k.ravel().tolist(), width, height)  # the tools' rule (camera_matrix.hpp)
 
 
 def intrinsics_from_open3d(camera) -> PinholeIntrinsics:

@@ -79,10 +79,7 @@ void require_plausible_scale(const float* raw, std::size_t pixels, double scale,
 void require_plausible_ranges(PointSpan points, const GeometryParams& g) {
   const std::optional<UnitMistake> mistake = point_unit_mistake(points, g);
   if (!mistake) return;
-  std::ostringstream m;
-  m << "the points' median range is " << mistake->outside(g) << ": the points look like " << mistake->likely.name
-    << ": pass them in metres (times " << mistake->likely.scale << ")";
-  throw InvalidParameter(m.str());
+  throw InvalidParameter(mistake->about_points(g) + ": pass them in metres");
 }
 
 /// Mapper::insert, through set_mask first when a mask is given (None: the mask in place, if any).

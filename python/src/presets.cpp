@@ -2,6 +2,7 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/geometry/camera_matrix.hpp"
 #include "occ_improve/grid/grid.hpp"
 #include "occ_improve/sensor/presets.hpp"
 #include "occ_improve/sample_scene.hpp"
@@ -27,6 +28,8 @@ void bind_intrinsics(py::module_& m) {
                     int_field_setter(&PinholeIntrinsics::height, "height"))
       .def("validate", &PinholeIntrinsics::validate, "Raises InvalidParameter naming the first bad field.");
   m.def("kinect_v1_intrinsics", &kinect_v1_intrinsics, "Kinect v1 as OpenNI reports it (fx = fy = 525).");
+  m.def("_intrinsics_from_matrix", &intrinsics_from_matrix, py::arg("k_row_major"), py::arg("width"), py::arg("height"),
+        "The library's rule for a camera matrix (frames.intrinsics_from_matrix takes any array).");
 }
 
 void bind_geometry_params(py::module_& m) {

@@ -186,7 +186,7 @@ TEST_F(FrameIoFiles, AThreeByThreeMatrixMustBeAPinholeKRowByRow) {
   EXPECT_EQ(k.fy, 585);
   EXPECT_EQ(k.cx, 320);
   EXPECT_EQ(k.cy, 240);
-  expect_intrinsics_refused({{"585 0 0 0 585 0 320 240 1", "looks transposed"},
+  expect_intrinsics_refused({{"585 0 0 0 585 0 320 240 1", "it looks transposed"},
                              {"585 3 320 0 585 240 0 0 1", "(no skew)"},
                              {"585 0 320 0 585 240 0 0 2", "(no skew)"},
                              {"585 0 320 0 585 240 1 1 1", "(no skew)"}});

@@ -125,6 +125,11 @@ def test_intrinsics_from_a_camera_matrix():
         oi.intrinsics_from_matrix([[585.0, 0, 320], [0, 585, 240], [0, 0, 2]], 640, 480)
     with pytest.raises(oi.InvalidParameter, match="fx"):
         oi.intrinsics_from_matrix([[-585.0, 0, 320], [0, 585, 240], [0, 0, 1]], 640, 480)
+    # MATLAB's transposed K is named (the tools' intrinsics files follow the same rule), a complex K refused.
+    with pytest.raises(oi.InvalidInput, match="looks transposed"):
+        oi.intrinsics_from_matrix([[585.0, 0, 0], [0, 585, 0], [320, 240, 1]], 640, 480)
+    with pytest.raises(TypeError, match="real"):
+        oi.intrinsics_from_matrix(np.eye(3) * (585 + 1j), 640, 480)
 
 
 def test_intrinsics_from_an_open3d_camera_build_the_same_grid(sample):

@@ -5,9 +5,8 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/maps/surface.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
+#include "occ_improve/geometry/rotation.hpp"
 #include "occ_improve/timing.hpp"
-
-#include <Eigen/SVD>
 
 #include <algorithm>
 #include <cmath>
@@ -32,29 +31,22 @@ using detail::require_parameter;
 // 8-pointer child array (8 bytes), plus ~1/7 for the inner levels above. Used only for the cap estimate.
 constexpr double kBytesPerLeaf = 28.0;
 
-// The pose as a rigid transform: a rotation within kRotationTolerance (Frobenius) of one is taken as the
-// nearest rotation (SVD), as the tools read pose files: poses written with 7-8 significant digits, such as
-// 7-Scenes', are that far from orthonormal (|R^T R - I| = 1.5e-4) and were refused. Scaling, shear and
-// reflections are refused.
-constexpr double kRotationTolerance = 1e-3;
+// The pose as a rigid transform: a rotation written with 7-8 digits (7-Scenes': |R^T R - I| = 1.5e-4, refused
+// before) is taken as the nearest rotation, as the tools read pose files (geometry/rotation.hpp).
 Eigen::Isometry3d rigid_pose(const Eigen::Isometry3d& pose) {
   const Eigen::Matrix4d& m = pose.matrix();
   if (!m.allFinite()) throw InvalidParameter("pose (world <- sensor) has non-finite entries");
   if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
     throw InvalidParameter("pose (world <- sensor) is not an affine transform: last row must be 0 0 0 1");
-  const Eigen::Matrix3d r = m.topLeftCorner<3, 3>();
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d rotation = svd.matrixU() * svd.matrixV().transpose();
-  const double distance = (rotation - r).norm();
-  if (rotation.determinant() < 0 || !(distance <= kRotationTolerance)) {
+  const std::optional<Eigen::Matrix3d> rotation = nearest_rotation(m.topLeftCorner<3, 3>());
+  if (!rotation) {
     std::ostringstream msg;
-    msg << "pose (world <- sensor) is not a rigid transform: its 3x3 part lies " << distance
-        << " from the nearest rotation (at most " << kRotationTolerance << "), det R = " << r.determinant()
-        << " (scaling, shear or reflection)";
+    msg << "pose (world <- sensor) is not a rigid transform: its 3x3 part is no rotation within " << kRotationTolerance
+        << ", det R = " << m.topLeftCorner<3, 3>().determinant() << " (scaling, shear or reflection)";
     throw InvalidParameter(msg.str());
   }
   Eigen::Isometry3d rigid = Eigen::Isometry3d::Identity();
-  rigid.linear() = rotation;
+  rigid.linear() = *rotation;
   rigid.translation() = m.topRightCorner<3, 1>();
   return rigid;
 }

@@ -1,4 +1,5 @@
 #include "occ_improve/geometry/geometry.hpp"
+#include "occ_improve/geometry/camera_matrix.hpp"
 
 #include "occ_improve/errors.hpp"
 
@@ -6,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <sstream>
 
 namespace occ_improve {
 
@@ -18,6 +20,25 @@ void PinholeIntrinsics::validate() const {
   require_parameter(std::isfinite(cy), "cy", cy, "finite");
   require_parameter(width > 0 && width <= 65536, "width", width, "in [1, 65536]");
   require_parameter(height > 0 && height <= 65536, "height", height, "in [1, 65536]");
+}
+
+PinholeIntrinsics intrinsics_from_matrix(const std::array<double, 9>& k, int width, int height) {
+  if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1) {
+    std::ostringstream m;
+    m << "K must be [[fx, 0, cx], [0, fy, cy], [0, 0, 1]] (no skew), got [[" << k[0] << ", " << k[1] << ", " << k[2]
+      << "], [" << k[3] << ", " << k[4] << ", " << k[5] << "], [" << k[6] << ", " << k[7] << ", " << k[8] << "]]";
+    if (k[2] == 0 && k[5] == 0 && k[6] != 0 && k[7] != 0) m << ": it looks transposed (cx, cy in the last row); give K row by row";
+    throw InvalidInput(m.str());
+  }
+  PinholeIntrinsics camera;
+  camera.fx = k[0];
+  camera.fy = k[4];
+  camera.cx = k[2];
+  camera.cy = k[5];
+  camera.width = width;
+  camera.height = height;
+  camera.validate();
+  return camera;
 }
 
 bool same_camera(const PinholeIntrinsics& a, const PinholeIntrinsics& b) {

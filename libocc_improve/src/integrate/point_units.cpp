@@ -17,6 +17,13 @@ std::string UnitMistake::outside(const GeometryParams& grid) const {
   return m.str();
 }
 
+std::string UnitMistake::about_points(const GeometryParams& grid) const {
+  std::ostringstream m;
+  m << "the points' median range is " << outside(grid) << ": they look like " << likely.name << " (times " << likely.scale
+    << " gives metres)";
+  return m.str();
+}
+
 std::optional<UnitMistake> unit_mistake(std::vector<float> values, double scale, const GeometryParams& grid) {
   values.erase(std::remove_if(values.begin(), values.end(), [](float v) { return !(v > 0.0f && std::isfinite(v)); }),
                values.end());

@@ -32,6 +32,8 @@ struct UnitMistake {
   DepthUnit likely;
   /// "<median> m, outside the grid's plausible depth range [a, b] m"
   std::string outside(const GeometryParams& grid) const;
+  /// "the points' median range is <outside>: they look like <unit> (times <scale> gives metres)"
+  std::string about_points(const GeometryParams& grid) const;
 };
 
 /// The mistake, when `scale` puts the median of `values` (0, NaN, inf: none) outside the grid's plausible

@@ -30,7 +30,7 @@ std::size_t valid_point_count(PointSpan points);
 void require_valid_points(PointSpan points, const std::string& name);
 
 /// Throws InvalidInput "'<name>': the points' median range is ... m, outside the grid's plausible depth range
-/// [a, b] m: the <what> looks like millimetres (times 0.001 gives metres)<hint>" when another usual unit
+/// [a, b] m: they look like millimetres (times 0.001 gives metres) (the <what>)<hint>" when another usual unit
 /// would put the points inside `grid`'s range (point_unit_mistake, integrate/point_units.hpp). `what`:
 /// "cloud" or "image"; `hint`: what to do (": the tools read clouds in metres").
 void require_points_in_metres(PointSpan points, const std::string& name, const GeometryParams& grid,
