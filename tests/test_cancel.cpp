@@ -63,7 +63,11 @@ TEST_F(Cancel, EveryLongComputationStopsOnARequest) {
   const std::string path = (std::filesystem::temp_directory_path() /
                             ("occ_cancel_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + ".occmap"))
                                .string();
-  save_map(path, grid, mapper.model().params());  // writing is not cancelled: it commits or leaves nothing
+  EXPECT_THROW(save_map(path, grid, mapper.model().params()), Cancelled);  // and leaves nothing
+  EXPECT_FALSE(std::filesystem::exists(path));
+  clear_stop_request();
+  save_map(path, grid, mapper.model().params());
+  request_stop(SIGINT);
   EXPECT_THROW(load_map(path), Cancelled);
   clear_stop_request();
   EXPECT_EQ(load_map(path).grid.touched_column_count(), grid.touched_column_count());
