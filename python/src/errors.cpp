@@ -22,7 +22,7 @@ py::handle new_exception(py::module_& m, const char* name, py::tuple bases, cons
 
 // Raises `type` with `message`, whose bytes may not be UTF-8 (a path the file system named in other bytes:
 // PyErr_SetString failed to decode it and the exception came without a message): such bytes read "\xff".
-void set_error(py::handle type, const char* message) {
+void raise_with_message(py::handle type, const char* message) {
   PyObject* text = PyUnicode_DecodeUTF8(message, static_cast<Py_ssize_t>(std::strlen(message)), "backslashreplace");
   if (!text) return;  // the decoding's own error (memory) is set
   PyErr_SetObject(type.ptr(), text);
@@ -54,19 +54,19 @@ void bind_errors(py::module_& m) {
     try {
       if (p) std::rethrow_exception(p);
     } catch (const InvalidParameter& e) {
-      set_error(invalid_parameter, e.what());
+      raise_with_message(invalid_parameter, e.what());
     } catch (const InvalidInput& e) {
-      set_error(invalid_input, e.what());
+      raise_with_message(invalid_input, e.what());
     } catch (const IoError& e) {
-      set_error(io_error, e.what());
+      raise_with_message(io_error, e.what());
     } catch (const FormatError& e) {
-      set_error(format_error, e.what());
+      raise_with_message(format_error, e.what());
     } catch (const ResourceLimit& e) {
-      set_error(resource_limit, e.what());
+      raise_with_message(resource_limit, e.what());
     } catch (const Cancelled& e) {
-      set_error(cancelled, e.what());
+      raise_with_message(cancelled, e.what());
     } catch (const Error& e) {
-      set_error(error, e.what());
+      raise_with_message(error, e.what());
     }
   });
 }
