@@ -79,7 +79,7 @@ void require_plausible_scale(const float* raw, std::size_t pixels, double scale,
 void require_plausible_ranges(PointSpan points, const GeometryParams& g) {
   const std::optional<UnitMistake> mistake = point_unit_mistake(points, g);
   if (!mistake) return;
-  throw InvalidParameter(mistake->about_points(g) + ": pass them in metres");
+  throw InvalidParameter(mistake->about_points(g) + ": pass them in metres (a scene that far needs a larger depth_max_m)");
 }
 
 /// Mapper::insert, through set_mask first when a mask is given (None: the mask in place, if any).

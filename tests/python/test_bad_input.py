@@ -143,7 +143,8 @@ def test_points_in_millimetres_are_refused_and_metres_accepted(sample, sample_po
     assert text.startswith("the points' median range is ")
     median_m = float(text.split(" is ")[1].split(" m,")[0])
     assert median_m == pytest.approx(1000 * np.median(ranges[np.isfinite(ranges) & (ranges > 0)]), rel=1e-3)
-    assert text.endswith("they look like millimetres (times 0.001 gives metres): pass them in metres")
+    assert text.endswith("they look like millimetres (times 0.001 gives metres): pass them in metres (a scene "
+                         "that far needs a larger depth_max_m)")
     assert mapper.touched_columns() == 0
     r = mapper.insert(sample_points).insertion
     assert r.points_inserted == np.count_nonzero(depth) and r.beyond_depth_range == 0

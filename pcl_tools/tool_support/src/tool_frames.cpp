@@ -89,7 +89,8 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
   if (!encoding_guessed)
     require_points_in_metres(span_of(loaded.cloud), source.path, options.preset.geometry,
                              loaded.encoding ? "image" : "cloud",
-                             loaded.encoding ? ": give the right -depth_encoding" : ": the tools read clouds in metres");
+                             loaded.encoding ? ": give the right -depth_encoding"
+                                             : ": the tools read clouds in metres (a scene that far needs a larger -depth_max)");
   frame.name = source.path;
   if (loaded.encoding) frame.name += std::string(" (depth encoding ") + depth_encoding_name(*loaded.encoding) + ")";
   if (!camera && options.preset_needs_camera() && loaded.cloud.height <= 1) {
