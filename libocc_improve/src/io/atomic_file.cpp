@@ -222,6 +222,12 @@ void throw_if_folder(const std::string& path, const std::string& what) {
   if (fs::is_directory(path, ec)) throw IoError("cannot read " + what + " '" + path + "': it is a folder");
 }
 
+bool is_pipe_or_device(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  return !ec && fs::exists(status) && !fs::is_regular_file(status) && !fs::is_directory(status);
+}
+
 void write_text_file(const std::string& path, const std::string& what, const std::string& text) {
   write_file_atomically(path, what, [&](std::ostream& out) {
     return static_cast<bool>(out.write(text.data(), static_cast<std::streamsize>(text.size())));
@@ -238,7 +244,7 @@ OutputFile::OutputFile(const std::string& target, const std::string& flag, bool 
   if (fs::is_directory(resolved, ec))
     throw IoError("cannot write " + what + " '" + target + "': it is a folder; name a file");
   // is_own reads the file's magic: a pipe would block it (forever, Ctrl-C or not), a device give it bytes.
-  if (fs::exists(resolved, ec) && !fs::is_regular_file(resolved, ec))
+  if (is_pipe_or_device(resolved.string()))
     throw IoError("cannot write " + what + " '" + target + "': it is not a regular file (a pipe, socket or device); name a file");
   require_writable_folder(resolved.parent_path(), what, target);
   if (fs::exists(resolved, ec) && !overwrite && !is_own(resolved.string()))

@@ -25,12 +25,12 @@ constexpr std::uint32_t kByteOrderSwapped = 0x04030201u;
 constexpr std::size_t kChecksumBytes = sizeof(std::uint64_t);
 constexpr std::size_t kPreambleBytes = sizeof(kMagic) + 2 * sizeof(std::uint32_t);  // magic, marker, version
 
-// FNV-1a 64 over 8-byte words (then the tail bytes): one multiply per word instead of per byte, so
-// that a one-frame map of ~100 MB is checked in tens of milliseconds. Defined by the format document.
 // Bytes a long pass over a map's bytes takes between stop polls (~20 ms of checksum or write): a 1.7 GB
 // exact-mode map was saved whole, and only then was a Ctrl-C seen, 1-8 s after it.
 constexpr std::size_t kBytesBetweenPolls = std::size_t{64} << 20;
 
+// FNV-1a 64 over 8-byte words (then the tail bytes): one multiply per word instead of per byte, so
+// that a one-frame map of ~100 MB is checked in tens of milliseconds. Defined by the format document.
 std::uint64_t checksum(const char* data, std::size_t size) {
   constexpr std::uint64_t kOffset = 14695981039346656037ull, kPrime = 1099511628211ull;
   static_assert(kBytesBetweenPolls % 8 == 0, "the chunks keep the words' alignment");
@@ -105,8 +105,7 @@ std::vector<char> read_file(const std::string& path, std::size_t memory_cap_byte
   throw_if_folder(path, "map");
   // A map is read by its size, which a pipe, socket or device has not; opening a pipe without a writer
   // would block for good (a Python thread loading one kept the interpreter from exiting).
-  std::error_code ec;
-  if (std::filesystem::exists(path, ec) && !std::filesystem::is_regular_file(path, ec))
+  if (is_pipe_or_device(path))
     throw IoError("cannot read map '" + path + "': it is not a regular file (a pipe, socket or device)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw IoError("cannot open map '" + path + "' for reading");

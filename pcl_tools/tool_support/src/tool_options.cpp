@@ -2,6 +2,7 @@
 
 #include "occ_improve/errors.hpp"
 #include "occ_improve/geometry/depth_binning.hpp"
+#include "occ_improve/tools/flag_registry.hpp"
 #include "occ_improve/sensor/sensor_model.hpp"
 
 #include <algorithm>
@@ -49,9 +50,9 @@ void warn_if_depth_bins_wider_than_sigma(const SensorPreset& preset) {
 // to read frames added to the map; -memory_cap bounds the load.)
 void warn_of_flags_a_loaded_map_overrides(const CommandLine& c) {
   std::string ignored;
-  for (const char* flag : {"-sigma_depth", "-sigma_depth_quadratic", "-sigma_angle", "-support_k", "-depth_bins",
-                           "-depth_max", "-fov", "-mode", "-clamp"})
-    if (c.declares(flag) && c.has(flag)) ignored += (ignored.empty() ? "" : ", ") + std::string(flag);
+  for (const std::string& flag : sensor_flag_names())
+    if (flag != "-preset" && flag != "-memory_cap" && c.declares(flag) && c.has(flag))
+      ignored += (ignored.empty() ? "" : ", ") + flag;
   if (!ignored.empty())
     std::fprintf(stderr, "warning: -load uses the map's own grid and sensor model: %s ignored\n", ignored.c_str());
 }

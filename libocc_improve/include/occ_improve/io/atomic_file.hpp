@@ -37,6 +37,10 @@ const std::string* replaced_input(const std::string& path, const std::vector<std
 /// otherwise open it and report a format error about its (absent) contents.
 void throw_if_folder(const std::string& path, const std::string& what);
 
+/// Whether `path` names something that exists and is neither a regular file nor a folder (a pipe, socket or
+/// device): opening a pipe without a writer blocks, and its contents have no size to read or magic to check.
+bool is_pipe_or_device(const std::string& path);
+
 /// write_file_atomically of a text held in memory (CSV tables, plan summaries).
 void write_text_file(const std::string& path, const std::string& what, const std::string& text);
 
