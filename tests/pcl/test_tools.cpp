@@ -99,6 +99,12 @@ protected:
     r.out = file_contents(folder_ / "stdout.log") + file_contents(folder_ / "stderr.log");
     return r;
   }
+  // A run a signal stopped: it exited, with 128 + the signal, and its summary says it was interrupted.
+  static void expect_interrupted_by(const SignalledRun& r, int signal) {
+    ASSERT_NE(r.exit_code, -1) << "still running 10 s after the signal";
+    EXPECT_EQ(r.exit_code, 128 + signal);
+    EXPECT_NE(r.out.find("Stopped: interrupted"), std::string::npos) << r.out;
+  }
   // Whether a staging folder or file of an output (".NAME.tmp-PID", ".NAME.staged-PID-*", "NAME.partial-PID-*")
   // is left in the test folder.
   bool staging_left() const {
@@ -611,10 +617,8 @@ TEST_F(Tools, SigtermStopsCleanlyWithTheSummaryAndAnExitCodeOfTheSignal) {
   fs::create_directory(folder_ / "frames");
   for (int i = 0; i < 40; ++i) fs::copy_file(write_cloud("wall.pcd", 2.0f), folder_ / "frames" / ("f" + std::to_string(100 + i) + ".pcd"));
   const SignalledRun r = run_and_signal(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir frames -fps 4 -o out", 2500, SIGTERM);
-  ASSERT_NE(r.exit_code, -1) << "still running 10 s after SIGTERM";
-  EXPECT_EQ(r.exit_code, 128 + SIGTERM);
+  ASSERT_NO_FATAL_FAILURE(expect_interrupted_by(r, SIGTERM));
   const std::string& out = r.out;
-  EXPECT_NE(out.find("Stopped: interrupted"), std::string::npos) << out;
   EXPECT_NE(out.find("interrupted by SIGTERM"), std::string::npos) << out;
   EXPECT_NE(out.find("Frames: "), std::string::npos) << "the summary so far: " << out;
   for (const auto& entry : fs::directory_iterator(folder_))
@@ -636,10 +640,8 @@ TEST_F(Tools, LiveFinishesTheFrameInFlightOnAFirstCtrlC) {
   ASSERT_EQ(pcl::io::savePCDFileBinary((folder_ / "big" / "f100.pcd").string(), wall), 0);
   for (int i = 1; i < 200; ++i) fs::create_symlink("f100.pcd", folder_ / "big" / ("f" + std::to_string(100 + i) + ".pcd"));
   const SignalledRun r = run_and_signal(OCC_IMPROVE_LIVE_EXECUTABLE, "-pcd_dir big -o out", 2000, SIGINT);
-  ASSERT_NE(r.exit_code, -1) << "still running 10 s after SIGINT";
-  EXPECT_EQ(r.exit_code, 128 + SIGINT);
+  ASSERT_NO_FATAL_FAILURE(expect_interrupted_by(r, SIGINT));
   const std::string& out = r.out;
-  EXPECT_NE(out.find("Stopped: interrupted"), std::string::npos) << out;
   EXPECT_NE(out.find(" 0 cut short by the stop"), std::string::npos) << out;
   EXPECT_LT(r.seconds_to_exit, 3.0) << "the run, its maps written, ended that long after the signal";
   EXPECT_TRUE(fs::is_regular_file(folder_ / "out" / "depth_mm.png"));
