@@ -7,6 +7,7 @@
 #include "occ_improve/pcl/cloud_segmentation.hpp"
 #include "occ_improve/pcl/conversion.hpp"
 #include "occ_improve/pcl/frame_io.hpp"
+#include "occ_improve/tools/frame_fusion.hpp"
 #include "occ_improve/tools/input_scope.hpp"
 #include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/tools/segmentation_flags.hpp"
@@ -47,6 +48,18 @@ Image16 label_id_image(const Segmentation& segmentation) {
   return image;
 }
 
+// Segments need returns inside the grid: a frame whose points all lie beyond (or before) the depth range
+// gave empty outputs and exit 0, its points counted nowhere.
+void require_returns_in_depth_range(const std::string& name, const SensorPreset& preset, const InsertionReport& in) {
+  const std::size_t valid = in.points_received - in.skipped_invalid - in.skipped_outside_fov - in.skipped_masked;
+  if (valid == 0 || in.points_inserted > in.beyond_depth_range + in.nearer_than_depth_range) return;
+  char range[64];
+  std::snprintf(range, sizeof range, "%.2f-%.2f m", preset.geometry.depth_min_m, preset.geometry.depth_max_m);
+  throw InvalidInput("no point of '" + name + "' lies in the depth range " + range + " (" +
+                     std::to_string(in.beyond_depth_range) + " beyond it, " + std::to_string(in.nearer_than_depth_range) +
+                     " nearer than its start): nothing to segment (-depth_max sets its far end)");
+}
+
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   if (options.inputs.size() != 1) throw InvalidParameter("give exactly one input frame (see -h)");
@@ -71,6 +84,7 @@ int run(const CommandLine& command_line) {
   if (mask) tool_mask_columns(command_line, GridGeometry(preset.geometry), *mask);  // refused naming -mask
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid, mask ? &*mask : nullptr);
   throw_if_stop_requested();
+  require_returns_in_depth_range(frame.name, preset, result.mapping.insertion);
 
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
   labelled.width = frame.cloud.width;
@@ -111,6 +125,7 @@ int run(const CommandLine& command_line) {
   std::printf("preset %s, contour < %.3f, min segment %zu rays, dominant plane %s\n", preset.name.c_str(),
               params.contour_improvement_below, params.min_segment_columns,
               params.remove_dominant_plane ? "removed" : "kept");
+  std::printf("%s\n", describe_points(result.mapping.insertion).c_str());
   std::printf("rays: %zu valid, %zu contour, %zu attached, %zu plane; %zu segments; %zu valid points outside the grid\n",
               seg.valid_columns, seg.contour_columns, seg.attached_columns, seg.plane_columns, seg.segments.size(),
               result.points_outside_grid);

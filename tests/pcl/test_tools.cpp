@@ -174,6 +174,42 @@ TEST_F(Tools, EveryToolRefusesACloudInMillimetres) {
   }
 }
 
+// A refused run left the folders it had created for -o (mkdir -p of the output's parents) behind, empty.
+TEST_F(Tools, ARefusedRunRemovesTheEmptyFoldersItCreated) {
+  const std::string nan = write_cloud("nan.pcd", NAN);
+  fs::create_directory(folder_ / "kept");
+  for (const auto& [tool, out] : {std::pair<std::string, std::string>{OCC_IMPROVE_MAP_EXECUTABLE, "made/a/b/out"},
+                                  {OCC_TO_OCTOMAP_EXECUTABLE, "made/a/b/out.bt"}, {OCC_SEGMENT_EXECUTABLE, "kept/a/out"}}) {
+    const ToolRun r = run(tool, nan + " -o " + file(out));
+    EXPECT_EQ(r.exit_code, 1) << tool << ": " << r.err;
+    EXPECT_FALSE(fs::exists(folder_ / "made")) << tool;
+    EXPECT_FALSE(fs::exists(folder_ / "kept" / "a")) << tool;
+    EXPECT_TRUE(fs::is_directory(folder_ / "kept")) << tool << ": a folder the run did not create is never removed";
+  }
+  // A run that succeeds keeps them, with its outputs inside.
+  EXPECT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, write_cloud("wall.pcd", 2.0f) + " -o " + file("made/a/out")).exit_code, 0);
+  EXPECT_TRUE(fs::exists(folder_ / "made" / "a" / "out" / "rays.csv"));
+}
+
+// occ_segment on a frame whose points all lie beyond the depth range wrote empty outputs with exit 0, the
+// points counted nowhere; occ_improve_map keeps such a frame (its free space is a map) and counts them.
+TEST_F(Tools, SegmentRefusesAFrameWithNothingInTheDepthRange) {
+  const std::string far = write_cloud("far.pcd", 20.0f);
+  const ToolRun r = run(OCC_SEGMENT_EXECUTABLE, far + " -o out");
+  expect_one_error_line_naming(r, "far.pcd", "occ_segment", true);
+  EXPECT_NE(r.err.find("lies in the depth range 0.50-8.00 m ("), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nothing to segment"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(folder_ / "out"));
+  const ToolRun map = run(OCC_IMPROVE_MAP_EXECUTABLE, far + " -o out");
+  EXPECT_EQ(map.exit_code, 0) << map.err;
+  EXPECT_NE(map.out.find(" used beyond the depth range"), std::string::npos) << map.out;
+  // With points in range the summary counts the points as occ_improve_map's does.
+  const ToolRun near = run(OCC_SEGMENT_EXECUTABLE, write_cloud("wall.pcd", 2.0f) + " -o out2");
+  EXPECT_EQ(near.exit_code, 0) << near.err;
+  EXPECT_NE(near.out.find("points: "), std::string::npos) << near.out;
+  EXPECT_NE(near.out.find("; 0 used beyond the depth range"), std::string::npos) << near.out;
+}
+
 // Without -intrinsics the camera, and so the grid's columns, come from the inputs, and -depth_bins was
 // checked against the cap only then: the depth axis was built first (-depth_bins 1e9: 24 GB, then the
 // kernel killed the tool; 2e7: 1.7 GB before the error). The depth axis alone is checked first.

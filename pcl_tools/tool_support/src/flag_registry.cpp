@@ -149,7 +149,8 @@ std::vector<FlagSpec> map_and_output_flags() {
                  "a region's rays have improvement >= V (0.2: above a ray seen once, below no data)", "0.2"),
       value_flag("-o", K::text, "OUT", kOutput,
                  "where the output goes: a folder, created with its parents (occ_to_octomap: a .bt/.ot\n"
-                 "file). Written in a staging folder and moved into place at the end; a folder holding files\n"
+                 "file; a failed run removes the parents it created). Written in a staging folder and moved\n"
+                 "into place at the end; a folder holding files\n"
                  "this tool did not write (marker " + std::string(kOutputMarkerName) + ") is refused",
                  "", "required"),
       switch_flag("-overwrite", kOutput,
@@ -255,7 +256,9 @@ std::vector<FlagSpec> segmentation_and_evaluation_flags() {
   return {
       bounded(value_flag("-contour", K::number, "V", kSegmentation, "contour rays have improvement < V", "",
                          "the preset's: -0.02, -0.01 for a constant depth sigma (kinect_v1_paper)"),
-              -kInf, 0, false, true),
+              // Held as a float (-1e300 became -inf, refused naming the library's field); improvements are of
+              // order 1, so any bound far below them does.
+              -1e30, 0, false, true),
       bounded(value_flag("-min_segment", K::integer, "N", kSegmentation,
                          "smaller regions are attached to a neighbour; islands between holes, which have\n"
                          "none, stay segments [rays]", "200"),

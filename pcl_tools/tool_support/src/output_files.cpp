@@ -75,10 +75,27 @@ void MapSaveTarget::commit() {
   if (file_) file_->commit();
 }
 
+namespace {
+
+// The folders create_parent_folders made in this process, outermost first: a run that fails removes
+// those still empty (remove_created_folders_left_empty), so a refused -o leaves no trace behind it.
+std::vector<std::filesystem::path>& created_folders() {
+  static std::vector<std::filesystem::path> folders;
+  return folders;
+}
+
+}  // namespace
+
 void create_parent_folders(const std::string& path, const std::string& flag) {
   const std::filesystem::path parent = std::filesystem::path(path).lexically_normal().parent_path();
   std::error_code ec;
   if (parent.empty() || std::filesystem::exists(parent, ec)) return;
+  std::vector<std::filesystem::path> missing;  // innermost first
+  for (std::filesystem::path p = parent; !p.empty() && !std::filesystem::exists(p, ec); p = p.parent_path()) {
+    missing.push_back(p);
+    if (p == p.parent_path()) break;
+  }
+  created_folders().insert(created_folders().end(), missing.rbegin(), missing.rend());
   std::filesystem::create_directories(parent, ec);
   // Named here: the writability check that follows could only say the folder does not exist.
   if (ec) throw IoError("cannot write " + flag + " '" + path + "': cannot create its folder '" + parent.string() + "': " +
@@ -90,6 +107,14 @@ OutputFolder open_output_folder(const CommandLine& c) {
   if (!folder) throw InvalidParameter("-o OUTDIR is required (see -h)");
   create_parent_folders(*folder, "-o");  // the folder itself is staged and moved into place
   return OutputFolder(*folder, c.tool().tool, c.has("-overwrite"), run_inputs(c));
+}
+
+void remove_created_folders_left_empty() {
+  auto& folders = created_folders();
+  std::error_code ec;
+  for (auto it = folders.rbegin(); it != folders.rend(); ++it)
+    if (std::filesystem::is_empty(*it, ec) && !ec) std::filesystem::remove(*it, ec);  // never a folder with content
+  folders.clear();
 }
 
 }  // namespace occ_improve

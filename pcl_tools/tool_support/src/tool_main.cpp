@@ -4,6 +4,7 @@
 #include "occ_improve/pcl/frame_io.hpp"
 #include "occ_improve/tools/batch.hpp"
 #include "occ_improve/tools/input_scope.hpp"
+#include "occ_improve/tools/output_files.hpp"
 #include "occ_improve/tools/signals.hpp"
 
 #include <pcl/console/print.h>
@@ -24,6 +25,7 @@ namespace {
 // to the process's end (signals.hpp). Everything of ours is done by then (the staged outputs were removed
 // or committed while unwinding).
 int finish(int code) {
+  if (code != 0) remove_created_folders_left_empty();
   if (pcl_read_abandoned() || process_ends_at_once()) {
     std::fflush(nullptr);
     std::_Exit(code);
@@ -40,7 +42,7 @@ int report_failure(const std::string& message) {
     std::fprintf(stderr, "%s\n", Cancelled(signal).what());
     return finish(128 + signal);
   }
-  return 1;
+  return finish(1);
 }
 
 bool help_requested(int argc, const char* const* argv) {

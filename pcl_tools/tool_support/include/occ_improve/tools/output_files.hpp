@@ -35,6 +35,10 @@ void require_distinct_outputs(const std::string& path_a, const std::string& flag
 /// the reason (permission denied, a file in the way) when they cannot be created.
 void create_parent_folders(const std::string& path, const std::string& flag);
 
+/// Removes the folders create_parent_folders made in this process that are still empty, innermost first:
+/// run_tool calls it when a run fails, so a refused or interrupted run leaves no empty folders behind.
+void remove_created_folders_left_empty();
+
 /// The output folder named by -o (or the tool's default for it; InvalidParameter when it has none), its
 /// missing parents created; refused when it already holds files the tool did not write unless -overwrite
 /// was given (see OutputFolder).
