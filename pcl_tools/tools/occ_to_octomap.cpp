@@ -46,7 +46,8 @@ const ToolFlags kFlags{
     "Neither format stores the clamping thresholds (the tree in memory has the grid's; a reader of the\n"
     "file gets OctoMap's defaults) nor the sensor model; keep the .occmap (-save) for those.\n"
     "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
-    "are added, then clamped.\n",
+    "are added, then clamped.\n"
+    "The tree's worst case is capped too: at 2 GiB unless -memory_cap is given (then by it).\n",
     joined({{"-o", "-overwrite", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame", "-free"}, sensor_flag_names(),
             camera_flag_names(), {"-no_poses", "-mask"}}),
     {},

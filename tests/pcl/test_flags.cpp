@@ -97,9 +97,11 @@ TEST(CommandLine, RefusalsNameTheFlagAndTheValue) {
   refused({"-o", "-q"}, "-o needs a value");  // a flag is not a folder name
   refused({"-fps", "abc"}, "-fps abc is invalid: must be a finite number in [0, 1000]");
   refused({"-fps", "-1"}, "-fps -1 is invalid");
-  refused({"-contour", "abc"}, "-contour abc is invalid: must be a finite number < 0");
+  refused({"-contour", "abc"}, "-contour abc is invalid: must be a finite number in [-1e+30, 0)");
   refused({"-contour", "0"}, "-contour 0 is invalid");
   refused({"-contour", "-bogus"}, "-contour -bogus is invalid");
+  // Held as a float: -1e300 became -inf and was refused naming the library's field, not the flag.
+  refused({"-contour", "-1e300"}, "-contour -1e300 is invalid");
   refused({"-threads", "2.5"}, "-threads 2.5 is invalid: must be an integer in [0, 1024]");
   refused({"-threads", "5000"}, "-threads 5000 is invalid");
   refused({"-threads", "1e99"}, "-threads 1e99 is invalid");

@@ -29,8 +29,9 @@ def stub_tree():
     return names, classes
 
 
-# Dunders the stub must declare where the module defines them (copy.copy and deepcopy are typed by them).
-CHECKED_DUNDERS = {"__copy__", "__deepcopy__"}
+# Dunders the stub must declare where the module defines them (copy.copy and deepcopy are typed by them;
+# __eq__ and __hash__ = None tell a type checker that the parameter structs compare by value, unhashable).
+CHECKED_DUNDERS = {"__copy__", "__deepcopy__", "__eq__", "__hash__"}
 
 
 def runtime_members(cls):
