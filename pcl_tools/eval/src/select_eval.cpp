@@ -225,27 +225,36 @@ public:
     // (a) is the reference: kReferenceFrames full frames, scored after each.
     const double limit = strategy_ == SelectStrategy::full ? 0 : options_.frames * n;
     const double checkpoint_every = strategy_ == SelectStrategy::full ? 0 : std::max<double>(budget_, n / 20);
-    double next_checkpoint = checkpoint_every, expected_since = 0;
-    std::size_t good_before = 0;
+    double next_checkpoint = checkpoint_every;
+    Shot last;
     while (strategy_ == SelectStrategy::full ? shots_ < kReferenceFrames : static_cast<double>(rays_asked_) < limit - 0.5) {
       throw_if_stop_requested();  // a run is thousands of shots; the library polls within each
-      const Shot shot = next_shot();
+      Shot shot = next_shot();
       if (shot.columns.empty()) break;  // the plan has nothing left to take: the curve ends here
       if (shot.stop && stop_rays_ == 0) stop_rays_ = rays_asked_;
       acquire(shot.columns);
-      expected_since += shot.expected_gain;
+      expected_since_ += shot.expected_gain;
+      last = std::move(shot);
       if (static_cast<double>(rays_asked_) + 0.5 < next_checkpoint && static_cast<double>(rays_asked_) < limit - 0.5) continue;
       next_checkpoint += checkpoint_every;
-      const Quality q = map_quality(mapper_.geometry(), prediction(), scene_, map_, asked_);
-      csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
-          << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since << ','
-          << static_cast<double>(q.good) - static_cast<double>(good_before) << ',' << (shot.stop ? 1 : 0) << ','
-          << shot.stop_gain_per_ray << ',' << q.wrong_unasked << ',' << q.wrong_unasked_within_3sigma << '\n';
-      curve_.push_back({static_cast<double>(rays_asked_), q.within});
-      calibration_.push_back({expected_since, static_cast<double>(q.good) - static_cast<double>(good_before)});
-      good_before = q.good;
-      expected_since = 0;
+      checkpoint(csv, last);
     }
+    // A plan that ran out before a checkpoint (a frame of few valid rays: the coverage pass took them all)
+    // ends its curve where it stopped; a run without any checkpoint crashed the summary.
+    if (curve_.empty() || curve_.back().first != static_cast<double>(rays_asked_)) checkpoint(csv, last);
+  }
+
+  /// Scores the map now: one CSV row, a point of the curve and of the calibration (`shot`: the last one).
+  void checkpoint(std::ostream& csv, const Shot& shot) {
+    const Quality q = map_quality(mapper_.geometry(), prediction(), scene_, map_, asked_);
+    csv << scene_.name << ',' << run_name(strategy_, rule_) << ',' << budget_ << ',' << shots_ << ',' << rays_asked_ << ','
+        << returned_ << ',' << q.within << ',' << q.coverage << ',' << q.mean_abs_error_m << ',' << expected_since_ << ','
+        << static_cast<double>(q.good) - static_cast<double>(good_before_) << ',' << (shot.stop ? 1 : 0) << ','
+        << shot.stop_gain_per_ray << ',' << q.wrong_unasked << ',' << q.wrong_unasked_within_3sigma << '\n';
+    curve_.push_back({static_cast<double>(rays_asked_), q.within});
+    calibration_.push_back({expected_since_, static_cast<double>(q.good) - static_cast<double>(good_before_)});
+    good_before_ = q.good;
+    expected_since_ = 0;
   }
 
   const std::vector<std::pair<double, double>>& curve() const { return curve_; }
@@ -364,6 +373,8 @@ private:
   std::uint64_t passes_ = 0;
   double seconds_ = 0;
   std::vector<std::pair<double, double>> curve_, calibration_;
+  double expected_since_ = 0;    ///< the shots' expected gain since the last checkpoint
+  std::size_t good_before_ = 0;  ///< good rays at the last checkpoint
 };
 
 /// Points (rays asked) at which a curve first reaches `target`, -1 if never.
