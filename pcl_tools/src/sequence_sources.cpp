@@ -297,7 +297,7 @@ DepthSequenceGrabber::DepthSequenceGrabber(DepthSequence sequence, const Pinhole
   const auto posed = std::find_if(sequence_.frames.begin(), sequence_.frames.end(),
                                   [](const DepthSequenceFrame& f) { return f.camera_to_world.has_value(); });
   use_poses_ = options.use_poses && posed != sequence_.frames.end();
-  if (use_poses_) world_to_first_ = posed->camera_to_world->inverse();
+  if (use_poses_) world_to_first_ = options.world_from_map ? options.world_from_map->inverse() : posed->camera_to_world->inverse();
 }
 
 std::size_t DepthSequenceGrabber::unposedFrames() const {

@@ -71,10 +71,17 @@ const ToolFlags kFlags{
 
 // Every write publishes the whole set (and the -save map), so the folder always holds one consistent state
 // of the map; a failure anywhere commits nothing.
+// What a -save keeps beside the grid: the planner's record (a -simulate run's, a -load map's) and the pose
+// of the map's view (a -load map's, else the first posed frame's), so that a later -load continues it.
+struct SavedWith {
+  ReturnRecord returns;
+  std::optional<Eigen::Isometry3d> world_from_map;
+};
+
 std::vector<std::string> write_maps(const Mapper& mapper, OutputFolder& out, MapSaveTarget& save,
-                                    const RegionOptions& regions, int top_k) {
+                                    const RegionOptions& regions, int top_k, const SavedWith& with) {
   const std::vector<std::string> names = write_map_outputs(out, mapper, summarize_map(mapper, regions, top_k), std::nullopt);
-  if (save.requested()) save_map(save.staged_path(), mapper.grid(), mapper.model().params());
+  if (save.requested()) save_map(save.staged_path(), mapper.grid(), mapper.model().params(), with.returns, with.world_from_map);
   out.commit();
   save.commit();
   return names;
@@ -97,6 +104,12 @@ void write_shots_csv(const std::string& path, const std::vector<SimulatedShot>& 
   if (!csv.flush()) throw IoError("cannot write '" + path + "'");
 }
 
+std::size_t returned_this_run(const std::vector<SimulatedShot>& shots) {
+  std::size_t returned = 0;
+  for (const SimulatedShot& s : shots) returned += s.returns;
+  return returned;
+}
+
 // One planned shot acquired and inserted; the return record learns which rays stayed silent.
 SimulatedShot acquire(const Shot& shot, VirtualSensor& sensor, Mapper& mapper, ReturnRecord& returns,
                       std::size_t asked_before) {
@@ -108,21 +121,46 @@ SimulatedShot acquire(const Shot& shot, VirtualSensor& sensor, Mapper& mapper, R
   return {shot.columns.size(), returned, asked_before + shot.columns.size(), shot.expected_gain};
 }
 
+// A simulation continues a -load map's own view: the frame must be of its camera, and of its pose when
+// both have one (the virtual sensor acquires from the frame's viewpoint).
+void require_simulation_fits_map(const ToolOptions& options, const ToolFrame& frame, const LoadedMap& loaded,
+                                 const std::string& load_path) {
+  require_frames_fit_loaded_map(loaded.grid.geometry(), frame.camera, load_path);
+  if (!options.use_poses || !frame.pose || !loaded.world_from_sensor) return;
+  const Eigen::Isometry3d between = loaded.world_from_sensor->inverse() * *frame.pose;
+  if (between.translation().norm() > 1e-3 || Eigen::AngleAxisd(between.linear()).angle() > 1e-3)
+    throw InvalidInput("-simulate " + frame.name + " is seen from another pose (" + frame.pose_source + ") than the map -load " +
+                       load_path + " was saved at: a simulation continues the map's own view");
+}
+
 int run_simulation(const CommandLine& command_line, const ToolOptions& options, const RegionOptions& regions,
-                   OutputFolder& out, MapSaveTarget& save) {
+                   OutputFolder& out, MapSaveTarget& save, std::optional<LoadedMap> loaded, const std::string& load_path) {
   const std::string frame_path = *command_line.text("-simulate");
   const int budget = *command_line.integer("-budget"), max_shots = *command_line.integer("-max_shots");
   const ToolFrame frame = read_tool_frame(options, single_frame_source(frame_path, "-simulate"));
-  const SensorPreset preset = options.preset_for_camera(frame.camera);
+  SensorPreset preset = options.preset_for_camera(frame.camera);
   if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
     throw InvalidParameter("-simulate " + frame_path + " needs an organized frame and a pixel-native preset "
                            "(kinect_v1): the plan's rays are the sensor's pixels");
+  SavedWith with;
+  if (loaded) {
+    require_simulation_fits_map(options, frame, *loaded, load_path);
+    preset.name = "loaded from " + load_path;
+    with.world_from_map = loaded->world_from_sensor;
+  } else if (options.use_poses) {
+    with.world_from_map = frame.pose;
+  }
   std::printf("%s\npreset %s, %d rays per shot\n", describe_camera({frame}).c_str(), preset.name.c_str(), budget);
   VirtualSensor sensor(depth_of_organized(frame.cloud), *frame.camera);
-  Mapper mapper(preset, options.grid);
+  Mapper mapper = loaded ? Mapper(std::move(loaded->grid), SensorModel(loaded->model)) : Mapper(preset, options.grid);
   const std::string mask_line = apply_tool_mask(command_line, mapper, &frame);
   if (!mask_line.empty()) std::printf("%s\n", mask_line.c_str());
-  ReturnRecord returns = ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  // A -load map's record: the plan goes on knowing which rays never return.
+  ReturnRecord& returns = with.returns;
+  returns = loaded ? std::move(loaded->returns) : ReturnRecord::for_grid(mapper.geometry().width(), mapper.geometry().height());
+  if (loaded)
+    std::printf("continuing the map loaded from %s: %llu rays asked before, %llu returned\n", load_path.c_str(),
+                static_cast<unsigned long long>(returns.total_asked()), static_cast<unsigned long long>(returns.total_returned()));
   PlanRequest request = plan_request_from_flags(command_line);
   require_plan_fits(command_line, request, mapper.geometry().width(), mapper.geometry().height());
   request.candidates = mapper.column_mask();  // rays outside -mask are never asked for
@@ -161,12 +199,12 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   if (shots.size() >= 2) write_png(out.file("gain.png"), render_curve(asked, gain));
   const std::string predicted =
       write_predicted_depth(out, mapper, *command_line.text("-predicted_depth"), *command_line.integer("-radius"));
-  const std::vector<std::string> names = write_maps(mapper, out, save, regions, options.top_k);
+  const std::vector<std::string> names = write_maps(mapper, out, save, regions, options.top_k, with);
   const double seconds = seconds_since(start);
   std::printf("%zu shots, %zu rays asked (%.2f frames), %zu returned, in %.2f s; stopped: %s\n", shots.size(),
               shots.empty() ? 0 : shots.back().rays_asked_total,
               shots.empty() ? 0.0 : static_cast<double>(shots.back().rays_asked_total) / static_cast<double>(mapper.geometry().column_count()),
-              returns.total_returned(), seconds, why.c_str());
+              returned_this_run(shots), seconds, why.c_str());
   std::printf("wrote %s/: shots.csv%s%s %s\n", out.path().c_str(), shots.size() >= 2 ? " gain.png" : "",
               predicted.empty() ? "" : " predicted_depth.png", join_names(names).c_str());
   if (signal) throw Cancelled(signal);
@@ -180,13 +218,23 @@ struct StreamSource {
   SensorPreset preset;
   std::optional<PinholeIntrinsics> frames_camera;  ///< the frames' camera, where known (a -load map must fit it)
   std::string text, camera;  ///< for the summary
-  bool poses_applied = false;  ///< the frames are moved into the first one's view
+  bool poses_applied = false;  ///< the frames are moved into the first one's view (or a -load map's)
+  std::optional<Eigen::Isometry3d> world_from_map;  ///< where the map's view lies: what -save keeps
   /// Frames the source skips by design and announces in `text` (a TUM sequence's frames before its ground
   /// truth starts): counted among its errors, but not a failure of the run.
   std::size_t announced_skips = 0;
 };
 
-std::string poses_text(bool applied) { return applied ? "poses applied: map in the first frame's view" : "no poses"; }
+std::string poses_text(bool applied, bool into_loaded_map = false) {
+  return !applied ? "no poses" : into_loaded_map ? "poses applied: frames moved into the loaded map's view"
+                                                 : "poses applied: map in the first frame's view";
+}
+
+// A -load map the frames go into: with poses, they are moved into its view by the pose saved with it.
+struct MapView {
+  std::string path;
+  std::optional<Eigen::Isometry3d> pose;
+};
 
 StreamSource open_device(const ToolOptions& options, const std::optional<std::string>& device, const std::string& oni) {
   StreamSource s;
@@ -199,7 +247,8 @@ StreamSource open_device(const ToolOptions& options, const std::optional<std::st
   return s;
 }
 
-StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth_dir, int max_frames, double fps) {
+StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth_dir, int max_frames, double fps,
+                            const std::optional<MapView>& map) {
   DepthSequence sequence = scan_depth_sequence(depth_dir);
   if (max_frames > 0 && sequence.frames.size() > static_cast<std::size_t>(max_frames))
     sequence.frames.resize(static_cast<std::size_t>(max_frames));  // file sources stop exactly there
@@ -209,13 +258,16 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
   sequence_options.fps = static_cast<float>(fps);
   sequence_options.use_poses = options.use_poses;
   sequence_options.encoding = options.depth_encoding;
+  if (map) sequence_options.world_from_map = map->pose;
   auto grabber = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
+  if (map && grabber->posesApplied() && !map->pose) refuse_posed_frames_into_unposed_map(map->path, depth_dir, "its pose files");
   StreamSource s;
+  s.world_from_map = map ? map->pose : grabber->posesApplied() ? std::optional(grabber->worldFromMap()) : std::nullopt;
   s.preset = options.preset_for_camera(camera);
   s.frames_camera = camera;
   s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
   s.text = depth_dir + " (" + std::to_string(sequence.frames.size()) + " depth frames, " +
-           poses_text(grabber->posesApplied()) +
+           poses_text(grabber->posesApplied(), map.has_value()) +
            (grabber->unposedFrames() > 0 ? "; " + std::to_string(grabber->unposedFrames()) + " without a pose skipped" : "") +
            ")";
   s.poses_applied = grabber->posesApplied();
@@ -226,7 +278,8 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
 }
 
 // -pcd_dir's PCD files, or the positional inputs of any kind (expand_input, as every tool reads them).
-StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, int max_frames, double fps) {
+StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, int max_frames, double fps,
+                        const std::optional<MapView>& map) {
   std::vector<FrameSource> frames;
   if (!pcd_dir.empty()) {
     const PcdSequenceGrabber listing(pcd_dir);
@@ -240,26 +293,34 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
   const ToolFrame first = read_tool_frame(options, frames.front());
   const std::string files_text = frames.size() == 1 ? frames.front().path
                                                     : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
-  auto grabber = std::make_shared<ToolFrameGrabber>(options, first, std::move(frames), static_cast<float>(fps));
+  const bool posed = first.pose && options.use_poses;
+  ToolFrame reference = frame_header(first);  // the frames, the first too, are moved into a -load map's view
+  if (map && posed) {
+    if (!map->pose) refuse_posed_frames_into_unposed_map(map->path, first.name, first.pose_source);
+    reference.pose = map->pose;
+    reference.pose_source = "the pose saved with " + map->path;
+  }
+  auto grabber = std::make_shared<ToolFrameGrabber>(options, reference, std::move(frames), static_cast<float>(fps));
   StreamSource s;
+  s.world_from_map = map ? map->pose : posed ? first.pose : std::nullopt;
   s.preset = options.preset_for_camera(first.camera);
   s.frames_camera = first.camera;
   s.camera = describe_camera({first});
   s.text = (pcd_dir.empty() ? files_text : pcd_dir) + " (" + std::to_string(grabber->frameCount()) + " frames, " +
-           poses_text(first.pose && options.use_poses) + ")";
-  s.poses_applied = first.pose && options.use_poses;
+           poses_text(posed, map.has_value()) + ")";
+  s.poses_applied = posed;
   s.file_source = grabber.get();
   s.grabber = grabber;
   return s;
 }
 
 // A saved map fixes the geometry and the model; the source's frames must fit it.
-std::shared_ptr<Mapper> make_mapper(const std::string& load_path, const ToolOptions& options, StreamSource& source) {
+std::shared_ptr<Mapper> make_mapper(std::optional<LoadedMap>& loaded, const std::string& load_path,
+                                    const ToolOptions& options, StreamSource& source) {
   SensorPreset& preset = source.preset;
-  if (load_path.empty()) return std::make_shared<Mapper>(preset, options.grid);
-  LoadedMap loaded = load_tool_map(load_path, options);
-  require_frames_fit_loaded_map(loaded.grid.geometry(), source.frames_camera, load_path);
-  auto mapper = std::make_shared<Mapper>(std::move(loaded.grid), SensorModel(loaded.model));
+  if (!loaded) return std::make_shared<Mapper>(preset, options.grid);
+  require_frames_fit_loaded_map(loaded->grid.geometry(), source.frames_camera, load_path);
+  auto mapper = std::make_shared<Mapper>(std::move(loaded->grid), SensorModel(loaded->model));
   preset.name = "loaded from " + load_path;
   preset.geometry = mapper->geometry().params();
   preset.model = mapper->model().params();
@@ -434,14 +495,25 @@ int run(const CommandLine& command_line) {
   for (const char* flag : {"-budget", "-shape", "-refine", "-window", "-negative_share", "-stop_gain", "-stop_share",
                            "-max_shots"})
     warn_if_ignored(command_line, flag, "-simulate", simulate);
+  for (const char* flag : {"-fps", "-drop", "-max_frames", "-save_every", "-stop_on_signal"})
+    if (simulate && command_line.has(flag))
+      std::fprintf(stderr, "warning: %s applies to a stream (-device, -oni, -pcd_dir, -depth_dir, input files), not to "
+                           "-simulate: ignored\n", flag);
   warn_if_ignored(command_line, "-radius", "-predicted_depth", *command_line.text("-predicted_depth") != "none");
   const std::unique_ptr<OutputFile> screenshot = open_screenshot(command_line, out, save);
   const std::unique_ptr<LiveView> view = open_view(command_line);
-  if (simulate) return run_simulation(command_line, options, region_options, out, save);
+  // Read before the source opens: its pose places the frames in its view, its record is kept by -save.
+  std::optional<LoadedMap> loaded;
+  if (!load_path.empty()) loaded = load_tool_map(load_path, options);
+  if (simulate) return run_simulation(command_line, options, region_options, out, save, std::move(loaded), load_path);
+  const std::optional<MapView> map_view =
+      loaded ? std::optional<MapView>(MapView{load_path, loaded->world_from_sensor}) : std::nullopt;
+  SavedWith saved_with{loaded ? loaded->returns : ReturnRecord(), std::nullopt};
 
   StreamSource source = device || !oni.empty() ? open_device(options, device, oni)
-                        : !depth_dir.empty()   ? open_depth_dir(options, depth_dir, max_frames, fps)
-                                               : open_files(options, pcd_dir, max_frames, fps);
+                        : !depth_dir.empty()   ? open_depth_dir(options, depth_dir, max_frames, fps, map_view)
+                                               : open_files(options, pcd_dir, max_frames, fps, map_view);
+  saved_with.world_from_map = device || !oni.empty() ? (map_view ? map_view->pose : std::nullopt) : source.world_from_map;
   const InputScope scope(source.text);
   PipelineOptions pipeline_options;
   pipeline_options.insertion.threads = *command_line.integer("-threads");
@@ -449,7 +521,7 @@ int run(const CommandLine& command_line) {
   pipeline_options.regions = region_options;  // the regions shown by -view are regions.csv's
   pipeline_options.backpressure = source.file_source != nullptr && !command_line.has("-drop");
   pipeline_options.keep_fraction = *command_line.number("-keep");
-  const std::shared_ptr<Mapper> mapper = make_mapper(load_path, options, source);
+  const std::shared_ptr<Mapper> mapper = make_mapper(loaded, load_path, options, source);
   // A stream has no first frame yet: -mask finite is refused here, a PNG mask applies to every frame.
   const std::string mask_line = apply_tool_mask(command_line, *mapper, nullptr);
   // Before the pipeline, whose end stops the grabber thread that calls it.
@@ -480,7 +552,7 @@ int run(const CommandLine& command_line) {
     ++frames_seen;
     if (view) view->post(pipeline.mapper().improvement(), r.top_regions, frames_seen);
     if (save_every > 0 && frames_seen % static_cast<std::uint64_t>(save_every) == 0) {
-      write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
+      write_maps(pipeline.mapper(), out, save, region_options, options.top_k, saved_with);
       ++maps_written;
     }
   });
@@ -532,7 +604,7 @@ int run(const CommandLine& command_line) {
     throw InvalidInput("no frame of " + source.text + " was used (" + std::to_string(statistics.rejected) +
                        " rejected: empty, all NaN or all zero, or of the wrong size; " +
                        std::to_string(statistics.grabber_errors) + " unreadable)");
-  const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k);
+  const std::vector<std::string> written = write_maps(pipeline.mapper(), out, save, region_options, options.top_k, saved_with);
   if (save.requested()) pcl::console::print_info("Saved the grid to %s\n", save.path().c_str());
   if (view) finish_view(*view, screenshot.get(), pipeline.mapper(), last, statistics.processed);
   print_stream_summary(statistics, pipeline_options.keep_fraction < 1.0, stop_reason, fired, last);

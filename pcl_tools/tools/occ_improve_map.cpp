@@ -71,6 +71,13 @@ int run(const CommandLine& command_line) {
   // The first frame sets the camera, so the grid; the others are read and inserted one by one (insertion
   // with the surface kept current, then the incremental improvement; timed by the mapper).
   ToolFrameReader frames(options, use_sample);
+  // A loaded map is read before the frames: its pose places them in its view (and its record is kept).
+  std::optional<LoadedMap> loaded;
+  if (!load_path.empty()) {
+    loaded = load_tool_map(load_path, options);
+    frames.into_loaded_map(loaded->world_from_sensor, load_path);
+  }
+  ReturnRecord returns = loaded ? std::move(loaded->returns) : ReturnRecord();
   ProgressLine progress(command_line, "frame");
   SensorPreset preset;
   std::optional<Mapper> mapper;
@@ -81,14 +88,13 @@ int run(const CommandLine& command_line) {
       frames, progress,
       [&](const std::optional<ToolFrame>& first) {
         preset = options.preset_for_camera(first ? first->camera : std::nullopt);
-        if (load_path.empty()) {
+        if (!loaded) {
           mapper.emplace(preset, options.grid);
         } else {
-          LoadedMap loaded = load_tool_map(load_path, options);
           preset.name = "loaded from " + load_path;
-          preset.geometry = loaded.grid.geometry().params();
-          preset.model = loaded.model;
-          mapper.emplace(std::move(loaded.grid), SensorModel(loaded.model));
+          preset.geometry = loaded->grid.geometry().params();
+          preset.model = loaded->model;
+          mapper.emplace(std::move(loaded->grid), SensorModel(loaded->model));
           require_frames_fit_loaded_map(mapper->geometry(), first ? first->camera : std::nullopt, load_path);
         }
         mask_line = apply_tool_mask(command_line, *mapper, first ? &*first : nullptr);
@@ -109,7 +115,8 @@ int run(const CommandLine& command_line) {
   start = SteadyClock::now();
   const std::vector<std::string> written =
       write_map_outputs(staging, *mapper, summary, fused.colour);
-  if (save.requested()) save_map(save.staged_path(), mapper->grid(), mapper->model().params());
+  // With the planner's record a -load brought and the pose of the map's view (frames.first_pose()).
+  if (save.requested()) save_map(save.staged_path(), mapper->grid(), mapper->model().params(), returns, frames.first_pose());
   throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   staging.commit();
   save.commit();

@@ -41,11 +41,12 @@ const ToolFlags kFlags{
     "free a leaf a ray crosses (-free crossed: its centre or a corner lies in free space, and no return's\n"
     "surface; -free wholly: all of it), unknown otherwise.\n"
     ".bt = maximum likelihood, .ot = full log-odds (both with OctoMap's own writers). The tree is in a\n"
-    "world frame: -pose, else the first frame's pose when the inputs have poses (a 7-Scenes folder),\n"
-    "else -frame.\n"
+    "world frame: -pose, else the pose saved with a -load map (a -save of posed frames), else the first\n"
+    "frame's pose when the inputs have poses (a 7-Scenes folder), else -frame.\n"
     "Neither format stores the clamping thresholds (the tree in memory has the grid's; a reader of the\n"
     "file gets OctoMap's defaults) nor the sensor model; keep the .occmap (-save) for those.\n"
-    "Repeat -load (each with its own -pose, in order) to merge maps taken from several poses: log-odds\n"
+    "Repeat -load (each with its own -pose, in order, or each saved with its pose) to merge maps taken\n"
+    "from several poses: log-odds\n"
     "are added, then clamped.\n"
     "The tree's worst case is capped too: at 2 GiB unless -memory_cap is given (then by it).\n",
     joined({{"-o", "-overwrite", "-q", "-load", "-pose", "-sample", "-save", "-resolution", "-frame", "-free"}, sensor_flag_names(),
@@ -80,7 +81,7 @@ struct Source {
   SensorModelParams model;
   std::string description;
   InsertionReport insertion;
-  std::optional<Eigen::Isometry3d> world_from_grid;  ///< the first frame's pose, when the frames have poses
+  std::optional<Eigen::Isometry3d> world_from_grid;  ///< the first frame's pose (posed frames), a map's saved pose
 };
 
 Source build_from_frames(const CommandLine& command_line, const ToolOptions& options, bool use_sample,
@@ -118,20 +119,33 @@ Source build_from_frames(const CommandLine& command_line, const ToolOptions& opt
   return source;
 }
 
-// world <- grid per map: the -pose values (one per map), else -frame's (replaced by the first frame's pose
-// for posed input frames once they are read).
+// The -pose values, one per map, or none (checked before any work).
 std::vector<Eigen::Isometry3d> parse_poses(const CommandLine& command_line, std::size_t maps) {
   const std::vector<std::string> texts = command_line.values("-pose");
   if (!texts.empty() && texts.size() != maps)
     throw InvalidParameter("give one -pose per map (" + std::to_string(maps) + " map(s), " +
                            std::to_string(texts.size()) + " poses)");
-  if (maps > 1 && texts.empty())
-    throw InvalidParameter("merging " + std::to_string(maps) + " maps needs one -pose per -load");
   std::vector<Eigen::Isometry3d> poses;
   for (const std::string& text : texts) poses.push_back(parse_pose(text));
-  if (poses.empty())
-    poses.push_back(*command_line.text("-frame") == "z_up" ? z_up_from_optical() : Eigen::Isometry3d::Identity());
   return poses;
+}
+
+// world <- grid per source: -pose, else the grid's own pose (a map saved with one; the first frame's for
+// posed input frames), else -frame's for a single source; maps merged without either are refused.
+std::vector<Eigen::Isometry3d> source_poses(const CommandLine& command_line, std::vector<Eigen::Isometry3d> given,
+                                            const std::vector<Source>& grids) {
+  if (!given.empty()) return given;
+  for (std::size_t i = 0; i < grids.size(); ++i) {
+    if (grids[i].world_from_grid) {
+      given.push_back(*grids[i].world_from_grid);
+    } else if (grids.size() > 1) {
+      throw InvalidParameter("merging " + std::to_string(grids.size()) + " maps needs one -pose per -load: " +
+                             grids[i].description + " was saved without its pose");
+    } else {
+      given.push_back(*command_line.text("-frame") == "z_up" ? z_up_from_optical() : Eigen::Isometry3d::Identity());
+    }
+  }
+  return given;
 }
 
 Source load_saved_map(const std::string& path, const ToolOptions& options) {
@@ -141,7 +155,8 @@ Source load_saved_map(const std::string& path, const ToolOptions& options) {
   Source source;
   source.grid.emplace(std::move(loaded.grid));
   source.model = loaded.model;
-  source.description = "map " + path;
+  source.world_from_grid = loaded.world_from_sensor;
+  source.description = "map " + path + (loaded.world_from_sensor ? " (at the pose saved with it)" : "");
   return source;
 }
 
@@ -188,7 +203,7 @@ int run(const CommandLine& command_line) {
   MapSaveTarget save(command_line, nullptr);
   if (save.requested()) require_distinct_outputs(save.path(), "-save", output, "-o");
   const auto tree_file = open_output_file(command_line, "-o", is_octomap_file, "an OctoMap file");
-  std::vector<Eigen::Isometry3d> poses = parse_poses(command_line, std::max<std::size_t>(load_paths.size(), 1));
+  const std::vector<Eigen::Isometry3d> given_poses = parse_poses(command_line, std::max<std::size_t>(load_paths.size(), 1));
   const PresetOverrides& o = options.overrides;
   const bool preset_flags = command_line.has("-preset") || o.sigma_depth_m ||
                             o.sigma_depth_per_m2 || o.sigma_angle_rad || o.support_k || o.depth_bins ||
@@ -205,13 +220,13 @@ int run(const CommandLine& command_line) {
   for (const std::string& path : load_paths) grids.push_back(load_saved_map(path, options));
   ProgressLine progress(command_line, "frame");
   if (load_paths.empty()) grids.push_back(build_from_frames(command_line, options, use_sample, progress));
-  if (!command_line.has("-pose") && grids.front().world_from_grid) poses.front() = *grids.front().world_from_grid;
+  const std::vector<Eigen::Isometry3d> poses = source_poses(command_line, given_poses, grids);
   const double read_seconds = seconds_since(start);
 
   double save_seconds = 0;
   if (save.requested()) {
     start = SteadyClock::now();
-    save_map(save.staged_path(), *grids.front().grid, grids.front().model);
+    save_map(save.staged_path(), *grids.front().grid, grids.front().model, ReturnRecord(), grids.front().world_from_grid);
     save_seconds = seconds_since(start);
   }
 

@@ -659,9 +659,17 @@ class Mapper:
     def predict_depth(self, params: DepthPredictionParams = ...
                       ) -> Tuple[npt.NDArray[np.float32], npt.NDArray[np.int32]]: ...
     def render_improvement(self) -> npt.NDArray[np.uint8]: ...
-    def save(self, path: _Path, overwrite: bool = False, returns: Optional[ReturnRecord] = None) -> None:
+    @property
+    def world_from_sensor(self) -> Optional[npt.NDArray[np.float64]]:
+        """Where the map's sensor frame lies in the world (4 x 4, a copy), or None; save() writes it, load_map()
+        reads it back, export_octomap() places the tree by it when given no pose."""
+    @world_from_sensor.setter
+    def world_from_sensor(self, pose: Optional[_ArrayLike]) -> None: ...
+    def save(self, path: _Path, overwrite: bool = False, returns: Optional[ReturnRecord] = None,
+             world_from_sensor: Optional[_ArrayLike] = None) -> None:
         """Replaces an existing file only when it is a map occ_improve wrote, or with overwrite=True; keeps
-        the planner's ReturnRecord with the map when given (load_map_and_returns reads it back)."""
+        the planner's ReturnRecord with the map when given (load_map_and_returns reads it back), and the pose
+        of its sensor frame (world_from_sensor, else the Mapper's own)."""
     def export_octomap(self, path: _Path, resolution_m: float,
                        world_from_sensor: Optional[_ArrayLike] = None,
                        options: OctomapExportOptions = ...,

@@ -6,6 +6,7 @@
 #include "occ_improve/errors.hpp"
 #include "occ_improve/mapper.hpp"
 
+#include <Eigen/Geometry>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
@@ -13,6 +14,7 @@
 #include <initializer_list>
 #include <limits>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -34,9 +36,12 @@ void bind_prediction(py::module_& m);
 /// The Python `Mapper`: the C++ Mapper plus a mutex. Calls release the GIL (so a grabber thread keeps
 /// running) and then take the mutex, so two Python threads never modify one Mapper at the same time.
 struct PyMapper {
-  explicit PyMapper(Mapper m) : mapper(std::move(m)) {}
+  explicit PyMapper(Mapper m, std::optional<Eigen::Isometry3d> pose = std::nullopt)
+      : mapper(std::move(m)), world_from_sensor(std::move(pose)) {}
   Mapper mapper;
   std::mutex mutex;
+  /// Where the map's sensor frame lies in the world: save() writes it, load_map() reads it back.
+  std::optional<Eigen::Isometry3d> world_from_sensor;
 };
 
 /// Runs f(mapper) with the GIL released and the Mapper's mutex held, Ctrl-C stopping it

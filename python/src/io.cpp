@@ -2,6 +2,7 @@
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
+#include "occ_improve/geometry/rotation.hpp"
 #include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/io/map_io.hpp"
 
@@ -83,31 +84,84 @@ OutputFile output_file(const std::string& path, const char* flag, bool overwrite
   return OutputFile(path, flag, overwrite, is_own, kind, "pass overwrite=True");
 }
 
+// A pose arrives as a numpy array, not through pybind11's Eigen caster: GCC 12 gives a false
+// maybe-uninitialized warning inside that caster for fixed-size matrices.
+using PoseArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+/// A 4 x 4 rigid transform (its last row 0 0 0 1, its rotation within kRotationTolerance of one: the
+/// nearest rotation is kept), or InvalidParameter naming `name`.
+Eigen::Isometry3d rigid_pose(const PoseArray& m, const char* name) {
+  if (m.ndim() != 2 || m.shape(0) != 4 || m.shape(1) != 4)
+    throw InvalidParameter(std::string(name) + " must be a 4 x 4 matrix");
+  Eigen::Matrix4d t;
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) t(r, c) = m.at(r, c);
+  const std::optional<Eigen::Matrix3d> rotation = nearest_rotation(t.topLeftCorner<3, 3>());
+  if (!rotation || !t.allFinite() || t.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+    throw InvalidParameter(std::string(name) + " is not a rigid transform (a rotation, a finite translation, last row 0 0 0 1)");
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = *rotation;
+  pose.translation() = t.topRightCorner<3, 1>();
+  return pose;
+}
+
+py::array_t<double> pose_array(const Eigen::Isometry3d& pose) {
+  py::array_t<double> a({4, 4});
+  for (int r = 0; r < 4; ++r)
+    for (int c = 0; c < 4; ++c) a.mutable_at(r, c) = pose.matrix()(r, c);
+  return a;
+}
+
+/// The pose a call uses: `given` when there is one, else the Mapper's own (set by load_map or assigned).
+std::optional<Eigen::Isometry3d> pose_or_mappers(const PyMapper& self, const std::optional<PoseArray>& given) {
+  if (given) return rigid_pose(*given, "world_from_sensor");
+  return self.world_from_sensor;
+}
+
 void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
   m.attr("MAP_FORMAT_VERSION") = kMapFormatVersion;
-  c.def("save", [](PyMapper& self, const py::object& path, bool overwrite, const ReturnRecord* returns) {
+  c.def_property(
+      "world_from_sensor",
+      [](const PyMapper& self) -> py::object {
+        if (!self.world_from_sensor) return py::none();
+        return pose_array(*self.world_from_sensor);
+      },
+      [](PyMapper& self, const std::optional<PoseArray>& pose) {
+        self.world_from_sensor = pose ? std::optional<Eigen::Isometry3d>(rigid_pose(*pose, "world_from_sensor")) : std::nullopt;
+      },
+      "Where the map's sensor frame lies in the world (4 x 4 float64, a copy), or None: save() writes it with "
+      "the map and load_map() reads it back, so that frames with poses of their own can be moved into the "
+      "map's view after a load (inv(world_from_sensor) @ frame_pose); export_octomap() places the tree by it "
+      "when given no pose. Assign a 4 x 4 rigid transform (InvalidParameter otherwise) or None.");
+  c.def("save", [](PyMapper& self, const py::object& path, bool overwrite, const ReturnRecord* returns,
+                   const std::optional<PoseArray>& world_from_sensor) {
     const std::string p = path_string(path);
+    const std::optional<Eigen::Isometry3d> pose = pose_or_mappers(self, world_from_sensor);  // checked before the file
     OutputFile out = output_file(p, "save", overwrite, &is_map_file, "a map");
     with_mapper(self, [&](Mapper& mp) {
-      save_map(out.staged(), mp.grid(), mp.model().params(), returns ? *returns : ReturnRecord());
+      save_map(out.staged(), mp.grid(), mp.model().params(), returns ? *returns : ReturnRecord(), pose);
     });
     out.commit();
   }, py::arg("path"), py::arg("overwrite") = false, py::arg("returns") = py::none(),
+        py::arg("world_from_sensor") = py::none(),
         "Writes the grid and its sensor model (atomically: temp file + rename), with the planner's "
-        "ReturnRecord when given (InvalidInput when it is of another grid). An existing file is replaced "
-        "when it is a map occ_improve wrote, or with overwrite=True; else IoError, and the file is kept. "
-        "Raises IoError.");
+        "ReturnRecord when given (InvalidInput when it is of another grid) and the pose of the map's sensor "
+        "frame: world_from_sensor when given (4 x 4 rigid transform), else the Mapper's world_from_sensor "
+        "(None: no pose). An existing file is replaced when it is a map occ_improve wrote, or with "
+        "overwrite=True; else IoError, and the file is kept. Raises IoError.");
   // Both loaders read the whole file; the record is what save(returns=...) wrote, else an empty one.
   const auto load = [](const py::object& path) {
     const std::string p = path_string(path);
     return run_interruptible([&] {
       LoadedMap loaded = load_map(p);
-      return std::make_pair(std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model))),
+      return std::make_pair(std::make_unique<PyMapper>(Mapper(std::move(loaded.grid), SensorModel(loaded.model)),
+                                                       loaded.world_from_sensor),
                             std::move(loaded.returns));
     });
   };
   m.def("load_map", [load](const py::object& path) { return std::move(load(path).first); }, py::arg("path"),
-        "A Mapper continuing from a saved map (surface and improvement recomputed). Raises IoError when "
+        "A Mapper continuing from a saved map (surface and improvement recomputed; its world_from_sensor the "
+        "pose saved with it, else None). Raises IoError when "
         "the file cannot be read, FormatError when it is not a valid map.");
   m.def("load_map_and_returns", [load](const py::object& path) {
     auto [mapper, returns] = load(path);
@@ -118,21 +172,6 @@ void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
 }
 
 #ifdef OCC_IMPROVE_PYTHON_WITH_OCTOMAP
-// The pose arrives as a numpy array, not through pybind11's Eigen caster: GCC 12 gives a false
-// maybe-uninitialized warning inside that caster for fixed-size matrices.
-using PoseArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
-
-Eigen::Isometry3d pose_from(const std::optional<PoseArray>& world_from_sensor) {
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  if (!world_from_sensor) return pose;
-  const PoseArray& m = *world_from_sensor;
-  if (m.ndim() != 2 || m.shape(0) != 4 || m.shape(1) != 4)
-    throw InvalidParameter("world_from_sensor must be a 4 x 4 matrix");
-  for (int r = 0; r < 4; ++r)
-    for (int c = 0; c < 4; ++c) pose.matrix()(r, c) = m.at(r, c);  // add_to_octree rejects a non-rigid one
-  return pose;
-}
-
 void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
   py::enum_<FreeLeafRule>(m, "FreeLeafRule", "Which OcTree leaves the export writes free.")
       .value("crossed", FreeLeafRule::crossed,
@@ -160,7 +199,7 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
     const std::string p = path_string(path);
     require_octomap_output_path(p);  // before any work, as the tools do
     OutputFile out = output_file(p, "export_octomap", overwrite, &is_octomap_file, "an OctoMap file");
-    const Eigen::Isometry3d pose = pose_from(world_from_sensor);
+    const Eigen::Isometry3d pose = pose_or_mappers(self, world_from_sensor).value_or(Eigen::Isometry3d::Identity());
     const OctomapExportReport written = with_mapper(self, [&](Mapper& mp) {
       OctomapExportReport report;
       const auto tree = to_octree(mp.grid(), pose, resolution_m, options, &report);
@@ -172,7 +211,8 @@ void bind_octomap(py::module_& m, py::class_<PyMapper>& c) {
   }, py::arg("path"), py::arg("resolution_m"), py::arg("world_from_sensor") = py::none(),
         py::arg("options") = OctomapExportOptions{}, py::arg("overwrite") = false,
         "Writes the grid as an OctoMap .bt (maximum likelihood) or .ot (log-odds) file at resolution_m, "
-        "seen from world_from_sensor (4 x 4 rigid transform, default identity). An existing file is replaced "
+        "seen from world_from_sensor (4 x 4 rigid transform; None: the Mapper's world_from_sensor, else the "
+        "identity). An existing file is replaced "
         "when occ_improve wrote it, or with overwrite=True; else IoError before any work.");
 }
 #endif

@@ -627,6 +627,81 @@ TEST_F(Tools, FramesMostlyOutsideTheFirstViewAreNamed) {
   }
 }
 
+// A 7-Scenes layout of 64 x 48 frames of a wall at 2 m, frame k seen turned k x 2 deg about the camera's y
+// axis and moved 5 cm along x; `frames` names which k the folder holds.
+std::string posed_wall_folder(const fs::path& folder, std::initializer_list<int> frames) {
+  fs::create_directories(folder);
+  std::ofstream(folder / "camera-intrinsics.txt") << "60 0 31.5\n0 60 23.5\n0 0 1\n";
+  for (const int k : frames) {
+    const std::string stem = (folder / ("frame-00000" + std::to_string(k))).string();
+    occ_improve::write_png(stem + ".depth.png", occ_improve::Image16{64, 48, std::vector<std::uint16_t>(64 * 48, 2000)});
+    const double a = k * 2.0 * M_PI / 180, c = std::cos(a), s = std::sin(a);
+    std::ofstream(stem + ".pose.txt") << c << " 0 " << s << " " << 0.05 * k << "\n0 1 0 0\n" << -s << " 0 " << c
+                                      << " 0\n0 0 0 1\n";
+  }
+  return folder.string();
+}
+
+// The map file kept no pose: frames with poses added after a -load were moved into the first NEW frame's
+// view, not the map's (a held-out trial: a 7-Scenes chain differed from the same frames fused in one run on
+// 68 % of its pixels, by a median 230 mm, without a word). The map is saved with its view's pose and a
+// -load places the frames by it, in occ_improve_map and occ_improve_live (a depth folder, positional
+// files): the chain equals one run over every frame. A map saved without a pose refuses posed frames.
+TEST_F(Tools, PosedFramesAfterALoadGoIntoTheMapsView) {
+  const std::string first = posed_wall_folder(folder_ / "first", {0}), rest = posed_wall_folder(folder_ / "rest", {1, 2});
+  const std::string all = posed_wall_folder(folder_ / "all", {0, 1, 2});
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, all + " -o whole").exit_code, 0);
+  const std::string whole = file_contents(folder_ / "whole" / "surface.pcd");
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, first + " -o a -save a.occmap").exit_code, 0);
+  const ToolRun chained = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load a.occmap " + rest + " -o b -save b.occmap");
+  ASSERT_EQ(chained.exit_code, 0) << chained.err;
+  EXPECT_NE(chained.out.find("poses applied: every frame moved into the loaded map's sensor frame"), std::string::npos)
+      << chained.out;
+  EXPECT_EQ(file_contents(folder_ / "b" / "surface.pcd"), whole);
+  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + first + " -o la -save la.occmap").exit_code, 0);
+  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + rest + " -load la.occmap -o lb").exit_code, 0);
+  EXPECT_EQ(file_contents(folder_ / "lb" / "surface.pcd"), whole);
+  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, rest + " -load a.occmap -o lc").exit_code, 0);
+  EXPECT_EQ(file_contents(folder_ / "lc" / "surface.pcd"), whole);
+  // Without the map's pose the new frames' view is unknown: refused, naming -no_poses.
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, first + " -no_poses -o n -save n.occmap").exit_code, 0);
+  for (const std::string& args : {"-load n.occmap " + rest + " -o r1", "-depth_dir " + rest + " -load n.occmap -o r2"}) {
+    const std::string tool = args.rfind("-depth_dir", 0) == 0 ? OCC_IMPROVE_LIVE_EXECUTABLE : OCC_IMPROVE_MAP_EXECUTABLE;
+    const ToolRun refused = run(tool, args);
+    EXPECT_EQ(refused.exit_code, 1) << args << ": " << refused.err;
+    EXPECT_NE(refused.err.find("-load n.occmap holds no pose"), std::string::npos) << refused.err;
+    EXPECT_NE(refused.err.find("-no_poses"), std::string::npos) << refused.err;
+  }
+  // occ_to_octomap places a loaded map's tree by its saved pose, as it places the frames' own tree.
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-load b.occmap -resolution 0.05 -o from_map.bt").exit_code, 0);
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, all + " -resolution 0.05 -o from_frames.bt").exit_code, 0);
+  EXPECT_EQ(file_contents(folder_ / "from_map.bt"), file_contents(folder_ / "from_frames.bt"));
+}
+
+// -save dropped the planner's return record: re-planned after a -load, a simulated acquisition forgot which
+// rays never return (a held-out trial: 481 silent rays in the next 4096-ray plan instead of 31, its expected
+// gain 100x too high). -simulate -save keeps it, a -load -save passes it on, and -simulate -load goes on
+// from it (it ignored -load).
+TEST_F(Tools, TheReturnRecordSurvivesSaveAndLoad) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);
+  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + wall + " -budget 300 -max_shots 3 -o sim -save sim.occmap").exit_code, 0);
+  const auto asked_in = [](const std::string& out) {
+    const std::size_t at = out.find("return record: ");
+    unsigned long long asked = 0;
+    if (at == std::string::npos || std::sscanf(out.c_str() + at, "return record: %llu rays asked", &asked) != 1) return -1LL;
+    return static_cast<long long>(asked);
+  };
+  const ToolRun plan = run(OCC_PLAN_EXECUTABLE, "-load sim.occmap -budget 100 -o plan");
+  ASSERT_EQ(plan.exit_code, 0) << plan.err;
+  EXPECT_EQ(asked_in(plan.out), 900) << plan.out;
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, "-load sim.occmap -o m -save resaved.occmap").exit_code, 0);
+  EXPECT_EQ(asked_in(run(OCC_PLAN_EXECUTABLE, "-load resaved.occmap -budget 100 -o plan2").out), 900);
+  const ToolRun more = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + wall + " -load sim.occmap -budget 300 -max_shots 2 -o sim2 -save sim2.occmap");
+  ASSERT_EQ(more.exit_code, 0) << more.err;
+  EXPECT_NE(more.out.find("continuing the map loaded from sim.occmap: 900 rays asked before"), std::string::npos) << more.out;
+  EXPECT_EQ(asked_in(run(OCC_PLAN_EXECUTABLE, "-load sim2.occmap -budget 100 -o plan3").out), 1500);
+}
+
 // occ_improve_live exited 0 after skipping a frame it could not use, where the other tools refuse the input:
 // a script checking the exit code took a map of fewer frames than it gave. The frame is named, the maps of
 // the others are written, and the exit code is 1.

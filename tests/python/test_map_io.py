@@ -153,6 +153,39 @@ def test_a_return_record_saved_with_the_map_comes_back(tmp_path, sample):
 
 
 
+def test_the_pose_of_the_maps_view_is_saved_and_loaded_with_it(tmp_path, paper_mapper):
+    """Frames with poses need the map's own pose to be placed in its view after a load (the tools' -load
+    moved them into their first frame's view instead: a misaligned map, without a word)."""
+    assert paper_mapper.world_from_sensor is None
+    pose = np.eye(4)
+    c, s = np.cos(0.4), np.sin(0.4)
+    pose[:3, :3] = [[c, -s, 0], [s, c, 0], [0, 0, 1]]
+    pose[:3, 3] = [1.0, 2.0, -0.5]
+    paper_mapper.save(tmp_path / "given.occmap", world_from_sensor=pose)
+    loaded = oi.load_map(tmp_path / "given.occmap")
+    assert np.allclose(loaded.world_from_sensor, pose, atol=1e-12)
+    assert_same_maps(loaded, paper_mapper)
+    # The Mapper's own pose is what save() writes when given none; a copy is read, never a view.
+    loaded.world_from_sensor[0, 3] = 99.0
+    assert loaded.world_from_sensor[0, 3] == pytest.approx(1.0)
+    loaded.save(tmp_path / "kept.occmap")
+    assert np.allclose(oi.load_map(tmp_path / "kept.occmap").world_from_sensor, pose, atol=1e-12)
+    loaded.world_from_sensor = None
+    loaded.save(tmp_path / "none.occmap", overwrite=True)
+    assert oi.load_map(tmp_path / "none.occmap").world_from_sensor is None
+    # Not a rigid transform: refused, nothing written, the Mapper's pose unchanged.
+    scaled = pose.copy()
+    scaled[:3, :3] *= 2
+    with pytest.raises(oi.InvalidParameter, match="rigid"):
+        paper_mapper.save(tmp_path / "scaled.occmap", world_from_sensor=scaled)
+    with pytest.raises(oi.InvalidParameter, match="rigid"):
+        paper_mapper.world_from_sensor = scaled
+    with pytest.raises(oi.InvalidParameter, match="4 x 4"):
+        paper_mapper.world_from_sensor = np.eye(3)
+    assert paper_mapper.world_from_sensor is None
+    assert not (tmp_path / "scaled.occmap").exists()
+
+
 def test_bytes_paths_are_file_names_and_a_nul_is_refused(tmp_path, paper_mapper):
     # os.fsdecode, as open() reads them: str() of bytes made a file named "b'...'".
     path = os.fsencode(tmp_path / "bytes.occmap")

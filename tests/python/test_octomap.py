@@ -31,6 +31,18 @@ def test_bt_and_ot_files_are_written_with_occupied_and_free_space(tmp_path):
     assert moved.occupied_written == pytest.approx(report.occupied_written, rel=0.2)
 
 
+def test_the_mappers_own_pose_places_the_tree_when_none_is_given(tmp_path):
+    mapper = small_mapper()
+    pose = np.eye(4)
+    pose[:3, 3] = (1.0, 2.0, 0.5)
+    mapper.export_octomap(tmp_path / "given.bt", 0.05, world_from_sensor=pose)
+    mapper.export_octomap(tmp_path / "identity.bt", 0.05)
+    mapper.world_from_sensor = pose  # as load_map sets it from a map saved with its pose
+    mapper.export_octomap(tmp_path / "own.bt", 0.05)
+    assert (tmp_path / "own.bt").read_bytes() == (tmp_path / "given.bt").read_bytes()
+    assert (tmp_path / "own.bt").read_bytes() != (tmp_path / "identity.bt").read_bytes()
+
+
 def test_free_leaves_rule_is_an_option(tmp_path):
     """crossed (the default) frees the leaves free space crosses, as OctoMap does; wholly_free fewer, no others."""
     mapper = small_mapper()

@@ -3,6 +3,7 @@
 #include "occ_improve/io/atomic_file.hpp"
 #include "occ_improve/cancel.hpp"
 #include "occ_improve/errors.hpp"
+#include "occ_improve/geometry/rotation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -133,9 +134,12 @@ bool has_depth_code(const GeometryParams& g) {
 // Version 3 holds the binnings it has a code for (angular: 0 spherical, 1 pinhole, no row elevations; depth:
 // 0 uniform, 1 inverse_depth): such maps are written as version 3, byte for byte as before, so that older
 // builds still read them.
-std::uint32_t version_for(const GeometryParams& g) {
+// A map with a pose is version 5 (version 4's geometry, then the pose after the return record), so that
+// maps without one stay readable by builds before it.
+std::uint32_t version_for(const GeometryParams& g, bool with_pose) {
+  if (with_pose) return 5u;
   const bool has_code = g.angular_binning == AngularBinning::spherical || g.angular_binning == AngularBinning::pinhole;
-  return has_code && g.row_elevations_rad.empty() && has_depth_code(g) ? 3u : kMapFormatVersion;
+  return has_code && g.row_elevations_rad.empty() && has_depth_code(g) ? 3u : 4u;
 }
 
 void write_tag(Writer& w, const std::string& tag) {
@@ -379,17 +383,52 @@ ReturnRecord read_returns(Reader& r, const GridGeometry& g, std::uint32_t versio
   }
 }
 
+// Since version 5: the rotation row by row, then the translation [m].
+void write_pose(Writer& w, const Eigen::Isometry3d& pose) {
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) w.put<double>(pose.linear()(i, j));
+  for (int i = 0; i < 3; ++i) w.put<double>(pose.translation()(i));
+}
+
+// A rigid motion: finite, its rotation within kRotationTolerance of one (taken as the nearest; a pose
+// written by save_map is one already).
+std::optional<Eigen::Isometry3d> rigid_motion(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
+  const std::optional<Eigen::Matrix3d> r = nearest_rotation(rotation);
+  if (!r || !translation.allFinite()) return std::nullopt;
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = *r;
+  pose.translation() = translation;
+  return pose;
+}
+
+std::optional<Eigen::Isometry3d> read_pose(Reader& r, std::uint32_t version) {
+  if (version < 5) return std::nullopt;
+  Eigen::Matrix3d rotation;
+  Eigen::Vector3d translation;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) rotation(i, j) = r.get<double>("pose");
+  for (int i = 0; i < 3; ++i) translation(i) = r.get<double>("pose");
+  const std::optional<Eigen::Isometry3d> pose = rigid_motion(rotation, translation);
+  if (!pose) r.fail("the pose is not a rigid motion (a rotation and a finite translation)");
+  return pose;
+}
+
 }  // namespace
 
 void save_map(const std::string& path, const ColumnGrid& grid, const SensorModelParams& model,
-              const ReturnRecord& returns) {
+              const ReturnRecord& returns, const std::optional<Eigen::Isometry3d>& world_from_sensor) {
   const GridGeometry& geometry = grid.geometry();
   if (returns.size()) returns.check_matches(geometry.width(), geometry.height());
+  std::optional<Eigen::Isometry3d> pose;
+  if (world_from_sensor) {
+    pose = rigid_motion(world_from_sensor->linear(), world_from_sensor->translation());
+    if (!pose) throw InvalidParameter("save_map: world_from_sensor is not a rigid motion (a rotation and a finite translation)");
+  }
   Writer w;
   w.reserve(256 + grid.stored_voxel_count() * sizeof(float) + grid.touched_column_count() * 16);
   for (char c : kMagic) w.put<char>(c);
   w.put<std::uint32_t>(kByteOrderMarker);
-  const std::uint32_t version = version_for(geometry.params());
+  const std::uint32_t version = version_for(geometry.params(), pose.has_value());
   w.put<std::uint32_t>(version);
   write_geometry(w, geometry.params(), version);
   write_model(w, model);
@@ -412,6 +451,7 @@ void save_map(const std::string& path, const ColumnGrid& grid, const SensorModel
     w.put_floats(column.window.data(), column.window.size());
   }
   write_returns(w, returns);
+  if (pose) write_pose(w, *pose);
   std::vector<char>& bytes = w.bytes();
   w.put<std::uint64_t>(checksum(bytes.data(), bytes.size()));
 
@@ -466,9 +506,10 @@ LoadedMap load_map(const std::string& path, std::size_t memory_cap_bytes) {
   }
   // After the cap: a file claiming a huge grid is a ResourceLimit whatever its sigmas.
   validated(r, "sensor model", [&] { model.validate_for(geometry); });
-  LoadedMap loaded{ColumnGrid(GridGeometry(geometry), options), model, {}};
+  LoadedMap loaded{ColumnGrid(GridGeometry(geometry), options), model, {}, std::nullopt};
   read_columns(r, loaded.grid);
   loaded.returns = read_returns(r, loaded.grid.geometry(), version);
+  loaded.world_from_sensor = read_pose(r, version);
   if (r.remaining() != 0) r.fail(std::to_string(r.remaining()) + " unexpected bytes after the last record");
   return loaded;
 }

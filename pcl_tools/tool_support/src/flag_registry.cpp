@@ -240,7 +240,8 @@ std::vector<FlagSpec> plan_and_octomap_flags() {
       bounded(value_flag("-resolution", K::number, "R", kOctomap, "OcTree leaf size [m]", "0.02"), 0, kInf, true),
       value_flag("-pose", K::text, "x,y,z,qx,qy,qz,qw", kOctomap,
                  "sensor pose in the world (world <- optical sensor frame, unit quaternion); one per -load", "",
-                 "the first frame's pose when the input has poses, else from -frame"),
+                 "the pose saved with the map (-save of a posed run), the first frame's pose when the input\n"
+                 "has poses, else from -frame"),
       choice("-frame", {"z_up", "optical"}, kOctomap,
              "world frame without poses: z_up puts the sensor at the origin looking along x with z up\n"
              "(ROS, octovis); optical keeps the camera's z forward, y down", "z_up"),

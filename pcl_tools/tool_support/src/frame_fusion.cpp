@@ -142,7 +142,9 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
   for (const std::string& warning : {scenes.warning(), out_of_view.warning()})
     if (!warning.empty()) std::fprintf(stderr, "%s\n", warning.c_str());
   fused.first_pose = frames.first_pose();
-  fused.poses = fused.first_pose ? "poses applied: every frame moved into the first frame's sensor frame" : "no poses";
+  fused.poses = frames.moved_into_loaded_map() ? "poses applied: every frame moved into the loaded map's sensor frame"
+                : fused.first_pose && !frames.loads_map() ? "poses applied: every frame moved into the first frame's sensor frame"
+                                                          : "no poses";
   if (fused.frames > 0 && fused.insertion.points_inserted == 0) throw InvalidInput(nothing_inserted(fused));
   return fused;
 }

@@ -169,12 +169,40 @@ std::optional<ToolFrame> ToolFrameReader::read_next() {
     require_same_camera(*first_, frame);
     move_into_first_frame(options_, *first_, frame);
   } else {
+    if (map_path_) move_first_into_map(frame);
     first_ = frame_header(frame);
+    if (moved_into_map_) {  // the later frames go where the first went: into the map's view
+      first_->pose = map_pose_;
+      first_->pose_source = "the pose saved with " + *map_path_;
+    }
   }
   return frame;
 }
 
+void ToolFrameReader::into_loaded_map(const std::optional<Eigen::Isometry3d>& map_pose, const std::string& map_path) {
+  map_path_ = map_path;
+  map_pose_ = map_pose;
+}
+
+// Moved into the first frame's view instead, the new frames landed where the map's own view was assumed to
+// be: a 7-Scenes chain was off by more than 20 mm on 68 % of its pixels, without a word.
+void ToolFrameReader::move_first_into_map(ToolFrame& frame) {
+  if (!options_.use_poses || !frame.pose) return;
+  if (!map_pose_) refuse_posed_frames_into_unposed_map(*map_path_, frame.name, frame.pose_source);
+  const Eigen::Isometry3d into_map = map_pose_->inverse() * *frame.pose;
+  pcl::transformPointCloud(frame.cloud, frame.cloud, into_map.matrix().cast<float>());
+  moved_into_map_ = true;
+}
+
+void refuse_posed_frames_into_unposed_map(const std::string& map_path, const std::string& frame,
+                                          const std::string& pose_source) {
+  throw InvalidInput("-load " + map_path + " holds no pose (saved from frames without poses, or by a build before map "
+                     "format 5), so '" + frame + "' cannot be placed in its view by its pose (" + pose_source +
+                     "): give -no_poses if the frames are in the map's sensor frame already");
+}
+
 std::optional<Eigen::Isometry3d> ToolFrameReader::first_pose() const {
+  if (map_path_) return map_pose_;  // the frames are in the map's view: moved there by their poses, or taken so
   if (!first_ || !options_.use_poses) return std::nullopt;
   return first_->pose;
 }

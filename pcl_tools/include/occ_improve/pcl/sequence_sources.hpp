@@ -140,6 +140,9 @@ DepthSequence scan_depth_sequence(const std::string& directory);
 struct DepthSequenceOptions {
   float fps = 0.0f;                 ///< 0: as fast as possible
   bool use_poses = true;            ///< transform into the first frame's sensor frame when poses exist
+  /// With poses: the sensor frame the frames are moved into, camera-to-world (a loaded map's pose); unset:
+  /// the first posed frame's.
+  std::optional<Eigen::Isometry3d> world_from_map;
   std::optional<DepthEncoding> encoding;  ///< overrides the layout's encoding
 };
 
@@ -155,6 +158,9 @@ public:
   const DepthSequence& sequence() const { return sequence_; }
   /// True when frames are transformed by their poses.
   bool posesApplied() const { return use_poses_; }
+  /// The camera-to-world of the frame they are moved into (posesApplied only): the options' world_from_map,
+  /// else the first posed frame's.
+  Eigen::Isometry3d worldFromMap() const { return world_to_first_.inverse(); }
   /// Frames skipped for want of a pose while others have one (0 without poses).
   std::size_t unposedFrames() const;
 

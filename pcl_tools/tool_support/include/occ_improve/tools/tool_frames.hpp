@@ -44,8 +44,20 @@ public:
   std::optional<ToolFrame> next();
   /// Time spent reading so far [s].
   double read_seconds() const { return read_seconds_; }
-  /// The first frame's camera-to-world when poses are applied (the grid's frame in the world), once read.
+  /// The grid's sensor frame in the world: the loaded map's pose when the frames go into a loaded map
+  /// (into_loaded_map; unset when it has none), else, once the first frame is read, its camera-to-world
+  /// when poses are applied.
   std::optional<Eigen::Isometry3d> first_pose() const;
+  /// The frames go into a map loaded from `map_path` (call before the first next()): with poses, every
+  /// frame, the first too, is moved into the map's sensor frame by `map_pose`; a posed first frame and a
+  /// map without a pose (saved from frames without poses, or before map format 5) are refused (InvalidInput
+  /// naming both and -no_poses), since the map's view in the world is unknown. Frames without poses are
+  /// taken in the map's view, as before.
+  void into_loaded_map(const std::optional<Eigen::Isometry3d>& map_pose, const std::string& map_path);
+  /// Whether the frames were moved into a loaded map's sensor frame by its pose.
+  bool moved_into_loaded_map() const { return moved_into_map_; }
+  /// Whether into_loaded_map was called.
+  bool loads_map() const { return map_path_.has_value(); }
   const ToolOptions& options() const { return options_; }
 
 private:
@@ -57,6 +69,10 @@ private:
   std::size_t next_ = 0;
   double read_seconds_ = 0;
   std::optional<ToolFrame> first_;  ///< its name and camera (the cloud is not kept)
+  std::optional<std::string> map_path_;          ///< into_loaded_map's
+  std::optional<Eigen::Isometry3d> map_pose_;    ///< into_loaded_map's
+  bool moved_into_map_ = false;
+  void move_first_into_map(ToolFrame& frame);
 };
 
 /// The built-in generated Kinect-like frame (samples/scene) as a tool frame, with its camera.
@@ -65,6 +81,12 @@ ToolFrame sample_tool_frame();
 /// Moves `frame` into the sensor frame of `first` by their poses (first^-1 * frame), when poses are used
 /// and `first` has one; refuses a frame without a pose then, and a posed frame after an unposed first.
 void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame);
+
+/// InvalidInput for posed frames going into a map loaded from `map_path` that holds no pose (saved from
+/// frames without poses, or before map format 5): where its view lies in the world is unknown, so the
+/// frames cannot be placed in it by their poses; names the frame, its pose's source and -no_poses.
+[[noreturn]] void refuse_posed_frames_into_unposed_map(const std::string& map_path, const std::string& frame,
+                                                       const std::string& pose_source);
 
 /// The frame's name, camera and pose without its points and colour: what the checks against a first frame
 /// (require_same_camera, move_into_first_frame) keep of it.
