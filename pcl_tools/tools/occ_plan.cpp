@@ -74,8 +74,13 @@ Source map_from_frames(const CommandLine& command_line, const ToolOptions& optio
       [&](const ToolFrame& frame) { return source.mapper->insert(span_of(frame.cloud)).insertion; });
   source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
   source.description = (use_sample ? std::string("built-in sample") : std::to_string(fused.frames) + " frame(s)") +
-                       ", preset " + preset.name + ", " + fused.camera + ", " +
-                       std::to_string(fused.insertion.points_inserted) + " points";
+                       ", preset " + preset.name + ", " + fused.camera + "\n" + describe_points(fused.insertion);
+  // A scene nearer than the range's start (or beyond its end) leaves the map without data: the plan asks
+  // for everything, as it should, but the user is told why.
+  if (!has_points_in_depth_range(fused.insertion))
+    std::fprintf(stderr, "warning: %s\n",
+                 nothing_in_depth_range(describe_inputs(fused), preset.geometry, fused.insertion,
+                                        "the map holds no return, every ray plans as unseen").c_str());
   return source;
 }
 

@@ -48,18 +48,6 @@ Image16 label_id_image(const Segmentation& segmentation) {
   return image;
 }
 
-// Segments need returns inside the grid: a frame whose points all lie beyond (or before) the depth range
-// gave empty outputs and exit 0, its points counted nowhere.
-void require_returns_in_depth_range(const std::string& name, const SensorPreset& preset, const InsertionReport& in) {
-  const std::size_t valid = in.points_received - in.skipped_invalid - in.skipped_outside_fov - in.skipped_masked;
-  if (valid == 0 || in.points_inserted > in.beyond_depth_range + in.nearer_than_depth_range) return;
-  char range[64];
-  std::snprintf(range, sizeof range, "%.2f-%.2f m", preset.geometry.depth_min_m, preset.geometry.depth_max_m);
-  throw InvalidInput("no point of '" + name + "' lies in the depth range " + range + " (" +
-                     std::to_string(in.beyond_depth_range) + " beyond it, " + std::to_string(in.nearer_than_depth_range) +
-                     " nearer than its start): nothing to segment (-depth_max sets its far end)");
-}
-
 int run(const CommandLine& command_line) {
   const ToolOptions options = parse_tool_options(command_line);
   if (options.inputs.size() != 1) throw InvalidParameter("give exactly one input frame (see -h)");
@@ -84,7 +72,11 @@ int run(const CommandLine& command_line) {
   if (mask) tool_mask_columns(command_line, GridGeometry(preset.geometry), *mask);  // refused naming -mask
   const CloudSegmentation result = segment_cloud(frame.cloud, preset, params, options.grid, mask ? &*mask : nullptr);
   throw_if_stop_requested();
-  require_returns_in_depth_range(frame.name, preset, result.mapping.insertion);
+  // Segments need returns inside the grid: a frame whose points all lie beyond (or before) the depth range
+  // gave empty outputs and exit 0, its points counted nowhere.
+  if (!has_points_in_depth_range(result.mapping.insertion))
+    throw InvalidInput(nothing_in_depth_range("'" + frame.name + "'", preset.geometry, result.mapping.insertion,
+                                              "nothing to segment"));
 
   pcl::PointCloud<pcl::PointXYZRGBL> labelled;
   labelled.width = frame.cloud.width;

@@ -174,6 +174,21 @@ TEST_F(Tools, EveryToolRefusesACloudInMillimetres) {
   }
 }
 
+// A scene nearer than the depth range's start: -simulate ran 92 shots (4.9 frames' worth of rays) against it,
+// the map empty and every shot's gain the same; occ_plan planned it without a word. The simulation is
+// refused, the plan warns, both name the frame and the counts.
+TEST_F(Tools, ASceneOutsideTheDepthRangeIsSaidSo) {
+  const std::string near = write_cloud("near.pcd", 0.3f);
+  const ToolRun sim = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + near + " -budget 300 -o sim");
+  expect_one_error_line_naming(sim, "near.pcd", "occ_improve_live -simulate", false);
+  EXPECT_NE(sim.err.find("(0 beyond it, 3072 nearer than its start): nothing to acquire"), std::string::npos) << sim.err;
+  EXPECT_FALSE(fs::exists(folder_ / "sim"));
+  const ToolRun plan = run(OCC_PLAN_EXECUTABLE, near + " -budget 300 -o plan");
+  ASSERT_EQ(plan.exit_code, 0) << plan.err;
+  EXPECT_NE(plan.err.find("warning: no point of '" + near + "' lies in the depth range"), std::string::npos) << plan.err;
+  EXPECT_NE(plan.out.find("3072 used nearer than its start"), std::string::npos) << plan.out;
+}
+
 // A refused run left the folders it had created for -o (mkdir -p of the output's parents) behind, empty.
 TEST_F(Tools, ARefusedRunRemovesTheEmptyFoldersItCreated) {
   const std::string nan = write_cloud("nan.pcd", NAN);

@@ -87,8 +87,7 @@ namespace {
 // Why no point of the frames was inserted, naming them: the mask, or the field of view.
 std::string nothing_inserted(const FusedFrames& fused) {
   const InsertionReport& in = fused.insertion;
-  const std::string inputs = fused.frames == 1 ? "'" + fused.first_name + "'"
-                                               : std::to_string(fused.frames) + " frames from '" + fused.first_name + "'";
+  const std::string inputs = describe_inputs(fused);
   const std::size_t valid = in.points_received - in.skipped_invalid;
   if (in.skipped_masked > 0 && in.skipped_outside_fov == 0)
     return "-mask leaves out all " + std::to_string(valid) + " valid points of " + inputs;
@@ -159,6 +158,25 @@ std::string describe_points(const InsertionReport& in) {
                 in.beyond_depth_range, in.nearer_than_depth_range);
   if (in.skipped_masked > 0) return line + std::string("; ") + std::to_string(in.skipped_masked) + " skipped outside -mask";
   return line;
+}
+
+bool has_points_in_depth_range(const InsertionReport& in) {
+  return in.points_inserted == 0 || in.points_inserted > in.beyond_depth_range + in.nearer_than_depth_range;
+}
+
+std::string describe_inputs(const FusedFrames& fused) {
+  return fused.frames == 1 ? "'" + fused.first_name + "'"
+                           : std::to_string(fused.frames) + " frames from '" + fused.first_name + "'";
+}
+
+std::string nothing_in_depth_range(const std::string& inputs, const GeometryParams& g, const InsertionReport& in,
+                                   const std::string& consequence) {
+  char range[64];
+  std::snprintf(range, sizeof range, "%.2f-%.2f m", g.depth_min_m, g.depth_max_m);
+  // Only the far end is a flag: the start is the sensor's own (a Kinect returns nothing nearer).
+  const std::string hint = in.beyond_depth_range > 0 ? "; -depth_max sets its far end" : "; its start is the preset's";
+  return "no point of " + inputs + " lies in the depth range " + range + " (" + std::to_string(in.beyond_depth_range) +
+         " beyond it, " + std::to_string(in.nearer_than_depth_range) + " nearer than its start): " + consequence + hint;
 }
 
 }  // namespace occ_improve

@@ -104,4 +104,15 @@ FusedFrames fuse_tool_frames(ToolFrameReader& frames, ProgressLine& progress,
 /// The points line of a tool's summary: read, used, skipped and beyond the depth range.
 std::string describe_points(const InsertionReport& report);
 
+/// Whether some valid point lies inside the depth range (a return the grid holds); true without valid points.
+bool has_points_in_depth_range(const InsertionReport& report);
+/// "no point of INPUTS lies in the depth range 0.50-8.00 m (N beyond it, M nearer than its start): CONSEQUENCE;
+/// -depth_max sets its far end" (all nearer: "; its start is the preset's"): what a tool says (an error or
+/// a warning, its own) when has_points_in_depth_range is false. `inputs` is quoted by the caller:
+/// "'far.pcd'", describe_inputs(fused).
+std::string nothing_in_depth_range(const std::string& inputs, const GeometryParams& geometry, const InsertionReport& report,
+                                   const std::string& consequence);
+/// "'NAME'" for one frame, "N frames from 'NAME'" for more: the inputs of a fused run, as messages name them.
+std::string describe_inputs(const FusedFrames& fused);
+
 }  // namespace occ_improve
