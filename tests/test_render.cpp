@@ -137,6 +137,13 @@ TEST(Render, CurveRunsFromTheFirstPointToTheLastInsideItsFrame) {
   EXPECT_EQ(pixel(50, 25), blue);   // a straight line through the middle
   EXPECT_EQ(pixel(0, 0), (std::array<std::uint8_t, 3>{0, 0, 0}));  // the frame
   EXPECT_EQ(pixel(90, 5), (std::array<std::uint8_t, 3>{255, 255, 255}));
+  // A series constant to six digits is a flat line at the top (the axis holds 0), not its rounding.
+  const Image flat = render_curve({0, 1, 2}, {293222.0, 293222.0 - 1e-6, 293222.0 + 1e-6}, 100, 50);
+  for (int y = 1; y < 49; ++y) {
+    const std::size_t i = (static_cast<std::size_t>(y) * 100 + 50) * 3;
+    const bool blue = flat.pixels[i] == 0 && flat.pixels[i + 1] == 64;
+    EXPECT_EQ(blue, y == 4) << "row " << y;
+  }
   EXPECT_THROW(render_curve({0}, {0}), InvalidInput);
   EXPECT_THROW(render_curve({0, 1}, {0}), InvalidInput);
   EXPECT_THROW(render_curve({0, 1}, {0, 1}, 8, 8), InvalidParameter);

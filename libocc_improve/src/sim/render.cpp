@@ -186,7 +186,10 @@ Image render_curve(const std::vector<double>& x, const std::vector<double>& y, i
   // Plain values, not structured bindings: lambdas may not capture those before C++20 (clang refuses).
   const auto x_range = std::minmax_element(x.begin(), x.end());
   const auto y_range = std::minmax_element(y.begin(), y.end());
-  const double x_lo = *x_range.first, x_hi = *x_range.second, y_lo = *y_range.first, y_hi = *y_range.second;
+  // The y axis spans 0 too: scaled from its own minimum to its maximum, a gain constant to six digits
+  // (293222 on every shot) filled the plot with a jagged curve of its rounding.
+  const double x_lo = *x_range.first, x_hi = *x_range.second;
+  const double y_lo = std::min(*y_range.first, 0.0), y_hi = std::max(*y_range.second, 0.0);
   // A margin of 4 pixels inside the frame; a constant series sits in the middle.
   const auto to_px = [&](double v) { return x_hi > x_lo ? 4 + (v - x_lo) / (x_hi - x_lo) * (width - 9) : width / 2.0; };
   const auto to_py = [&](double v) { return y_hi > y_lo ? height - 5 - (v - y_lo) / (y_hi - y_lo) * (height - 9) : height / 2.0; };

@@ -36,8 +36,10 @@ constexpr std::uint8_t kNotObservableGrey = 128;
 /// Throws InvalidInput for a colour image of another size, InvalidParameter for a weight outside [0, 1].
 Image render_overlay(const ImprovementMap& map, const Image& colour, double improvement_weight = 0.5);
 
-/// RGB line plot of y against x (a polyline in blue on white inside a black frame), each axis scaled from
-/// its minimum to its maximum; for a quick look at a run (the numbers go in a CSV beside it). Throws
+/// RGB line plot of y against x (a polyline in blue on white inside a black frame), x scaled from its
+/// minimum to its maximum, y over the smallest range that holds its values and 0 (so that a nearly
+/// constant series reads flat, not as its rounding); for a quick look at a run (the numbers go in a CSV
+/// beside it). Throws
 /// InvalidInput when x and y differ in length or hold fewer than 2 points, InvalidParameter for a size
 /// under 16 x 16.
 Image render_curve(const std::vector<double>& x, const std::vector<double>& y, int width = 640, int height = 400);
