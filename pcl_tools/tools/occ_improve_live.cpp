@@ -150,7 +150,7 @@ void require_returns_to_acquire(const std::string& name, const GeometryParams& g
 int run_simulation(const CommandLine& command_line, const ToolOptions& options, const RegionOptions& regions,
                    OutputFolder& out, MapSaveTarget& save, std::optional<LoadedMap> loaded, const std::string& load_path) {
   const std::string frame_path = *command_line.text("-simulate");
-  const int budget = *command_line.integer("-budget"), max_shots = *command_line.integer("-max_shots");
+  const int max_shots = *command_line.integer("-max_shots");
   const ToolFrame frame = read_tool_frame(options, single_frame_source(frame_path, "-simulate"));
   SensorPreset preset = options.preset_for_camera(frame.camera);
   if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
@@ -164,7 +164,7 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   } else if (options.use_poses) {
     with.world_from_map = frame.pose;
   }
-  std::printf("%s\npreset %s, %d rays per shot\n", describe_camera({frame}).c_str(), preset.name.c_str(), budget);
+  std::printf("%s\n", describe_camera({frame}).c_str());
   const std::vector<float> scene_depth = depth_of_organized(frame.cloud);
   require_returns_to_acquire(frame.name, preset.geometry, scene_depth);
   VirtualSensor sensor(scene_depth, *frame.camera);
@@ -178,7 +178,8 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
     std::printf("continuing the map loaded from %s: %llu rays asked before, %llu returned\n", load_path.c_str(),
                 static_cast<unsigned long long>(returns.total_asked()), static_cast<unsigned long long>(returns.total_returned()));
   PlanRequest request = plan_request_from_flags(command_line);
-  require_plan_fits(command_line, request, mapper.geometry().width(), mapper.geometry().height());
+  fit_plan_to_grid(command_line, request, mapper.geometry().width(), mapper.geometry().height());
+  std::printf("preset %s, %d rays per shot\n", preset.name.c_str(), request.budget_rays);
   request.candidates = mapper.column_mask();  // rays outside -mask are never asked for
   std::vector<SimulatedShot> shots;
   PlanMemory memory;  // the measured samples' triangulation, extended shot by shot

@@ -134,7 +134,7 @@ int run(const CommandLine& command_line) {
   ProgressLine progress(command_line, "frame");
   const Source source = load_path.empty() ? map_from_frames(command_line, options, use_sample, progress)
                                           : map_from_file(command_line, load_path, options);
-  require_plan_fits(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
+  fit_plan_to_grid(command_line, request, source.mapper->geometry().width(), source.mapper->geometry().height());
   request.candidates = source.mapper->column_mask();  // rays outside -mask are never taken (empty: all)
   const auto planned = SteadyClock::now();
   const Shot shot = plan_next_shot(*source.mapper, source.returns, request);

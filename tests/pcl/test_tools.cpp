@@ -189,6 +189,21 @@ TEST_F(Tools, ASceneOutsideTheDepthRangeIsSaidSo) {
   EXPECT_NE(plan.out.find("3072 used nearer than its start"), std::string::npos) << plan.out;
 }
 
+// A frame of fewer rays than the default budget (4096) was refused for a -budget the user never set; the
+// default shot now takes every ray of such a grid, and a -budget given beyond it is still refused.
+TEST_F(Tools, TheDefaultBudgetFitsASmallFrame) {
+  const std::string wall = write_cloud("wall.pcd", 2.0f);  // 64 x 48 = 3072 rays
+  const ToolRun sim = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + wall + " -max_shots 1 -o sim");
+  ASSERT_EQ(sim.exit_code, 0) << sim.err;
+  EXPECT_NE(sim.out.find("3072 rays per shot"), std::string::npos) << sim.out;
+  const ToolRun plan = run(OCC_PLAN_EXECUTABLE, wall + " -o plan");
+  ASSERT_EQ(plan.exit_code, 0) << plan.err;
+  EXPECT_NE(file_contents(folder_ / "plan" / "plan.txt").find("rays 3072"), std::string::npos);
+  const ToolRun given = run(OCC_PLAN_EXECUTABLE, wall + " -budget 4000 -o plan2");
+  EXPECT_EQ(given.exit_code, 1);
+  EXPECT_NE(given.err.find("-budget 4000 is more than the grid's 64 x 48 = 3072 rays"), std::string::npos) << given.err;
+}
+
 // A refused run left the folders it had created for -o (mkdir -p of the output's parents) behind, empty.
 TEST_F(Tools, ARefusedRunRemovesTheEmptyFoldersItCreated) {
   const std::string nan = write_cloud("nan.pcd", NAN);

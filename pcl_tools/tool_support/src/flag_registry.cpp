@@ -217,7 +217,7 @@ std::vector<FlagSpec> stream_flags() {
 std::vector<FlagSpec> plan_and_octomap_flags() {
   using K = FlagKind;
   return {
-      bounded(value_flag("-budget", K::integer, "N", kPlan, "rays per shot", "4096"), 1),
+      bounded(value_flag("-budget", K::integer, "N", kPlan, "rays per shot", "4096", "4096, or every ray of a smaller grid"), 1),
       choice("-shape", {"coarse_to_fine", "rays", "window", "decimation"}, kPlan,
              "shot shape: coarse-to-fine (a coverage pass, then one ray per block by the multi-scale\n"
              "improvement and the predictor's residual; docs/SELECTIVE.md), the best single rays, the best\n"

@@ -44,9 +44,10 @@ PlanRequest plan_request_from_flags(const CommandLine& command_line) {
   return request;
 }
 
-void require_plan_fits(const CommandLine& command_line, const PlanRequest& request, int width, int height) {
+void fit_plan_to_grid(const CommandLine& command_line, PlanRequest& request, int width, int height) {
   const long long columns = static_cast<long long>(width) * height;
   const std::string grid = std::to_string(width) + " x " + std::to_string(height);
+  if (!command_line.has("-budget") && request.budget_rays > columns) request.budget_rays = static_cast<int>(columns);
   if (request.budget_rays > columns)
     throw InvalidParameter("-budget " + std::to_string(request.budget_rays) + " is more than the grid's " + grid +
                            " = " + std::to_string(columns) + " rays");

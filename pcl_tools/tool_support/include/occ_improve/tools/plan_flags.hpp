@@ -10,8 +10,9 @@ namespace occ_improve {
 PlanRequest plan_request_from_flags(const CommandLine& command_line);
 
 /// The checks of PlanRequest::validate that depend on the grid, made first with the flags' names (the
-/// library's message names its struct fields): -budget beyond the grid's rays, a -window that does not
-/// fit in the grid or covers more than -budget rays. InvalidParameter.
-void require_plan_fits(const CommandLine& command_line, const PlanRequest& request, int width, int height);
+/// library's message names its struct fields): a -budget given beyond the grid's rays, a -window that does
+/// not fit in the grid or covers more than -budget rays: InvalidParameter. The default budget (4096) is
+/// lowered to a smaller grid's ray count: a tiny frame was refused for a budget the user never set.
+void fit_plan_to_grid(const CommandLine& command_line, PlanRequest& request, int width, int height);
 
 }  // namespace occ_improve
