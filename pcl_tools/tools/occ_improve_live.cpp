@@ -549,6 +549,21 @@ int run(const CommandLine& command_line) {
   std::atomic<bool> check_scene_failed{false};
   Pipeline pipeline(mapper, with_camera(pipeline_options, source.preset));
 
+  // The files' names in the order the pipeline receives them (its frame_index), for the warnings: recorded
+  // by a slot connected before the pipeline's, so a name is in before its frame is queued.
+  std::mutex names_mutex;
+  std::vector<std::string> received_names;
+  const boost::signals2::scoped_connection name_connection =
+      source.file_source ? source.grabber->registerCallback(std::function<void(const Pipeline::Cloud::ConstPtr&)>(
+                               [&](const Pipeline::Cloud::ConstPtr&) {
+                                 const std::lock_guard<std::mutex> lock(names_mutex);
+                                 received_names.push_back(source.file_source->emittingFrameName());
+                               }))
+                         : boost::signals2::connection();
+  const auto frame_name = [&](std::uint64_t index) {
+    const std::lock_guard<std::mutex> lock(names_mutex);
+    return index < received_names.size() ? received_names[index] : "frame " + std::to_string(index + 1);
+  };
   std::mutex report_mutex;
   std::optional<FrameResult> last, fired;
   InsertionReport points;  // every processed frame's, for the summary's points line
@@ -562,7 +577,7 @@ int run(const CommandLine& command_line) {
       std::lock_guard<std::mutex> lock(report_mutex);
       last = r;
       points += r.report.insertion;
-      out_of_view.add("frame " + std::to_string(r.frame_index + 1), r.report.insertion);
+      out_of_view.add(frame_name(r.frame_index), r.report.insertion);
       if (r.stop.stop && !fired) fired = r;
     }
     if (r.stop.stop) stop_wake.fire();
