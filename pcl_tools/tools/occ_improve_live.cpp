@@ -405,10 +405,15 @@ struct StopWake {
     }
     woken.notify_all();
   }
-  // Waits up to `period`, or less when the signal fires and `stop_on_signal` asks to end on it.
+  // Waits up to `period`, or less when the signal fires and `stop_on_signal` asks to end on it, or on
+  // Ctrl-C: a signal handler cannot notify, so that is polled every 20 ms (at a 200 ms wait, 4-6 frames
+  // went into the map after the Ctrl-C).
   void wait(std::chrono::milliseconds period, bool stop_on_signal) {
+    const auto until = std::chrono::steady_clock::now() + period;
     std::unique_lock<std::mutex> lock(mutex);
-    woken.wait_for(lock, period, [&] { return stop_on_signal && fired.load(); });
+    const auto done = [&] { return (stop_on_signal && fired.load()) || stop_requested() || soft_stop_signal(); };
+    while (!done() && std::chrono::steady_clock::now() < until)
+      woken.wait_until(lock, std::min(until, std::chrono::steady_clock::now() + std::chrono::milliseconds(20)), done);
   }
 };
 
