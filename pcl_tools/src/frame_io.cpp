@@ -316,6 +316,10 @@ bool is_depth_frame_name(const std::string& path) {
   return false;
 }
 
+bool is_named_depth(const std::string& path) {
+  return std::filesystem::path(path).filename().string().find("depth") != std::string::npos;
+}
+
 namespace {
 
 // A frame with the intrinsics found for it and the pose file beside it.
@@ -359,7 +363,15 @@ std::vector<FrameSource> expand_input(const std::string& input) {
     if (it->is_regular_file(ec) && is_depth_frame_name(it->path().string())) frames.push_back(it->path().string());
   }
   if (ec) throw IoError("cannot list folder '" + input + "': " + ec.message());
-  if (frames.empty()) throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames");
+  if (frames.empty()) {
+    // A TUM RGB-D folder lists its frames in depth.txt, under depth/: the one reader of that layout is the
+    // live tool's (with the poses of groundtruth.txt).
+    const bool tum = fs::exists(p / "depth.txt", ec);
+    throw InvalidInput("folder '" + input + "' holds no *.depth.png or *_depth.tif(f) frames" +
+                       (tum ? std::string(": a TUM RGB-D folder (depth.txt) is read by occ_improve_live -depth_dir, with "
+                                          "its poses; give the other tools its depth/*.png files and -intrinsics")
+                            : std::string()));
+  }
   std::sort(frames.begin(), frames.end());
   const std::optional<PinholeIntrinsics> intrinsics = intrinsics_beside(p, frames.front());
   // Otherwise each subfolder's (seq-*/ beside their parent's file), found once per subfolder: sizing a

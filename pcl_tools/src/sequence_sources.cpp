@@ -270,12 +270,9 @@ DepthSequence scan_depth_sequence(const std::string& directory_name) {
   } else if (images.empty()) {
     sequence = scene_folder_sequence(directory);
   } else {
-    auto named_depth = [](const std::string& path) {
-      return fs::path(path).filename().string().find("depth") != std::string::npos;
-    };
-    const bool some_named_depth = std::any_of(images.begin(), images.end(), named_depth);
+    const bool some_named_depth = std::any_of(images.begin(), images.end(), is_named_depth);
     for (const std::string& path : images)
-      if (!some_named_depth || named_depth(path)) sequence.frames.push_back({path, std::nullopt});
+      if (!some_named_depth || is_named_depth(path)) sequence.frames.push_back({path, std::nullopt});
   }
   if (sequence.frames.empty())
     throw InvalidInput("no depth image (.png/.pgm/.tif/.tiff) found in '" + directory_name +

@@ -190,6 +190,19 @@ TEST_F(Batch, ADatasetFoldersColourImagesAreSkipped) {
   expect_same_regions(folder_ / "out" / "frame-000000.depth", "in/frame-000000.depth.png", "-depth_encoding mm");
 }
 
+// Open3D's sample layout, TUM_depth.png beside TUM_color.png: the colour image failed as a depth frame and
+// the batch exited 1. Images that name their depth make the others colour, as -depth_dir reads a folder.
+TEST_F(Batch, ImagesNamedDepthMakeTheOthersColour) {
+  fs::create_directories(folder_ / "in");
+  write_depth_png("in", "TUM_depth.png", 1);
+  write_png((folder_ / "in" / "TUM_color.png").string(), Image{4, 3, 3, std::vector<std::uint8_t>(36, 90)});
+  const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, "-input_dir in -output_dir out -depth_encoding mm -q");
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  EXPECT_NE(r.out.find("processed 1, failed 0, skipped 2 (TUM_color.png, camera-intrinsics.txt)"), std::string::npos)
+      << r.out;
+  expect_same_regions(folder_ / "out" / "TUM_depth", "in/TUM_depth.png", "-depth_encoding mm");
+}
+
 // occ_segment and occ_plan take the same flags (tool_support's plumbing): one folder per file with the
 // values of the tool run on that file alone.
 TEST_F(Batch, SegmentAndPlanRunPerFileToo) {

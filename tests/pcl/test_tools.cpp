@@ -204,6 +204,20 @@ TEST_F(Tools, TheDefaultBudgetFitsASmallFrame) {
   EXPECT_NE(given.err.find("-budget 4000 is more than the grid's 64 x 48 = 3072 rays"), std::string::npos) << given.err;
 }
 
+// A TUM RGB-D folder (depth.txt, depth/*.png) given to a tool that reads 7-Scenes folders was refused as
+// holding no frames, without saying which reader takes it.
+TEST_F(Tools, ATumFolderIsSentToTheReaderThatTakesIt) {
+  fs::create_directories(folder_ / "tum" / "depth");
+  occ_improve::write_png((folder_ / "tum" / "depth" / "1.png").string(),
+                         occ_improve::Image16{64, 48, std::vector<std::uint16_t>(64 * 48, 10000)});
+  std::ofstream(folder_ / "tum" / "depth.txt") << "# depth maps\n1.0 depth/1.png\n";
+  const ToolRun r = run(OCC_IMPROVE_MAP_EXECUTABLE, file("tum") + " -intrinsics 60,60,31.5,23.5,64,48 -o out");
+  expect_one_error_line_naming(r, "tum", "occ_improve_map on a TUM folder", true);
+  EXPECT_NE(r.err.find("a TUM RGB-D folder (depth.txt) is read by occ_improve_live -depth_dir"), std::string::npos) << r.err;
+  const ToolRun live = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + file("tum") + " -intrinsics 60,60,31.5,23.5,64,48 -o live");
+  EXPECT_EQ(live.exit_code, 0) << live.err;
+}
+
 // A refused run left the folders it had created for -o (mkdir -p of the output's parents) behind, empty.
 TEST_F(Tools, ARefusedRunRemovesTheEmptyFoldersItCreated) {
   const std::string nan = write_cloud("nan.pcd", NAN);

@@ -74,14 +74,17 @@ BatchFiles list_batch_files(const std::string& folder) {
   for (fs::directory_iterator it(folder, ec), end; it != end && !ec; it.increment(ec)) entries.push_back(*it);
   if (ec) throw IoError("cannot list -input_dir '" + folder + "': " + ec.message());
   std::sort(entries.begin(), entries.end());
-  const bool dataset = std::any_of(entries.begin(), entries.end(),
-                                   [](const fs::directory_entry& e) { return is_depth_frame_name(e.path().string()); });
+  // A folder whose images name their depth (7-Scenes' *.depth.png, *_depth.png): the others are colour
+  // (Open3D's TUM_color.png beside TUM_depth.png failed as a depth frame and the batch exited 1).
+  const bool dataset = std::any_of(entries.begin(), entries.end(), [](const fs::directory_entry& e) {
+    return is_depth_image_path(e.path().string()) && is_named_depth(e.path().string());
+  });
   BatchFiles files;
   for (const fs::directory_entry& e : entries) {
     const std::string name = e.path().filename().string();
     const bool regular = e.is_regular_file(ec);  // follows symbolic links
     // A dataset folder's other images are its colour frames, not depth.
-    const bool colour = dataset && is_depth_image_path(name) && !is_depth_frame_name(name);
+    const bool colour = dataset && is_depth_image_path(name) && !is_named_depth(name);
     if (regular && name[0] != '.' && has_frame_extension(e.path()) && !colour)
       files.frames.push_back(e.path().string());
     else

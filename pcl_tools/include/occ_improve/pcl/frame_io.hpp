@@ -91,6 +91,9 @@ FrameSource single_frame_source(const std::string& input, const std::string& fla
 /// Whether the file name is a dataset folder's depth frame: 7-Scenes / 3DMatch `*.depth.png`, PCL
 /// ImageGrabber `*_depth.tif(f)` (what expand_input takes from a folder; its other images are colour).
 bool is_depth_frame_name(const std::string& path);
+/// Whether the file name holds "depth" (Open3D's samples `TUM_depth.png` beside `TUM_color.png`, NYU's
+/// `*_depth.pgm`): in a folder where some images do, the others are colour frames, not depth.
+bool is_named_depth(const std::string& path);
 
 /// The pose file of a 7-Scenes / 3DMatch depth frame: `<dir>/frame-NNNNNN.depth.png` ->
 /// `<dir>/frame-NNNNNN.pose.txt` (whether it exists or not); "" for a name not of that layout.
