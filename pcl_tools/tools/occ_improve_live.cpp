@@ -53,7 +53,8 @@ const ToolFlags kFlags{
     "regions.png rays.csv),\n"
     "at the end and every -save_every frames. Give exactly one source: -device, -oni, -pcd_dir, -depth_dir,\n"
     "-simulate or positional inputs (below). With poses, every frame is moved into the FIRST frame's sensor\n"
-    "frame (the grid has one viewpoint). -simulate also writes shots.csv and gain.png (expected gain per\n"
+    "frame (the grid has one viewpoint; with -load, the map's). -simulate -load MAP continues MAP and its\n"
+    "return record from the frame's viewpoint. -simulate also writes shots.csv and gain.png (expected gain per\n"
     "shot against rays asked), and with -predicted_depth nearest|linear predicted_depth.png (the map's dense\n"
     "depth from its samples, 16-bit mm, 0 = none within -radius). -view shows the improvement map and the\n"
     "top regions as frames arrive. Ctrl-C stops cleanly and still writes the maps. A file source's frame\n"
@@ -153,17 +154,21 @@ int run_simulation(const CommandLine& command_line, const ToolOptions& options, 
   const int max_shots = *command_line.integer("-max_shots");
   const ToolFrame frame = read_tool_frame(options, single_frame_source(frame_path, "-simulate"));
   SensorPreset preset = options.preset_for_camera(frame.camera);
-  if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
-    throw InvalidParameter("-simulate " + frame_path + " needs an organized frame and a pixel-native preset "
-                           "(kinect_v1): the plan's rays are the sensor's pixels");
-  SavedWith with;
-  if (loaded) {
-    require_simulation_fits_map(options, frame, *loaded, load_path);
+  if (loaded) {  // the map's grid and model, checked as a preset of the flags would be
     preset.name = "loaded from " + load_path;
-    with.world_from_map = loaded->world_from_sensor;
-  } else if (options.use_poses) {
-    with.world_from_map = frame.pose;
+    preset.geometry = loaded->grid.geometry().params();
+    preset.model = loaded->model;
   }
+  if (preset.geometry.angular_binning != AngularBinning::pinhole || !frame.camera || frame.cloud.height <= 1)
+    throw InvalidParameter("-simulate " + frame_path + " needs an organized frame and a pixel-native " +
+                           (loaded ? "map (-load " + load_path + " is not)" : std::string("preset (kinect_v1)")) +
+                           ": the plan's rays are the sensor's pixels");
+  if (loaded) require_simulation_fits_map(options, frame, *loaded, load_path);
+  // The map's view: a -load map's pose, else the frame's (the simulation acquires from the frame's viewpoint).
+  SavedWith with;
+  with.world_from_map = loaded && loaded->world_from_sensor ? loaded->world_from_sensor
+                        : options.use_poses                 ? frame.pose
+                                                            : std::nullopt;
   std::printf("%s\n", describe_camera({frame}).c_str());
   const std::vector<float> scene_depth = depth_of_organized(frame.cloud);
   require_returns_to_acquire(frame.name, preset.geometry, scene_depth);

@@ -56,6 +56,7 @@ struct Source {
   std::optional<Mapper> mapper;
   ReturnRecord returns;
   std::string description;
+  std::string points;  ///< the frames' points line (describe_points), "" for a loaded map
   std::string mask;  ///< the mask's summary line, "" without -mask
 };
 
@@ -74,7 +75,8 @@ Source map_from_frames(const CommandLine& command_line, const ToolOptions& optio
       [&](const ToolFrame& frame) { return source.mapper->insert(span_of(frame.cloud)).insertion; });
   source.returns = ReturnRecord::for_grid(source.mapper->geometry().width(), source.mapper->geometry().height());
   source.description = (use_sample ? std::string("built-in sample") : std::to_string(fused.frames) + " frame(s)") +
-                       ", preset " + preset.name + ", " + fused.camera + "\n" + describe_points(fused.insertion);
+                       ", preset " + preset.name + ", " + fused.camera;
+  source.points = describe_points(fused.insertion);
   // A scene nearer than the range's start (or beyond its end) leaves the map without data: the plan asks
   // for everything, as it should, but the user is told why.
   if (!has_points_in_depth_range(fused.insertion))
@@ -156,8 +158,9 @@ int run(const CommandLine& command_line) {
   throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind
   out.commit();
   if (!source.mask.empty()) std::printf("%s\n", source.mask.c_str());
-  std::printf("read %s (%.2f s)\n%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt%s%s\n",
-              source.description.c_str(), std::chrono::duration<double>(planned - start).count(), summary, plan_ms,
+  std::printf("read %s (%.2f s)\n%s%s%splanned in %.2f ms; wrote %s/: shot_mask.png shot_rays.csv plan.txt%s%s\n",
+              source.description.c_str(), std::chrono::duration<double>(planned - start).count(), source.points.c_str(),
+              source.points.empty() ? "" : "\n", summary, plan_ms,
               out.path().c_str(), predicted.empty() ? "" : " ", predicted.c_str());
   return 0;
 }

@@ -226,7 +226,11 @@ int run(const CommandLine& command_line) {
   double save_seconds = 0;
   if (save.requested()) {
     start = SteadyClock::now();
-    save_map(save.staged_path(), *grids.front().grid, grids.front().model, ReturnRecord(), grids.front().world_from_grid);
+    // The pose the tree was placed by when the user gave it (-pose), else the frames' own; never -frame's,
+    // a display convention rather than where the sensor was.
+    const std::optional<Eigen::Isometry3d> pose =
+        command_line.has("-pose") ? std::optional<Eigen::Isometry3d>(poses.front()) : grids.front().world_from_grid;
+    save_map(save.staged_path(), *grids.front().grid, grids.front().model, ReturnRecord(), pose);
     save_seconds = seconds_since(start);
   }
 

@@ -96,19 +96,19 @@ Eigen::Isometry3d rigid_pose(const PoseArray& m, const char* name) {
   Eigen::Matrix4d t;
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) t(r, c) = m.at(r, c);
-  const std::optional<Eigen::Matrix3d> rotation = nearest_rotation(t.topLeftCorner<3, 3>());
-  if (!rotation || !t.allFinite() || t.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
+  const std::optional<Eigen::Isometry3d> pose = rigid_transform(t);
+  if (!pose)
     throw InvalidParameter(std::string(name) + " is not a rigid transform (a rotation, a finite translation, last row 0 0 0 1)");
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = *rotation;
-  pose.translation() = t.topRightCorner<3, 1>();
-  return pose;
+  return *pose;
 }
 
+// Read-only: `mapper.world_from_sensor[0, 3] += 1` on a writable copy did nothing without a word; assign
+// the whole matrix instead.
 py::array_t<double> pose_array(const Eigen::Isometry3d& pose) {
   py::array_t<double> a({4, 4});
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) a.mutable_at(r, c) = pose.matrix()(r, c);
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
   return a;
 }
 
@@ -129,7 +129,8 @@ void bind_map_io(py::module_& m, py::class_<PyMapper>& c) {
       [](PyMapper& self, const std::optional<PoseArray>& pose) {
         self.world_from_sensor = pose ? std::optional<Eigen::Isometry3d>(rigid_pose(*pose, "world_from_sensor")) : std::nullopt;
       },
-      "Where the map's sensor frame lies in the world (4 x 4 float64, a copy), or None: save() writes it with "
+      "Where the map's sensor frame lies in the world (4 x 4 float64, a read-only copy: assign a whole matrix "
+      "to change it), or None: save() writes it with "
       "the map and load_map() reads it back, so that frames with poses of their own can be moved into the "
       "map's view after a load (inv(world_from_sensor) @ frame_pose); export_octomap() places the tree by it "
       "when given no pose. Assign a 4 x 4 rigid transform (InvalidParameter otherwise) or None.");

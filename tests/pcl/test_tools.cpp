@@ -696,7 +696,7 @@ std::string posed_wall_folder(const fs::path& folder, std::initializer_list<int>
 TEST_F(Tools, PosedFramesAfterALoadGoIntoTheMapsView) {
   const std::string first = posed_wall_folder(folder_ / "first", {0}), rest = posed_wall_folder(folder_ / "rest", {1, 2});
   const std::string all = posed_wall_folder(folder_ / "all", {0, 1, 2});
-  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, all + " -o whole").exit_code, 0);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, all + " -o whole -save whole.occmap").exit_code, 0);
   const std::string whole = file_contents(folder_ / "whole" / "surface.pcd");
   ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, first + " -o a -save a.occmap").exit_code, 0);
   const ToolRun chained = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load a.occmap " + rest + " -o b -save b.occmap");
@@ -704,6 +704,8 @@ TEST_F(Tools, PosedFramesAfterALoadGoIntoTheMapsView) {
   EXPECT_NE(chained.out.find("poses applied: every frame moved into the loaded map's sensor frame"), std::string::npos)
       << chained.out;
   EXPECT_EQ(file_contents(folder_ / "b" / "surface.pcd"), whole);
+  // The saved maps too: the same grid and pose, and no record (the empty one a load gives is none).
+  EXPECT_EQ(file_contents(folder_ / "b.occmap"), file_contents(folder_ / "whole.occmap"));
   ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + first + " -o la -save la.occmap").exit_code, 0);
   ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-depth_dir " + rest + " -load la.occmap -o lb").exit_code, 0);
   EXPECT_EQ(file_contents(folder_ / "lb" / "surface.pcd"), whole);
@@ -718,10 +720,20 @@ TEST_F(Tools, PosedFramesAfterALoadGoIntoTheMapsView) {
     EXPECT_NE(refused.err.find("-load n.occmap holds no pose"), std::string::npos) << refused.err;
     EXPECT_NE(refused.err.find("-no_poses"), std::string::npos) << refused.err;
   }
-  // occ_to_octomap places a loaded map's tree by its saved pose, as it places the frames' own tree.
+  // A simulation acquires from its frame's viewpoint: continuing a map without a pose, it saves the frame's.
+  ASSERT_EQ(run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + first + "/frame-000000.depth.png -load n.occmap -budget 300 "
+                                             "-max_shots 1 -o s -save s.occmap").exit_code, 0);
+  const ToolRun after_simulation = run(OCC_IMPROVE_MAP_EXECUTABLE, "-load s.occmap " + rest + " -o r3");
+  EXPECT_EQ(after_simulation.exit_code, 0) << after_simulation.err;
+  // occ_to_octomap places a loaded map's tree by its saved pose, as it places the frames' own tree; its
+  // -save keeps the -pose it was given.
   ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-load b.occmap -resolution 0.05 -o from_map.bt").exit_code, 0);
   ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, all + " -resolution 0.05 -o from_frames.bt").exit_code, 0);
   EXPECT_EQ(file_contents(folder_ / "from_map.bt"), file_contents(folder_ / "from_frames.bt"));
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, first + " -no_poses -pose 1,2,3,0,0,0,1 -resolution 0.05 -o given.bt -save given.occmap")
+                .exit_code, 0);
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-load given.occmap -resolution 0.05 -o reloaded.bt").exit_code, 0);
+  EXPECT_EQ(file_contents(folder_ / "reloaded.bt"), file_contents(folder_ / "given.bt"));
 }
 
 // -save dropped the planner's return record: re-planned after a -load, a simulated acquisition forgot which
@@ -746,6 +758,17 @@ TEST_F(Tools, TheReturnRecordSurvivesSaveAndLoad) {
   ASSERT_EQ(more.exit_code, 0) << more.err;
   EXPECT_NE(more.out.find("continuing the map loaded from sim.occmap: 900 rays asked before"), std::string::npos) << more.out;
   EXPECT_EQ(asked_in(run(OCC_PLAN_EXECUTABLE, "-load sim2.occmap -budget 100 -o plan3").out), 1500);
+  // -simulate -load checks the frame against the MAP's grid: a spherical map (column index != pixel index)
+  // and a scene beyond the map's own depth range (not the flags' preset's) are refused.
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -preset kinect_v1_spherical -o sph -save sph.occmap").exit_code, 0);
+  const ToolRun spherical = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + wall + " -load sph.occmap -budget 300 -o sim3");
+  EXPECT_EQ(spherical.exit_code, 1) << spherical.out;
+  EXPECT_NE(spherical.err.find("needs an organized frame and a pixel-native map (-load sph.occmap is not)"), std::string::npos)
+      << spherical.err;
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, wall + " -depth_max 1.5 -o short -save short.occmap").exit_code, 0);
+  const ToolRun beyond = run(OCC_IMPROVE_LIVE_EXECUTABLE, "-simulate " + wall + " -load short.occmap -budget 300 -o sim4");
+  EXPECT_EQ(beyond.exit_code, 1) << beyond.out;
+  EXPECT_NE(beyond.err.find("lies in the depth range 0.50-1.50 m (3072 beyond it"), std::string::npos) << beyond.err;
 }
 
 // occ_improve_live exited 0 after skipping a frame it could not use, where the other tools refuse the input:

@@ -165,8 +165,10 @@ def test_the_pose_of_the_maps_view_is_saved_and_loaded_with_it(tmp_path, paper_m
     loaded = oi.load_map(tmp_path / "given.occmap")
     assert np.allclose(loaded.world_from_sensor, pose, atol=1e-12)
     assert_same_maps(loaded, paper_mapper)
-    # The Mapper's own pose is what save() writes when given none; a copy is read, never a view.
-    loaded.world_from_sensor[0, 3] = 99.0
+    # The Mapper's own pose is what save() writes when given none; it reads as a read-only copy (an in-place
+    # change of a writable copy did nothing without a word): assign a whole matrix to change it.
+    with pytest.raises(ValueError, match="read-only"):
+        loaded.world_from_sensor[0, 3] = 99.0
     assert loaded.world_from_sensor[0, 3] == pytest.approx(1.0)
     loaded.save(tmp_path / "kept.occmap")
     assert np.allclose(oi.load_map(tmp_path / "kept.occmap").world_from_sensor, pose, atol=1e-12)

@@ -35,20 +35,14 @@ constexpr double kBytesPerLeaf = 28.0;
 // before) is taken as the nearest rotation, as the tools read pose files (geometry/rotation.hpp).
 Eigen::Isometry3d rigid_pose(const Eigen::Isometry3d& pose) {
   const Eigen::Matrix4d& m = pose.matrix();
+  if (const std::optional<Eigen::Isometry3d> rigid = rigid_transform(m)) return *rigid;
   if (!m.allFinite()) throw InvalidParameter("pose (world <- sensor) has non-finite entries");
   if (m.row(3) != Eigen::RowVector4d(0, 0, 0, 1))
     throw InvalidParameter("pose (world <- sensor) is not an affine transform: last row must be 0 0 0 1");
-  const std::optional<Eigen::Matrix3d> rotation = nearest_rotation(m.topLeftCorner<3, 3>());
-  if (!rotation) {
-    std::ostringstream msg;
-    msg << "pose (world <- sensor) is not a rigid transform: its 3x3 part is no rotation within " << kRotationTolerance
-        << ", det R = " << m.topLeftCorner<3, 3>().determinant() << " (scaling, shear or reflection)";
-    throw InvalidParameter(msg.str());
-  }
-  Eigen::Isometry3d rigid = Eigen::Isometry3d::Identity();
-  rigid.linear() = *rotation;
-  rigid.translation() = m.topRightCorner<3, 1>();
-  return rigid;
+  std::ostringstream msg;
+  msg << "pose (world <- sensor) is not a rigid transform: its 3x3 part is no rotation within " << kRotationTolerance
+      << ", det R = " << m.topLeftCorner<3, 3>().determinant() << " (scaling, shear or reflection)";
+  throw InvalidParameter(msg.str());
 }
 
 // The far end of everything the grid knows: beyond the last touched bin of every column all voxels are

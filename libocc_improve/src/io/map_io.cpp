@@ -345,10 +345,13 @@ void read_columns(Reader& r, ColumnGrid& grid) {
   grid.shrink_to_fit();  // columns came one by one: the tiles' storage grew geometrically
 }
 
-// Since version 3: a flag, then the columns ever asked for (ascending) with their asks and returns.
+// Since version 3: a flag, then the columns ever asked for (ascending) with their asks and returns. A
+// record without asks is none (it loads as the empty record of the grid's size either way): a map re-saved
+// with the empty record a load gave it stays the bytes of one saved without.
 void write_returns(Writer& w, const ReturnRecord& returns) {
-  w.put<std::uint32_t>(returns.size() ? 1u : 0u);
-  if (!returns.size()) return;
+  const bool any = returns.size() && returns.total_asked() > 0;
+  w.put<std::uint32_t>(any ? 1u : 0u);
+  if (!any) return;
   std::uint64_t asked_columns = 0;
   for (std::uint32_t a : returns.asked()) asked_columns += a ? 1 : 0;
   w.put<std::uint64_t>(asked_columns);
@@ -390,25 +393,13 @@ void write_pose(Writer& w, const Eigen::Isometry3d& pose) {
   for (int i = 0; i < 3; ++i) w.put<double>(pose.translation()(i));
 }
 
-// A rigid motion: finite, its rotation within kRotationTolerance of one (taken as the nearest; a pose
-// written by save_map is one already).
-std::optional<Eigen::Isometry3d> rigid_motion(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) {
-  const std::optional<Eigen::Matrix3d> r = nearest_rotation(rotation);
-  if (!r || !translation.allFinite()) return std::nullopt;
-  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
-  pose.linear() = *r;
-  pose.translation() = translation;
-  return pose;
-}
-
 std::optional<Eigen::Isometry3d> read_pose(Reader& r, std::uint32_t version) {
   if (version < 5) return std::nullopt;
-  Eigen::Matrix3d rotation;
-  Eigen::Vector3d translation;
+  Eigen::Matrix4d m = Eigen::Matrix4d::Identity();
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) rotation(i, j) = r.get<double>("pose");
-  for (int i = 0; i < 3; ++i) translation(i) = r.get<double>("pose");
-  const std::optional<Eigen::Isometry3d> pose = rigid_motion(rotation, translation);
+    for (int j = 0; j < 3; ++j) m(i, j) = r.get<double>("pose");
+  for (int i = 0; i < 3; ++i) m(i, 3) = r.get<double>("pose");
+  const std::optional<Eigen::Isometry3d> pose = rigid_transform(m);
   if (!pose) r.fail("the pose is not a rigid motion (a rotation and a finite translation)");
   return pose;
 }
@@ -421,7 +412,7 @@ void save_map(const std::string& path, const ColumnGrid& grid, const SensorModel
   if (returns.size()) returns.check_matches(geometry.width(), geometry.height());
   std::optional<Eigen::Isometry3d> pose;
   if (world_from_sensor) {
-    pose = rigid_motion(world_from_sensor->linear(), world_from_sensor->translation());
+    pose = rigid_transform(world_from_sensor->matrix());
     if (!pose) throw InvalidParameter("save_map: world_from_sensor is not a rigid motion (a rotation and a finite translation)");
   }
   Writer w;

@@ -83,7 +83,7 @@ std::vector<FlagSpec> input_flags() {
                 "guessed per file from its values"),
       switch_flag("-no_poses", kInput,
                   "ignore the frames' poses (.pose.txt, groundtruth.txt, a PCD's VIEWPOINT); by default every\n"
-                  "frame is moved into the first frame's sensor frame"),
+                  "frame is moved into the first frame's sensor frame (with -load, the map's)"),
       switch_flag("-sample", kInput, "use the built-in generated Kinect-like frame instead of input files"),
       value_flag("-mask", K::text, "PNG|finite", kInput,
                  "validity / region-of-interest mask over the camera's pixels: an 8- or 16-bit grey PNG of the\n"
@@ -138,8 +138,9 @@ std::vector<FlagSpec> map_and_output_flags() {
   using K = FlagKind;
   return {
       value_flag("-load", K::text, "MAP.occmap", kMap,
-                 "start from a saved grid (same viewpoint); it carries its own preset, so preset flags are\n"
-                 "ignored", "", "none: an empty grid"),
+                 "start from a saved grid; it carries its own preset, so preset flags are ignored. Frames\n"
+                 "with poses are moved into its view by the pose saved with it (a -save of posed frames);\n"
+                 "a map without one takes frames without poses (or -no_poses) only", "", "none: an empty grid"),
       value_flag("-save", K::text, "MAP.occmap", kMap, "save the resulting grid (written atomically, after the other outputs); an existing file\n"
                  "is replaced only when it is an occ_improve map (or with -overwrite), never an input", "", "not saved"),
       bounded(value_flag("-threads", K::integer, "N", kMap, "insertion threads; 0: all cores", "0"), 0,

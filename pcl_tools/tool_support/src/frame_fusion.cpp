@@ -76,8 +76,9 @@ std::string OutOfViewCheck::warning() const {
   if (flagged_.count == 0) return "";
   char line[1024];
   std::snprintf(line, sizeof line,
-                "warning: %zu frame(s) have up to %.0f%% of their valid points outside the grid's field of view, the "
-                "first frame's (the first such frame: '%s'); they were skipped and counted: other viewpoints? %s",
+                "warning: %zu frame(s) have up to %.0f%% of their valid points outside the grid's field of view (the "
+                "first frame's, or a -load map's; the first such frame: '%s'); they were skipped and counted: other "
+                "viewpoints? %s",
                 flagged_.count, 100.0 * flagged_.worst_share, flagged_.first.c_str(), advice_.c_str());
   return line;
 }

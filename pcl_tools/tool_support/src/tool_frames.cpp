@@ -255,7 +255,8 @@ std::string frame_inputs_help() {
   FILE.png/.pgm/.tif/.tiff  16-bit depth image, back-projected through -intrinsics or its dataset's file
   FOLDER                    a dataset folder: 7-Scenes/3DMatch/SUN3D (*.depth.png, camera-intrinsics.txt,
                             *.pose.txt) or PCL's image-grabber layout (*_depth.tiff)
-  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame.
+  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame
+  (with -load, into the map's, by the pose saved with it).
 )";
 }
 
