@@ -31,6 +31,16 @@ SelectScene wall_and_box() {
   return scene;
 }
 
+// 5 % of the rays per shot, `frames` frames' worth of rays, the strategies scored with one predictor.
+SelectEvalOptions at_five_percent(std::vector<SelectStrategy> strategies, DepthPredictionRule rule, double frames) {
+  SelectEvalOptions options;
+  options.budgets = {0.05};
+  options.frames = frames;
+  options.strategies = std::move(strategies);
+  options.predictors = {rule};
+  return options;
+}
+
 struct CsvRow {
   std::size_t shot, rays_asked, returns;
   double quality, coverage, expected_gain;
@@ -59,11 +69,9 @@ std::vector<CsvRow> rows_of(const std::string& csv, const std::string& strategy)
 }
 
 TEST(SelectEval, TrianglesRunReadsBackAsACurveOfShares) {
-  SelectEvalOptions options;
-  options.budgets = {0.05};
-  options.frames = 1.5;  // past every ray once: the plan re-asks instead of stalling
-  options.strategies = {SelectStrategy::uniform, SelectStrategy::coarse_triangles};
-  options.predictors = {DepthPredictionRule::linear};
+  // 1.5 frames: past every ray once, the plan re-asks instead of stalling.
+  const SelectEvalOptions options =
+      at_five_percent({SelectStrategy::uniform, SelectStrategy::coarse_triangles}, DepthPredictionRule::linear, 1.5);
   std::ostringstream csv;
   const std::vector<SelectSummaryRow> summary = evaluate_select_scene(wall_and_box(), options, csv);
   const std::vector<CsvRow> rows = rows_of(csv.str(), "g_triangles_linear");
@@ -103,11 +111,8 @@ TEST(SelectEval, TrianglesRunReadsBackAsACurveOfShares) {
 TEST(SelectEval, ARunThatStopsBeforeItsFirstCheckpointEndsItsCurveThere) {
   SelectScene scene{"three_returns", std::vector<float>(64 * 48, 0.0f), test::small_camera()};
   for (const std::size_t c : {700u, 1500u, 2300u}) scene.depth_m[c] = 2.0f;
-  SelectEvalOptions options;
-  options.budgets = {0.05};
-  options.frames = 1;
-  options.strategies = {SelectStrategy::coarse_residual, SelectStrategy::coarse_both};
-  options.predictors = {DepthPredictionRule::nearest};
+  const SelectEvalOptions options =
+      at_five_percent({SelectStrategy::coarse_residual, SelectStrategy::coarse_both}, DepthPredictionRule::nearest, 1);
   std::ostringstream csv;
   const std::vector<SelectSummaryRow> summary = evaluate_select_scene(scene, options, csv);
   for (const std::string name : {"g_residual", "g_coarse_to_fine"}) {
@@ -122,11 +127,8 @@ TEST(SelectEval, ARunThatStopsBeforeItsFirstCheckpointEndsItsCurveThere) {
 }
 
 TEST(SelectEval, OracleStartsAsTrianglesThenAsksTheWrongRaysLeft) {
-  SelectEvalOptions options;
-  options.budgets = {0.05};
-  options.frames = 0.5;
-  options.strategies = {SelectStrategy::coarse_triangles, SelectStrategy::oracle};
-  options.predictors = {DepthPredictionRule::linear};
+  const SelectEvalOptions options =
+      at_five_percent({SelectStrategy::coarse_triangles, SelectStrategy::oracle}, DepthPredictionRule::linear, 0.5);
   std::ostringstream csv;
   const std::vector<SelectSummaryRow> summary = evaluate_select_scene(wall_and_box(), options, csv);
   const std::vector<CsvRow> triangles = rows_of(csv.str(), "g_triangles_linear"), oracle = rows_of(csv.str(), "o_oracle_linear");
