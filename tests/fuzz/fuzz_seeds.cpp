@@ -88,6 +88,13 @@ void map_seed(const fs::path& dir) {
   const std::vector<Eigen::Vector3f> points = {{0.0f, 0.0f, 2.0f}, {0.1f, 0.05f, 3.0f}, {-0.2f, 0.1f, 1.0f}};
   mapper.insert(occ_improve::PointSpan::from(points));
   occ_improve::save_map((dir / "small.occmap").string(), mapper.grid(), mapper.model().params());
+  // Version 5: a return record and the pose of the map's view after the columns.
+  occ_improve::ReturnRecord returns = occ_improve::ReturnRecord::for_grid(8, 6);
+  returns.record_shot({1, 7, 40}, {1, 0, 1});
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(0.5, -1.0, 2.0);
+  occ_improve::save_map((dir / "posed.occmap").string(), mapper.grid(), mapper.model().params(), returns, pose);
 }
 
 }  // namespace
