@@ -39,12 +39,12 @@ pcl::PCLPointCloud2 packed(const pcl::PCLPointCloud2& cloud) {
 
 }  // namespace
 
-void save_pcd_binary(const std::string& path, const pcl::PCLPointCloud2& cloud) {
+void save_pcd_binary(const std::string& path, const pcl::PCLPointCloud2& cloud, const Eigen::Vector4f& origin,
+                     const Eigen::Quaternionf& orientation) {
   const pcl::PCLPointCloud2 blob = packed(cloud);
   pcl::PCDWriter writer;
   // generateHeaderBinary stops before the DATA line, which writeBinary adds itself.
-  const std::string header =
-      writer.generateHeaderBinary(blob, Eigen::Vector4f::Zero(), Eigen::Quaternionf::Identity()) + "DATA binary\n";
+  const std::string header = writer.generateHeaderBinary(blob, origin, orientation) + "DATA binary\n";
   write_file_atomically(path, "PCD file", [&](std::ostream& out) {
     out.write(header.data(), static_cast<std::streamsize>(header.size()));
     out.write(reinterpret_cast<const char*>(blob.data.data()), static_cast<std::streamsize>(blob.data.size()));

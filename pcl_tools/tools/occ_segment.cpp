@@ -16,6 +16,7 @@
 #include "occ_improve/tools/tool_mask.hpp"
 #include "occ_improve/tools/tool_options.hpp"
 
+#include <pcl/common/transforms.h>
 #include <pcl/io/pcd_io.h>
 
 #include <cstdio>
@@ -97,6 +98,15 @@ int run(const CommandLine& command_line) {
     q.g = rgb[1];
     q.b = rgb[2];
   }
+  // Back in the frame the input file holds its points in, with its VIEWPOINT: labels.pcd overlays the input
+  // (a cloud with a real VIEWPOINT came out in the sensor frame, up to metres away from it).
+  const Eigen::Isometry3d to_file = frame.file_from_sensor.value_or(Eigen::Isometry3d::Identity());
+  if (frame.file_from_sensor) {
+    pcl::transformPointCloud(labelled, labelled, to_file.matrix().cast<float>());
+    labelled.sensor_origin_ = Eigen::Vector4f(0, 0, 0, 1);
+    labelled.sensor_origin_.head<3>() = to_file.translation().cast<float>();
+    labelled.sensor_orientation_ = Eigen::Quaternionf(to_file.linear().cast<float>());
+  }
   save_pcd_binary(out.file("labels.pcd"), labelled);
   write_png(out.file("labels.png"), render_segmentation(result.segmentation));
   write_png(out.file("label_ids.png"), label_id_image(result.segmentation));
@@ -105,9 +115,11 @@ int run(const CommandLine& command_line) {
   std::ofstream csv(csv_path);
   if (!csv) throw IoError("cannot write '" + csv_path + "'");
   csv << "label,rays,points,centroid_x_m,centroid_y_m,centroid_z_m,mean_depth_m,plane\n";
-  for (const Segment& s : result.segmentation.segments)
-    csv << s.label << ',' << s.columns << ',' << points_per_label[s.label] << ',' << s.centroid_m.x() << ','
-        << s.centroid_m.y() << ',' << s.centroid_m.z() << ',' << s.mean_depth_m << ',' << (s.plane ? 1 : 0) << '\n';
+  for (const Segment& s : result.segmentation.segments) {
+    const Eigen::Vector3d centroid = to_file * s.centroid_m;  // in labels.pcd's frame
+    csv << s.label << ',' << s.columns << ',' << points_per_label[s.label] << ',' << centroid.x() << ',' << centroid.y()
+        << ',' << centroid.z() << ',' << s.mean_depth_m << ',' << (s.plane ? 1 : 0) << '\n';
+  }
   csv.close();
   if (!csv) throw IoError("cannot write '" + csv_path + "'");
   throw_if_stop_requested();  // before anything is committed: an interrupted run leaves nothing behind

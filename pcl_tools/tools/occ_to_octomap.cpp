@@ -156,7 +156,7 @@ Source load_saved_map(const std::string& path, const ToolOptions& options) {
   source.grid.emplace(std::move(loaded.grid));
   source.model = loaded.model;
   source.world_from_grid = loaded.world_from_sensor;
-  source.description = "map " + path + (loaded.world_from_sensor ? " (at the pose saved with it)" : "");
+  source.description = "map " + path;
   return source;
 }
 
@@ -221,15 +221,27 @@ int run(const CommandLine& command_line) {
   ProgressLine progress(command_line, "frame");
   if (load_paths.empty()) grids.push_back(build_from_frames(command_line, options, use_sample, progress));
   const std::vector<Eigen::Isometry3d> poses = source_poses(command_line, given_poses, grids);
+  for (Source& source : grids)  // where each tree went: the summary says which pose placed it
+    source.description += command_line.has("-pose")  ? " (at -pose)"
+                          : !source.world_from_grid ? " (in -frame " + *command_line.text("-frame") + ")"
+                          : load_paths.empty()      ? " (at the first frame's pose)"
+                                                    : " (at the pose saved with it)";
+  if (command_line.has("-frame") && (command_line.has("-pose") || grids.front().world_from_grid))
+    std::fprintf(stderr, "warning: -frame applies without poses: ignored (the tree is placed by %s)\n",
+                 command_line.has("-pose") ? "-pose" : "the poses");
   const double read_seconds = seconds_since(start);
 
   double save_seconds = 0;
   if (save.requested()) {
     start = SteadyClock::now();
-    // The pose the tree was placed by when the user gave it (-pose), else the frames' own; never -frame's,
-    // a display convention rather than where the sensor was.
+    // Where the grid's sensor frame lies in the frames' world (their first pose): what places frames added
+    // after a -load. -pose places the tree only, so it is saved for frames without poses alone (a -pose
+    // saved over posed frames put the next frames 0.9 m and 40 deg off); never -frame's, a display
+    // convention rather than where the sensor was.
     const std::optional<Eigen::Isometry3d> pose =
-        command_line.has("-pose") ? std::optional<Eigen::Isometry3d>(poses.front()) : grids.front().world_from_grid;
+        grids.front().world_from_grid ? grids.front().world_from_grid
+        : command_line.has("-pose")   ? std::optional<Eigen::Isometry3d>(poses.front())
+                                      : std::nullopt;
     save_map(save.staged_path(), *grids.front().grid, grids.front().model, ReturnRecord(), pose);
     save_seconds = seconds_since(start);
   }

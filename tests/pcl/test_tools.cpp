@@ -547,6 +547,31 @@ TEST_F(Tools, APcdViewpointIsTheSensorPose) {
   const ToolRun c = run(OCC_IMPROVE_MAP_EXECUTABLE, "far.pcd -o c");
   ASSERT_EQ(c.exit_code, 0) << c.err;
   EXPECT_GE(regions("c").size(), 3u);
+  // occ_segment's labels.pcd came out in the sensor frame, metres away from the input it labels: it is in
+  // the input's frame, with its VIEWPOINT, and segments.csv's centroids with it.
+  ASSERT_EQ(run(OCC_SEGMENT_EXECUTABLE, "world.pcd -o seg").exit_code, 0);
+  ASSERT_EQ(run(OCC_SEGMENT_EXECUTABLE, "sensor.pcd -o seg_sensor").exit_code, 0);
+  pcl::PointCloud<pcl::PointXYZRGBL> labels;
+  ASSERT_EQ(pcl::io::loadPCDFile(file("seg/labels.pcd"), labels), 0);
+  ASSERT_EQ(labels.size(), world.size());
+  double worst = 0;
+  for (std::size_t i = 0; i < world.size(); ++i)
+    if (std::isfinite(world[i].z))
+      worst = std::max(worst, static_cast<double>((labels[i].getVector3fMap() - world[i].getVector3fMap()).norm()));
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_LT((labels.sensor_origin_.head<3>() - world.sensor_origin_.head<3>()).norm(), 1e-6);
+  EXPECT_LT(labels.sensor_orientation_.angularDistance(world.sensor_orientation_), 1e-6);
+  const test::CsvTable in_world = test::read_csv(folder_ / "seg" / "segments.csv"),
+                       in_sensor = test::read_csv(folder_ / "seg_sensor" / "segments.csv");
+  ASSERT_EQ(in_world.rows.size(), in_sensor.rows.size());
+  ASSERT_FALSE(in_world.rows.empty());
+  for (std::size_t r = 0; r < in_world.rows.size(); ++r) {
+    const auto centroid = [&](const test::CsvTable& csv) {
+      return Eigen::Vector3f(static_cast<float>(csv.value(r, "centroid_x_m")), static_cast<float>(csv.value(r, "centroid_y_m")),
+                             static_cast<float>(csv.value(r, "centroid_z_m")));
+    };
+    EXPECT_LT((centroid(in_world) - viewpoint * centroid(in_sensor)).norm(), 1e-3) << "segment row " << r;
+  }
 }
 
 // Repeated -load/-pose (the one flag pair a tool lets repeat) merges saved maps into one tree.
@@ -732,8 +757,17 @@ TEST_F(Tools, PosedFramesAfterALoadGoIntoTheMapsView) {
   EXPECT_EQ(file_contents(folder_ / "from_map.bt"), file_contents(folder_ / "from_frames.bt"));
   ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, first + " -no_poses -pose 1,2,3,0,0,0,1 -resolution 0.05 -o given.bt -save given.occmap")
                 .exit_code, 0);
-  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, "-load given.occmap -resolution 0.05 -o reloaded.bt").exit_code, 0);
+  const ToolRun reloaded = run(OCC_TO_OCTOMAP_EXECUTABLE, "-load given.occmap -resolution 0.05 -o reloaded.bt");
+  ASSERT_EQ(reloaded.exit_code, 0) << reloaded.err;
+  EXPECT_NE(reloaded.out.find("read map given.occmap (at the pose saved with it)"), std::string::npos) << reloaded.out;
   EXPECT_EQ(file_contents(folder_ / "reloaded.bt"), file_contents(folder_ / "given.bt"));
+  // Over posed frames -pose places the tree only: the map keeps the frames' pose (a saved -pose put the
+  // next frames 0.9 m and 40 deg off), and the summary says which pose placed each tree.
+  ASSERT_EQ(run(OCC_TO_OCTOMAP_EXECUTABLE, first + " -pose 1,2,3,0,0,0,1 -resolution 0.05 -o over.bt -save over.occmap").exit_code, 0);
+  ASSERT_EQ(run(OCC_IMPROVE_MAP_EXECUTABLE, "-load over.occmap " + rest + " -o after_over").exit_code, 0);
+  EXPECT_EQ(file_contents(folder_ / "after_over" / "surface.pcd"), whole);
+  const ToolRun overridden = run(OCC_TO_OCTOMAP_EXECUTABLE, "-load over.occmap -pose 0,0,0,0,0,0,1 -resolution 0.05 -o o.bt");
+  EXPECT_NE(overridden.out.find("read map over.occmap (at -pose)"), std::string::npos) << overridden.out;
 }
 
 // -save dropped the planner's return record: re-planned after a -load, a simulated acquisition forgot which

@@ -88,6 +88,7 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
     pcl::transformPointCloud(loaded.cloud, loaded.cloud, loaded.viewpoint->inverse().matrix().cast<float>());
     frame.pose = loaded.viewpoint;
     frame.pose_source = "VIEWPOINT of " + source.path;
+    frame.file_from_sensor = loaded.viewpoint;
   } else if (source.pose) {
     frame.pose = source.pose;
     frame.pose_source = source.pose_source;
@@ -208,7 +209,8 @@ std::optional<Eigen::Isometry3d> ToolFrameReader::first_pose() const {
 }
 
 ToolFrame frame_header(const ToolFrame& frame) {
-  return ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt, frame.pose, frame.pose_source};
+  return ToolFrame{frame.name, {}, frame.camera, frame.camera_source, std::nullopt, frame.pose, frame.pose_source,
+                   frame.file_from_sensor};
 }
 
 void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame) {

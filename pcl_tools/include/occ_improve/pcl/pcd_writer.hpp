@@ -7,18 +7,24 @@
 #include <pcl/conversions.h>
 #include <pcl/point_cloud.h>
 
+#include <Eigen/Geometry>
+
 #include <string>
 
 namespace occ_improve {
 
-/// Writes `cloud` as a binary PCD. Throws IoError naming `path` and the cause.
-void save_pcd_binary(const std::string& path, const pcl::PCLPointCloud2& cloud);
+/// Writes `cloud` as a binary PCD with the VIEWPOINT `origin`, `orientation` (PCL's sensor pose of the
+/// cloud). Throws IoError naming `path` and the cause.
+void save_pcd_binary(const std::string& path, const pcl::PCLPointCloud2& cloud,
+                     const Eigen::Vector4f& origin = Eigen::Vector4f::Zero(),
+                     const Eigen::Quaternionf& orientation = Eigen::Quaternionf::Identity());
 
+/// The typed cloud with its own VIEWPOINT (sensor_origin_, sensor_orientation_), as PCL writes it.
 template <typename PointT>
 void save_pcd_binary(const std::string& path, const pcl::PointCloud<PointT>& cloud) {
   pcl::PCLPointCloud2 blob;
   pcl::toPCLPointCloud2(cloud, blob);
-  save_pcd_binary(path, blob);
+  save_pcd_binary(path, blob, cloud.sensor_origin_, cloud.sensor_orientation_);
 }
 
 }  // namespace occ_improve

@@ -27,6 +27,9 @@ struct ToolFrame {
   /// moved into the sensor frame as they are read, as PCL defines the viewpoint). Unset without either.
   std::optional<Eigen::Isometry3d> pose{};
   std::string pose_source{};  ///< "frame-000150.pose.txt", "VIEWPOINT of FILE.pcd"
+  /// A PCD's VIEWPOINT the points were moved out of (into the sensor frame): what takes outputs made of the
+  /// points (occ_segment's labels.pcd) back into the frame the file holds them in. Unset otherwise.
+  std::optional<Eigen::Isometry3d> file_from_sensor{};
 };
 
 /// The frames of a tool's inputs (or the built-in sample, for -sample), read one at a time so that a long
