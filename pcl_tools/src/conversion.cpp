@@ -29,7 +29,7 @@ void require_points_in_metres(PointSpan points, const std::string& name, const G
                               const std::string& what, const std::string& hint) {
   const std::optional<UnitMistake> mistake = point_unit_mistake(points, grid);
   if (!mistake) return;
-  throw InvalidInput("'" + name + "': " + mistake->about_points(grid) + " (the " + what + ")" + hint);
+  throw InvalidInput("'" + name + "': " + mistake->about_points(grid) + (what.empty() ? "" : " (the " + what + ")") + hint);
 }
 
 pcl::PointCloud<pcl::PointXYZ> organized_cloud(const std::vector<Eigen::Vector3f>& points, int width, int height) {

@@ -116,6 +116,16 @@ bool ImprovementFilter<PointT>::evaluate(std::vector<float>& point_improvement, 
   const auto& cloud = *input_;
   last_report_ = {};
   fitDefaultCamera();
+  // An organized cloud of another size than the map's camera is another camera's image: its points were
+  // inserted without a word (GrabberPipeline rejects such a frame). Refused as the pipeline does.
+  const std::optional<PinholeIntrinsics>& camera = mapper_->geometry().params().camera;
+  if (cloud.height > 1 && mapper_->geometry().binning() == AngularBinning::pinhole && camera &&
+      (static_cast<int>(cloud.width) != camera->width || static_cast<int>(cloud.height) != camera->height)) {
+    PCL_ERROR("[occ_improve::%s::applyFilter] the organized cloud is %ux%u, the map's camera %dx%d: another camera's "
+              "image (give setSensorPreset the cloud's own camera).\n",
+              getClassName().c_str(), cloud.width, cloud.height, camera->width, camera->height);
+    return false;
+  }
   if (update_map_) {
     try {
       if (is_every_index(*indices_, cloud.size())) {

@@ -89,6 +89,37 @@ protected:
 Cloud::Ptr ImprovementFilterTest::cloud_;
 std::shared_ptr<Mapper> ImprovementFilterTest::mapper_;
 
+// A held-out trial: estimate_intrinsics_fit(cloud) with its default threw on every cloud (the default,
+// infinity, is a limit the check refuses); it fits the sample's camera.
+TEST(EstimateIntrinsicsFit, TheDefaultLimitFitsAPinholeCloud) {
+  const sample::SampleFrame frame = sample::generate_scene();
+  const IntrinsicsFit fit = estimate_intrinsics_fit(*sample_cloud());
+  EXPECT_NEAR(fit.intrinsics.fx, frame.intrinsics.fx, 1e-3);
+  EXPECT_NEAR(fit.intrinsics.cy, frame.intrinsics.cy, 1e-3);
+  EXPECT_LT(fit.rms_residual_px, kMaxIntrinsicsFitResidualPx);
+}
+
+// An organized cloud of another size than the map's camera (another camera's image) was inserted without a
+// word; it is refused as GrabberPipeline refuses it: no output, the map untouched.
+TEST(ImprovementFilterCamera, AnOrganizedCloudOfAnotherSizeIsRefused) {
+  const Cloud::Ptr full = sample_cloud();
+  Cloud::Ptr half(new Cloud(full->width / 2, full->height / 2));
+  for (std::uint32_t v = 0; v < half->height; ++v)
+    for (std::uint32_t u = 0; u < half->width; ++u) half->at(u, v) = full->at(2 * u, 2 * v);
+  ImprovementFilter<pcl::PointXYZ> filter;
+  filter.setSensorPreset(kinect_v1(sample::generate_scene().intrinsics));
+  filter.setTopFraction(0.2);
+  filter.setInputCloud(half);
+  pcl::Indices kept;
+  filter.filter(kept);
+  EXPECT_TRUE(kept.empty());
+  EXPECT_EQ(filter.getMapper()->grid().touched_column_count(), 0u);
+  filter.setInputCloud(full);  // the camera's own size goes in
+  filter.filter(kept);
+  EXPECT_FALSE(kept.empty());
+  EXPECT_GT(filter.getMapper()->grid().touched_column_count(), 0u);
+}
+
 TEST_F(ImprovementFilterTest, ImprovementCloudIsAlignedWithTheInputAndTheMap) {
   ImprovementFilter<pcl::PointXYZ> filter;
   configure(filter);

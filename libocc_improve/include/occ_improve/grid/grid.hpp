@@ -122,6 +122,12 @@ public:
 
   /// Throws InvalidParameter for bad options, ResourceLimit when the worst case exceeds the cap.
   ColumnGrid(const GridGeometry& geometry, const GridOptions& options = {});
+  /// Moved, never copied (a grid is tens of MB; to keep or duplicate one, save_map and load_map): declared
+  /// so that a copy fails at the caller's line, not inside the standard library's vector of tiles.
+  ColumnGrid(const ColumnGrid&) = delete;
+  ColumnGrid& operator=(const ColumnGrid&) = delete;
+  ColumnGrid(ColumnGrid&&) noexcept = default;
+  ColumnGrid& operator=(ColumnGrid&&) noexcept = default;
 
   const GridGeometry& geometry() const { return geometry_; }
   const GridOptions& options() const { return options_; }

@@ -32,9 +32,11 @@ void require_valid_points(PointSpan points, const std::string& name);
 /// Throws InvalidInput "'<name>': the points' median range is ... m, outside the grid's plausible depth range
 /// [a, b] m: they look like millimetres (times 0.001 gives metres) (the <what>)<hint>" when another usual unit
 /// would put the points inside `grid`'s range (point_unit_mistake, integrate/point_units.hpp). `what`:
-/// "cloud" or "image"; `hint`: what to do (": the tools read clouds in metres").
+/// "cloud" or "image" ("": no parenthesis); `hint`: what to do (": the tools read clouds in metres").
+/// Mapper::insert takes any unit as metres (a cloud in millimetres maps "beyond the depth range"): a
+/// program that reads clouds from users calls this first, as the tools do.
 void require_points_in_metres(PointSpan points, const std::string& name, const GeometryParams& grid,
-                              const std::string& what, const std::string& hint);
+                              const std::string& what = "", const std::string& hint = "");
 
 /// An organized width x height cloud from per-pixel points in row-major order, NaN where there is no
 /// return (sample::SampleFrame::points(), depth_image_to_points()). Throws InvalidInput on a size mismatch.
@@ -47,10 +49,11 @@ std::vector<float> depth_of_organized(const pcl::PointCloud<pcl::PointXYZ>& clou
 /// Pinhole intrinsics of an organized cloud from a pinhole camera, fitted by least squares to
 /// u = fx x/z + cx and v = fy y/z + cy over its valid points (fit_intrinsics_checked), with the fit's
 /// residual. Throws InvalidInput when the cloud is not organized, has fewer than 100 valid points, or fits
-/// worse than max_rms_px (the message names the residual and -intrinsics).
+/// worse than max_rms_px (the message names the residual and -intrinsics); InvalidParameter for a
+/// max_rms_px not finite or <= 0. The default is the tools' (a cloud from a pinhole camera fits to ~1e-4 px;
+/// its default was infinity, which the check refuses: every call without it threw).
 template <typename PointT>
-IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud,
-                                      double max_rms_px = std::numeric_limits<double>::infinity());
+IntrinsicsFit estimate_intrinsics_fit(const pcl::PointCloud<PointT>& cloud, double max_rms_px = kMaxIntrinsicsFitResidualPx);
 
 /// The intrinsics alone, refusing a fit worse than kMaxIntrinsicsFitResidualPx.
 template <typename PointT>
