@@ -37,7 +37,7 @@ const ToolFlags kFlags{
             camera_flag_names(), {"-mask"}, batch_flag_names()}),
     {},
     {},
-    frame_inputs_help()};
+    frame_inputs_help(false)};
 
 // The label of each ray as a 16-bit id (0 = no segment), as PCL's pcl_pcd2png writes a label field ("mono").
 Image16 label_id_image(const Segmentation& segmentation) {

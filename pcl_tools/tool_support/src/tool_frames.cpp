@@ -250,14 +250,16 @@ std::string describe_camera(const std::vector<ToolFrame>& frames) {
   return "no camera (the preset's grid does not depend on one)";
 }
 
-std::string frame_inputs_help() {
-  return R"(  FILE.pcd / FILE.ply       a cloud with x y z in metres, optical frame (z forward, y down); with a
+std::string frame_inputs_help(bool fuses_frames) {
+  const std::string kinds = R"(  FILE.pcd / FILE.ply       a cloud with x y z in metres, optical frame (z forward, y down); with a
                             camera preset its intrinsics are fitted to its organized points (an
                             unorganized cloud after the first frame takes the first frame's camera)
   FILE.png/.pgm/.tif/.tiff  16-bit depth image, back-projected through -intrinsics or its dataset's file
   FOLDER                    a dataset folder: 7-Scenes/3DMatch/SUN3D (*.depth.png, camera-intrinsics.txt,
                             *.pose.txt) or PCL's image-grabber layout (*_depth.tiff)
-  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame
+)";
+  if (!fuses_frames) return kinds + "  One frame (a FOLDER with -input_dir: each of its frames by itself).\n";
+  return kinds + R"(  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame
   (with -load, into the map's, by the pose saved with it).
 )";
 }
