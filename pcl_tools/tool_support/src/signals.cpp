@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <ctime>
 
 namespace occ_improve {
 
@@ -9,13 +10,46 @@ namespace {
 
 std::atomic<bool> g_ends_at_once{false};
 std::atomic<int> g_soft_signal{0};
+std::atomic<long long> g_last_signal_ns{0};  // when the last signal the handlers acted on came (0: none)
 static_assert(std::atomic<int>::is_always_lock_free, "the handler's store must be async-signal-safe");
+static_assert(std::atomic<long long>::is_always_lock_free, "the handler's store must be async-signal-safe");
 
-extern "C" void record_stop_signal(int signal) { request_stop(signal); }
+// One press, delivered twice: coreutils' timeout sends its signal to the command and again to its process
+// group, microseconds apart, and the second one killed the tool at once (no message, its staging folder
+// left) as a second Ctrl-C does. A signal this soon after the last is that same press. clock_gettime,
+// sigaction, raise and lock-free atomics are async-signal-safe.
+constexpr long long kSamePressNs = 50'000'000;
 
-// The first signal after defer_first_stop_signal: recorded, and the next one cancels (sigaction and a
-// lock-free atomic store are async-signal-safe).
+long long now_ns() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return static_cast<long long>(t.tv_sec) * 1'000'000'000 + t.tv_nsec;
+}
+
+// Whether this signal repeats the last one acted on; else it becomes the last.
+bool repeats_last_signal() {
+  const long long now = now_ns(), last = g_last_signal_ns.load();
+  if (last != 0 && now - last < kSamePressNs) return true;
+  g_last_signal_ns = now;
+  return false;
+}
+
+void install_handler(void (*handler)(int), int flags);
+
+// A first signal requests the stop; a second (another press) kills at once, the default action.
+extern "C" void record_stop_signal(int signal) {
+  if (repeats_last_signal()) return;
+  if (stop_requested() == 0) {
+    request_stop(signal);
+    return;
+  }
+  install_handler(SIG_DFL, 0);
+  raise(signal);
+}
+
+// The first signal after defer_first_stop_signal: recorded, and the next press cancels.
 extern "C" void record_soft_stop_signal(int signal) {
+  if (repeats_last_signal()) return;
   g_soft_signal = signal;
   install_stop_signals();
 }
@@ -32,7 +66,7 @@ void install_handler(void (*handler)(int), int flags) {
 }  // namespace
 
 void install_stop_signals() {
-  install_handler(record_stop_signal, SA_RESETHAND);  // a second Ctrl-C kills at once; the next run removes what is left
+  install_handler(record_stop_signal, 0);  // a second press kills at once; the next run removes what is left
 }
 
 void defer_first_stop_signal() { install_handler(record_soft_stop_signal, 0); }

@@ -2,8 +2,9 @@
 // Stopping on SIGINT/SIGTERM: run_tool's handlers call the library's request_stop(signal) (cancel.hpp),
 // so the library's long loops and the tools' own (frames, files, shots; throw_if_stop_requested) stop
 // within milliseconds with Cancelled, which run_tool reports as "interrupted by SIG..." and exit code
-// 128 + the signal. stop_requested() is the signal received, or 0. The handlers reset themselves, so a
-// second signal ends the process at once.
+// 128 + the signal. stop_requested() is the signal received, or 0. A second signal ends the process at
+// once; one within 50 ms of the last is the same press delivered twice (coreutils' timeout signals the
+// command and its process group) and is ignored.
 #include "occ_improve/cancel.hpp"
 
 #include <chrono>
