@@ -53,7 +53,7 @@ const ToolFlags kFlags{
             camera_flag_names(), {"-no_poses", "-mask"}}),
     {},
     {"-load", "-pose"},
-    frame_inputs_help()};
+    frame_inputs_help(true, false)};
 
 // world <- optical for -frame z_up: the optical z (forward) is world x, x (right) is -y, y (down) is -z.
 Eigen::Isometry3d z_up_from_optical() {

@@ -250,7 +250,7 @@ std::string describe_camera(const std::vector<ToolFrame>& frames) {
   return "no camera (the preset's grid does not depend on one)";
 }
 
-std::string frame_inputs_help(bool fuses_frames) {
+std::string frame_inputs_help(bool fuses_frames, bool adds_to_loaded_map) {
   const std::string kinds = R"(  FILE.pcd / FILE.ply       a cloud with x y z in metres, optical frame (z forward, y down); with a
                             camera preset its intrinsics are fitted to its organized points (an
                             unorganized cloud after the first frame takes the first frame's camera)
@@ -259,9 +259,9 @@ std::string frame_inputs_help(bool fuses_frames) {
                             *.pose.txt) or PCL's image-grabber layout (*_depth.tiff)
 )";
   if (!fuses_frames) return kinds + "  One frame (a FOLDER with -input_dir: each of its frames by itself).\n";
-  return kinds + R"(  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame
-  (with -load, into the map's, by the pose saved with it).
-)";
+  const std::string fused = "  Frames are fused in order; with poses every frame is moved into the first frame's sensor frame";
+  if (!adds_to_loaded_map) return kinds + fused + ".\n";
+  return kinds + fused + "\n  (with -load, into the map's, by the pose saved with it).\n";
 }
 
 }  // namespace occ_improve

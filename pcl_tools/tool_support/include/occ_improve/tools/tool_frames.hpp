@@ -115,8 +115,8 @@ ToolFrame load_tool_frame(const ToolOptions& options, const FrameSource& source,
 /// "camera fx=.. fy=.. cx=.. cy=.. WxH (source)", or the note that the preset needs none.
 std::string describe_camera(const std::vector<ToolFrame>& frames);
 
-/// -h text of the positional frame inputs every frame-reading tool takes (`fuses_frames`: several are fused;
-/// else the tool takes one).
-std::string frame_inputs_help(bool fuses_frames = true);
+/// -h text of the positional frame inputs every frame-reading tool takes (`fuses_frames`: several are fused,
+/// else the tool takes one; `adds_to_loaded_map`: frames may follow a -load).
+std::string frame_inputs_help(bool fuses_frames = true, bool adds_to_loaded_map = true);
 
 }  // namespace occ_improve
