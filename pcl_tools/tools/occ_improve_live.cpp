@@ -241,7 +241,7 @@ struct StreamSource {
   std::optional<PinholeIntrinsics> frames_camera;  ///< the frames' camera, where known (a -load map must fit it)
   std::string text, camera;  ///< for the summary
   bool poses_applied = false;  ///< the frames are moved into the first one's view (or a -load map's)
-  std::optional<Eigen::Isometry3d> world_from_map;  ///< where the map's view lies: what -save keeps
+  std::optional<Eigen::Isometry3d> world_from_map;  ///< where the frames' view lies (posed frames), if known
   /// Frames the source skips by design and announces in `text` (a TUM sequence's frames before its ground
   /// truth starts): counted among its errors, but not a failure of the run.
   std::size_t announced_skips = 0;
@@ -284,7 +284,7 @@ StreamSource open_depth_dir(const ToolOptions& options, const std::string& depth
   auto grabber = std::make_shared<DepthSequenceGrabber>(sequence, *camera, sequence_options);
   if (map && grabber->posesApplied() && !map->pose) refuse_posed_frames_into_unposed_map(map->path, depth_dir, "its pose files");
   StreamSource s;
-  s.world_from_map = map ? map->pose : grabber->posesApplied() ? std::optional(grabber->worldFromMap()) : std::nullopt;
+  if (grabber->posesApplied()) s.world_from_map = grabber->worldFromMap();
   s.preset = options.preset_for_camera(camera);
   s.frames_camera = camera;
   s.camera = options.intrinsics ? "camera from " + options.intrinsics_flag : "camera from " + depth_dir + "'s intrinsics file";
@@ -316,15 +316,11 @@ StreamSource open_files(const ToolOptions& options, const std::string& pcd_dir, 
   const std::string files_text = frames.size() == 1 ? frames.front().path
                                                     : frames.front().path + " and " + std::to_string(frames.size() - 1) + " more";
   const bool posed = first.pose && options.use_poses;
-  ToolFrame reference = frame_header(first);  // the frames, the first too, are moved into a -load map's view
-  if (map && posed) {
-    if (!map->pose) refuse_posed_frames_into_unposed_map(map->path, first.name, first.pose_source);
-    reference.pose = map->pose;
-    reference.pose_source = "the pose saved with " + map->path;
-  }
+  // The frames, the first too, are moved into the reference's view: a -load map's, else the first frame's.
+  const ToolFrame reference = map ? loaded_map_reference(options, first, map->pose, map->path) : frame_header(first);
   auto grabber = std::make_shared<ToolFrameGrabber>(options, reference, std::move(frames), static_cast<float>(fps));
   StreamSource s;
-  s.world_from_map = map ? map->pose : posed ? first.pose : std::nullopt;
+  if (posed) s.world_from_map = first.pose;
   s.preset = options.preset_for_camera(first.camera);
   s.frames_camera = first.camera;
   s.camera = describe_camera({first});
@@ -535,12 +531,12 @@ int run(const CommandLine& command_line) {
   if (simulate) return run_simulation(command_line, options, region_options, out, save, std::move(loaded), load_path);
   const std::optional<MapView> map_view =
       loaded ? std::optional<MapView>(MapView{load_path, loaded->world_from_sensor}) : std::nullopt;
-  SavedWith saved_with{loaded ? loaded->returns : ReturnRecord(), std::nullopt};
+  SavedWith saved_with{loaded ? std::move(loaded->returns) : ReturnRecord(), std::nullopt};
 
   StreamSource source = device || !oni.empty() ? open_device(options, device, oni)
                         : !depth_dir.empty()   ? open_depth_dir(options, depth_dir, max_frames, fps, map_view)
                                                : open_files(options, pcd_dir, max_frames, fps, map_view);
-  saved_with.world_from_map = device || !oni.empty() ? (map_view ? map_view->pose : std::nullopt) : source.world_from_map;
+  saved_with.world_from_map = map_view ? map_view->pose : source.world_from_map;  // the map's view
   const InputScope scope(source.text);
   PipelineOptions pipeline_options;
   pipeline_options.insertion.threads = *command_line.integer("-threads");

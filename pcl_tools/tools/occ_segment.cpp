@@ -103,8 +103,7 @@ int run(const CommandLine& command_line) {
   const Eigen::Isometry3d to_file = frame.file_from_sensor.value_or(Eigen::Isometry3d::Identity());
   if (frame.file_from_sensor) {
     pcl::transformPointCloud(labelled, labelled, to_file.matrix().cast<float>());
-    labelled.sensor_origin_ = Eigen::Vector4f(0, 0, 0, 1);
-    labelled.sensor_origin_.head<3>() = to_file.translation().cast<float>();
+    labelled.sensor_origin_ << to_file.translation().cast<float>(), 0.0f;
     labelled.sensor_orientation_ = Eigen::Quaternionf(to_file.linear().cast<float>());
   }
   save_pcd_binary(out.file("labels.pcd"), labelled);

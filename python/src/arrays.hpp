@@ -55,12 +55,18 @@ py::array_t<T, py::array::c_style | py::array::forcecast> c_array_of(const py::a
 /// and 256 unset); NaN is InvalidInput naming `what` and the element; types as real_array.
 std::vector<std::uint8_t> flags_of(const py::handle& values, const char* what);
 
+/// Clears the array's writeable flag: an in-place change raises ValueError instead of changing a copy or
+/// the library's buffer.
+inline void make_read_only(py::array& a) {
+  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+}
+
 /// A read-only H x W array over `data` that keeps `owner` alive (a view: it follows later changes).
 template <class T>
 py::array view_2d(const T* data, int height, int width, py::handle owner, const py::dtype& dtype = py::dtype::of<T>()) {
   py::array a(dtype, {height, width},
               {static_cast<py::ssize_t>(width * sizeof(T)), static_cast<py::ssize_t>(sizeof(T))}, data, owner);
-  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  make_read_only(a);
   return a;
 }
 

@@ -1,4 +1,5 @@
 // Saving and loading maps, and the OctoMap export where the module was built with it.
+#include "arrays.hpp"
 #include "bindings.hpp"
 
 #include "occ_improve/errors.hpp"
@@ -108,7 +109,7 @@ py::array_t<double> pose_array(const Eigen::Isometry3d& pose) {
   py::array_t<double> a({4, 4});
   for (int r = 0; r < 4; ++r)
     for (int c = 0; c < 4; ++c) a.mutable_at(r, c) = pose.matrix()(r, c);
-  py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  make_read_only(a);
   return a;
 }
 

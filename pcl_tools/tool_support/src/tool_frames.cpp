@@ -169,15 +169,17 @@ std::optional<ToolFrame> ToolFrameReader::read_next() {
   if (first_) {
     require_same_camera(*first_, frame);
     move_into_first_frame(options_, *first_, frame);
+  } else if (map_path_) {  // the first frame too goes into the map's view, and the later ones where it went
+    first_ = loaded_map_reference(options_, frame, map_pose_, *map_path_);
+    move_into_first_frame(options_, *first_, frame);
   } else {
-    if (map_path_) move_first_into_map(frame);
     first_ = frame_header(frame);
-    if (moved_into_map_) {  // the later frames go where the first went: into the map's view
-      first_->pose = map_pose_;
-      first_->pose_source = "the pose saved with " + *map_path_;
-    }
   }
   return frame;
+}
+
+bool ToolFrameReader::moved_into_loaded_map() const {
+  return map_path_ && first_ && first_->pose && options_.use_poses;
 }
 
 void ToolFrameReader::into_loaded_map(const std::optional<Eigen::Isometry3d>& map_pose, const std::string& map_path) {
@@ -187,12 +189,14 @@ void ToolFrameReader::into_loaded_map(const std::optional<Eigen::Isometry3d>& ma
 
 // Moved into the first frame's view instead, the new frames landed where the map's own view was assumed to
 // be: a 7-Scenes chain was off by more than 20 mm on 68 % of its pixels, without a word.
-void ToolFrameReader::move_first_into_map(ToolFrame& frame) {
-  if (!options_.use_poses || !frame.pose) return;
-  if (!map_pose_) refuse_posed_frames_into_unposed_map(*map_path_, frame.name, frame.pose_source);
-  const Eigen::Isometry3d into_map = map_pose_->inverse() * *frame.pose;
-  pcl::transformPointCloud(frame.cloud, frame.cloud, into_map.matrix().cast<float>());
-  moved_into_map_ = true;
+ToolFrame loaded_map_reference(const ToolOptions& options, const ToolFrame& first,
+                               const std::optional<Eigen::Isometry3d>& map_pose, const std::string& map_path) {
+  ToolFrame reference = frame_header(first);
+  if (!options.use_poses || !first.pose) return reference;  // frames without poses are taken in the map's view
+  if (!map_pose) refuse_posed_frames_into_unposed_map(map_path, first.name, first.pose_source);
+  reference.pose = map_pose;
+  reference.pose_source = "the pose saved with " + map_path;
+  return reference;
 }
 
 void refuse_posed_frames_into_unposed_map(const std::string& map_path, const std::string& frame,

@@ -58,7 +58,7 @@ public:
   /// taken in the map's view, as before.
   void into_loaded_map(const std::optional<Eigen::Isometry3d>& map_pose, const std::string& map_path);
   /// Whether the frames were moved into a loaded map's sensor frame by its pose.
-  bool moved_into_loaded_map() const { return moved_into_map_; }
+  bool moved_into_loaded_map() const;
   /// Whether into_loaded_map was called.
   bool loads_map() const { return map_path_.has_value(); }
   const ToolOptions& options() const { return options_; }
@@ -74,8 +74,6 @@ private:
   std::optional<ToolFrame> first_;  ///< its name and camera (the cloud is not kept)
   std::optional<std::string> map_path_;          ///< into_loaded_map's
   std::optional<Eigen::Isometry3d> map_pose_;    ///< into_loaded_map's
-  bool moved_into_map_ = false;
-  void move_first_into_map(ToolFrame& frame);
 };
 
 /// The built-in generated Kinect-like frame (samples/scene) as a tool frame, with its camera.
@@ -84,6 +82,12 @@ ToolFrame sample_tool_frame();
 /// Moves `frame` into the sensor frame of `first` by their poses (first^-1 * frame), when poses are used
 /// and `first` has one; refuses a frame without a pose then, and a posed frame after an unposed first.
 void move_into_first_frame(const ToolOptions& options, const ToolFrame& first, ToolFrame& frame);
+
+/// The reference the frames of a -load run are moved into (move_into_first_frame): `first`'s header, its
+/// pose the map's when poses apply and `first` has one (refused when the map has none, below); frames
+/// without poses are taken in the map's view as they are.
+ToolFrame loaded_map_reference(const ToolOptions& options, const ToolFrame& first,
+                               const std::optional<Eigen::Isometry3d>& map_pose, const std::string& map_path);
 
 /// InvalidInput for posed frames going into a map loaded from `map_path` that holds no pose (saved from
 /// frames without poses, or before map format 5): where its view lies in the world is unknown, so the
